@@ -1,0 +1,79 @@
+/* scene.h -- the static scene: triangle meshes with diffuse materials, punctual lights, the camera,
+ * named light paths; loading it from OBJ/MTL or glTF 2.0 (assimp) plus a JSON sidecar, and the
+ * Cornell box built into the binary. A loaded scene is read-only and shared between threads.
+ * Not ray tracing (rt.h) and not light sampling (light.h). Format: docs/scene-format.md. */
+#ifndef IIR_SCENE_H
+#define IIR_SCENE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "iir/camera.h"
+#include "iir/light.h"
+#include "iir/status.h"
+#include "iir/vecmath.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Two-sided diffuse material. Emissive materials make quad/triangle area lights. */
+typedef struct iir_material {
+    char name[64];
+    iir_vec3 albedo;   /* diffuse reflectance rho, each channel in [0, 1] */
+    iir_vec3 emission; /* emitted radiance Le (W/sr/m^2), >= 0 */
+} iir_material;
+
+typedef struct iir_scene {
+    char name[128];    /* short name: "cornell_box", or the file's base name */
+    char source[1024]; /* the file it came from; "" for the built-in box */
+
+    uint32_t num_vertices;
+    iir_vec3 *positions; /* world space, after unit scale */
+
+    uint32_t num_triangles;
+    uint32_t *indices;   /* 3 per triangle, into positions */
+    uint32_t *materials; /* per triangle, into material_list */
+    iir_vec3 *normals;   /* per triangle, unit geometric normal (winding order) */
+    float *areas;        /* per triangle, world units^2 */
+
+    uint32_t num_materials;
+    iir_material *material_list;
+
+    uint32_t num_lights; /* punctual lights (spot, point) */
+    iir_light *lights;
+
+    iir_camera camera;
+    iir_vec3 bounds_min, bounds_max;
+
+    uint32_t skipped_degenerate; /* triangles dropped at load: zero area or repeated vertices */
+    char *paths_json;            /* sidecar "paths" object as JSON text, or NULL */
+} iir_scene;
+
+/* Loads a scene from a file (.obj, .gltf, .glb, or a .scene.json sidecar naming one) or a folder
+ * (its *.scene.json, else its only mesh file). A sidecar NAME.scene.json next to NAME.obj is
+ * applied. On error returns a status and a message naming the file and the problem; *out is left
+ * NULL. */
+iir_status iir_scene_load(const char *path, iir_scene **out, iir_error *err);
+
+/* Maps what a user typed to a path: an existing file or folder is taken as is; otherwise a bare
+ * name (letters, digits, '_', '-', '.') is looked up as scenes_dir/NAME. Names with '/' or ".."
+ * that do not exist are refused. Writes the path into out (size n). */
+iir_status iir_scene_resolve(const char *name_or_path, const char *scenes_dir, char *out, size_t n,
+                             iir_error *err);
+
+/* The classic Cornell box (McGuire's CornellBox-Original geometry and colours), lit by a spot light
+ * under the ceiling, seen by the classic camera. The ceiling panel is kept as a white, non-emitting
+ * patch so the spot is the only light. Returns NULL only on allocation failure. */
+iir_scene *iir_scene_create_cornell_box(void);
+
+void iir_scene_destroy(iir_scene *scene);
+
+/* Human-readable one-line summary ("cornell_box: 36 triangles, 8 materials, 1 light, 0 skipped").
+ */
+void iir_scene_describe(const iir_scene *scene, char *buf, size_t n);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

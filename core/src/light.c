@@ -1,0 +1,101 @@
+/* light.c -- punctual lights: validity, intensity, flux, the spot's disk domain and emission
+ * sampling. Not the light set (lightset.c) and not VPLs. */
+#include "iir/light.h"
+
+#include "sampling.h"
+
+static bool finite_nonneg(iir_vec3 c)
+{
+    return iir_is_finite3(c) && c.x >= 0.f && c.y >= 0.f && c.z >= 0.f;
+}
+
+iir_status iir_light_validate(const iir_light *l, iir_error *err)
+{
+    const char *name = l->name[0] ? l->name : "(unnamed)";
+    if (!iir_is_finite3(l->position))
+        return iir_fail(err, IIR_ERR_INVALID, "light '%s': position is not finite", name);
+    if (!finite_nonneg(l->intensity))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "light '%s': intensity must be finite and non-negative", name);
+    if (l->type == IIR_LIGHT_POINT) return IIR_OK;
+    if (!iir_is_finite3(l->direction) || iir_length(l->direction) < 1e-6f)
+        return iir_fail(err, IIR_ERR_INVALID, "light '%s': direction is zero or not finite", name);
+    if (!(l->cone_angle > 0.f && l->cone_angle <= IIR_PI * 0.5f + 1e-6f))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "light '%s': cone angle %g degrees is outside (0, 90]", name,
+                        (double)iir_degrees(l->cone_angle));
+    if (!(l->smooth >= 0.f && l->smooth <= l->cone_angle))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "light '%s': smooth edge %g degrees must be in [0, cone angle]", name,
+                        (double)iir_degrees(l->smooth));
+    return IIR_OK;
+}
+
+iir_frame iir_spot_frame(const iir_light *spot)
+{
+    iir_vec3 up = iir_length_sq(spot->up) > 0.f ? spot->up : iir_v3(0, 1, 0);
+    return iir_frame_from_forward(spot->direction, up);
+}
+
+float iir_spot_falloff(const iir_light *spot, float rho)
+{
+    float R = iir_spot_radius(spot);
+    if (rho >= R) return 0.f;
+    if (spot->smooth <= 0.f) return 1.f;
+    float R_in = sinf(spot->cone_angle - spot->smooth);
+    if (rho <= R_in) return 1.f;
+    float t = (R - rho) / (R - R_in);
+    return t * t * (3.f - 2.f * t);
+}
+
+/* Phi = I0 * integral over the disk of falloff(rho) dA (the cosine lobe is uniform on the disk). */
+static float spot_flux_factor(const iir_light *spot)
+{
+    float R = iir_spot_radius(spot);
+    if (spot->smooth <= 0.f) return IIR_PI * R * R;
+    enum { STEPS = 512 };
+    double sum = 0.0, dr = R / STEPS;
+    for (int i = 0; i < STEPS; i++) {
+        double rho = (i + 0.5) * dr;
+        sum += iir_spot_falloff(spot, (float)rho) * rho * dr;
+    }
+    return (float)(2.0 * IIR_PI * sum);
+}
+
+iir_vec3 iir_light_flux(const iir_light *l)
+{
+    if (l->type == IIR_LIGHT_POINT) return iir_scale(l->intensity, 4.f * IIR_PI);
+    return iir_scale(l->intensity, spot_flux_factor(l));
+}
+
+iir_vec3 iir_light_intensity(const iir_light *l, iir_vec3 w)
+{
+    if (l->type == IIR_LIGHT_POINT) return l->intensity;
+    iir_frame fr = iir_spot_frame(l);
+    float cos_theta = iir_dot(w, fr.f);
+    if (cos_theta <= 0.f) return iir_v3s(0.f);
+    iir_vec2 s = iir_spot_dir_to_disk(&fr, w);
+    float rho = sqrtf(s.x * s.x + s.y * s.y);
+    return iir_scale(l->intensity, cos_theta * iir_spot_falloff(l, rho));
+}
+
+iir_light_ray iir_light_sample_emission(const iir_light *l, iir_vec2 u)
+{
+    iir_light_ray r;
+    r.origin = l->position;
+    if (l->type == IIR_LIGHT_POINT) {
+        r.dir = iir_sample_uniform_sphere(u);
+        r.beta = iir_scale(l->intensity, 4.f * IIR_PI);
+        return r;
+    }
+    /* Uniform on the disk of radius R is the cosine lobe: pdf(w) = cos / (pi R^2), so
+     * beta = I0 cos falloff / pdf = pi R^2 I0 falloff. */
+    iir_frame fr = iir_spot_frame(l);
+    float R = iir_spot_radius(l);
+    iir_vec2 d = iir_sample_uniform_disk_concentric(u);
+    iir_vec2 s = iir_v2(d.x * R, d.y * R);
+    r.dir = iir_spot_disk_to_dir(&fr, s);
+    float rho = sqrtf(s.x * s.x + s.y * s.y);
+    r.beta = iir_scale(l->intensity, IIR_PI * R * R * iir_spot_falloff(l, rho));
+    return r;
+}

@@ -1,0 +1,171 @@
+/* lightset.c -- the lights next-event estimation chooses from: punctual lights and emissive
+ * triangles, picked in proportion to their flux (luminance). Not the lights' own radiometry
+ * (light.c). */
+#include "iir/light.h"
+
+#include <stdlib.h>
+
+#include "iir/scene.h"
+#include "sampling.h"
+
+struct iir_lightset {
+    const iir_scene *scene;
+    uint32_t num_punctual;
+    iir_light *punctual;
+    uint32_t num_entries; /* punctual lights first, then emissive triangles */
+    uint32_t *tri_of;     /* entry -> triangle (entries >= num_punctual) */
+    float *cdf;           /* num_entries + 1, cdf[0] = 0, cdf[n] = 1 */
+    uint32_t *entry_of;   /* triangle -> entry, UINT32_MAX if not emissive */
+};
+
+static float triangle_power(const iir_scene *s, uint32_t t)
+{
+    iir_vec3 Le = s->material_list[s->materials[t]].emission;
+    return IIR_PI * s->areas[t] * iir_luminance(Le);
+}
+
+static uint32_t count_emissive(const iir_scene *s)
+{
+    uint32_t n = 0;
+    for (uint32_t t = 0; t < s->num_triangles; t++) n += triangle_power(s, t) > 0.f;
+    return n;
+}
+
+static void build_cdf(iir_lightset *set)
+{
+    const iir_scene *s = set->scene;
+    double total = 0.0;
+    set->cdf[0] = 0.f;
+    for (uint32_t e = 0; e < set->num_entries; e++) {
+        double w = e < set->num_punctual ? iir_luminance(iir_light_flux(&set->punctual[e]))
+                                         : triangle_power(s, set->tri_of[e]);
+        total += w;
+        set->cdf[e + 1] = (float)total;
+    }
+    for (uint32_t e = 1; e <= set->num_entries; e++)
+        set->cdf[e] = total > 0.0 ? (float)(set->cdf[e] / total) : 0.f;
+    if (set->num_entries > 0 && total > 0.0) set->cdf[set->num_entries] = 1.f;
+}
+
+iir_lightset *iir_lightset_create(const iir_scene *scene, const iir_light *lights,
+                                  uint32_t num_lights)
+{
+    iir_lightset *set = calloc(1, sizeof *set);
+    if (!set) return NULL;
+    set->scene = scene;
+    set->num_punctual = num_lights;
+    set->num_entries = num_lights + count_emissive(scene);
+    set->punctual = malloc(sizeof(iir_light) * (num_lights ? num_lights : 1));
+    set->tri_of = calloc(set->num_entries + 1, sizeof(uint32_t));
+    set->cdf = calloc(set->num_entries + 1, sizeof(float));
+    set->entry_of = malloc(sizeof(uint32_t) * (scene->num_triangles + 1));
+    if (!set->punctual || !set->tri_of || !set->cdf || !set->entry_of) {
+        iir_lightset_destroy(set);
+        return NULL;
+    }
+    for (uint32_t i = 0; i < num_lights; i++) set->punctual[i] = lights[i];
+    uint32_t e = num_lights;
+    for (uint32_t t = 0; t < scene->num_triangles; t++) {
+        set->entry_of[t] = UINT32_MAX;
+        if (triangle_power(scene, t) > 0.f) {
+            set->entry_of[t] = e;
+            set->tri_of[e++] = t;
+        }
+    }
+    build_cdf(set);
+    return set;
+}
+
+void iir_lightset_destroy(iir_lightset *set)
+{
+    if (!set) return;
+    free(set->punctual);
+    free(set->tri_of);
+    free(set->cdf);
+    free(set->entry_of);
+    free(set);
+}
+
+bool iir_lightset_empty(const iir_lightset *set)
+{
+    return set->num_entries == 0 || set->cdf[set->num_entries] <= 0.f;
+}
+
+bool iir_lightset_has_area_lights(const iir_lightset *set)
+{
+    return set->num_entries > set->num_punctual;
+}
+
+static float entry_pmf(const iir_lightset *set, uint32_t e)
+{
+    return set->cdf[e + 1] - set->cdf[e];
+}
+
+/* Largest e with cdf[e] <= u, skipping zero-width entries. */
+static uint32_t pick_entry(const iir_lightset *set, float u)
+{
+    uint32_t lo = 0, hi = set->num_entries;
+    while (hi - lo > 1) {
+        uint32_t mid = (lo + hi) / 2;
+        if (set->cdf[mid] <= u)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+static iir_light_sample sample_punctual(const iir_light *l, iir_vec3 x, float pmf)
+{
+    iir_light_sample ls = {0};
+    iir_vec3 d = iir_sub(l->position, x);
+    float dist2 = iir_length_sq(d);
+    if (dist2 <= 0.f) return ls;
+    ls.dist = sqrtf(dist2);
+    ls.wi = iir_scale(d, 1.f / ls.dist);
+    ls.Li = iir_scale(iir_light_intensity(l, iir_neg(ls.wi)), 1.f / dist2);
+    ls.pdf = pmf;
+    ls.is_delta = true;
+    return ls;
+}
+
+static iir_light_sample sample_triangle(const iir_scene *s, uint32_t t, iir_vec3 x, float pmf,
+                                        iir_vec2 u)
+{
+    iir_light_sample ls = {0};
+    const uint32_t *idx = &s->indices[3 * t];
+    iir_vec2 b = iir_sample_uniform_triangle(u);
+    iir_vec3 p =
+        iir_add(iir_add(iir_scale(s->positions[idx[0]], b.x), iir_scale(s->positions[idx[1]], b.y)),
+                iir_scale(s->positions[idx[2]], 1.f - b.x - b.y));
+    iir_vec3 d = iir_sub(p, x);
+    float dist2 = iir_length_sq(d);
+    if (dist2 <= 0.f) return ls;
+    ls.dist = sqrtf(dist2);
+    ls.wi = iir_scale(d, 1.f / ls.dist);
+    float cos_l = -iir_dot(s->normals[t], ls.wi); /* one-sided emission along the normal */
+    if (cos_l <= 0.f) return ls;
+    ls.Li = s->material_list[s->materials[t]].emission;
+    ls.pdf = pmf * dist2 / (cos_l * s->areas[t]);
+    return ls;
+}
+
+iir_light_sample iir_lightset_sample(const iir_lightset *set, iir_vec3 x, float u_pick, iir_vec2 u)
+{
+    iir_light_sample none = {0};
+    if (iir_lightset_empty(set)) return none;
+    uint32_t e = pick_entry(set, u_pick);
+    float pmf = entry_pmf(set, e);
+    if (pmf <= 0.f) return none;
+    if (e < set->num_punctual) return sample_punctual(&set->punctual[e], x, pmf);
+    return sample_triangle(set->scene, set->tri_of[e], x, pmf, u);
+}
+
+float iir_lightset_pdf_area(const iir_lightset *set, uint32_t prim, iir_vec3 wi, float dist)
+{
+    const iir_scene *s = set->scene;
+    if (prim >= s->num_triangles || set->entry_of[prim] == UINT32_MAX) return 0.f;
+    float cos_l = -iir_dot(s->normals[prim], wi);
+    if (cos_l <= 0.f) return 0.f;
+    return entry_pmf(set, set->entry_of[prim]) * dist * dist / (cos_l * s->areas[prim]);
+}

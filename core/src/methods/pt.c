@@ -1,0 +1,233 @@
+/* pt.c -- the reference path tracer (method "pt"): next-event estimation with MIS for area
+ * lights, Russian roulette, a maximum bounce count, deterministic seeds, OpenMP over tiles, and
+ * progressive refinement (more samples into the same frame). Uses params spp, bounces, seed.
+ *
+ * Bounces count reflections: a light path light -> x_k -> ... -> x_1 -> camera has k of them, so
+ * bounces = 1 is direct light only and bounces = 2 adds one diffuse bounce. Emitters seen directly
+ * (k = 0) always count. Sample s of pixel (x, y) draws from the stream hash(x, y, s) of the seed,
+ * so an image depends on the seed and the sample count only, not on threads or tile order. */
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "iir/method.h"
+#include "iir/rng.h"
+#include "iir/scene.h"
+#include "method_internal.h"
+#include "sampling.h"
+#include "surface.h"
+#include "timer.h"
+
+enum { TILE = 16, RR_START = 3 };
+
+typedef struct pt_state {
+    const iir_scene *scene;
+    const iir_rt *rt;
+    iir_params params;
+    iir_lightset *lights;
+    bool has_area_lights;
+    iir_camera_frame cam;
+    iir_image *sum; /* sum of samples; the frame is sum / spp_done */
+    uint64_t spp_done;
+} pt_state;
+
+static float power_heuristic(float pdf_a, float pdf_b)
+{
+    float a2 = pdf_a * pdf_a, b2 = pdf_b * pdf_b;
+    return a2 + b2 > 0.f ? a2 / (a2 + b2) : 0.f;
+}
+
+/* ---- the estimator ---- */
+
+/* Direct light at sf by sampling one light: f * Li * cos / pdf, MIS-weighted against the BSDF. */
+static iir_vec3 estimate_direct(const pt_state *pt, const iir_surface *sf, iir_rng *rng,
+                                iir_raystats *st)
+{
+    float u_pick = iir_rng_uniform(rng);
+    iir_light_sample ls = iir_lightset_sample(pt->lights, sf->p, u_pick, iir_rng_uniform2(rng));
+    if (ls.pdf <= 0.f || iir_is_black(ls.Li)) return iir_v3s(0.f);
+    float cos_theta = iir_dot(sf->ns, ls.wi);
+    if (cos_theta <= 0.f) return iir_v3s(0.f);
+
+    float eps = iir_rt_epsilon(pt->rt);
+    iir_ray shadow = iir_make_ray(iir_surface_offset(sf, eps), ls.wi, 0.f, ls.dist - 2.f * eps);
+    if (iir_rt_occluded(pt->rt, &shadow, st, IIR_RAYS_SHADOW)) return iir_v3s(0.f);
+
+    iir_vec3 f = iir_scale(sf->mat->albedo, IIR_INV_PI);
+    float w = ls.is_delta ? 1.f : power_heuristic(ls.pdf, iir_cosine_hemisphere_pdf(cos_theta));
+    return iir_scale(iir_mul(f, ls.Li), cos_theta * w / ls.pdf);
+}
+
+static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *st)
+{
+    const int max_bounces = pt->params.bounces;
+    iir_vec3 L = iir_v3s(0.f), beta = iir_v3s(1.f);
+    float pdf_bsdf = 0.f; /* pdf of the direction that led here; 0 for the camera ray */
+
+    for (int vertex = 1;; vertex++) {
+        iir_hit hit;
+        iir_ray_kind kind = vertex == 1 ? IIR_RAYS_CAMERA : IIR_RAYS_BOUNCE;
+        if (!iir_rt_intersect(pt->rt, &ray, &hit, st, kind)) break;
+        iir_vec3 wo = iir_neg(ray.dir);
+        iir_surface sf = iir_surface_at(pt->scene, &hit, wo);
+
+        /* Emission found by BSDF sampling, MIS-weighted against light sampling. */
+        iir_vec3 Le = iir_surface_Le(&sf, wo);
+        if (!iir_is_black(Le)) {
+            float w = 1.f;
+            if (pdf_bsdf > 0.f)
+                w = power_heuristic(pdf_bsdf,
+                                    iir_lightset_pdf_area(pt->lights, hit.prim, ray.dir, hit.t));
+            L = iir_add(L, iir_scale(iir_mul(beta, Le), w));
+        }
+        if (vertex > max_bounces) break;
+
+        /* Next-event estimation: a light path with `vertex` reflections. */
+        L = iir_add(L, iir_mul(beta, estimate_direct(pt, &sf, rng, st)));
+        if (vertex == max_bounces && !pt->has_area_lights) break;
+
+        /* Continue with a cosine-sampled direction: f cos / pdf = albedo. */
+        iir_frame fr = iir_frame_from_normal(sf.ns);
+        iir_vec3 wi = iir_frame_to_world(&fr, iir_sample_cosine_hemisphere(iir_rng_uniform2(rng)));
+        float cos_theta = iir_dot(wi, sf.ns);
+        pdf_bsdf = iir_cosine_hemisphere_pdf(cos_theta);
+        if (pdf_bsdf <= 0.f) break;
+        beta = iir_mul(beta, sf.mat->albedo);
+
+        /* Russian roulette once paths are long enough to matter. */
+        if (vertex >= RR_START) {
+            float q = fmaxf(0.05f, 1.f - iir_max_comp(beta));
+            if (iir_rng_uniform(rng) < q) break;
+            beta = iir_scale(beta, 1.f / (1.f - q));
+        }
+        if (iir_is_black(beta)) break;
+        ray = iir_make_ray(iir_surface_offset(&sf, iir_rt_epsilon(pt->rt)), wi, 0.f, INFINITY);
+    }
+    return L;
+}
+
+/* ---- pixels and tiles ---- */
+
+static void render_tile(pt_state *pt, int tile, int spp, iir_raystats *st)
+{
+    const iir_camera_frame *cam = &pt->cam;
+    int tiles_x = (cam->width + TILE - 1) / TILE;
+    int x0 = (tile % tiles_x) * TILE, y0 = (tile / tiles_x) * TILE;
+    int x1 = x0 + TILE < cam->width ? x0 + TILE : cam->width;
+    int y1 = y0 + TILE < cam->height ? y0 + TILE : cam->height;
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++) {
+            iir_vec3 sum = iir_v3s(0.f);
+            for (uint64_t s = pt->spp_done; s < pt->spp_done + (uint64_t)spp; s++) {
+                iir_rng rng = iir_rng_make(pt->params.seed, iir_hash3((uint64_t)x, (uint64_t)y, s));
+                iir_vec2 j = iir_rng_uniform2(&rng);
+                iir_vec3 dir = iir_camera_dir(cam, (float)x + j.x, (float)y + j.y);
+                iir_vec3 L = Li(pt, iir_make_ray(cam->origin, dir, 0.f, INFINITY), &rng, st);
+                if (iir_is_finite3(L)) sum = iir_add(sum, L);
+            }
+            iir_vec3 *acc = iir_image_at(pt->sum, x, y);
+            *acc = iir_add(*acc, sum);
+        }
+}
+
+static void accumulate(pt_state *pt, int spp, iir_frame_stats *stats)
+{
+    double t0 = iir_now_ms();
+    int tiles = ((pt->cam.width + TILE - 1) / TILE) * ((pt->cam.height + TILE - 1) / TILE);
+    iir_raystats total = {0};
+#pragma omp parallel
+    {
+        iir_raystats local = {0};
+#pragma omp for schedule(dynamic, 1)
+        for (int t = 0; t < tiles; t++) render_tile(pt, t, spp, &local);
+#pragma omp critical(iir_pt_rays)
+        iir_raystats_add(&total, &local);
+    }
+    pt->spp_done += (uint64_t)spp;
+    stats->rays = total;
+    stats->phase_ms[IIR_PHASE_TRACE] = iir_now_ms() - t0;
+    stats->total_ms = stats->phase_ms[IIR_PHASE_TRACE];
+    stats->samples_per_pixel = pt->spp_done;
+}
+
+static void resolve(const pt_state *pt, iir_image *out)
+{
+    float inv = 1.f / (float)pt->spp_done;
+    size_t n = (size_t)out->width * (size_t)out->height;
+    for (size_t i = 0; i < n; i++) out->pixels[i] = iir_scale(pt->sum->pixels[i], inv);
+}
+
+/* ---- the method interface ---- */
+
+static iir_status pt_create(const iir_scene *scene, const iir_rt *rt, const iir_params *params,
+                            void **state, iir_error *err)
+{
+    pt_state *pt = calloc(1, sizeof *pt);
+    if (!pt) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the path tracer");
+    pt->scene = scene;
+    pt->rt = rt;
+    pt->params = *params;
+    *state = pt;
+    return IIR_OK;
+}
+
+static void pt_destroy(void *state)
+{
+    pt_state *pt = state;
+    if (!pt) return;
+    iir_lightset_destroy(pt->lights);
+    iir_image_destroy(pt->sum);
+    free(pt);
+}
+
+static iir_status check_view(const iir_view *view, iir_error *err)
+{
+    iir_status st = iir_camera_validate(&view->camera, err);
+    for (uint32_t i = 0; st == IIR_OK && i < view->num_lights; i++)
+        st = iir_light_validate(&view->lights[i], err);
+    return st;
+}
+
+static iir_status pt_render(void *state, const iir_view *view, iir_image *out,
+                            iir_frame_stats *stats, iir_error *err)
+{
+    pt_state *pt = state;
+    iir_status st = check_view(view, err);
+    if (st != IIR_OK) return st;
+    iir_lightset_destroy(pt->lights);
+    pt->lights = iir_lightset_create(pt->scene, view->lights, view->num_lights);
+    if (!pt->sum || pt->sum->width != out->width || pt->sum->height != out->height) {
+        iir_image_destroy(pt->sum);
+        pt->sum = iir_image_create(out->width, out->height);
+    }
+    if (!pt->lights || !pt->sum) return iir_fail(err, IIR_ERR_NOMEM, "out of memory in pt");
+    pt->has_area_lights = iir_lightset_has_area_lights(pt->lights);
+    pt->cam = iir_camera_setup(&view->camera, out->width, out->height);
+    iir_image_clear(pt->sum);
+    pt->spp_done = 0;
+    accumulate(pt, pt->params.spp, stats);
+    resolve(pt, out);
+    return IIR_OK;
+}
+
+static iir_status pt_refine(void *state, iir_image *out, iir_frame_stats *stats, iir_error *err)
+{
+    pt_state *pt = state;
+    if (!pt->sum || pt->spp_done == 0)
+        return iir_fail(err, IIR_ERR_INVALID, "pt: refine called before any frame was rendered");
+    if (out->width != pt->sum->width || out->height != pt->sum->height)
+        return iir_fail(err, IIR_ERR_INVALID, "pt: refine needs a %dx%d image, got %dx%d",
+                        pt->sum->width, pt->sum->height, out->width, out->height);
+    accumulate(pt, pt->params.spp, stats);
+    resolve(pt, out);
+    return IIR_OK;
+}
+
+const iir_method_ops iir_method_pt = {
+    .name = "pt",
+    .summary = "reference path tracer (NEE + MIS, Russian roulette)",
+    .create = pt_create,
+    .destroy = pt_destroy,
+    .render = pt_render,
+    .refine = pt_refine,
+};

@@ -1,0 +1,228 @@
+/* rt.c -- the Embree 3 device and BVH over the scene's triangles, and every ray query the
+ * renderer makes (single rays and 8-wide packets). Not shading, not sampling.
+ *
+ * One error callback on the device reports Embree failures to stderr; creation checks
+ * rtcGetDeviceError once after the build instead of after every call. */
+#include "iir/rt.h"
+
+#include <embree3/rtcore.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "iir/scene.h"
+
+struct iir_rt {
+    RTCDevice device;
+    RTCScene scene;
+    float epsilon;
+};
+
+static void on_embree_error(void *user, enum RTCError code, const char *msg)
+{
+    (void)user;
+    fprintf(stderr, "iir: embree error %d: %s\n", (int)code, msg ? msg : "");
+}
+
+static void fill_buffers(RTCGeometry geom, const iir_scene *s)
+{
+    float *v = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                       3 * sizeof(float), s->num_vertices);
+    unsigned *ix = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                           3 * sizeof(unsigned), s->num_triangles);
+    if (v) memcpy(v, s->positions, sizeof(float) * 3 * s->num_vertices);
+    if (ix) memcpy(ix, s->indices, sizeof(unsigned) * 3 * s->num_triangles);
+}
+
+static float scene_epsilon(const iir_scene *s)
+{
+    float diag = iir_length(iir_sub(s->bounds_max, s->bounds_min));
+    float m = fmaxf(iir_max_comp(iir_v3(fabsf(s->bounds_max.x), fabsf(s->bounds_max.y),
+                                        fabsf(s->bounds_max.z))),
+                    iir_max_comp(iir_v3(fabsf(s->bounds_min.x), fabsf(s->bounds_min.y),
+                                        fabsf(s->bounds_min.z))));
+    return fmaxf(1e-5f * diag, 4e-6f * m) + 1e-7f;
+}
+
+iir_status iir_rt_create(const iir_scene *s, iir_rt **out, iir_error *err)
+{
+    *out = NULL;
+    if (s->num_triangles == 0)
+        return iir_fail(err, IIR_ERR_INVALID, "scene '%s' has no triangles to trace", s->name);
+    iir_rt *rt = calloc(1, sizeof *rt);
+    if (!rt) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the ray tracer");
+    rt->device = rtcNewDevice(NULL);
+    if (!rt->device) {
+        free(rt);
+        return iir_fail(err, IIR_ERR_INTERNAL, "embree: cannot create a device (error %d)",
+                        (int)rtcGetDeviceError(NULL));
+    }
+    rtcSetDeviceErrorFunction(rt->device, on_embree_error, NULL);
+    rt->scene = rtcNewScene(rt->device);
+    rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_HIGH);
+    RTCGeometry geom = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    fill_buffers(geom, s);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(rt->scene, geom);
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(rt->scene);
+    enum RTCError e = rtcGetDeviceError(rt->device);
+    if (e != RTC_ERROR_NONE) {
+        iir_rt_destroy(rt);
+        return iir_fail(err, IIR_ERR_INTERNAL,
+                        "embree: building the BVH for '%s' failed (error %d)", s->name, (int)e);
+    }
+    rt->epsilon = scene_epsilon(s);
+    *out = rt;
+    return IIR_OK;
+}
+
+void iir_rt_destroy(iir_rt *rt)
+{
+    if (!rt) return;
+    if (rt->scene) rtcReleaseScene(rt->scene);
+    if (rt->device) rtcReleaseDevice(rt->device);
+    free(rt);
+}
+
+float iir_rt_epsilon(const iir_rt *rt)
+{
+    return rt->epsilon;
+}
+
+/* ---- single rays ---- */
+
+static void set_ray(struct RTCRay *r, const iir_ray *ray)
+{
+    r->org_x = ray->org.x;
+    r->org_y = ray->org.y;
+    r->org_z = ray->org.z;
+    r->tnear = ray->tnear;
+    r->dir_x = ray->dir.x;
+    r->dir_y = ray->dir.y;
+    r->dir_z = ray->dir.z;
+    r->time = 0.f;
+    r->tfar = ray->tfar;
+    r->mask = UINT32_MAX;
+    r->id = 0;
+    r->flags = 0;
+}
+
+static inline void count(iir_raystats *st, iir_ray_kind kind, uint64_t n)
+{
+    if (st) st->n[kind] += n;
+}
+
+bool iir_rt_intersect(const iir_rt *rt, const iir_ray *ray, iir_hit *hit, iir_raystats *st,
+                      iir_ray_kind kind)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRayHit rh;
+    set_ray(&rh.ray, ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rt->scene, &ctx, &rh);
+    count(st, kind, 1);
+    bool found = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    hit->t = found ? rh.ray.tfar : INFINITY;
+    hit->prim = found ? rh.hit.primID : IIR_NO_HIT;
+    hit->u = rh.hit.u;
+    hit->v = rh.hit.v;
+    return found;
+}
+
+bool iir_rt_occluded(const iir_rt *rt, const iir_ray *ray, iir_raystats *st, iir_ray_kind kind)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRay r;
+    set_ray(&r, ray);
+    rtcOccluded1(rt->scene, &ctx, &r);
+    count(st, kind, 1);
+    return r.tfar < 0.f; /* Embree sets tfar to -inf on a hit */
+}
+
+/* ---- packets of 8 ---- */
+
+static void set_ray8(struct RTCRay8 *r, const iir_ray8 *p, int valid[8])
+{
+    for (int i = 0; i < 8; i++) {
+        valid[i] = p->valid[i] ? -1 : 0;
+        r->org_x[i] = p->ox[i];
+        r->org_y[i] = p->oy[i];
+        r->org_z[i] = p->oz[i];
+        r->dir_x[i] = p->dx[i];
+        r->dir_y[i] = p->dy[i];
+        r->dir_z[i] = p->dz[i];
+        r->tnear[i] = p->tnear[i];
+        r->tfar[i] = p->tfar[i];
+        r->time[i] = 0.f;
+        r->mask[i] = UINT32_MAX;
+        r->id[i] = (unsigned)i;
+        r->flags[i] = 0;
+    }
+}
+
+static uint64_t count_valid(const int valid[8])
+{
+    uint64_t n = 0;
+    for (int i = 0; i < 8; i++) n += valid[i] != 0;
+    return n;
+}
+
+void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], iir_raystats *st,
+                       iir_ray_kind kind)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    struct RTCRayHit8 rh;
+    int valid[8];
+    set_ray8(&rh.ray, rays, valid);
+    for (int i = 0; i < 8; i++) rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect8(valid, rt->scene, &ctx, &rh);
+    count(st, kind, count_valid(valid));
+    for (int i = 0; i < 8; i++) {
+        bool found = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+        hits[i].t = found ? rh.ray.tfar[i] : INFINITY;
+        hits[i].prim = found ? rh.hit.primID[i] : IIR_NO_HIT;
+        hits[i].u = rh.hit.u[i];
+        hits[i].v = rh.hit.v[i];
+    }
+}
+
+void iir_rt_occluded8(const iir_rt *rt, const iir_ray8 *rays, bool occluded[8], iir_raystats *st,
+                      iir_ray_kind kind)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    struct RTCRay8 r;
+    int valid[8];
+    set_ray8(&r, rays, valid);
+    rtcOccluded8(valid, rt->scene, &ctx, &r);
+    count(st, kind, count_valid(valid));
+    for (int i = 0; i < 8; i++) occluded[i] = valid[i] && r.tfar[i] < 0.f;
+}
+
+/* ---- counters ---- */
+
+const char *iir_ray_kind_name(iir_ray_kind kind)
+{
+    static const char *names[IIR_RAY_KIND_COUNT] = {"camera",    "shadow",     "bounce", "vpl",
+                                                    "shadowmap", "visibility", "bench"};
+    return kind < IIR_RAY_KIND_COUNT ? names[kind] : "unknown";
+}
+
+void iir_raystats_add(iir_raystats *into, const iir_raystats *from)
+{
+    for (int k = 0; k < IIR_RAY_KIND_COUNT; k++) into->n[k] += from->n[k];
+}
+
+uint64_t iir_raystats_total(const iir_raystats *st)
+{
+    uint64_t t = 0;
+    for (int k = 0; k < IIR_RAY_KIND_COUNT; k++) t += st->n[k];
+    return t;
+}

@@ -1,0 +1,445 @@
+/* scene_assimp.c -- mesh files through the assimp C API (OBJ/MTL, glTF 2.0 and whatever else assimp
+ * reads) into the scene builder: triangles, used materials, punctual lights, the first camera;
+ * not the sidecar, not degenerate triangles (the builder counts those).
+ *
+ * Design. assimp imports with Triangulate and RemoveComponent (normals, UVs, colours, ... are not
+ * used, and dropping them lets JoinIdenticalVertices weld on position alone). Vertices are checked
+ * for NaN/Inf *before* JoinIdenticalVertices runs (aiApplyPostProcessing), because that step
+ * silently welds a NaN vertex onto another one. FindDegenerates is not used: the builder counts
+ * degenerate triangles itself. PreTransformVertices is not used either: in assimp 5.2 it applies a
+ * glTF camera node's translation twice (the importer already copies it into aiCamera::mPosition)
+ * and dereferences NULL for a light or camera that no node places. Instead this file walks the
+ * node tree and applies each node's world transform to its meshes (instances included), lights
+ * and camera.
+ *
+ * Conventions (docs/scene-format.md): a glTF light or camera sits at its node's origin looking
+ * down its node's -z with +y up (the spec's rule; assimp's own pose fields are ignored for glTF).
+ * KHR_lights_punctual intensity (candela for point/spot) times colour is taken as I0 in W/sr,
+ * without a photometric conversion; a spot's outer cone angle is our cone half-angle and
+ * (outer - inner) our smooth edge. Directional and area lights are ignored.
+ *
+ * assimp's C API keeps the last error message in one process-wide string, so imports run under a
+ * mutex (the only shared state here; it guards the library, not ours). */
+#include "scene_build.h"
+
+#include <assimp/cimport.h>
+#include <assimp/config.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <assimp/version.h>
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+static pthread_mutex_t assimp_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* ======================== small helpers ======================== */
+
+typedef struct mat4 {
+    double m[4][4]; /* row-major, column vectors: p' = M p, translation in m[i][3] */
+} mat4;
+
+static mat4 mat4_from_ai(const struct aiMatrix4x4 *a)
+{
+    mat4 r = {{{a->a1, a->a2, a->a3, a->a4},
+               {a->b1, a->b2, a->b3, a->b4},
+               {a->c1, a->c2, a->c3, a->c4},
+               {a->d1, a->d2, a->d3, a->d4}}};
+    return r;
+}
+
+static mat4 mat4_mul(const mat4 *a, const mat4 *b)
+{
+    mat4 r;
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) {
+            double s = 0.0;
+            for (int k = 0; k < 4; k++) s += a->m[i][k] * b->m[k][j];
+            r.m[i][j] = s;
+        }
+    return r;
+}
+
+static iir_vec3 mat4_point(const mat4 *M, iir_vec3 p)
+{
+    double v[3];
+    for (int i = 0; i < 3; i++)
+        v[i] = M->m[i][0] * p.x + M->m[i][1] * p.y + M->m[i][2] * p.z + M->m[i][3];
+    return iir_v3((float)v[0], (float)v[1], (float)v[2]);
+}
+
+static iir_vec3 mat4_vector(const mat4 *M, iir_vec3 d)
+{
+    double v[3];
+    for (int i = 0; i < 3; i++) v[i] = M->m[i][0] * d.x + M->m[i][1] * d.y + M->m[i][2] * d.z;
+    return iir_v3((float)v[0], (float)v[1], (float)v[2]);
+}
+
+static double mat4_det3(const mat4 *M)
+{
+    const double(*m)[4] = M->m;
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
+static iir_vec3 v3_from_ai(struct aiVector3D v)
+{
+    return iir_v3(v.x, v.y, v.z);
+}
+
+static const char *file_extension(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(path, '.');
+    return dot && (!slash || dot > slash) ? dot : "";
+}
+
+static bool is_gltf(const char *path)
+{
+    const char *ext = file_extension(path);
+    return strcasecmp(ext, ".gltf") == 0 || strcasecmp(ext, ".glb") == 0;
+}
+
+static bool is_known_extension(const char *path)
+{
+    return is_gltf(path) || strcasecmp(file_extension(path), ".obj") == 0;
+}
+
+/* World transform of a node: the product of its ancestors' transforms and its own. */
+static mat4 node_world(const struct aiNode *node)
+{
+    mat4 M = mat4_from_ai(&node->mTransformation);
+    for (const struct aiNode *p = node->mParent; p; p = p->mParent) {
+        mat4 P = mat4_from_ai(&p->mTransformation);
+        M = mat4_mul(&P, &M);
+    }
+    return M;
+}
+
+/* First node (depth first) called name, or NULL. */
+static const struct aiNode *find_node(const struct aiNode *node, const char *name)
+{
+    if (strcmp(node->mName.data, name) == 0) return node;
+    for (unsigned i = 0; i < node->mNumChildren; i++) {
+        const struct aiNode *hit = find_node(node->mChildren[i], name);
+        if (hit) return hit;
+    }
+    return NULL;
+}
+
+/* ======================== importing ======================== */
+
+static iir_status check_readable(const char *path, iir_error *err)
+{
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return iir_fail(err, IIR_ERR_IO, "cannot open scene file %s: %s", path, strerror(errno));
+    if (!S_ISREG(st.st_mode))
+        return iir_fail(err, IIR_ERR_IO, "cannot load %s: not a regular file", path);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return iir_fail(err, IIR_ERR_IO, "cannot read scene file %s: %s", path, strerror(errno));
+    fclose(f);
+    return IIR_OK;
+}
+
+/* NaN/Inf anywhere in the raw meshes, before vertex welding can hide it. */
+static iir_status check_finite(const struct aiScene *s, const char *path, iir_error *err)
+{
+    for (unsigned m = 0; m < s->mNumMeshes; m++) {
+        const struct aiMesh *mesh = s->mMeshes[m];
+        for (unsigned v = 0; v < mesh->mNumVertices; v++) {
+            iir_vec3 p = v3_from_ai(mesh->mVertices[v]);
+            if (!iir_is_finite3(p))
+                return iir_fail(err, IIR_ERR_FORMAT,
+                                "%s: vertex %u of mesh '%s' is not finite (%g, %g, %g)", path, v,
+                                mesh->mName.data, (double)p.x, (double)p.y, (double)p.z);
+        }
+    }
+    return IIR_OK;
+}
+
+static iir_status import_failed(const char *path, const char *what, iir_error *err)
+{
+    const char *hint =
+        is_known_extension(path) ? "" : " (iir reads .obj, .gltf, .glb and NAME.scene.json)";
+    return iir_fail(err, IIR_ERR_FORMAT, "cannot load %s: assimp: %s%s", path, what, hint);
+}
+
+/* Imports, checks vertices, then welds identical vertices. On error *out is NULL. */
+static iir_status import_scene(const char *path, const struct aiScene **out, iir_error *err)
+{
+    struct aiPropertyStore *props = aiCreatePropertyStore();
+    aiSetImportPropertyInteger(props, AI_CONFIG_PP_RVC_FLAGS,
+                               aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS |
+                                   aiComponent_COLORS | aiComponent_TEXCOORDS |
+                                   aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
+                                   aiComponent_TEXTURES);
+    iir_status st = IIR_OK;
+    pthread_mutex_lock(&assimp_lock);
+    const struct aiScene *s = aiImportFileExWithProperties(
+        path, aiProcess_Triangulate | aiProcess_RemoveComponent, NULL, props);
+    if (!s) st = import_failed(path, aiGetErrorString(), err);
+    if (s) st = check_finite(s, path, err);
+    if (s && st == IIR_OK) {
+        /* on failure assimp has already released the scene */
+        s = aiApplyPostProcessing(s, aiProcess_JoinIdenticalVertices);
+        if (!s) st = import_failed(path, aiGetErrorString(), err);
+    }
+    if (s && st != IIR_OK) aiReleaseImport(s);
+    pthread_mutex_unlock(&assimp_lock);
+    aiReleasePropertyStore(props);
+    *out = st == IIR_OK ? s : NULL;
+    return st;
+}
+
+/* ======================== materials ======================== */
+
+static iir_vec3 color3(const struct aiMaterial *mat, const char *key, unsigned type, unsigned idx,
+                       iir_vec3 fallback)
+{
+    struct aiColor4D c;
+    if (aiGetMaterialColor(mat, key, type, idx, &c) != aiReturn_SUCCESS) return fallback;
+    return iir_v3(c.r, c.g, c.b);
+}
+
+static iir_vec3 clamp01(iir_vec3 c)
+{
+    return iir_v3(iir_clampf(c.x, 0.f, 1.f), iir_clampf(c.y, 0.f, 1.f), iir_clampf(c.z, 0.f, 1.f));
+}
+
+static iir_vec3 clamp0(iir_vec3 c)
+{
+    return iir_v3(fmaxf(c.x, 0.f), fmaxf(c.y, 0.f), fmaxf(c.z, 0.f));
+}
+
+/* Diffuse colour -> albedo (clamped to [0, 1]), emissive colour -> emission (negatives to 0;
+ * NaN stays NaN and is refused by the builder). */
+static iir_material convert_material(const struct aiMaterial *mat, unsigned index)
+{
+    iir_material m;
+    memset(&m, 0, sizeof m);
+    struct aiString name;
+    name.length = 0;
+    name.data[0] = '\0';
+    if (aiGetMaterialString(mat, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS && name.data[0])
+        iir_scene_strcpy(m.name, sizeof m.name, name.data);
+    else
+        snprintf(m.name, sizeof m.name, "material%u", index);
+    iir_vec3 kd = color3(mat, AI_MATKEY_COLOR_DIFFUSE, iir_v3s(0.8f));
+    iir_vec3 ke = color3(mat, AI_MATKEY_COLOR_EMISSIVE, iir_v3s(0.f));
+    m.albedo = isnan(kd.x) || isnan(kd.y) || isnan(kd.z) ? kd : clamp01(kd);
+    m.emission = isnan(ke.x) || isnan(ke.y) || isnan(ke.z) ? ke : clamp0(ke);
+    return m;
+}
+
+typedef struct loader {
+    const char *path;
+    const struct aiScene *s;
+    iir_scene_builder *b;
+    uint32_t *material_map; /* assimp material -> builder material, UINT32_MAX until used */
+} loader;
+
+/* Builder index of assimp material i, adding it on first use (unused materials are dropped). */
+static iir_status use_material(loader *L, unsigned i, uint32_t *out, iir_error *err)
+{
+    if (i >= L->s->mNumMaterials)
+        return iir_fail(err, IIR_ERR_FORMAT, "%s: a mesh refers to material %u of %u", L->path, i,
+                        L->s->mNumMaterials);
+    if (L->material_map[i] == UINT32_MAX) {
+        iir_material m = convert_material(L->s->mMaterials[i], i);
+        iir_status st = iir_builder_add_material(L->b, &m, &L->material_map[i], err);
+        if (st != IIR_OK) return st;
+    }
+    *out = L->material_map[i];
+    return IIR_OK;
+}
+
+/* ======================== meshes ======================== */
+
+static iir_status add_faces(loader *L, const struct aiMesh *mesh, uint32_t first, uint32_t mat,
+                            bool flip, iir_error *err)
+{
+    for (unsigned f = 0; f < mesh->mNumFaces; f++) {
+        const struct aiFace *face = &mesh->mFaces[f];
+        if (face->mNumIndices != 3) continue; /* points and lines */
+        const unsigned *ix = face->mIndices;
+        if (ix[0] >= mesh->mNumVertices || ix[1] >= mesh->mNumVertices ||
+            ix[2] >= mesh->mNumVertices)
+            return iir_fail(err, IIR_ERR_FORMAT,
+                            "%s: face %u of mesh '%s' has a vertex index "
+                            "out of range",
+                            L->path, f, mesh->mName.data);
+        uint32_t a = first + ix[0], b = first + ix[flip ? 2 : 1], c = first + ix[flip ? 1 : 2];
+        iir_status st = iir_builder_add_triangle(L->b, a, b, c, mat, err);
+        if (st != IIR_OK) return st;
+    }
+    return IIR_OK;
+}
+
+/* Appends one instance of mesh under world transform M. A mirroring transform flips the winding
+ * so that normals keep their side. */
+static iir_status add_mesh(loader *L, const struct aiMesh *mesh, const mat4 *M, iir_error *err)
+{
+    uint32_t mat = 0, first = L->b->num_vertices;
+    iir_status st = use_material(L, mesh->mMaterialIndex, &mat, err);
+    if (st == IIR_OK) st = iir_builder_reserve(L->b, mesh->mNumVertices, mesh->mNumFaces, err);
+    for (unsigned v = 0; st == IIR_OK && v < mesh->mNumVertices; v++)
+        st = iir_builder_add_vertex(L->b, mat4_point(M, v3_from_ai(mesh->mVertices[v])), NULL, err);
+    if (st != IIR_OK) return st;
+    return add_faces(L, mesh, first, mat, mat4_det3(M) < 0.0, err);
+}
+
+static iir_status add_node(loader *L, const struct aiNode *node, const mat4 *parent, iir_error *err)
+{
+    mat4 local = mat4_from_ai(&node->mTransformation);
+    mat4 M = mat4_mul(parent, &local);
+    for (unsigned i = 0; i < node->mNumMeshes; i++) {
+        unsigned m = node->mMeshes[i];
+        if (m >= L->s->mNumMeshes)
+            return iir_fail(err, IIR_ERR_FORMAT, "%s: node '%s' refers to mesh %u of %u", L->path,
+                            node->mName.data, m, L->s->mNumMeshes);
+        iir_status st = add_mesh(L, L->s->mMeshes[m], &M, err);
+        if (st != IIR_OK) return st;
+    }
+    for (unsigned c = 0; c < node->mNumChildren; c++) {
+        iir_status st = add_node(L, node->mChildren[c], &M, err);
+        if (st != IIR_OK) return st;
+    }
+    return IIR_OK;
+}
+
+/* ======================== lights and camera ======================== */
+
+/* A light's pose in its node's space: glTF fixes it (origin, -z, +y); other formats say it. */
+static void light_local_pose(const loader *L, const struct aiLight *al, iir_vec3 *p, iir_vec3 *d,
+                             iir_vec3 *u)
+{
+    if (is_gltf(L->path)) {
+        *p = iir_v3(0.f, 0.f, 0.f);
+        *d = iir_v3(0.f, 0.f, -1.f);
+        *u = iir_v3(0.f, 1.f, 0.f);
+    } else {
+        *p = v3_from_ai(al->mPosition);
+        *d = v3_from_ai(al->mDirection);
+        *u = v3_from_ai(al->mUp);
+    }
+}
+
+static iir_light convert_light(const loader *L, const struct aiLight *al, const mat4 *M)
+{
+    iir_light l;
+    memset(&l, 0, sizeof l);
+    l.type = al->mType == aiLightSource_SPOT ? IIR_LIGHT_SPOT : IIR_LIGHT_POINT;
+    iir_scene_strcpy(l.name, sizeof l.name, al->mName.data);
+    iir_vec3 p, d, u;
+    light_local_pose(L, al, &p, &d, &u);
+    l.position = mat4_point(M, p);
+    l.intensity = iir_v3(al->mColorDiffuse.r, al->mColorDiffuse.g, al->mColorDiffuse.b);
+    if (l.type == IIR_LIGHT_SPOT) {
+        l.direction = iir_normalize(mat4_vector(M, d));
+        l.up = iir_normalize(mat4_vector(M, u));
+        l.cone_angle = al->mAngleOuterCone;
+        l.smooth = iir_clampf(al->mAngleOuterCone - al->mAngleInnerCone, 0.f, l.cone_angle);
+    }
+    return l;
+}
+
+/* Point and spot lights that a node places; others (directional, area, unplaced) are skipped. */
+static iir_status add_lights(loader *L, iir_error *err)
+{
+    for (unsigned i = 0; i < L->s->mNumLights; i++) {
+        const struct aiLight *al = L->s->mLights[i];
+        if (al->mType != aiLightSource_POINT && al->mType != aiLightSource_SPOT) continue;
+        const struct aiNode *node = find_node(L->s->mRootNode, al->mName.data);
+        if (!node) continue;
+        mat4 M = node_world(node);
+        iir_light l = convert_light(L, al, &M);
+        iir_error e;
+        if (iir_light_validate(&l, &e) != IIR_OK)
+            return iir_fail(err, e.status, "%s: %s", L->path, e.msg);
+        iir_status st = iir_builder_add_light(L->b, &l, err);
+        if (st != IIR_OK) return st;
+    }
+    return IIR_OK;
+}
+
+/* Vertical field of view in degrees from assimp's horizontal one. assimp before 5.3 stores a glTF
+ * camera's yfov * aspect (its issue #4435); 5.3 and later store the true horizontal angle, as
+ * other importers do. An aspect of 0 means "unknown": the angle is then the vertical one. */
+static float camera_fov_y(const loader *L, const struct aiCamera *cam)
+{
+    double h = cam->mHorizontalFOV, a = cam->mAspect;
+    if (!(a > 0.0)) return iir_degrees((float)h);
+    bool linear = is_gltf(L->path) && (aiGetVersionMajor() < 5 ||
+                                       (aiGetVersionMajor() == 5 && aiGetVersionMinor() < 3));
+    double v = linear ? h / a : 2.0 * atan(tan(0.5 * h) / a);
+    return iir_degrees((float)v);
+}
+
+/* The first perspective camera that a node places, if any (assimp gives orthographic cameras a
+ * zero field of view). */
+static void set_camera(loader *L)
+{
+    for (unsigned i = 0; i < L->s->mNumCameras; i++) {
+        const struct aiCamera *ac = L->s->mCameras[i];
+        const struct aiNode *node = find_node(L->s->mRootNode, ac->mName.data);
+        if (!node || !(ac->mHorizontalFOV > 0.f)) continue;
+        mat4 M = node_world(node);
+        bool gltf = is_gltf(L->path);
+        iir_vec3 p = gltf ? iir_v3(0.f, 0.f, 0.f) : v3_from_ai(ac->mPosition);
+        iir_vec3 d = gltf ? iir_v3(0.f, 0.f, -1.f) : v3_from_ai(ac->mLookAt);
+        iir_vec3 u = gltf ? iir_v3(0.f, 1.f, 0.f) : v3_from_ai(ac->mUp);
+        iir_camera cam;
+        cam.position = mat4_point(&M, p);
+        cam.target = iir_add(cam.position, iir_normalize(mat4_vector(&M, d)));
+        cam.up = iir_normalize(mat4_vector(&M, u));
+        cam.fov_y = camera_fov_y(L, ac);
+        iir_builder_set_camera(L->b, &cam);
+        return;
+    }
+}
+
+/* ======================== the entry point ======================== */
+
+static iir_status load_scene(loader *L, iir_error *err)
+{
+    uint32_t before = L->b->num_triangles;
+    mat4 identity = {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
+    iir_status st = L->s->mRootNode ? add_node(L, L->s->mRootNode, &identity, err) : IIR_OK;
+    if (st != IIR_OK) return st;
+    if (L->b->num_triangles == before)
+        return iir_fail(err, IIR_ERR_FORMAT,
+                        "%s: no triangles (the file has no faces, or only "
+                        "points and lines)",
+                        L->path);
+    st = add_lights(L, err);
+    if (st == IIR_OK) set_camera(L);
+    return st;
+}
+
+iir_status iir_assimp_load(const char *path, iir_scene_builder *b, iir_error *err)
+{
+    iir_status st = check_readable(path, err);
+    if (st != IIR_OK) return st;
+    const struct aiScene *s;
+    st = import_scene(path, &s, err);
+    if (st != IIR_OK) return st;
+    loader L = {path, s, b, malloc(sizeof(uint32_t) * (s->mNumMaterials + 1))};
+    if (!L.material_map) {
+        st = iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", path);
+    } else {
+        for (unsigned i = 0; i < s->mNumMaterials; i++) L.material_map[i] = UINT32_MAX;
+        st = load_scene(&L, err);
+    }
+    free(L.material_map);
+    aiReleaseImport(s);
+    return st;
+}

@@ -1,0 +1,339 @@
+/* scene_build.c -- the scene builder shared by every source: growing arrays, validation of what is
+ * appended, and the finishing pass (degenerates, normals, areas, bounds, default camera); not file
+ * formats (scene_assimp.c, scene_sidecar.c) and not the built-in box (scene_cornell.c). */
+#include "scene_build.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A triangle is degenerate when its area is below this fraction of the squared bounding-box
+ * diagonal: far below anything a renderer resolves (the conference room's smallest triangles,
+ * real detail, are at 3e-13 and are kept), while a collapsed triangle, its cross product taken in
+ * double from float vertices, comes out at or very near zero. */
+#define DEGENERATE_REL_AREA 1e-14
+
+/* ======================== growing arrays ======================== */
+
+/* Ensures room for `need` elements of size `elem` in *p (capacity *cap). False on overflow or
+ * allocation failure, with *p and *cap unchanged. */
+static bool grow(void **p, uint32_t *cap, uint64_t need, size_t elem)
+{
+    if (need <= *cap) return true;
+    if (need > UINT32_MAX) return false;
+    uint64_t n = *cap ? *cap : 64;
+    while (n < need) n *= 2;
+    if (n > UINT32_MAX) n = UINT32_MAX;
+    void *q = realloc(*p, (size_t)n * elem);
+    if (!q) return false;
+    *p = q;
+    *cap = (uint32_t)n;
+    return true;
+}
+
+static bool grow_triangles(iir_scene_builder *b, uint64_t need)
+{
+    if (need <= b->cap_triangles) return true;
+    uint32_t cap_idx = b->cap_triangles, cap_mat = b->cap_triangles;
+    /* indices hold 3 per triangle: grow them as triangles of 12 bytes */
+    if (!grow((void **)&b->indices, &cap_idx, need, 3 * sizeof(uint32_t))) return false;
+    if (!grow((void **)&b->tri_materials, &cap_mat, need, sizeof(uint32_t))) return false;
+    b->cap_triangles = cap_idx < cap_mat ? cap_idx : cap_mat;
+    return true;
+}
+
+static iir_status no_memory(const iir_scene_builder *b, iir_error *err)
+{
+    return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory while building the scene", b->source);
+}
+
+/* ======================== appending ======================== */
+
+void iir_builder_init(iir_scene_builder *b, const char *name, const char *source)
+{
+    memset(b, 0, sizeof *b);
+    iir_scene_strcpy(b->name, sizeof b->name, name);
+    iir_scene_strcpy(b->source, sizeof b->source, source);
+}
+
+void iir_builder_free(iir_scene_builder *b)
+{
+    free(b->positions);
+    free(b->indices);
+    free(b->tri_materials);
+    free(b->materials);
+    free(b->lights);
+    free(b->paths_json);
+    b->positions = NULL;
+    b->indices = b->tri_materials = NULL;
+    b->materials = NULL;
+    b->lights = NULL;
+    b->paths_json = NULL;
+    b->num_vertices = b->cap_vertices = 0;
+    b->num_triangles = b->cap_triangles = 0;
+    b->num_materials = b->cap_materials = 0;
+    b->num_lights = b->cap_lights = 0;
+}
+
+iir_status iir_builder_reserve(iir_scene_builder *b, uint32_t more_vertices,
+                               uint32_t more_triangles, iir_error *err)
+{
+    if (!grow((void **)&b->positions, &b->cap_vertices, (uint64_t)b->num_vertices + more_vertices,
+              sizeof(iir_vec3)) ||
+        !grow_triangles(b, (uint64_t)b->num_triangles + more_triangles))
+        return no_memory(b, err);
+    return IIR_OK;
+}
+
+iir_status iir_builder_add_vertex(iir_scene_builder *b, iir_vec3 p, uint32_t *index, iir_error *err)
+{
+    if (!iir_is_finite3(p))
+        return iir_fail(err, IIR_ERR_FORMAT, "%s: vertex %u is not finite (%g, %g, %g)", b->source,
+                        b->num_vertices, (double)p.x, (double)p.y, (double)p.z);
+    if (!grow((void **)&b->positions, &b->cap_vertices, (uint64_t)b->num_vertices + 1,
+              sizeof(iir_vec3)))
+        return no_memory(b, err);
+    if (index) *index = b->num_vertices;
+    b->positions[b->num_vertices++] = p;
+    return IIR_OK;
+}
+
+iir_status iir_builder_add_triangle(iir_scene_builder *b, uint32_t i0, uint32_t i1, uint32_t i2,
+                                    uint32_t material, iir_error *err)
+{
+    uint32_t nv = b->num_vertices;
+    if (i0 >= nv || i1 >= nv || i2 >= nv)
+        return iir_fail(err, IIR_ERR_FORMAT,
+                        "%s: triangle %u refers to vertex (%u, %u, %u) but there are only %u",
+                        b->source, b->num_triangles, i0, i1, i2, nv);
+    if (material >= b->num_materials)
+        return iir_fail(err, IIR_ERR_FORMAT,
+                        "%s: triangle %u refers to material %u but there are only %u", b->source,
+                        b->num_triangles, material, b->num_materials);
+    if (!grow_triangles(b, (uint64_t)b->num_triangles + 1)) return no_memory(b, err);
+    uint32_t *t = b->indices + 3 * (size_t)b->num_triangles;
+    t[0] = i0;
+    t[1] = i1;
+    t[2] = i2;
+    b->tri_materials[b->num_triangles++] = material;
+    return IIR_OK;
+}
+
+static bool in_unit_range(iir_vec3 c)
+{
+    return c.x >= 0.f && c.x <= 1.f && c.y >= 0.f && c.y <= 1.f && c.z >= 0.f && c.z <= 1.f;
+}
+
+static bool non_negative(iir_vec3 c)
+{
+    return iir_is_finite3(c) && c.x >= 0.f && c.y >= 0.f && c.z >= 0.f;
+}
+
+iir_status iir_builder_add_material(iir_scene_builder *b, const iir_material *m, uint32_t *index,
+                                    iir_error *err)
+{
+    if (!in_unit_range(m->albedo))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "%s: material '%s': albedo (%g, %g, %g) must be in [0, 1]", b->source,
+                        m->name, (double)m->albedo.x, (double)m->albedo.y, (double)m->albedo.z);
+    if (!non_negative(m->emission))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "%s: material '%s': emission (%g, %g, %g) must be finite and >= 0",
+                        b->source, m->name, (double)m->emission.x, (double)m->emission.y,
+                        (double)m->emission.z);
+    if (!grow((void **)&b->materials, &b->cap_materials, (uint64_t)b->num_materials + 1,
+              sizeof(iir_material)))
+        return no_memory(b, err);
+    if (index) *index = b->num_materials;
+    b->materials[b->num_materials++] = *m;
+    return IIR_OK;
+}
+
+int64_t iir_builder_find_material(const iir_scene_builder *b, const char *name)
+{
+    for (uint32_t i = 0; i < b->num_materials; i++)
+        if (strcmp(b->materials[i].name, name) == 0) return i;
+    return -1;
+}
+
+iir_status iir_builder_add_light(iir_scene_builder *b, const iir_light *light, iir_error *err)
+{
+    iir_error e;
+    iir_status st = iir_light_validate(light, &e);
+    if (st != IIR_OK) return iir_fail(err, st, "%s: %s", b->source, e.msg);
+    if (!grow((void **)&b->lights, &b->cap_lights, (uint64_t)b->num_lights + 1, sizeof(iir_light)))
+        return no_memory(b, err);
+    b->lights[b->num_lights++] = *light;
+    return IIR_OK;
+}
+
+void iir_builder_clear_lights(iir_scene_builder *b)
+{
+    b->num_lights = 0;
+}
+
+void iir_builder_set_camera(iir_scene_builder *b, const iir_camera *cam)
+{
+    b->camera = *cam;
+    b->has_camera = true;
+}
+
+void iir_builder_scale(iir_scene_builder *b, float s)
+{
+    for (uint32_t i = 0; i < b->num_vertices; i++) b->positions[i] = iir_scale(b->positions[i], s);
+    for (uint32_t i = 0; i < b->num_lights; i++)
+        b->lights[i].position = iir_scale(b->lights[i].position, s);
+    b->camera.position = iir_scale(b->camera.position, s);
+    b->camera.target = iir_scale(b->camera.target, s);
+}
+
+/* ======================== finishing ======================== */
+
+typedef struct bounds {
+    iir_vec3 lo, hi;
+} bounds;
+
+static bounds bounds_empty(void)
+{
+    bounds bb = {iir_v3s(INFINITY), iir_v3s(-INFINITY)};
+    return bb;
+}
+
+static void bounds_add(bounds *bb, iir_vec3 p)
+{
+    bb->lo = iir_v3(fminf(bb->lo.x, p.x), fminf(bb->lo.y, p.y), fminf(bb->lo.z, p.z));
+    bb->hi = iir_v3(fmaxf(bb->hi.x, p.x), fmaxf(bb->hi.y, p.y), fmaxf(bb->hi.z, p.z));
+}
+
+/* Bounds of the vertices of the first n triangles. */
+static bounds triangle_bounds(const iir_scene_builder *b, uint32_t n)
+{
+    bounds bb = bounds_empty();
+    for (size_t k = 0; k < 3 * (size_t)n; k++) bounds_add(&bb, b->positions[b->indices[k]]);
+    return bb;
+}
+
+/* Twice the area vector of triangle t, in double so that a collapsed triangle gives ~0. */
+static void cross_double(const iir_scene_builder *b, const uint32_t *t, double c[3])
+{
+    iir_vec3 p0 = b->positions[t[0]], p1 = b->positions[t[1]], p2 = b->positions[t[2]];
+    double e1[3] = {(double)p1.x - p0.x, (double)p1.y - p0.y, (double)p1.z - p0.z};
+    double e2[3] = {(double)p2.x - p0.x, (double)p2.y - p0.y, (double)p2.z - p0.z};
+    c[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    c[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    c[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
+/* Compacts the non-degenerate triangles to the front, filling normals and areas for them.
+ * Returns how many were kept. */
+static uint32_t keep_good_triangles(iir_scene_builder *b, double min_area, iir_vec3 *normals,
+                                    float *areas)
+{
+    uint32_t kept = 0;
+    for (uint32_t i = 0; i < b->num_triangles; i++) {
+        const uint32_t *t = b->indices + 3 * (size_t)i;
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+        double c[3];
+        cross_double(b, t, c);
+        double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        if (!(0.5 * len > min_area)) continue;
+        uint32_t *dst = b->indices + 3 * (size_t)kept;
+        memmove(dst, t, 3 * sizeof(uint32_t));
+        b->tri_materials[kept] = b->tri_materials[i];
+        normals[kept] = iir_v3((float)(c[0] / len), (float)(c[1] / len), (float)(c[2] / len));
+        areas[kept] = (float)(0.5 * len);
+        kept++;
+    }
+    return kept;
+}
+
+/* Looks at the centre of the bounds from +z, far enough for the bounding sphere to fit the
+ * vertical field of view. */
+static iir_camera default_camera(bounds bb)
+{
+    iir_camera cam;
+    iir_vec3 centre = iir_scale(iir_add(bb.lo, bb.hi), 0.5f);
+    float radius = 0.5f * iir_length(iir_sub(bb.hi, bb.lo));
+    cam.fov_y = 45.f;
+    cam.target = centre;
+    cam.position = iir_add(centre, iir_v3(0.f, 0.f, radius / sinf(iir_radians(0.5f * cam.fov_y))));
+    cam.up = iir_v3(0.f, 1.f, 0.f);
+    return cam;
+}
+
+static iir_status check_camera(const iir_scene_builder *b, const iir_camera *cam, iir_error *err)
+{
+    iir_error e;
+    iir_status st = iir_camera_validate(cam, &e);
+    if (st != IIR_OK) return iir_fail(err, st, "%s: camera: %s", b->source, e.msg);
+    return IIR_OK;
+}
+
+/* Moves the builder's arrays into s and empties the builder. */
+static void move_into_scene(iir_scene_builder *b, iir_scene *s)
+{
+    iir_scene_strcpy(s->name, sizeof s->name, b->name);
+    iir_scene_strcpy(s->source, sizeof s->source, b->source);
+    s->num_vertices = b->num_vertices;
+    s->positions = b->positions;
+    s->num_triangles = b->num_triangles;
+    s->indices = b->indices;
+    s->materials = b->tri_materials;
+    s->num_materials = b->num_materials;
+    s->material_list = b->materials;
+    s->num_lights = b->num_lights;
+    s->lights = b->lights;
+    s->camera = b->camera;
+    s->paths_json = b->paths_json;
+    b->positions = NULL;
+    b->indices = b->tri_materials = NULL;
+    b->materials = NULL;
+    b->lights = NULL;
+    b->paths_json = NULL;
+    iir_builder_free(b);
+}
+
+/* A zeroed scene with room for n normals and areas, or NULL. */
+static iir_scene *alloc_scene(uint32_t n)
+{
+    iir_scene *s = calloc(1, sizeof *s);
+    if (!s) return NULL;
+    s->normals = malloc(sizeof(iir_vec3) * n);
+    s->areas = malloc(sizeof(float) * n);
+    if (s->normals && s->areas) return s;
+    iir_scene_destroy(s);
+    return NULL;
+}
+
+iir_status iir_builder_finish(iir_scene_builder *b, iir_scene **out, iir_error *err)
+{
+    *out = NULL;
+    if (b->num_triangles == 0) return iir_fail(err, IIR_ERR_FORMAT, "%s: no triangles", b->source);
+    if (b->has_camera) {
+        iir_status st = check_camera(b, &b->camera, err);
+        if (st != IIR_OK) return st;
+    }
+    iir_scene *s = alloc_scene(b->num_triangles);
+    if (!s) return no_memory(b, err);
+    bounds all = triangle_bounds(b, b->num_triangles);
+    double min_area = DEGENERATE_REL_AREA * iir_length_sq(iir_sub(all.hi, all.lo));
+    uint32_t total = b->num_triangles;
+    uint32_t kept = keep_good_triangles(b, min_area, s->normals, s->areas);
+    if (kept == 0) {
+        iir_scene_destroy(s);
+        return iir_fail(err, IIR_ERR_FORMAT, "%s: no triangles left: all %u are degenerate",
+                        b->source, total);
+    }
+    b->num_triangles = kept;
+    bounds bb = triangle_bounds(b, kept);
+    if (!b->has_camera) {
+        iir_camera cam = default_camera(bb);
+        iir_builder_set_camera(b, &cam);
+    }
+    s->bounds_min = bb.lo;
+    s->bounds_max = bb.hi;
+    s->skipped_degenerate = total - kept;
+    move_into_scene(b, s);
+    *out = s;
+    return IIR_OK;
+}

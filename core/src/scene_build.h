@@ -1,0 +1,142 @@
+/* scene_build.h -- the internal scene builder every scene source feeds (assimp files, the JSON
+ * sidecar, the built-in Cornell box) and the entry points of those sources; not the public API
+ * (iir/scene.h), not how a user's name becomes a path (scene.c).
+ *
+ * A source appends vertices, triangles, materials and lights to an iir_scene_builder, may set the
+ * camera, and iir_builder_finish() turns it into an iir_scene: it drops and counts degenerate
+ * triangles, computes unit normals (winding order), areas and bounds, and picks a default camera
+ * when no source gave one. The builder lives on the caller's stack; every function leaves it in a
+ * state iir_builder_free() can release, whatever it returns. */
+#ifndef IIR_SCENE_BUILD_H
+#define IIR_SCENE_BUILD_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "iir/scene.h"
+
+#include <string.h>
+
+/* Copies src into dst (size n > 0), truncating, always NUL-terminated. */
+static inline void iir_scene_strcpy(char *dst, size_t n, const char *src)
+{
+    size_t len = strlen(src);
+    if (len >= n) len = n - 1;
+    memcpy(dst, src, len);
+    dst[len] = '\0';
+}
+
+/* ======================== the builder ======================== */
+
+typedef struct iir_scene_builder {
+    char name[128];    /* becomes iir_scene.name */
+    char source[1024]; /* becomes iir_scene.source; every error message names it */
+
+    iir_vec3 *positions;
+    uint32_t num_vertices, cap_vertices;
+
+    uint32_t *indices;       /* 3 per triangle */
+    uint32_t *tri_materials; /* 1 per triangle */
+    uint32_t num_triangles, cap_triangles;
+
+    iir_material *materials;
+    uint32_t num_materials, cap_materials;
+
+    iir_light *lights;
+    uint32_t num_lights, cap_lights;
+
+    iir_camera camera;
+    bool has_camera;
+
+    char *paths_json; /* owned; moved into the scene */
+} iir_scene_builder;
+
+/* An empty builder; name and source are copied (truncated to fit). */
+void iir_builder_init(iir_scene_builder *b, const char *name, const char *source);
+
+/* Releases everything the builder still owns; safe after any other call, and twice. */
+void iir_builder_free(iir_scene_builder *b);
+
+/* Makes room for n more vertices and triangles (an optimisation; appending grows as needed). */
+iir_status iir_builder_reserve(iir_scene_builder *b, uint32_t more_vertices,
+                               uint32_t more_triangles, iir_error *err);
+
+/* Appends a vertex and writes its index to *index (may be NULL). IIR_ERR_FORMAT for a NaN or
+ * infinite coordinate, naming the source and the vertex. */
+iir_status iir_builder_add_vertex(iir_scene_builder *b, iir_vec3 p, uint32_t *index,
+                                  iir_error *err);
+
+/* Appends a triangle (vertex indices in winding order) with a material index. Indices must
+ * refer to vertices and materials already added (IIR_ERR_FORMAT otherwise). Degenerate
+ * triangles are accepted here and dropped (and counted) by iir_builder_finish. */
+iir_status iir_builder_add_triangle(iir_scene_builder *b, uint32_t i0, uint32_t i1, uint32_t i2,
+                                    uint32_t material, iir_error *err);
+
+/* Appends a material and writes its index to *index (may be NULL). IIR_ERR_INVALID naming the
+ * material when albedo is not in [0, 1] or emission is negative or not finite; callers that
+ * promise to clamp (file colours) clamp before calling. */
+iir_status iir_builder_add_material(iir_scene_builder *b, const iir_material *m, uint32_t *index,
+                                    iir_error *err);
+
+/* Index of the first material called name, or -1. */
+int64_t iir_builder_find_material(const iir_scene_builder *b, const char *name);
+
+/* Appends a punctual light after iir_light_validate(); its message is prefixed with the source. */
+iir_status iir_builder_add_light(iir_scene_builder *b, const iir_light *light, iir_error *err);
+
+/* Drops every light added so far (sidecar lights replace file lights). */
+void iir_builder_clear_lights(iir_scene_builder *b);
+
+void iir_builder_set_camera(iir_scene_builder *b, const iir_camera *cam);
+
+/* Multiplies vertex positions, light positions and the camera's position and target by s > 0
+ * (a unit scale). Directions, angles and intensities are unchanged. */
+void iir_builder_scale(iir_scene_builder *b, float s);
+
+/* Turns the builder into a scene: drops degenerate triangles (repeated indices, or area below
+ * 1e-14 of the squared bounding-box diagonal) and counts them, computes normals, areas and
+ * bounds, adds a default camera framing the bounds if none was set, and validates the camera.
+ * On success *out owns all arrays and the builder is left empty; on error (no triangles left,
+ * bad camera, no memory) *out is NULL and the builder still owns its data. */
+iir_status iir_builder_finish(iir_scene_builder *b, iir_scene **out, iir_error *err);
+
+/* ======================== the sources ======================== */
+
+/* scene_assimp.c: appends the meshes, used materials, lights and first camera of any file assimp
+ * reads (OBJ/MTL and glTF 2.0 are the tested ones). Errors name the file: missing or unreadable,
+ * a format assimp does not know (with assimp's message), NaN/Inf vertices, no triangles. */
+iir_status iir_assimp_load(const char *path, iir_scene_builder *b, iir_error *err);
+
+/* scene_sidecar.c: a parsed NAME.scene.json. Angles are stored in radians, positions in world
+ * units (after unit_scale). */
+typedef struct iir_sidecar_material {
+    char name[64];
+    bool has_albedo, has_emission;
+    iir_vec3 albedo, emission;
+} iir_sidecar_material;
+
+typedef struct iir_sidecar {
+    char path[1024]; /* the sidecar file itself */
+    char file[1024]; /* the mesh it names, joined with the sidecar's folder; "" if it names none */
+    float unit_scale;
+    bool has_camera;
+    iir_camera camera;
+    bool has_lights; /* a "lights" array was given (possibly empty: no lights at all) */
+    uint32_t num_lights;
+    iir_light *lights;
+    uint32_t num_materials;
+    iir_sidecar_material *materials;
+    char *paths_json; /* the "paths" object as compact JSON, or NULL */
+} iir_sidecar;
+
+/* Reads and validates a sidecar. Errors (IIR_ERR_IO, IIR_ERR_FORMAT, IIR_ERR_INVALID) name the
+ * file and the JSON field path ("lights[0].cone_angle"). On error *sc holds nothing to free. */
+iir_status iir_sidecar_parse(const char *path, iir_sidecar *sc, iir_error *err);
+
+/* Applies a parsed sidecar to a builder that already holds the mesh: unit scale first, then
+ * material overrides (an unknown material name is an error), camera, lights, paths (moved). */
+iir_status iir_sidecar_apply(iir_sidecar *sc, iir_scene_builder *b, iir_error *err);
+
+void iir_sidecar_free(iir_sidecar *sc);
+
+#endif

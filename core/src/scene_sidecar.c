@@ -1,0 +1,575 @@
+/* scene_sidecar.c -- the JSON scene sidecar (NAME.scene.json): reading and validating it with
+ * cJSON, and applying it to a builder that holds the mesh; not mesh loading (scene_assimp.c) and
+ * not how a sidecar is found (scene.c). The format is documented in docs/scene-format.md.
+ *
+ * Every field is checked: an unknown or repeated field, a wrong type, a NaN, an out-of-range value
+ * is an error naming the file and the JSON field path ("lights[0].cone_angle"), so that a typo is
+ * never silently ignored. Angles are degrees in the file and radians in memory. */
+#include "scene_build.h"
+
+#include <cjson/cJSON.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#define MAX_SIDECAR_BYTES (16L << 20)
+#define MAX_COORD 1e6     /* positions, targets, directions: |x| <= this (world units) */
+#define MAX_INTENSITY 1e9 /* W/sr, and emission in W/sr/m^2 */
+
+/* Where errors go: the sidecar's path and the caller's error. */
+typedef struct ctx {
+    const char *path;
+    iir_error *err;
+} ctx;
+
+static iir_status field_error(const ctx *c, iir_status st, const char *field, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+static iir_status field_error(const ctx *c, iir_status st, const char *field, const char *fmt, ...)
+{
+    char msg[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return iir_fail(c->err, st, "%s: %s: %s", c->path, field, msg);
+}
+
+/* ======================== typed getters ======================== */
+
+/* A member of a JSON object and its path for messages; item is NULL when it is absent. */
+typedef struct member {
+    const cJSON *item;
+    char field[192];
+} member;
+
+static member get_member(const cJSON *obj, const char *where, const char *name)
+{
+    member m;
+    snprintf(m.field, sizeof m.field, "%s%s%s", where, *where ? "." : "", name);
+    m.item = cJSON_GetObjectItemCaseSensitive(obj, name);
+    return m;
+}
+
+static iir_status required(const ctx *c, const member *m, const char *what)
+{
+    return m->item ? IIR_OK : field_error(c, IIR_ERR_FORMAT, m->field, "is required%s", what);
+}
+
+/* Fails on a field of obj not named in `allowed` (NULL-terminated) or named twice. */
+static iir_status check_fields(const ctx *c, const cJSON *obj, const char *where,
+                               const char *const *allowed)
+{
+    for (const cJSON *it = obj->child; it; it = it->next) {
+        char field[192];
+        snprintf(field, sizeof field, "%s%s%s", where, *where ? "." : "", it->string);
+        bool known = false;
+        for (const char *const *a = allowed; *a && !known; a++) known = strcmp(*a, it->string) == 0;
+        if (!known) {
+            char list[256] = "";
+            for (const char *const *a = allowed; *a; a++)
+                snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s",
+                         a == allowed ? "" : ", ", *a);
+            return field_error(c, IIR_ERR_FORMAT, field, "unknown field (known: %s)", list);
+        }
+        for (const cJSON *prev = obj->child; prev != it; prev = prev->next)
+            if (strcmp(prev->string, it->string) == 0)
+                return field_error(c, IIR_ERR_FORMAT, field, "field given twice");
+    }
+    return IIR_OK;
+}
+
+static iir_status get_number(const ctx *c, const cJSON *item, const char *field, double lo,
+                             double hi, double *out)
+{
+    if (!cJSON_IsNumber(item)) return field_error(c, IIR_ERR_FORMAT, field, "must be a number");
+    double v = item->valuedouble;
+    if (!isfinite(v) || v < lo || v > hi)
+        return field_error(c, IIR_ERR_INVALID, field, "%g is outside [%g, %g]", v, lo, hi);
+    *out = v;
+    return IIR_OK;
+}
+
+/* An [x, y, z] array of numbers, each within [lo, hi]. */
+static iir_status get_vec3(const ctx *c, const cJSON *item, const char *field, double lo, double hi,
+                           iir_vec3 *out)
+{
+    if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
+        return field_error(c, IIR_ERR_FORMAT, field, "must be an array of 3 numbers");
+    float v[3];
+    int i = 0;
+    for (const cJSON *e = item->child; e; e = e->next, i++) {
+        char sub[208];
+        snprintf(sub, sizeof sub, "%s[%d]", field, i);
+        double d = 0.0;
+        iir_status st = get_number(c, e, sub, lo, hi, &d);
+        if (st != IIR_OK) return st;
+        v[i] = (float)d;
+    }
+    *out = iir_v3(v[0], v[1], v[2]);
+    return IIR_OK;
+}
+
+/* A colour: one number (grey) or [r, g, b], each within [0, hi]. */
+static iir_status get_color(const ctx *c, const cJSON *item, const char *field, double hi,
+                            iir_vec3 *out)
+{
+    if (cJSON_IsArray(item)) return get_vec3(c, item, field, 0.0, hi, out);
+    double v = 0.0;
+    iir_status st = get_number(c, item, field, 0.0, hi, &v);
+    if (st == IIR_OK) *out = iir_v3s((float)v);
+    return st;
+}
+
+static iir_status get_string(const ctx *c, const cJSON *item, const char *field, char *out,
+                             size_t n)
+{
+    if (!cJSON_IsString(item) || !item->valuestring[0])
+        return field_error(c, IIR_ERR_FORMAT, field, "must be a non-empty string");
+    if (strlen(item->valuestring) >= n)
+        return field_error(c, IIR_ERR_INVALID, field, "is longer than %zu characters", n - 1);
+    iir_scene_strcpy(out, n, item->valuestring);
+    return IIR_OK;
+}
+
+static iir_status get_position(const ctx *c, const cJSON *item, const char *field, iir_vec3 *out)
+{
+    return get_vec3(c, item, field, -MAX_COORD, MAX_COORD, out);
+}
+
+/* A direction (or up vector): finite, not zero. */
+static iir_status get_direction(const ctx *c, const cJSON *item, const char *field, iir_vec3 *out)
+{
+    iir_status st = get_vec3(c, item, field, -MAX_COORD, MAX_COORD, out);
+    if (st == IIR_OK && iir_length(*out) < 1e-12f)
+        return field_error(c, IIR_ERR_INVALID, field, "must not be zero");
+    return st;
+}
+
+/* ======================== per-object parsers ======================== */
+
+/* True if some '/'-separated component of p is "..". */
+static bool has_dotdot(const char *p)
+{
+    for (const char *q = p; *q;) {
+        size_t len = strcspn(q, "/");
+        if (len == 2 && q[0] == '.' && q[1] == '.') return true;
+        q += len;
+        if (*q == '/') q++;
+    }
+    return false;
+}
+
+/* "file": a relative path that stays inside the sidecar's folder, joined with that folder. */
+static iir_status parse_file(const ctx *c, const cJSON *item, iir_sidecar *sc)
+{
+    char rel[512];
+    iir_status st = get_string(c, item, "file", rel, sizeof rel);
+    if (st != IIR_OK) return st;
+    if (rel[0] == '/' || has_dotdot(rel))
+        return field_error(
+            c, IIR_ERR_INVALID, "file",
+            "'%s' must be a path inside the sidecar's folder (no '..', not absolute)", rel);
+    const char *slash = strrchr(c->path, '/');
+    int dir_len = slash ? (int)(slash - c->path) : 1;
+    const char *dir = slash ? c->path : ".";
+    if (snprintf(sc->file, sizeof sc->file, "%.*s/%s", dir_len, dir, rel) >= (int)sizeof sc->file)
+        return field_error(c, IIR_ERR_INVALID, "file", "path is too long");
+    struct stat stt;
+    if (stat(sc->file, &stt) != 0)
+        return field_error(c, IIR_ERR_IO, "file", "cannot open %s: %s", sc->file, strerror(errno));
+    return IIR_OK;
+}
+
+static iir_status parse_unit_scale(const ctx *c, const cJSON *item, iir_sidecar *sc)
+{
+    double s = 0.0;
+    iir_status st = get_number(c, item, "unit_scale", 0.0, MAX_COORD, &s);
+    if (st == IIR_OK && !(s > 0.0))
+        return field_error(c, IIR_ERR_INVALID, "unit_scale", "must be positive, got %g", s);
+    if (st == IIR_OK) sc->unit_scale = (float)s;
+    return st;
+}
+
+/* fov_y in degrees; 0 when absent (iir_sidecar_apply then keeps the mesh file's, else 45). */
+static iir_status parse_fov(const ctx *c, const member *m, float *fov_y)
+{
+    *fov_y = 0.f;
+    if (!m->item) return IIR_OK;
+    double f = 0.0;
+    iir_status st = get_number(c, m->item, m->field, -360.0, 360.0, &f);
+    if (st == IIR_OK && !(f > 0.0 && f < 180.0))
+        return field_error(c, IIR_ERR_INVALID, m->field, "%g degrees is outside (0, 180)", f);
+    *fov_y = (float)f;
+    return st;
+}
+
+static iir_status check_view(const ctx *c, const iir_camera *cam)
+{
+    iir_vec3 view = iir_sub(cam->target, cam->position);
+    if (iir_length(view) < 1e-6f)
+        return field_error(c, IIR_ERR_INVALID, "camera.target", "equals camera.position");
+    if (iir_length(iir_cross(iir_normalize(view), iir_normalize(cam->up))) < 1e-6f)
+        return field_error(c, IIR_ERR_INVALID, "camera.up", "is parallel to the view direction");
+    return IIR_OK;
+}
+
+static iir_status parse_camera(const ctx *c, const cJSON *obj, iir_sidecar *sc)
+{
+    static const char *const fields[] = {"position", "target", "up", "fov_y", NULL};
+    if (!cJSON_IsObject(obj)) return field_error(c, IIR_ERR_FORMAT, "camera", "must be an object");
+    member pos = get_member(obj, "camera", "position"), tgt = get_member(obj, "camera", "target");
+    member up = get_member(obj, "camera", "up"), fov = get_member(obj, "camera", "fov_y");
+    iir_camera *cam = &sc->camera;
+    cam->up = iir_v3(0.f, 1.f, 0.f);
+    iir_status st = check_fields(c, obj, "camera", fields);
+    if (st == IIR_OK) st = required(c, &pos, "");
+    if (st == IIR_OK) st = required(c, &tgt, "");
+    if (st == IIR_OK) st = get_position(c, pos.item, pos.field, &cam->position);
+    if (st == IIR_OK) st = get_position(c, tgt.item, tgt.field, &cam->target);
+    if (st == IIR_OK && up.item) st = get_direction(c, up.item, up.field, &cam->up);
+    if (st == IIR_OK) st = parse_fov(c, &fov, &cam->fov_y);
+    if (st == IIR_OK) st = check_view(c, cam);
+    sc->has_camera = st == IIR_OK;
+    return st;
+}
+
+/* A spot's axis: exactly one of "target" and "direction". */
+static iir_status parse_spot_axis(const ctx *c, const cJSON *obj, const char *where, iir_light *l)
+{
+    member tgt = get_member(obj, where, "target"), dir = get_member(obj, where, "direction");
+    if (!tgt.item == !dir.item)
+        return field_error(c, IIR_ERR_FORMAT, where,
+                           "a spot light needs exactly one of \"target\" and \"direction\"");
+    iir_vec3 v = {0.f, 0.f, 0.f};
+    iir_status st = tgt.item ? get_position(c, tgt.item, tgt.field, &v)
+                             : get_direction(c, dir.item, dir.field, &v);
+    if (st != IIR_OK) return st;
+    if (tgt.item) v = iir_sub(v, l->position);
+    if (tgt.item && iir_length(v) < 1e-6f)
+        return field_error(c, IIR_ERR_INVALID, tgt.field, "equals the light's position");
+    l->direction = iir_normalize(v);
+    return IIR_OK;
+}
+
+/* cone_angle (required) and smooth (default 0), degrees in the file, radians in l. */
+static iir_status parse_cone(const ctx *c, const cJSON *obj, const char *where, iir_light *l)
+{
+    member cone = get_member(obj, where, "cone_angle"), sm = get_member(obj, where, "smooth");
+    double alpha = 0.0, smooth = 0.0;
+    iir_status st = required(c, &cone, " for a spot light");
+    if (st == IIR_OK) st = get_number(c, cone.item, cone.field, -360.0, 360.0, &alpha);
+    if (st == IIR_OK && !(alpha > 0.0 && alpha <= 90.0))
+        return field_error(c, IIR_ERR_INVALID, cone.field, "%g degrees is outside (0, 90]", alpha);
+    if (st == IIR_OK && sm.item) st = get_number(c, sm.item, sm.field, 0.0, alpha, &smooth);
+    l->cone_angle = iir_radians((float)alpha);
+    l->smooth = fminf(iir_radians((float)smooth), l->cone_angle);
+    return st;
+}
+
+/* The spot-only fields: axis, up (default +y), cone. */
+static iir_status parse_spot(const ctx *c, const cJSON *obj, const char *where, iir_light *l)
+{
+    member up = get_member(obj, where, "up");
+    l->up = iir_v3(0.f, 1.f, 0.f);
+    iir_status st = parse_spot_axis(c, obj, where, l);
+    if (st == IIR_OK && up.item) st = get_direction(c, up.item, up.field, &l->up);
+    if (st == IIR_OK) st = parse_cone(c, obj, where, l);
+    return st;
+}
+
+static iir_status point_has_no(const ctx *c, const cJSON *obj, const char *where)
+{
+    static const char *const spot_only[] = {"target", "direction", "up", "cone_angle", "smooth"};
+    for (size_t i = 0; i < sizeof spot_only / sizeof *spot_only; i++) {
+        member m = get_member(obj, where, spot_only[i]);
+        if (m.item)
+            return field_error(c, IIR_ERR_INVALID, m.field, "only spot lights have this field");
+    }
+    return IIR_OK;
+}
+
+static iir_status parse_light_type(const ctx *c, const member *m, iir_light *l)
+{
+    char type[16];
+    iir_status st = required(c, m, " (\"spot\" or \"point\")");
+    if (st == IIR_OK) st = get_string(c, m->item, m->field, type, sizeof type);
+    if (st == IIR_OK && strcmp(type, "spot") != 0 && strcmp(type, "point") != 0)
+        return field_error(c, IIR_ERR_INVALID, m->field,
+                           "must be \"spot\" or \"point\", got \"%s\"", type);
+    l->type = st == IIR_OK && strcmp(type, "spot") == 0 ? IIR_LIGHT_SPOT : IIR_LIGHT_POINT;
+    return st;
+}
+
+static iir_status parse_light(const ctx *c, const cJSON *obj, int index, iir_light *l)
+{
+    static const char *const fields[] = {"type", "name",       "position", "target",    "direction",
+                                         "up",   "cone_angle", "smooth",   "intensity", NULL};
+    char where[32];
+    snprintf(where, sizeof where, "lights[%d]", index);
+    if (!cJSON_IsObject(obj)) return field_error(c, IIR_ERR_FORMAT, where, "must be an object");
+    member type = get_member(obj, where, "type"), name = get_member(obj, where, "name");
+    member pos = get_member(obj, where, "position"), in = get_member(obj, where, "intensity");
+    memset(l, 0, sizeof *l);
+    snprintf(l->name, sizeof l->name, "light%d", index);
+    iir_status st = check_fields(c, obj, where, fields);
+    if (st == IIR_OK) st = parse_light_type(c, &type, l);
+    if (st == IIR_OK && name.item)
+        st = get_string(c, name.item, name.field, l->name, sizeof l->name);
+    if (st == IIR_OK) st = required(c, &pos, "");
+    if (st == IIR_OK) st = get_position(c, pos.item, pos.field, &l->position);
+    if (st == IIR_OK) st = required(c, &in, "");
+    if (st == IIR_OK) st = get_color(c, in.item, in.field, MAX_INTENSITY, &l->intensity);
+    if (st == IIR_OK)
+        st = l->type == IIR_LIGHT_SPOT ? parse_spot(c, obj, where, l) : point_has_no(c, obj, where);
+    iir_error e;
+    if (st == IIR_OK && iir_light_validate(l, &e) != IIR_OK)
+        return field_error(c, e.status, where, "%s", e.msg);
+    return st;
+}
+
+static iir_status parse_lights(const ctx *c, const cJSON *arr, iir_sidecar *sc)
+{
+    if (!cJSON_IsArray(arr)) return field_error(c, IIR_ERR_FORMAT, "lights", "must be an array");
+    int n = cJSON_GetArraySize(arr);
+    sc->has_lights = true;
+    if (n == 0) return IIR_OK;
+    sc->lights = calloc((size_t)n, sizeof *sc->lights);
+    if (!sc->lights) return iir_fail(c->err, IIR_ERR_NOMEM, "%s: out of memory", c->path);
+    int i = 0;
+    for (const cJSON *e = arr->child; e; e = e->next, i++) {
+        iir_status st = parse_light(c, e, i, &sc->lights[i]);
+        if (st != IIR_OK) return st;
+        sc->num_lights++;
+    }
+    return IIR_OK;
+}
+
+static iir_status parse_material(const ctx *c, const cJSON *obj, iir_sidecar_material *m)
+{
+    static const char *const fields[] = {"albedo", "emission", NULL};
+    char where[96];
+    snprintf(where, sizeof where, "materials.%s", obj->string);
+    if (strlen(obj->string) >= sizeof m->name)
+        return field_error(c, IIR_ERR_INVALID, where, "material names have at most %zu characters",
+                           sizeof m->name - 1);
+    if (!cJSON_IsObject(obj)) return field_error(c, IIR_ERR_FORMAT, where, "must be an object");
+    member albedo = get_member(obj, where, "albedo"), emission = get_member(obj, where, "emission");
+    iir_scene_strcpy(m->name, sizeof m->name, obj->string);
+    m->has_albedo = albedo.item != NULL;
+    m->has_emission = emission.item != NULL;
+    iir_status st = check_fields(c, obj, where, fields);
+    if (st == IIR_OK && albedo.item) st = get_color(c, albedo.item, albedo.field, 1.0, &m->albedo);
+    if (st == IIR_OK && emission.item)
+        st = get_color(c, emission.item, emission.field, MAX_INTENSITY, &m->emission);
+    return st;
+}
+
+static iir_status parse_materials(const ctx *c, const cJSON *obj, iir_sidecar *sc)
+{
+    if (!cJSON_IsObject(obj))
+        return field_error(c, IIR_ERR_FORMAT, "materials", "must be an object {NAME: {...}}");
+    int n = cJSON_GetArraySize(obj);
+    if (n == 0) return IIR_OK;
+    sc->materials = calloc((size_t)n, sizeof *sc->materials);
+    if (!sc->materials) return iir_fail(c->err, IIR_ERR_NOMEM, "%s: out of memory", c->path);
+    for (const cJSON *e = obj->child; e; e = e->next) {
+        for (const cJSON *prev = obj->child; prev != e; prev = prev->next)
+            if (strcmp(prev->string, e->string) == 0)
+                return field_error(c, IIR_ERR_FORMAT, "materials", "'%s' is given twice",
+                                   e->string);
+        iir_status st = parse_material(c, e, &sc->materials[sc->num_materials]);
+        if (st != IIR_OK) return st;
+        sc->num_materials++;
+    }
+    return IIR_OK;
+}
+
+static iir_status parse_paths(const ctx *c, const cJSON *obj, iir_sidecar *sc)
+{
+    if (!cJSON_IsObject(obj)) return field_error(c, IIR_ERR_FORMAT, "paths", "must be an object");
+    char *text = cJSON_PrintUnformatted(obj);
+    sc->paths_json = text ? strdup(text) : NULL;
+    cJSON_free(text);
+    if (!sc->paths_json) return iir_fail(c->err, IIR_ERR_NOMEM, "%s: out of memory", c->path);
+    return IIR_OK;
+}
+
+static iir_status parse_root(const ctx *c, const cJSON *root, iir_sidecar *sc)
+{
+    static const char *const fields[] = {"file",      "unit_scale", "camera", "lights",
+                                         "materials", "paths",      NULL};
+    if (!cJSON_IsObject(root))
+        return iir_fail(c->err, IIR_ERR_FORMAT, "%s: the top level must be a JSON object", c->path);
+    iir_status st = check_fields(c, root, "", fields);
+    const cJSON *it;
+    if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "file")))
+        st = parse_file(c, it, sc);
+    if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "unit_scale")))
+        st = parse_unit_scale(c, it, sc);
+    if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "camera")))
+        st = parse_camera(c, it, sc);
+    if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "lights")))
+        st = parse_lights(c, it, sc);
+    if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "materials")))
+        st = parse_materials(c, it, sc);
+    if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "paths")))
+        st = parse_paths(c, it, sc);
+    return st;
+}
+
+/* ======================== reading ======================== */
+
+/* Reads the whole file into a NUL-terminated buffer the caller frees. */
+static iir_status read_text(const char *path, char **out, size_t *len, iir_error *err)
+{
+    *out = NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) return iir_fail(err, IIR_ERR_IO, "cannot read sidecar %s: %s", path, strerror(errno));
+    char *buf = malloc(MAX_SIDECAR_BYTES + 1);
+    size_t n = buf ? fread(buf, 1, MAX_SIDECAR_BYTES + 1, f) : 0;
+    bool failed = buf && ferror(f);
+    fclose(f);
+    if (!buf) return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", path);
+    if (failed || n > MAX_SIDECAR_BYTES) {
+        free(buf);
+        return iir_fail(err, IIR_ERR_IO, "cannot read sidecar %s: %s", path,
+                        failed ? "read error" : "larger than 16 MiB");
+    }
+    buf[n] = '\0';
+    *out = buf;
+    *len = n;
+    return IIR_OK;
+}
+
+/* Line and column (from 1) of offset `at` in text. */
+static void line_column(const char *text, size_t at, int *line, int *col)
+{
+    *line = 1;
+    *col = 1;
+    for (size_t i = 0; i < at && text[i]; i++) {
+        if (text[i] == '\n') {
+            (*line)++;
+            *col = 1;
+        } else {
+            (*col)++;
+        }
+    }
+}
+
+static iir_status parse_json(const char *path, const char *text, size_t len, cJSON **out,
+                             iir_error *err)
+{
+    const char *end = NULL;
+    *out = cJSON_ParseWithLengthOpts(text, len, &end, false);
+    if (*out) return IIR_OK;
+    int line, col;
+    size_t at = end && end >= text && end <= text + len ? (size_t)(end - text) : 0;
+    line_column(text, at, &line, &col);
+    return iir_fail(err, IIR_ERR_FORMAT, "%s: malformed JSON at line %d, column %d", path, line,
+                    col);
+}
+
+/* ======================== the sidecar's life ======================== */
+
+iir_status iir_sidecar_parse(const char *path, iir_sidecar *sc, iir_error *err)
+{
+    memset(sc, 0, sizeof *sc);
+    sc->unit_scale = 1.f;
+    iir_scene_strcpy(sc->path, sizeof sc->path, path);
+    char *text = NULL;
+    size_t len = 0;
+    iir_status st = read_text(path, &text, &len, err);
+    if (st != IIR_OK) return st;
+    cJSON *root;
+    st = parse_json(path, text, len, &root, err);
+    if (st == IIR_OK) {
+        ctx c = {path, err};
+        st = parse_root(&c, root, sc);
+        cJSON_Delete(root);
+    }
+    free(text);
+    if (st != IIR_OK) iir_sidecar_free(sc);
+    return st;
+}
+
+void iir_sidecar_free(iir_sidecar *sc)
+{
+    free(sc->lights);
+    free(sc->materials);
+    free(sc->paths_json);
+    sc->lights = NULL;
+    sc->materials = NULL;
+    sc->paths_json = NULL;
+    sc->num_lights = sc->num_materials = 0;
+}
+
+/* Lists the builder's material names into buf, for "no such material" errors. */
+static void material_names(const iir_scene_builder *b, char *buf, size_t n)
+{
+    buf[0] = '\0';
+    for (uint32_t i = 0; i < b->num_materials; i++) {
+        size_t used = strlen(buf);
+        if (used + 8 >= n) {
+            snprintf(buf + used, n - used, "...");
+            return;
+        }
+        snprintf(buf + used, n - used, "%s%s", i ? ", " : "", b->materials[i].name);
+    }
+}
+
+static iir_status apply_materials(const iir_sidecar *sc, iir_scene_builder *b, iir_error *err)
+{
+    for (uint32_t k = 0; k < sc->num_materials; k++) {
+        const iir_sidecar_material *o = &sc->materials[k];
+        bool found = false;
+        for (uint32_t i = 0; i < b->num_materials; i++) {
+            if (strcmp(b->materials[i].name, o->name) != 0) continue;
+            if (o->has_albedo) b->materials[i].albedo = o->albedo;
+            if (o->has_emission) b->materials[i].emission = o->emission;
+            found = true;
+        }
+        if (!found) {
+            char names[256];
+            material_names(b, names, sizeof names);
+            return iir_fail(err, IIR_ERR_INVALID,
+                            "%s: materials.%s: the mesh has no material of that name (it has: %s)",
+                            sc->path, o->name, names);
+        }
+    }
+    return IIR_OK;
+}
+
+static iir_status apply_camera(const iir_sidecar *sc, iir_scene_builder *b, iir_error *err)
+{
+    iir_camera cam = sc->camera;
+    if (cam.fov_y == 0.f) cam.fov_y = b->has_camera ? b->camera.fov_y : 45.f;
+    iir_error e;
+    if (iir_camera_validate(&cam, &e) != IIR_OK)
+        return iir_fail(err, e.status, "%s: camera: %s", sc->path, e.msg);
+    iir_builder_set_camera(b, &cam);
+    return IIR_OK;
+}
+
+iir_status iir_sidecar_apply(iir_sidecar *sc, iir_scene_builder *b, iir_error *err)
+{
+    if (sc->unit_scale != 1.f) iir_builder_scale(b, sc->unit_scale);
+    iir_status st = apply_materials(sc, b, err);
+    if (st == IIR_OK && sc->has_camera) st = apply_camera(sc, b, err);
+    if (st == IIR_OK && sc->has_lights) {
+        iir_builder_clear_lights(b);
+        for (uint32_t i = 0; st == IIR_OK && i < sc->num_lights; i++)
+            st = iir_builder_add_light(b, &sc->lights[i], err);
+    }
+    if (st == IIR_OK && sc->paths_json) {
+        free(b->paths_json);
+        b->paths_json = sc->paths_json;
+        sc->paths_json = NULL;
+    }
+    return st;
+}

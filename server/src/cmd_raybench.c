@@ -1,0 +1,141 @@
+/* cmd_raybench.c -- `iird raybench`: the raw Embree ray rate on a scene beside the path tracer's
+ * own ray rate on the same scene, measured in one run so the ratio is honest. */
+#include <getopt.h>
+#include <omp.h>
+#include <stdio.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "iir/method.h"
+#include "iir/raybench.h"
+
+typedef struct bench_opts {
+    const char *scene, *scenes_dir;
+    long rays;
+    int width, height;
+    iir_params params;
+} bench_opts;
+
+static void raybench_usage(FILE *f)
+{
+    fprintf(f, "usage: iird raybench [SCENE] [options]\n"
+               "\n"
+               "Traces random incoherent rays (origins on surfaces, uniform directions) through\n"
+               "SCENE with no shading, then renders it with the path tracer, and prints both ray\n"
+               "rates and their ratio. Without SCENE, the built-in Cornell box.\n"
+               "\n"
+               "  --rays N       raw rays per kind (default 4000000)\n"
+               "  --size WxH     path tracer image (default 320x240)\n"
+               "  --spp N        path tracer samples per pixel (default 8)\n"
+               "  --bounces B    path tracer bounces (default 2)\n"
+               "  --seed S       random seed (default 1)\n"
+               "  --threads N    OpenMP threads (default: all cores)\n"
+               "  --scenes DIR   where scene names are looked up\n");
+}
+
+static int parse_args(int argc, char **argv, bench_opts *o)
+{
+    static const struct option longopts[] = {{"rays", required_argument, 0, 'n'},
+                                             {"size", required_argument, 0, 'z'},
+                                             {"spp", required_argument, 0, 's'},
+                                             {"bounces", required_argument, 0, 'b'},
+                                             {"seed", required_argument, 0, 'r'},
+                                             {"threads", required_argument, 0, 't'},
+                                             {"scenes", required_argument, 0, 'S'},
+                                             {"help", no_argument, 0, 'h'},
+                                             {0, 0, 0, 0}};
+    int c;
+    long v = 0;
+    iir_error err = {0};
+    iir_status st = IIR_OK;
+    optind = 1;
+    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'h':
+            return raybench_usage(stdout), 0;
+        case 'n':
+            st = iird_parse_int(optarg, "--rays", 1, 1l << 28, &o->rays, &err);
+            break;
+        case 'z':
+            st = iird_parse_size(optarg, 4096, &o->width, &o->height, &err);
+            break;
+        case 's':
+            if ((st = iird_parse_int(optarg, "--spp", 1, 4096, &v, &err)) == IIR_OK)
+                o->params.spp = (int)v;
+            break;
+        case 'b':
+            if ((st = iird_parse_int(optarg, "--bounces", 1, 1000, &v, &err)) == IIR_OK)
+                o->params.bounces = (int)v;
+            break;
+        case 'r':
+            st = iird_parse_u64(optarg, "--seed", &o->params.seed, &err);
+            break;
+        case 't':
+            if ((st = iird_parse_int(optarg, "--threads", 1, 1024, &v, &err)) == IIR_OK)
+                omp_set_num_threads((int)v);
+            break;
+        case 'S':
+            o->scenes_dir = optarg;
+            break;
+        default:
+            return raybench_usage(stderr), IIRD_EXIT_USAGE;
+        }
+        if (st != IIR_OK) return iird_report("raybench", &err);
+    }
+    if (optind < argc) o->scene = argv[optind++];
+    if (optind < argc) return raybench_usage(stderr), IIRD_EXIT_USAGE;
+    return -1;
+}
+
+static iir_status run_pt(const bench_opts *o, const iir_scene *scene, const iir_rt *rt,
+                         iir_frame_stats *fs, iir_error *err)
+{
+    iir_method *m = NULL;
+    iir_image *img = iir_image_create(o->width, o->height);
+    if (!img) return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the image");
+    iir_status st = iir_method_create("pt", scene, rt, &o->params, &m, err);
+    iir_view view = {scene->lights, scene->num_lights, scene->camera};
+    if (st == IIR_OK) st = iir_method_render(m, &view, img, fs, err);
+    iir_method_destroy(m);
+    iir_image_destroy(img);
+    return st;
+}
+
+static void print_report(const iir_scene *scene, const iir_raybench_result *r,
+                         const iir_frame_stats *fs)
+{
+    double pt_rays = (double)iir_raystats_total(&fs->rays);
+    double pt_rate = pt_rays / (fs->total_ms * 1e-3);
+    double occl = (double)fs->rays.n[IIR_RAYS_SHADOW];
+    /* What raw Embree would take for the same mix of closest-hit and occlusion rays. */
+    double raw_ms = (pt_rays - occl) / r->closest_per_s * 1e3 + occl / r->occluded_per_s * 1e3;
+    printf("scene %s: %u triangles, %d threads\n", scene->name, scene->num_triangles, r->threads);
+    printf("raw closest-hit : %8.2f Mrays/s  (%llu rays, %.0f%% hit)\n", r->closest_per_s / 1e6,
+           (unsigned long long)r->rays, r->hit_fraction * 100);
+    printf("raw occlusion   : %8.2f Mrays/s\n", r->occluded_per_s / 1e6);
+    printf("pt (shading incl): %7.2f Mrays/s  (%.1f Mrays: %.0f%% closest-hit, %.0f%% shadow)\n",
+           pt_rate / 1e6, pt_rays / 1e6, 100 * (pt_rays - occl) / pt_rays, 100 * occl / pt_rays);
+    printf("pt / raw closest-hit rate      : %.0f%%\n", 100 * pt_rate / r->closest_per_s);
+    printf("pt / raw rate for the same mix : %.0f%%\n", 100 * raw_ms / fs->total_ms);
+}
+
+int iird_cmd_raybench(int argc, char **argv)
+{
+    bench_opts o = {.rays = 4000000, .width = 320, .height = 240, .params = iir_params_default()};
+    o.params.spp = 8;
+    int rc = parse_args(argc, argv, &o);
+    if (rc >= 0) return rc;
+    iir_error err = {0};
+    iir_scene *scene = NULL;
+    iir_rt *rt = NULL;
+    iir_raybench_result r = {0};
+    iir_frame_stats fs = {0};
+    iir_status st = iird_load_scene(o.scene, iird_scenes_dir(o.scenes_dir), &scene, &rt, &err);
+    if (st == IIR_OK) st = iir_raybench_run(scene, rt, (uint64_t)o.rays, o.params.seed, &r, &err);
+    if (st == IIR_OK) st = run_pt(&o, scene, rt, &fs, &err);
+    if (st == IIR_OK) print_report(scene, &r, &fs);
+    rc = st == IIR_OK ? 0 : iird_report("raybench", &err);
+    iir_rt_destroy(rt);
+    iir_scene_destroy(scene);
+    return rc;
+}

@@ -1,0 +1,195 @@
+/* cmd_render.c -- `iird render`: one still of a scene with any method, written as PNG, EXR or
+ * PFM. Long renders refine in chunks so the progress bar moves and Ctrl-C keeps what is done. */
+#include <getopt.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "iir/image.h"
+#include "iir/method.h"
+
+typedef struct render_opts {
+    const char *scene, *scenes_dir, *method, *out;
+    int width, height;
+    float exposure;
+    iir_params params;
+} render_opts;
+
+static void render_usage(FILE *f)
+{
+    fprintf(f,
+            "usage: iird render [SCENE] --out FILE.{png,exr,pfm} [options]\n"
+            "\n"
+            "Renders one still. SCENE is a name in the scenes directory, a scene folder or a file\n"
+            "(.obj, .gltf, .glb, .scene.json); without it, the built-in Cornell box.\n"
+            "\n"
+            "  --out FILE         output image; the format follows the extension (required)\n"
+            "  --method NAME      rendering method (default pt)\n"
+            "  --spp N            samples per pixel (default 16)\n"
+            "  --bounces B        1 = direct only, 2 = one diffuse bounce, ... (default 2)\n"
+            "  --size WxH         image size (default 512x512)\n"
+            "  --seed S           random seed (default 1); same seed, same image\n"
+            "  --exposure E       PNG exposure in stops (default 0)\n"
+            "  --threads N        OpenMP threads (default: all cores)\n"
+            "  --scenes DIR       where scene names are looked up (default ./scenes)\n"
+            "  -h, --help         this text\n"
+            "\n"
+            "Exit codes: 0 ok, 2 bad input, 3 file error, 64 usage, 130 interrupted.\n");
+}
+
+static iir_status parse_option(render_opts *o, int c, const char *arg, iir_error *err)
+{
+    long v;
+    iir_status st = IIR_OK;
+    switch (c) {
+    case 'o':
+        o->out = arg;
+        break;
+    case 'm':
+        o->method = arg;
+        break;
+    case 'S':
+        o->scenes_dir = arg;
+        break;
+    case 's':
+        if ((st = iird_parse_int(arg, "--spp", 1, 1 << 20, &v, err)) == IIR_OK)
+            o->params.spp = (int)v;
+        break;
+    case 'b':
+        if ((st = iird_parse_int(arg, "--bounces", 1, 1000, &v, err)) == IIR_OK)
+            o->params.bounces = (int)v;
+        break;
+    case 'z':
+        st = iird_parse_size(arg, IIR_IMAGE_MAX_DIM, &o->width, &o->height, err);
+        break;
+    case 'r':
+        st = iird_parse_u64(arg, "--seed", &o->params.seed, err);
+        break;
+    case 'e':
+        st = iird_parse_float(arg, "--exposure", -30.f, 30.f, &o->exposure, err);
+        break;
+    case 't':
+        if ((st = iird_parse_int(arg, "--threads", 1, 1024, &v, err)) == IIR_OK)
+            omp_set_num_threads((int)v);
+        break;
+    }
+    return st;
+}
+
+/* Returns -1 when parsing succeeded, else the exit code. */
+static int parse_args(int argc, char **argv, render_opts *o)
+{
+    static const struct option longopts[] = {{"out", required_argument, 0, 'o'},
+                                             {"method", required_argument, 0, 'm'},
+                                             {"spp", required_argument, 0, 's'},
+                                             {"bounces", required_argument, 0, 'b'},
+                                             {"size", required_argument, 0, 'z'},
+                                             {"seed", required_argument, 0, 'r'},
+                                             {"exposure", required_argument, 0, 'e'},
+                                             {"threads", required_argument, 0, 't'},
+                                             {"scenes", required_argument, 0, 'S'},
+                                             {"help", no_argument, 0, 'h'},
+                                             {0, 0, 0, 0}};
+    int c;
+    iir_error err = {0};
+    optind = 1;
+    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
+        if (c == 'h') return render_usage(stdout), 0;
+        if (c == '?') return render_usage(stderr), IIRD_EXIT_USAGE;
+        if (parse_option(o, c, optarg, &err) != IIR_OK) return iird_report("render", &err);
+    }
+    if (optind < argc) o->scene = argv[optind++];
+    if (optind < argc) {
+        fprintf(stderr, "iird render: unexpected argument '%s'\n", argv[optind]);
+        return IIRD_EXIT_USAGE;
+    }
+    if (!o->out) {
+        fprintf(stderr, "iird render: --out FILE is required (see iird render --help)\n");
+        return IIRD_EXIT_USAGE;
+    }
+    if (iird_check_output(o->out, &err) != IIR_OK) return iird_report("render", &err);
+    return -1;
+}
+
+/* Largest divisor of spp that is at most spp/20, so ~20 progress steps add up to exactly spp. */
+static int chunk_for(int spp)
+{
+    int limit = spp / 20 > 1 ? spp / 20 : 1;
+    for (int d = limit; d > 1; d--)
+        if (spp % d == 0) return d;
+    return 1;
+}
+
+static iir_status render_still(const render_opts *o, iir_method *m, const iir_scene *scene,
+                               iir_image *img, iir_frame_stats *sum, iir_error *err)
+{
+    iir_view view = {scene->lights, scene->num_lights, scene->camera};
+    iir_frame_stats fs;
+    iird_progress bar;
+    iird_progress_start(&bar, "render", o->params.spp);
+    iir_status st = iir_method_render(m, &view, img, &fs, err);
+    *sum = fs;
+    while (st == IIR_OK && iir_method_can_refine(m) &&
+           fs.samples_per_pixel < (uint64_t)o->params.spp) {
+        iird_progress_update(&bar, (double)fs.samples_per_pixel);
+        if (iird_interrupted())
+            return iir_fail(err, IIR_ERR_INTERRUPTED,
+                            "interrupted after %llu of %d samples per pixel",
+                            (unsigned long long)fs.samples_per_pixel, o->params.spp);
+        st = iir_method_refine(m, img, &fs, err);
+        sum->total_ms += fs.total_ms;
+        iir_raystats_add(&sum->rays, &fs.rays);
+        sum->samples_per_pixel = fs.samples_per_pixel;
+    }
+    iird_progress_finish(&bar);
+    return st;
+}
+
+static void print_summary(const render_opts *o, const iir_scene *scene, const iir_frame_stats *fs)
+{
+    double rays = (double)iir_raystats_total(&fs->rays);
+    printf("wrote %s: %s, %dx%d, method %s, %llu spp, %d bounces, seed %llu, %.2f s, %.1f Mrays "
+           "(%.2f Mrays/s)\n",
+           o->out, scene->name, o->width, o->height, o->method,
+           (unsigned long long)fs->samples_per_pixel, o->params.bounces,
+           (unsigned long long)o->params.seed, fs->total_ms / 1e3, rays / 1e6,
+           fs->total_ms > 0 ? rays / (fs->total_ms * 1e3) : 0.0);
+}
+
+int iird_cmd_render(int argc, char **argv)
+{
+    render_opts o = {.method = "pt", .width = 512, .height = 512, .params = iir_params_default()};
+    int rc = parse_args(argc, argv, &o);
+    if (rc >= 0) return rc;
+
+    iir_error err = {0};
+    iir_scene *scene = NULL;
+    iir_rt *rt = NULL;
+    iir_method *m = NULL;
+    iir_image *img = iir_image_create(o.width, o.height);
+    iir_params chunked = o.params;
+    chunked.spp = chunk_for(o.params.spp);
+    iir_status st = iird_load_scene(o.scene, iird_scenes_dir(o.scenes_dir), &scene, &rt, &err);
+    if (st == IIR_OK) st = iir_method_create(o.method, scene, rt, &chunked, &m, &err);
+    iir_frame_stats fs = {0};
+    iird_catch_interrupts();
+    if (st == IIR_OK) st = render_still(&o, m, scene, img, &fs, &err);
+    if (st == IIR_OK || (st == IIR_ERR_INTERRUPTED && fs.samples_per_pixel > 0)) {
+        iir_error werr = {0};
+        if (iir_image_write(img, o.out, o.exposure, &werr) != IIR_OK)
+            st = werr.status, err = werr;
+        else if (st == IIR_OK)
+            print_summary(&o, scene, &fs);
+        else
+            fprintf(stderr, "iird render: wrote the partial image to %s\n", o.out);
+    }
+    rc = st == IIR_OK ? 0 : iird_report("render", &err);
+    iir_method_destroy(m);
+    iir_image_destroy(img);
+    iir_rt_destroy(rt);
+    iir_scene_destroy(scene);
+    return rc;
+}

@@ -1,0 +1,786 @@
+/* test_scene.c -- scenes: the built-in Cornell box and its shipped twin, OBJ/MTL and glTF loading
+ * (materials, KHR_lights_punctual, cameras), the JSON sidecar, degenerate triangles, resolving
+ * names, the camera frame, and every refusal (each must name the file and the problem). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "iir/camera.h"
+#include "iir/light.h"
+#include "iir/scene.h"
+#include "testutil.h"
+
+/* ======================== helpers ======================== */
+
+static char tmp[512]; /* this executable's scratch folder */
+
+/* Writes dir/name and copies the full path into out. */
+static void write_file(const char *name, const char *text, char *out, size_t n)
+{
+    const char *p = iir_test_write_file(tmp, name, text);
+    assert_non_null(p);
+    snprintf(out, n, "%s", p);
+}
+
+static void assert_contains(const char *msg, const char *needle)
+{
+    if (!strstr(msg, needle)) {
+        print_message("message \"%s\" lacks \"%s\"\n", msg, needle);
+        fail();
+    }
+}
+
+/* Loading must fail with a message that contains both needles. */
+static void assert_load_fails(const char *path, const char *needle1, const char *needle2)
+{
+    iir_scene *s = (iir_scene *)1;
+    iir_error err = {0};
+    iir_status st = iir_scene_load(path, &s, &err);
+    if (st == IIR_OK) print_message("%s loaded, expected a failure\n", path);
+    assert_int_not_equal(st, IIR_OK);
+    assert_null(s);
+    assert_int_equal(err.status, st);
+    assert_contains(err.msg, needle1);
+    if (needle2) assert_contains(err.msg, needle2);
+}
+
+static iir_scene *load_ok(const char *path)
+{
+    iir_scene *s = NULL;
+    iir_error err = {0};
+    iir_status st = iir_scene_load(path, &s, &err);
+    if (st != IIR_OK) print_message("loading %s failed: %s\n", path, err.msg);
+    assert_int_equal(st, IIR_OK);
+    assert_non_null(s);
+    return s;
+}
+
+static bool near(float a, float b, float tol)
+{
+    return fabsf(a - b) <= tol;
+}
+
+static void assert_vec_near(iir_vec3 a, iir_vec3 b, float tol)
+{
+    if (!(near(a.x, b.x, tol) && near(a.y, b.y, tol) && near(a.z, b.z, tol))) {
+        print_message("(%g, %g, %g) != (%g, %g, %g)\n", (double)a.x, (double)a.y, (double)a.z,
+                      (double)b.x, (double)b.y, (double)b.z);
+        fail();
+    }
+}
+
+static const iir_material *find_material(const iir_scene *s, const char *name)
+{
+    for (uint32_t i = 0; i < s->num_materials; i++)
+        if (strcmp(s->material_list[i].name, name) == 0) return &s->material_list[i];
+    return NULL;
+}
+
+static float material_area(const iir_scene *s, const char *name)
+{
+    double sum = 0.0;
+    for (uint32_t t = 0; t < s->num_triangles; t++)
+        if (strcmp(s->material_list[s->materials[t]].name, name) == 0) sum += s->areas[t];
+    return (float)sum;
+}
+
+/* Every triangle: valid indices, unit normal along the winding-order cross product, area > 0. */
+static void assert_triangles_sane(const iir_scene *s)
+{
+    for (uint32_t t = 0; t < s->num_triangles; t++) {
+        const uint32_t *ix = s->indices + 3 * t;
+        assert_true(ix[0] < s->num_vertices && ix[1] < s->num_vertices && ix[2] < s->num_vertices);
+        assert_true(s->materials[t] < s->num_materials);
+        iir_vec3 p0 = s->positions[ix[0]], p1 = s->positions[ix[1]], p2 = s->positions[ix[2]];
+        iir_vec3 c = iir_cross(iir_sub(p1, p0), iir_sub(p2, p0));
+        assert_true(s->areas[t] > 0.f);
+        assert_true(near(iir_length(s->normals[t]), 1.f, 1e-5f));
+        assert_true(iir_dot(c, s->normals[t]) > 0.f);
+    }
+}
+
+/* ======================== the built-in box ======================== */
+
+static const float PANEL_FLUX_RED = IIR_PI * 17.f * 0.47f * 0.38f; /* pi Ke A, red channel */
+
+static void test_cornell_builtin(void **state)
+{
+    (void)state;
+    iir_scene *s = iir_scene_create_cornell_box();
+    assert_non_null(s);
+    assert_string_equal(s->name, "cornell_box");
+    assert_string_equal(s->source, "");
+    assert_int_equal(s->num_triangles, 36);
+    assert_int_equal(s->num_materials, 8);
+    assert_int_equal(s->skipped_degenerate, 0);
+    assert_null(s->paths_json);
+    assert_triangles_sane(s);
+
+    /* the red left wall faces +x, into the room; the panel faces down and emits nothing */
+    const iir_material *red = find_material(s, "leftWall");
+    assert_non_null(red);
+    assert_vec_near(red->albedo, iir_v3(0.63f, 0.065f, 0.05f), 1e-6f);
+    assert_vec_near(find_material(s, "rightWall")->albedo, iir_v3(0.14f, 0.45f, 0.091f), 1e-6f);
+    assert_vec_near(find_material(s, "light")->albedo, iir_v3s(0.78f), 1e-6f);
+    for (uint32_t i = 0; i < s->num_materials; i++)
+        assert_true(iir_is_black(s->material_list[i].emission));
+    for (uint32_t t = 0; t < s->num_triangles; t++) {
+        const char *m = s->material_list[s->materials[t]].name;
+        if (strcmp(m, "leftWall") == 0) assert_true(s->normals[t].x > 0.99f);
+        if (strcmp(m, "rightWall") == 0) assert_true(s->normals[t].x < -0.99f);
+        if (strcmp(m, "light") == 0) assert_true(s->normals[t].y < -0.99f);
+    }
+    assert_true(near(material_area(s, "light"), 0.47f * 0.38f, 1e-4f));
+
+    /* one spot under the ceiling, aimed down, with the panel's flux */
+    assert_int_equal(s->num_lights, 1);
+    const iir_light *l = &s->lights[0];
+    iir_error err;
+    assert_int_equal(iir_light_validate(l, &err), IIR_OK);
+    assert_int_equal(l->type, IIR_LIGHT_SPOT);
+    assert_string_equal(l->name, "spot");
+    assert_vec_near(l->position, iir_v3(0.f, 1.9f, 0.f), 1e-6f);
+    assert_vec_near(l->direction, iir_v3(0.f, -1.f, 0.f), 1e-6f);
+    assert_true(near(iir_degrees(l->cone_angle), 60.f, 1e-4f));
+    assert_true(l->smooth == 0.f);
+    assert_true(near(iir_light_flux(l).x, PANEL_FLUX_RED, 1e-3f * PANEL_FLUX_RED));
+    assert_true(near(l->intensity.y / l->intensity.x, 12.f / 17.f, 1e-6f));
+
+    /* the classic camera; bounds of the OBJ */
+    assert_int_equal(iir_camera_validate(&s->camera, &err), IIR_OK);
+    assert_vec_near(s->camera.position, iir_v3(0.f, 1.f, 3.9f), 1e-6f);
+    assert_vec_near(s->camera.target, iir_v3(0.f, 1.f, 0.f), 1e-6f);
+    assert_true(near(s->camera.fov_y, 39.3f, 1e-5f));
+    assert_vec_near(s->bounds_min, iir_v3(-1.02f, 0.f, -1.04f), 1e-6f);
+    assert_vec_near(s->bounds_max, iir_v3(1.f, 1.99f, 0.99f), 1e-6f);
+
+    char text[256];
+    iir_scene_describe(s, text, sizeof text);
+    assert_string_equal(text, "cornell_box: 36 triangles, 8 materials, 1 light, 0 skipped");
+    iir_scene_destroy(s);
+}
+
+/* scenes/cornell_box (OBJ + sidecar) must be the built-in box. */
+static void test_cornell_shipped_equals_builtin(void **state)
+{
+    (void)state;
+    iir_scene *a = iir_scene_create_cornell_box();
+    iir_scene *b = load_ok(IIR_SOURCE_DIR "/scenes/cornell_box");
+    assert_string_equal(b->name, "cornell_box");
+    assert_int_equal(b->num_triangles, a->num_triangles);
+    assert_int_equal(b->num_materials, a->num_materials);
+    assert_int_equal(b->skipped_degenerate, 0);
+    assert_triangles_sane(b);
+    for (uint32_t i = 0; i < a->num_materials; i++) {
+        const iir_material *ma = &a->material_list[i];
+        const iir_material *mb = find_material(b, ma->name);
+        assert_non_null(mb);
+        assert_vec_near(mb->albedo, ma->albedo, 1e-6f);
+        assert_vec_near(mb->emission, ma->emission, 0.f);
+        assert_true(near(material_area(b, ma->name), material_area(a, ma->name), 1e-4f));
+    }
+    assert_vec_near(b->bounds_min, a->bounds_min, 1e-6f);
+    assert_vec_near(b->bounds_max, a->bounds_max, 1e-6f);
+    assert_int_equal(b->num_lights, 1);
+    const iir_light *la = &a->lights[0], *lb = &b->lights[0];
+    assert_string_equal(lb->name, la->name);
+    assert_int_equal(lb->type, la->type);
+    assert_vec_near(lb->position, la->position, 1e-6f);
+    assert_vec_near(lb->direction, la->direction, 1e-6f);
+    assert_vec_near(lb->up, la->up, 1e-6f);
+    assert_true(near(lb->cone_angle, la->cone_angle, 1e-6f));
+    assert_true(near(lb->smooth, la->smooth, 1e-6f));
+    assert_vec_near(lb->intensity, la->intensity, 1e-5f);
+    assert_vec_near(b->camera.position, a->camera.position, 1e-6f);
+    assert_vec_near(b->camera.target, a->camera.target, 1e-6f);
+    assert_vec_near(b->camera.up, a->camera.up, 1e-6f);
+    assert_true(near(b->camera.fov_y, a->camera.fov_y, 1e-5f));
+    iir_scene_destroy(a);
+    iir_scene_destroy(b);
+}
+
+/* ======================== the camera ======================== */
+
+static void test_camera(void **state)
+{
+    (void)state;
+    iir_camera cam = {iir_v3(0, 1, 3.9f), iir_v3(0, 1, 0), iir_v3(0, 1, 0), 39.3f};
+    iir_error err;
+    assert_int_equal(iir_camera_validate(&cam, &err), IIR_OK);
+    iir_camera_frame cf = iir_camera_setup(&cam, 640, 480);
+    assert_vec_near(cf.basis.f, iir_v3(0, 0, -1), 1e-6f);
+    assert_vec_near(cf.basis.r, iir_v3(1, 0, 0), 1e-6f); /* red wall (-x) on the left */
+    assert_vec_near(cf.basis.u, iir_v3(0, 1, 0), 1e-6f);
+    assert_true(near(cf.aspect, 4.f / 3.f, 1e-6f));
+    assert_true(near(cf.tan_half_y, tanf(iir_radians(19.65f)), 1e-6f));
+    assert_vec_near(iir_camera_dir(&cf, 320.f, 240.f), iir_v3(0, 0, -1), 1e-6f);
+    /* the top edge of the image is fov_y / 2 above the axis */
+    iir_vec3 top = iir_camera_dir(&cf, 320.f, 0.f);
+    assert_true(near(iir_degrees(acosf(-top.z)), 19.65f, 1e-3f) && top.y > 0.f);
+
+    iir_camera bad = cam;
+    bad.target = bad.position;
+    assert_int_equal(iir_camera_validate(&bad, &err), IIR_ERR_INVALID);
+    assert_contains(err.msg, "target");
+    bad = cam;
+    bad.up = iir_v3(0, 0, -2);
+    assert_int_equal(iir_camera_validate(&bad, &err), IIR_ERR_INVALID);
+    assert_contains(err.msg, "parallel");
+    bad = cam;
+    bad.fov_y = 180.f;
+    assert_int_equal(iir_camera_validate(&bad, &err), IIR_ERR_INVALID);
+    assert_contains(err.msg, "fov");
+    bad = cam;
+    bad.position.x = NAN;
+    assert_int_equal(iir_camera_validate(&bad, &err), IIR_ERR_INVALID);
+    assert_contains(err.msg, "position");
+}
+
+/* ======================== OBJ/MTL ======================== */
+
+static const char *const GLOW_MTL = "newmtl glow\nKd 0.5 0.6 0.7\nKe 1 2 3\n"
+                                    "newmtl unused\nKd 1 1 1\n";
+
+static void test_obj_emissive(void **state)
+{
+    (void)state;
+    char path[1024];
+    write_file("glow.mtl", GLOW_MTL, path, sizeof path);
+    write_file("glow.obj",
+               "mtllib glow.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl glow\nf 1 2 3 4\n",
+               path, sizeof path);
+    iir_scene *s = load_ok(path);
+    assert_string_equal(s->name, "glow");
+    assert_string_equal(s->source, path);
+    assert_int_equal(s->num_triangles, 2);
+    assert_int_equal(s->num_materials, 1); /* unused and default materials are dropped */
+    assert_string_equal(s->material_list[0].name, "glow");
+    assert_vec_near(s->material_list[0].albedo, iir_v3(0.5f, 0.6f, 0.7f), 1e-6f);
+    assert_vec_near(s->material_list[0].emission, iir_v3(1.f, 2.f, 3.f), 1e-6f);
+    assert_int_equal(s->num_lights, 0);
+    assert_triangles_sane(s);
+    assert_vec_near(s->normals[0], iir_v3(0, 0, 1), 1e-6f);
+    iir_error err;
+    assert_int_equal(iir_camera_validate(&s->camera, &err), IIR_OK); /* the default camera */
+    iir_scene_destroy(s);
+}
+
+/* Albedo is clamped to [0, 1], negative emission to 0. */
+static void test_obj_colours_clamped(void **state)
+{
+    (void)state;
+    char path[1024];
+    write_file("hot.mtl", "newmtl hot\nKd 1.5 -0.2 0.5\nKe -1 0 2\n", path, sizeof path);
+    write_file("hot.obj", "mtllib hot.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl hot\nf 1 2 3\n", path,
+               sizeof path);
+    iir_scene *s = load_ok(path);
+    assert_vec_near(s->material_list[0].albedo, iir_v3(1.f, 0.f, 0.5f), 0.f);
+    assert_vec_near(s->material_list[0].emission, iir_v3(0.f, 0.f, 2.f), 0.f);
+    iir_scene_destroy(s);
+}
+
+static void test_degenerate_triangles(void **state)
+{
+    (void)state;
+    char path[1024];
+    /* two good triangles, one with a repeated vertex, one collinear, one with two vertices at
+     * the same position */
+    write_file("degen.obj",
+               "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 0 0 0\n"
+               "f 1 2 3\nf 1 3 4\nf 1 1 2\nf 1 2 5\nf 1 6 3\n",
+               path, sizeof path);
+    iir_scene *s = load_ok(path);
+    assert_int_equal(s->num_triangles, 2);
+    assert_int_equal(s->skipped_degenerate, 3);
+    assert_triangles_sane(s);
+    assert_vec_near(s->bounds_min, iir_v3(0, 0, 0), 0.f);
+    assert_vec_near(s->bounds_max, iir_v3(1, 1, 0), 0.f); /* (2, 0, 0) only in a dropped one */
+    char text[256];
+    iir_scene_describe(s, text, sizeof text);
+    assert_string_equal(text, "degen: 2 triangles, 1 material, 0 lights, 3 skipped");
+    iir_scene_destroy(s);
+
+    write_file("alldegen.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n", path, sizeof path);
+    assert_load_fails(path, "alldegen.obj", "degenerate");
+}
+
+/* ======================== glTF 2.0 ======================== */
+
+/* A 2x2 floor quad (facing +y, material "glow": base colour and emissive factor), a spot light
+ * on a rotated node under a translated parent (world position (1, 2, 0), aimed down), a point
+ * light, and a camera at (0, 1, 5) looking down -z with yfov 0.8 rad and aspect 1.5. */
+static const char *const GLTF =
+    "{\"asset\": {\"version\": \"2.0\"},\n"
+    " \"extensionsUsed\": [\"KHR_lights_punctual\"],\n"
+    " \"extensions\": {\"KHR_lights_punctual\": {\"lights\": [\n"
+    "   {\"type\": \"spot\", \"name\": \"key\", \"color\": [1, 0.5, 0.25], \"intensity\": 10,\n"
+    "    \"spot\": {\"innerConeAngle\": 0.4, \"outerConeAngle\": 0.6}},\n"
+    "   {\"type\": \"point\", \"name\": \"fill\", \"color\": [1, 1, 1], \"intensity\": 2}]}},\n"
+    " \"scene\": 0, \"scenes\": [{\"nodes\": [0, 1, 3, 4]}],\n"
+    " \"nodes\": [\n"
+    "   {\"mesh\": 0, \"name\": \"floor\"},\n"
+    "   {\"name\": \"rig\", \"translation\": [1, 0, 0], \"children\": [2]},\n"
+    "   {\"name\": \"keynode\", \"translation\": [0, 2, 0],\n"
+    "    \"rotation\": [-0.70710678, 0, 0, 0.70710678],\n"
+    "    \"extensions\": {\"KHR_lights_punctual\": {\"light\": 0}}},\n"
+    "   {\"name\": \"cam\", \"translation\": [0, 1, 5], \"camera\": 0},\n"
+    "   {\"name\": \"fillnode\", \"translation\": [0, 1.5, 0.5],\n"
+    "    \"extensions\": {\"KHR_lights_punctual\": {\"light\": 1}}}],\n"
+    " \"cameras\": [{\"type\": \"perspective\",\n"
+    "   \"perspective\": {\"yfov\": 0.8, \"aspectRatio\": 1.5, \"znear\": 0.1}}],\n"
+    " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"indices\": 1,\n"
+    "   \"material\": 0}]}],\n"
+    " \"materials\": [{\"name\": \"glow\",\n"
+    "   \"pbrMetallicRoughness\": {\"baseColorFactor\": [0.8, 0.2, 0.1, 1]},\n"
+    "   \"emissiveFactor\": [1, 2, 3]}],\n"
+    " \"buffers\": [{\"byteLength\": 60, \"uri\": \"data:application/octet-stream;base64,"
+    "AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/AAACAAEAAAADAAIA\"}],\n"
+    " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
+    "   {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 12}],\n"
+    " \"accessors\": [\n"
+    "   {\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\",\n"
+    "    \"min\": [-1, 0, -1], \"max\": [1, 0, 1]},\n"
+    "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": \"SCALAR\"}]}\n";
+
+static const iir_light *find_light(const iir_scene *s, const char *name)
+{
+    for (uint32_t i = 0; i < s->num_lights; i++)
+        if (strcmp(s->lights[i].name, name) == 0) return &s->lights[i];
+    return NULL;
+}
+
+static void test_gltf_lights_and_camera(void **state)
+{
+    (void)state;
+    char path[1024];
+    write_file("lit.gltf", GLTF, path, sizeof path);
+    iir_scene *s = load_ok(path);
+    assert_int_equal(s->num_triangles, 2);
+    assert_triangles_sane(s);
+    assert_vec_near(s->normals[0], iir_v3(0, 1, 0), 1e-6f);
+    assert_int_equal(s->num_materials, 1);
+    assert_vec_near(s->material_list[0].albedo, iir_v3(0.8f, 0.2f, 0.1f), 1e-6f);
+    assert_vec_near(s->material_list[0].emission, iir_v3(1.f, 2.f, 3.f), 1e-6f);
+
+    assert_int_equal(s->num_lights, 2);
+    const iir_light *spot = find_light(s, "keynode"), *point = find_light(s, "fillnode");
+    assert_non_null(spot);
+    assert_non_null(point);
+    iir_error err;
+    assert_int_equal(iir_light_validate(spot, &err), IIR_OK);
+    assert_int_equal(spot->type, IIR_LIGHT_SPOT);
+    assert_vec_near(spot->position, iir_v3(1.f, 2.f, 0.f), 1e-5f);
+    assert_vec_near(spot->direction, iir_v3(0.f, -1.f, 0.f), 1e-5f);
+    assert_true(near(spot->cone_angle, 0.6f, 1e-6f));
+    assert_true(near(spot->smooth, 0.2f, 1e-6f));
+    assert_vec_near(spot->intensity, iir_v3(10.f, 5.f, 2.5f), 1e-5f);
+    assert_int_equal(point->type, IIR_LIGHT_POINT);
+    assert_vec_near(point->position, iir_v3(0.f, 1.5f, 0.5f), 1e-6f);
+    assert_vec_near(point->intensity, iir_v3s(2.f), 1e-6f);
+
+    assert_int_equal(iir_camera_validate(&s->camera, &err), IIR_OK);
+    assert_vec_near(s->camera.position, iir_v3(0.f, 1.f, 5.f), 1e-5f);
+    assert_vec_near(iir_normalize(iir_sub(s->camera.target, s->camera.position)),
+                    iir_v3(0.f, 0.f, -1.f), 1e-5f);
+    assert_vec_near(s->camera.up, iir_v3(0.f, 1.f, 0.f), 1e-5f);
+    assert_true(near(s->camera.fov_y, iir_degrees(0.8f), 1e-3f));
+    iir_scene_destroy(s);
+}
+
+/* text with the first `from` replaced by `to`, into out */
+static void replace_once(const char *text, const char *from, const char *to, char *out, size_t n)
+{
+    const char *at = strstr(text, from);
+    assert_non_null(at);
+    snprintf(out, n, "%.*s%s%s", (int)(at - text), text, to, at + strlen(from));
+}
+
+/* A glTF spot wider than a hemisphere is refused, naming the file and the light. */
+static void test_gltf_bad_light(void **state)
+{
+    (void)state;
+    static char text[8192];
+    char path[1024];
+    replace_once(GLTF, "\"outerConeAngle\": 0.6", "\"outerConeAngle\": 2.0", text, sizeof text);
+    write_file("wide.gltf", text, path, sizeof path);
+    assert_load_fails(path, "wide.gltf", "keynode");
+    assert_load_fails(path, "wide.gltf", "cone angle");
+}
+
+/* ======================== refusals of mesh files ======================== */
+
+static void test_missing_file(void **state)
+{
+    (void)state;
+    char path[1024];
+    snprintf(path, sizeof path, "%s/nope.obj", tmp);
+    assert_load_fails(path, "nope.obj", "No such file");
+}
+
+static void test_unreadable_file(void **state)
+{
+    (void)state;
+    /* root reads a chmod 000 file anyway, so the check means nothing there */
+    if (geteuid() == 0) skip();
+    char path[1024];
+    write_file("secret.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", path, sizeof path);
+    assert_int_equal(chmod(path, 0), 0);
+    assert_load_fails(path, "secret.obj", "Permission denied");
+    chmod(path, 0644);
+}
+
+static void test_unknown_format(void **state)
+{
+    (void)state;
+    char path[1024];
+    write_file("mesh.xyz", "hello, I am not a mesh\n", path, sizeof path);
+    assert_load_fails(path, "mesh.xyz", "assimp");
+    write_file("broken.gltf", "{\"asset\": ", path, sizeof path);
+    assert_load_fails(path, "broken.gltf", "assimp");
+}
+
+static void test_no_triangles(void **state)
+{
+    (void)state;
+    char path[1024];
+    write_file("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\np 3\n", path, sizeof path);
+    assert_load_fails(path, "points.obj", "no triangles");
+    write_file("empty.obj", "# nothing but a comment, long enough for assimp\n", path, sizeof path);
+    assert_load_fails(path, "empty.obj", NULL);
+}
+
+static void test_nan_inf_vertices(void **state)
+{
+    (void)state;
+    char path[1024];
+    write_file("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n", path,
+               sizeof path);
+    assert_load_fails(path, "nan.obj", "not finite");
+    write_file("inf.obj", "v 0 0 0\nv 1 0 0\nv 0 -inf 0\nf 1 2 3\n", path, sizeof path);
+    assert_load_fails(path, "inf.obj", "not finite");
+    write_file("huge.obj", "v 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n", path, sizeof path);
+    assert_load_fails(path, "huge.obj", "not finite");
+}
+
+/* ======================== the sidecar ======================== */
+
+static const char *const BOX_OBJ = "mtllib glow.mtl\n"
+                                   "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                   "usemtl glow\nf 1 2 3 4\n";
+
+/* Writes box.obj and NAME with the given sidecar text; returns the sidecar path in out. */
+static void write_sidecar(const char *name, const char *json, char *out, size_t n)
+{
+    char path[1024];
+    write_file("glow.mtl", GLOW_MTL, path, sizeof path);
+    write_file("box.obj", BOX_OBJ, path, sizeof path);
+    write_file(name, json, out, n);
+}
+
+static void test_sidecar_applied(void **state)
+{
+    (void)state;
+    char path[1024], sc[1024];
+    write_file("glow.mtl", GLOW_MTL, path, sizeof path);
+    write_file("room.obj", BOX_OBJ, path, sizeof path);
+    write_file("room.scene.json",
+               "{\"unit_scale\": 2,\n"
+               " \"camera\": {\"position\": [1, 1, 5], \"target\": [1, 1, 0], \"fov_y\": 50},\n"
+               " \"lights\": [{\"type\": \"spot\", \"name\": \"key\", \"position\": [1, 1, 3],\n"
+               "   \"target\": [1, 1, 0], \"cone_angle\": 30, \"smooth\": 10, \"intensity\": 5},\n"
+               "   {\"type\": \"point\", \"position\": [0.5, 0.5, 1], \"intensity\": [1, 2, 3]}],\n"
+               " \"materials\": {\"glow\": {\"albedo\": [0.1, 0.2, 0.3], \"emission\": 0}},\n"
+               " \"paths\": {\"orbit\": {\"keys\": [[0, 1, 2]]}}}\n",
+               sc, sizeof sc);
+    /* applied automatically next to room.obj */
+    iir_scene *s = load_ok(path);
+    assert_string_equal(s->name, "room");
+    assert_vec_near(s->bounds_max, iir_v3(2.f, 2.f, 0.f), 1e-6f); /* geometry scaled */
+    assert_vec_near(s->camera.position, iir_v3(1, 1, 5), 0.f);    /* sidecar: world units */
+    assert_true(s->camera.fov_y == 50.f);
+    assert_int_equal(s->num_lights, 2);
+    const iir_light *key = &s->lights[0];
+    assert_string_equal(key->name, "key");
+    assert_vec_near(key->position, iir_v3(1, 1, 3), 0.f);
+    assert_vec_near(key->direction, iir_v3(0, 0, -1), 1e-6f);
+    assert_true(near(key->cone_angle, iir_radians(30.f), 1e-6f));
+    assert_true(near(key->smooth, iir_radians(10.f), 1e-6f));
+    assert_vec_near(key->intensity, iir_v3s(5.f), 0.f);
+    assert_string_equal(s->lights[1].name, "light1");
+    assert_int_equal(s->lights[1].type, IIR_LIGHT_POINT);
+    assert_vec_near(s->lights[1].intensity, iir_v3(1, 2, 3), 0.f);
+    assert_vec_near(s->material_list[0].albedo, iir_v3(0.1f, 0.2f, 0.3f), 1e-6f);
+    assert_true(iir_is_black(s->material_list[0].emission));
+    assert_non_null(s->paths_json);
+    assert_string_equal(s->paths_json, "{\"orbit\":{\"keys\":[[0,1,2]]}}");
+    iir_scene_destroy(s);
+
+    /* a standalone sidecar naming its mesh; an empty lights array removes all lights */
+    write_sidecar("named.scene.json", "{\"file\": \"box.obj\", \"lights\": []}", sc, sizeof sc);
+    s = load_ok(sc);
+    assert_string_equal(s->name, "named");
+    assert_string_equal(s->source, sc);
+    assert_int_equal(s->num_triangles, 2);
+    assert_int_equal(s->num_lights, 0);
+    iir_scene_destroy(s);
+}
+
+/* A folder with one mesh loads it; with a sidecar named after the folder, that. */
+static void test_folder(void **state)
+{
+    (void)state;
+    char dir[600], path[700];
+    snprintf(dir, sizeof dir, "%s/onemesh", tmp);
+    mkdir(dir, 0755);
+    snprintf(path, sizeof path, "%s/only.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", f);
+    fclose(f);
+    iir_scene *s = load_ok(dir);
+    assert_string_equal(s->name, "only");
+    assert_int_equal(s->num_triangles, 1);
+    iir_scene_destroy(s);
+
+    snprintf(dir, sizeof dir, "%s/nomesh", tmp);
+    mkdir(dir, 0755);
+    assert_load_fails(dir, "nomesh", "no *.scene.json");
+}
+
+static void test_sidecar_malformed(void **state)
+{
+    (void)state;
+    char sc[1024];
+    write_sidecar("bad.scene.json", "{\"file\": \"box.obj\",\n \"camera\": {\"position\": [1, 2,",
+                  sc, sizeof sc);
+    assert_load_fails(sc, "bad.scene.json", "malformed JSON at line 2");
+    write_sidecar("nanjson.scene.json", "{\"file\": \"box.obj\", \"unit_scale\": NaN}", sc,
+                  sizeof sc);
+    assert_load_fails(sc, "nanjson.scene.json", "malformed JSON");
+    write_sidecar("list.scene.json", "[1, 2]", sc, sizeof sc);
+    assert_load_fails(sc, "list.scene.json", "JSON object");
+}
+
+static void test_sidecar_unknown_field(void **state)
+{
+    (void)state;
+    char sc[1024];
+    write_sidecar("typo.scene.json", "{\"file\": \"box.obj\", \"lihgts\": []}", sc, sizeof sc);
+    assert_load_fails(sc, "typo.scene.json", "lihgts: unknown field");
+    write_sidecar("typo2.scene.json",
+                  "{\"file\": \"box.obj\", \"lights\": [{\"type\": \"point\", \"position\": "
+                  "[0, 1, 0], \"intensity\": 1, \"colour\": [1, 1, 1]}]}",
+                  sc, sizeof sc);
+    assert_load_fails(sc, "typo2.scene.json", "lights[0].colour: unknown field");
+    write_sidecar("twice.scene.json", "{\"file\": \"box.obj\", \"file\": \"box.obj\"}", sc,
+                  sizeof sc);
+    assert_load_fails(sc, "twice.scene.json", "given twice");
+    write_sidecar("nomat.scene.json",
+                  "{\"file\": \"box.obj\", \"materials\": {\"gloww\": {\"albedo\": 0.5}}}", sc,
+                  sizeof sc);
+    assert_load_fails(sc, "nomat.scene.json", "materials.gloww");
+}
+
+static void test_sidecar_bad_values(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *json, *field, *problem;
+    } cases[] = {
+        {"\"lights\": [{\"type\": \"spot\", \"position\": [0, 1, 0], \"direction\": [0, 0, 0], "
+         "\"cone_angle\": 30, \"intensity\": 1}]",
+         "lights[0].direction", "zero"},
+        {"\"lights\": [{\"type\": \"spot\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"cone_angle\": 0, \"intensity\": 1}]",
+         "lights[0].cone_angle", "(0, 90]"},
+        {"\"lights\": [{\"type\": \"spot\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"cone_angle\": 120, \"intensity\": 1}]",
+         "lights[0].cone_angle", "(0, 90]"},
+        {"\"lights\": [{\"type\": \"spot\", \"position\": [0, 1, 0], \"target\": [0, 1, 0], "
+         "\"cone_angle\": 30, \"intensity\": 1}]",
+         "lights[0].target", "position"},
+        {"\"lights\": [{\"type\": \"spot\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"target\": [0, 0, 0], \"cone_angle\": 30, \"intensity\": 1}]",
+         "lights[0]", "exactly one"},
+        {"\"lights\": [{\"type\": \"point\", \"position\": [0, 1e7, 0], \"intensity\": 1}]",
+         "lights[0].position[1]", "outside"},
+        {"\"lights\": [{\"type\": \"point\", \"position\": [0, 1, 0], \"intensity\": -1}]",
+         "lights[0].intensity", "outside"},
+        {"\"lights\": [{\"type\": \"point\", \"position\": [0, 1, 0], \"intensity\": 1, "
+         "\"cone_angle\": 30}]",
+         "lights[0].cone_angle", "only spot"},
+        {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"intensity\": 1}]",
+         "lights[0].type", "\"spot\" or \"point\""},
+        {"\"camera\": {\"position\": [0, 1, 2], \"target\": [0, 1, 2]}", "camera.target",
+         "equals camera.position"},
+        {"\"camera\": {\"position\": [0, 1, 2], \"target\": [0, 1, 0], \"fov_y\": 0}",
+         "camera.fov_y", "(0, 180)"},
+        {"\"camera\": {\"position\": [0, 1, 2], \"target\": [0, 1, 0], \"up\": [0, 0, 1]}",
+         "camera.up", "parallel"},
+        {"\"camera\": {\"position\": [0, \"1\", 2], \"target\": [0, 1, 0]}", "camera.position[1]",
+         "number"},
+        {"\"camera\": {\"target\": [0, 1, 0]}", "camera.position", "required"},
+        {"\"unit_scale\": 0", "unit_scale", "positive"},
+        {"\"unit_scale\": \"mm\"", "unit_scale", "number"},
+        {"\"unit_scale\": 1e999", "unit_scale", "outside"},
+        {"\"materials\": {\"glow\": {\"albedo\": [1.5, 0, 0]}}", "materials.glow.albedo[0]",
+         "outside"},
+        {"\"paths\": [1, 2]", "paths", "object"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        char json[1024], sc[1024];
+        snprintf(json, sizeof json, "{\"file\": \"box.obj\", %s}", cases[i].json);
+        write_sidecar("values.scene.json", json, sc, sizeof sc);
+        print_message("case %zu: %s\n", i, cases[i].field);
+        assert_load_fails(sc, "values.scene.json", cases[i].field);
+        assert_load_fails(sc, cases[i].field, cases[i].problem);
+    }
+}
+
+static void test_sidecar_file_escapes(void **state)
+{
+    (void)state;
+    char sc[1024];
+    write_sidecar("up.scene.json", "{\"file\": \"../x.obj\"}", sc, sizeof sc);
+    assert_load_fails(sc, "up.scene.json", "inside the sidecar's folder");
+    write_sidecar("deep.scene.json", "{\"file\": \"a/../../x.obj\"}", sc, sizeof sc);
+    assert_load_fails(sc, "deep.scene.json", "file");
+    write_sidecar("abs.scene.json", "{\"file\": \"/etc/passwd\"}", sc, sizeof sc);
+    assert_load_fails(sc, "abs.scene.json", "inside the sidecar's folder");
+    write_sidecar("gone.scene.json", "{\"file\": \"gone.obj\"}", sc, sizeof sc);
+    assert_load_fails(sc, "gone.scene.json", "gone.obj");
+    write_sidecar("orphan.scene.json", "{\"lights\": []}", sc, sizeof sc);
+    assert_load_fails(sc, "orphan.scene.json", "names no mesh");
+}
+
+/* ======================== resolving names ======================== */
+
+static void test_resolve(void **state)
+{
+    (void)state;
+    char out[1024], cwd[1024];
+    iir_error err;
+    const char *scenes = IIR_SOURCE_DIR "/scenes";
+    assert_int_equal(iir_scene_resolve("cornell_box", scenes, out, sizeof out, &err), IIR_OK);
+    assert_string_equal(out, IIR_SOURCE_DIR "/scenes/cornell_box");
+    /* an existing path is taken as is */
+    assert_int_equal(iir_scene_resolve(scenes, NULL, out, sizeof out, &err), IIR_OK);
+    assert_string_equal(out, scenes);
+
+    /* relative names are judged from the scratch folder, where ../etc does not exist */
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    assert_int_equal(chdir(tmp), 0);
+    assert_int_equal(iir_scene_resolve("../etc", scenes, out, sizeof out, &err), IIR_ERR_INVALID);
+    assert_contains(err.msg, "'../etc'");
+    assert_contains(err.msg, "'..'");
+    assert_int_equal(iir_scene_resolve("a/b", scenes, out, sizeof out, &err), IIR_ERR_INVALID);
+    assert_contains(err.msg, "'a/b'");
+    assert_int_equal(iir_scene_resolve("up..name", scenes, out, sizeof out, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_scene_resolve("my scene", scenes, out, sizeof out, &err), IIR_ERR_INVALID);
+    assert_contains(err.msg, "letters, digits");
+    assert_int_equal(iir_scene_resolve("", scenes, out, sizeof out, &err), IIR_ERR_INVALID);
+    /* a missing name says where it looked, and lists nothing */
+    assert_int_equal(iir_scene_resolve("no_such_scene", scenes, out, sizeof out, &err), IIR_ERR_IO);
+    assert_contains(err.msg, "no_such_scene");
+    assert_contains(err.msg, scenes);
+    assert_null(strstr(err.msg, "cornell_box"));
+    assert_int_equal(chdir(cwd), 0);
+
+    char tiny[8];
+    assert_int_equal(iir_scene_resolve("cornell_box", scenes, tiny, sizeof tiny, &err),
+                     IIR_ERR_INVALID);
+}
+
+/* ======================== the big shipped scenes ======================== */
+
+static double seconds_since(const struct timespec *t0)
+{
+    struct timespec t1;
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    return (double)(t1.tv_sec - t0->tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0->tv_nsec);
+}
+
+/* The light and camera must be inside the bounds, the camera must validate. */
+static void assert_inside(const iir_scene *s, iir_vec3 p)
+{
+    assert_true(p.x > s->bounds_min.x && p.y > s->bounds_min.y && p.z > s->bounds_min.z);
+    assert_true(p.x < s->bounds_max.x && p.y < s->bounds_max.y && p.z < s->bounds_max.z);
+}
+
+static void check_shipped_room(const iir_scene *s)
+{
+    iir_error err;
+    assert_int_equal(iir_camera_validate(&s->camera, &err), IIR_OK);
+    assert_inside(s, s->camera.position);
+    assert_int_equal(s->num_lights, 1);
+    assert_int_equal(iir_light_validate(&s->lights[0], &err), IIR_OK);
+    assert_inside(s, s->lights[0].position);
+}
+
+static void test_conference(void **state)
+{
+    (void)state;
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    iir_scene *s = load_ok(IIR_SOURCE_DIR "/scenes/conference");
+    print_message("conference: %u triangles (%u skipped), %.2f s\n", s->num_triangles,
+                  s->skipped_degenerate, seconds_since(&t0));
+    assert_true(s->num_triangles + s->skipped_degenerate == 331179);
+    assert_true(s->num_triangles > 300000);
+    /* metres: about 8.1 x 2 x 5.2 m */
+    assert_true(near(s->bounds_min.x, -3.06f, 0.01f) && near(s->bounds_max.x, 5.06f, 0.01f));
+    assert_true(near(s->bounds_min.y, -0.008f, 0.01f) && near(s->bounds_max.y, 1.95f, 0.01f));
+    assert_true(near(s->bounds_min.z, -3.17f, 0.01f) && near(s->bounds_max.z, 2.01f, 0.01f));
+    check_shipped_room(s);
+    iir_scene_destroy(s);
+}
+
+static void test_living_room(void **state)
+{
+    (void)state;
+    iir_scene *s = load_ok(IIR_SOURCE_DIR "/scenes/living_room");
+    assert_true(s->num_triangles + s->skipped_degenerate == 143163);
+    assert_true(near(s->bounds_max.y, 2.88f, 0.01f));
+    check_shipped_room(s);
+    iir_scene_destroy(s);
+}
+
+/* ======================== main ======================== */
+
+int main(void)
+{
+    snprintf(tmp, sizeof tmp, "%s", iir_test_tmpdir("test_scene"));
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cornell_builtin),
+        cmocka_unit_test(test_cornell_shipped_equals_builtin),
+        cmocka_unit_test(test_camera),
+        cmocka_unit_test(test_obj_emissive),
+        cmocka_unit_test(test_obj_colours_clamped),
+        cmocka_unit_test(test_degenerate_triangles),
+        cmocka_unit_test(test_gltf_lights_and_camera),
+        cmocka_unit_test(test_gltf_bad_light),
+        cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_unreadable_file),
+        cmocka_unit_test(test_unknown_format),
+        cmocka_unit_test(test_no_triangles),
+        cmocka_unit_test(test_nan_inf_vertices),
+        cmocka_unit_test(test_sidecar_applied),
+        cmocka_unit_test(test_folder),
+        cmocka_unit_test(test_sidecar_malformed),
+        cmocka_unit_test(test_sidecar_unknown_field),
+        cmocka_unit_test(test_sidecar_bad_values),
+        cmocka_unit_test(test_sidecar_file_escapes),
+        cmocka_unit_test(test_resolve),
+        cmocka_unit_test(test_conference),
+        cmocka_unit_test(test_living_room),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
