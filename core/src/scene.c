@@ -39,9 +39,11 @@ static const char *plural(uint32_t n)
 
 void iir_scene_describe(const iir_scene *s, char *buf, size_t n)
 {
-    snprintf(buf, n, "%s: %u triangle%s, %u material%s, %u light%s, %u skipped", s->name,
-             s->num_triangles, plural(s->num_triangles), s->num_materials, plural(s->num_materials),
-             s->num_lights, plural(s->num_lights), s->skipped_degenerate);
+    snprintf(buf, n,
+             "%s: %u triangle%s, %u material%s, %u light%s, skipped %u degenerate and %u duplicate",
+             s->name, s->num_triangles, plural(s->num_triangles), s->num_materials,
+             plural(s->num_materials), s->num_lights, plural(s->num_lights), s->skipped_degenerate,
+             s->skipped_duplicate);
 }
 
 /* ======================== path helpers ======================== */

@@ -247,6 +247,84 @@ static uint32_t keep_good_triangles(iir_scene_builder *b, double min_area, iir_v
     return kept;
 }
 
+/* A triangle's three positions in a canonical (sorted) order, so the same triangle listed twice,
+ * in any vertex order or winding, gives the same key. */
+typedef struct tri_key {
+    iir_vec3 p[3];
+    uint32_t tri;
+} tri_key;
+
+static int cmp_vec3(const iir_vec3 *a, const iir_vec3 *b)
+{
+    if (a->x != b->x) return a->x < b->x ? -1 : 1;
+    if (a->y != b->y) return a->y < b->y ? -1 : 1;
+    if (a->z != b->z) return a->z < b->z ? -1 : 1;
+    return 0;
+}
+
+static int cmp_key_points(const tri_key *a, const tri_key *b)
+{
+    for (int k = 0; k < 3; k++) {
+        int c = cmp_vec3(&a->p[k], &b->p[k]);
+        if (c) return c;
+    }
+    return 0;
+}
+
+/* Points first, then the triangle's index, so the earliest of equal triangles comes first. */
+static int cmp_key(const void *va, const void *vb)
+{
+    const tri_key *a = va, *b = vb;
+    int c = cmp_key_points(a, b);
+    return c ? c : (a->tri > b->tri) - (a->tri < b->tri);
+}
+
+static tri_key make_key(const iir_scene_builder *b, uint32_t t)
+{
+    tri_key k = {{b->positions[b->indices[3 * (size_t)t]],
+                  b->positions[b->indices[3 * (size_t)t + 1]],
+                  b->positions[b->indices[3 * (size_t)t + 2]]},
+                 t};
+    for (int i = 0; i < 2; i++) /* sort three points */
+        for (int j = 0; j < 2 - i; j++)
+            if (cmp_vec3(&k.p[j], &k.p[j + 1]) > 0) {
+                iir_vec3 tmp = k.p[j];
+                k.p[j] = k.p[j + 1];
+                k.p[j + 1] = tmp;
+            }
+    return k;
+}
+
+/* Drops every triangle whose three positions equal an earlier triangle's (coplanar duplicates
+ * make hits ambiguous and double the area light sampling sees), compacting triangles, normals and
+ * areas in order. Returns how many remain, or UINT32_MAX when out of memory. */
+static uint32_t drop_duplicates(iir_scene_builder *b, uint32_t n, iir_vec3 *normals, float *areas)
+{
+    tri_key *keys = malloc(sizeof(tri_key) * (n ? n : 1));
+    uint8_t *dup = calloc(n ? n : 1, 1);
+    if (!keys || !dup) {
+        free(keys);
+        free(dup);
+        return UINT32_MAX;
+    }
+    for (uint32_t t = 0; t < n; t++) keys[t] = make_key(b, t);
+    qsort(keys, n, sizeof(tri_key), cmp_key);
+    for (uint32_t i = 1; i < n; i++)
+        if (cmp_key_points(&keys[i - 1], &keys[i]) == 0) dup[keys[i].tri] = 1;
+    uint32_t kept = 0;
+    for (uint32_t t = 0; t < n; t++) {
+        if (dup[t]) continue;
+        memmove(b->indices + 3 * (size_t)kept, b->indices + 3 * (size_t)t, 3 * sizeof(uint32_t));
+        b->tri_materials[kept] = b->tri_materials[t];
+        normals[kept] = normals[t];
+        areas[kept] = areas[t];
+        kept++;
+    }
+    free(keys);
+    free(dup);
+    return kept;
+}
+
 /* Looks at the centre of the bounds from +z, far enough for the bounding sphere to fit the
  * vertical field of view. */
 static iir_camera default_camera(bounds bb)
@@ -324,8 +402,13 @@ iir_status iir_builder_finish(iir_scene_builder *b, iir_scene **out, iir_error *
         return iir_fail(err, IIR_ERR_FORMAT, "%s: no triangles left: all %u are degenerate",
                         b->source, total);
     }
-    b->num_triangles = kept;
-    bounds bb = triangle_bounds(b, kept);
+    uint32_t unique = drop_duplicates(b, kept, s->normals, s->areas);
+    if (unique == UINT32_MAX) {
+        iir_scene_destroy(s);
+        return no_memory(b, err);
+    }
+    b->num_triangles = unique;
+    bounds bb = triangle_bounds(b, unique);
     if (!b->has_camera) {
         iir_camera cam = default_camera(bb);
         iir_builder_set_camera(b, &cam);
@@ -333,6 +416,7 @@ iir_status iir_builder_finish(iir_scene_builder *b, iir_scene **out, iir_error *
     s->bounds_min = bb.lo;
     s->bounds_max = bb.hi;
     s->skipped_degenerate = total - kept;
+    s->skipped_duplicate = kept - unique;
     move_into_scene(b, s);
     *out = s;
     return IIR_OK;

@@ -36,9 +36,9 @@ static const struct {
 /* The OBJ's quads in file order, vertices in its winding order (y up, open side towards +z).
  * Each splits into triangles (0, 1, 2) and (0, 2, 3). The OBJ's "bottom" faces of both boxes
  * index the vertices of another side face (short box: right face, tall box: front face), so they
- * duplicate that face; they are kept as in the file so that the built-in box and the shipped
- * scenes/cornell_box are the same geometry. */
-#define NUM_QUADS 18
+ * duplicate that face; they are left out here, and the loader drops them from the OBJ as duplicate
+ * triangles, so the built-in box and the shipped scenes/cornell_box are the same geometry. */
+#define NUM_QUADS 16
 /* clang-format off */
 static const struct {
     int material;
@@ -49,19 +49,17 @@ static const struct {
     {BACK_WALL, {{-0.99f, 0.00f, -1.04f}, {1.00f, 0.00f, -1.04f}, {1.00f, 1.99f, -1.04f}, {-1.02f, 1.99f, -1.04f}}},
     {RIGHT_WALL, {{1.00f, 0.00f, -1.04f}, {1.00f, 0.00f, 0.99f}, {1.00f, 1.99f, 0.99f}, {1.00f, 1.99f, -1.04f}}},
     {LEFT_WALL, {{-1.01f, 0.00f, 0.99f}, {-0.99f, 0.00f, -1.04f}, {-1.02f, 1.99f, -1.04f}, {-1.02f, 1.99f, 0.99f}}},
-    /* short box: top, left, front, right, back, "bottom" (= right) */
+    /* short box: top, left, front, right, back */
     {SHORT_BOX, {{0.53f, 0.60f, 0.75f}, {0.70f, 0.60f, 0.17f}, {0.13f, 0.60f, 0.00f}, {-0.05f, 0.60f, 0.57f}}},
     {SHORT_BOX, {{-0.05f, 0.00f, 0.57f}, {-0.05f, 0.60f, 0.57f}, {0.13f, 0.60f, 0.00f}, {0.13f, 0.00f, 0.00f}}},
     {SHORT_BOX, {{0.53f, 0.00f, 0.75f}, {0.53f, 0.60f, 0.75f}, {-0.05f, 0.60f, 0.57f}, {-0.05f, 0.00f, 0.57f}}},
     {SHORT_BOX, {{0.70f, 0.00f, 0.17f}, {0.70f, 0.60f, 0.17f}, {0.53f, 0.60f, 0.75f}, {0.53f, 0.00f, 0.75f}}},
     {SHORT_BOX, {{0.13f, 0.00f, 0.00f}, {0.13f, 0.60f, 0.00f}, {0.70f, 0.60f, 0.17f}, {0.70f, 0.00f, 0.17f}}},
-    {SHORT_BOX, {{0.70f, 0.00f, 0.17f}, {0.70f, 0.60f, 0.17f}, {0.53f, 0.60f, 0.75f}, {0.53f, 0.00f, 0.75f}}},
-    /* tall box: top, left, back, right, front, "bottom" (= front) */
+    /* tall box: top, left, back, right, front */
     {TALL_BOX, {{-0.53f, 1.20f, 0.09f}, {0.04f, 1.20f, -0.09f}, {-0.14f, 1.20f, -0.67f}, {-0.71f, 1.20f, -0.49f}}},
     {TALL_BOX, {{-0.53f, 0.00f, 0.09f}, {-0.53f, 1.20f, 0.09f}, {-0.71f, 1.20f, -0.49f}, {-0.71f, 0.00f, -0.49f}}},
     {TALL_BOX, {{-0.71f, 0.00f, -0.49f}, {-0.71f, 1.20f, -0.49f}, {-0.14f, 1.20f, -0.67f}, {-0.14f, 0.00f, -0.67f}}},
     {TALL_BOX, {{-0.14f, 0.00f, -0.67f}, {-0.14f, 1.20f, -0.67f}, {0.04f, 1.20f, -0.09f}, {0.04f, 0.00f, -0.09f}}},
-    {TALL_BOX, {{0.04f, 0.00f, -0.09f}, {0.04f, 1.20f, -0.09f}, {-0.53f, 1.20f, 0.09f}, {-0.53f, 0.00f, 0.09f}}},
     {TALL_BOX, {{0.04f, 0.00f, -0.09f}, {0.04f, 1.20f, -0.09f}, {-0.53f, 1.20f, 0.09f}, {-0.53f, 0.00f, 0.09f}}},
     /* the ceiling panel (the original area light), 0.47 x 0.38, facing down */
     {LIGHT, {{-0.24f, 1.98f, 0.16f}, {-0.24f, 1.98f, -0.22f}, {0.23f, 1.98f, -0.22f}, {0.23f, 1.98f, 0.16f}}},

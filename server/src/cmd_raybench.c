@@ -26,7 +26,7 @@ static void raybench_usage(FILE *f)
                "\n"
                "  --rays N       raw rays per kind (default 4000000)\n"
                "  --size WxH     path tracer image (default 320x240)\n"
-               "  --spp N        path tracer samples per pixel (default 8)\n"
+               "  --spp N        path tracer samples per pixel (default 32)\n"
                "  --bounces B    path tracer bounces (default 2)\n"
                "  --seed S       random seed (default 1)\n"
                "  --threads N    OpenMP threads (default: all cores)\n"
@@ -122,7 +122,7 @@ static void print_report(const iir_scene *scene, const iir_raybench_result *r,
 int iird_cmd_raybench(int argc, char **argv)
 {
     bench_opts o = {.rays = 4000000, .width = 320, .height = 240, .params = iir_params_default()};
-    o.params.spp = 8;
+    o.params.spp = 32;
     int rc = parse_args(argc, argv, &o);
     if (rc >= 0) return rc;
     iir_error err = {0};

@@ -118,9 +118,10 @@ static void test_cornell_builtin(void **state)
     assert_non_null(s);
     assert_string_equal(s->name, "cornell_box");
     assert_string_equal(s->source, "");
-    assert_int_equal(s->num_triangles, 36);
+    assert_int_equal(s->num_triangles, 32);
     assert_int_equal(s->num_materials, 8);
     assert_int_equal(s->skipped_degenerate, 0);
+    assert_int_equal(s->skipped_duplicate, 0);
     assert_null(s->paths_json);
     assert_triangles_sane(s);
 
@@ -164,7 +165,9 @@ static void test_cornell_builtin(void **state)
 
     char text[256];
     iir_scene_describe(s, text, sizeof text);
-    assert_string_equal(text, "cornell_box: 36 triangles, 8 materials, 1 light, 0 skipped");
+    assert_string_equal(
+        text,
+        "cornell_box: 32 triangles, 8 materials, 1 light, skipped 0 degenerate and 0 duplicate");
     iir_scene_destroy(s);
 }
 
@@ -178,6 +181,8 @@ static void test_cornell_shipped_equals_builtin(void **state)
     assert_int_equal(b->num_triangles, a->num_triangles);
     assert_int_equal(b->num_materials, a->num_materials);
     assert_int_equal(b->skipped_degenerate, 0);
+    /* the OBJ's two "bottom" box faces repeat a side face: 2 quads, 4 triangles */
+    assert_int_equal(b->skipped_duplicate, 4);
     assert_triangles_sane(b);
     for (uint32_t i = 0; i < a->num_materials; i++) {
         const iir_material *ma = &a->material_list[i];
@@ -305,7 +310,21 @@ static void test_degenerate_triangles(void **state)
     assert_vec_near(s->bounds_max, iir_v3(1, 1, 0), 0.f); /* (2, 0, 0) only in a dropped one */
     char text[256];
     iir_scene_describe(s, text, sizeof text);
-    assert_string_equal(text, "degen: 2 triangles, 1 material, 0 lights, 3 skipped");
+    assert_string_equal(
+        text, "degen: 2 triangles, 1 material, 0 lights, skipped 3 degenerate and 0 duplicate");
+    iir_scene_destroy(s);
+
+    /* the same triangle again, reversed and from other vertex indices, is a duplicate; a triangle
+     * sharing two of its vertices is not */
+    write_file("dup.obj",
+               "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 0 0\nv 0 0 0\nv 1 1 0\n"
+               "f 1 2 3\nf 3 5 4\nf 2 3 6\nf 2 6 3\n",
+               path, sizeof path);
+    s = load_ok(path);
+    assert_int_equal(s->num_triangles, 2);
+    assert_int_equal(s->skipped_duplicate, 2);
+    assert_int_equal(s->skipped_degenerate, 0);
+    assert_triangles_sane(s);
     iir_scene_destroy(s);
 
     write_file("alldegen.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n", path, sizeof path);

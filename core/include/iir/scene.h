@@ -47,6 +47,7 @@ typedef struct iir_scene {
     iir_vec3 bounds_min, bounds_max;
 
     uint32_t skipped_degenerate; /* triangles dropped at load: zero area or repeated vertices */
+    uint32_t skipped_duplicate;  /* triangles dropped at load: same three positions as another */
     char *paths_json;            /* sidecar "paths" object as JSON text, or NULL */
 } iir_scene;
 
@@ -69,7 +70,8 @@ iir_scene *iir_scene_create_cornell_box(void);
 
 void iir_scene_destroy(iir_scene *scene);
 
-/* Human-readable one-line summary ("cornell_box: 36 triangles, 8 materials, 1 light, 0 skipped").
+/* Human-readable one-line summary ("cornell_box: 32 triangles, 8 materials, 1 light, skipped 0
+ * degenerate and 0 duplicate").
  */
 void iir_scene_describe(const iir_scene *scene, char *buf, size_t n);
 
