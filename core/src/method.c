@@ -6,7 +6,7 @@
 #include "iir/scene.h"
 #include "method_internal.h"
 
-static const iir_method_ops *const registry[] = {&iir_method_pt};
+static const iir_method_ops *const registry[] = {&iir_method_pt, &iir_method_ir, &iir_method_iir};
 enum { NUM_METHODS = sizeof registry / sizeof registry[0] };
 
 struct iir_method {
@@ -16,22 +16,92 @@ struct iir_method {
 
 iir_params iir_params_default(void)
 {
-    iir_params p = {.spp = 16, .bounces = 2, .seed = 1};
+    iir_indirect_params ind = iir_indirect_params_default();
+    iir_incr_params inc = iir_incr_params_default();
+    iir_params p = {
+        .spp = 16,
+        .bounces = 2,
+        .seed = 1,
+        .jitter = true,
+        .vpls = (int)inc.target,
+        .kmin = (int)inc.k_min,
+        .kmax = (int)inc.k_max,
+        .weights = inc.weights,
+        .regen_threshold = inc.regen_threshold,
+        .visibility = ind.visibility,
+        .sm_res = 128,
+        .sm_bias = ind.sm_bias,
+        .interleave = ind.interleave,
+        .clamp = ind.clamp,
+        .ir_fresh = true,
+    };
     return p;
+}
+
+static iir_status check_int(int v, int lo, int hi, const char *name, iir_error *err)
+{
+    if (v < lo || v > hi)
+        return iir_fail(err, IIR_ERR_INVALID, "%s %d is outside [%d, %d]", name, v, lo, hi);
+    return IIR_OK;
+}
+
+static iir_status check_float(float v, float lo, float hi, const char *name, iir_error *err)
+{
+    if (!(v >= lo && v <= hi))
+        return iir_fail(err, IIR_ERR_INVALID, "%s %g is outside [%g, %g]", name, (double)v,
+                        (double)lo, (double)hi);
+    return IIR_OK;
 }
 
 iir_status iir_params_validate(const iir_params *p, iir_error *err)
 {
-    if (p->spp < 1 || p->spp > (1 << 20))
-        return iir_fail(err, IIR_ERR_INVALID, "spp %d is outside [1, 1048576]", p->spp);
-    if (p->bounces < 1 || p->bounces > 1000)
-        return iir_fail(err, IIR_ERR_INVALID, "bounces %d is outside [1, 1000]", p->bounces);
-    return IIR_OK;
+    iir_status st = check_int(p->spp, 1, 1 << 20, "spp", err);
+    if (st == IIR_OK) st = check_int(p->bounces, 1, 1000, "bounces", err);
+    if (st == IIR_OK) st = check_int(p->vpls, 1, 16384, "vpls", err);
+    if (st == IIR_OK) st = check_int(p->kmax, 0, p->vpls, "kmax", err);
+    if (st == IIR_OK) st = check_int(p->kmin, 0, p->kmax, "kmin", err);
+    if (st == IIR_OK) st = check_int(p->sm_res, 8, 2048, "sm_res", err);
+    if (st == IIR_OK) st = check_int(p->interleave, 1, 8, "interleave", err);
+    if (st == IIR_OK) st = check_float(p->regen_threshold, 1e-6f, 1.f, "regen_threshold", err);
+    if (st == IIR_OK) st = check_float(p->clamp, 0.f, 1e12f, "clamp", err);
+    if (st == IIR_OK) st = check_float(p->sm_bias, 0.f, 1.f, "sm_bias", err);
+    if (st == IIR_OK && p->weights != IIR_WEIGHTS_UNIFORM && p->weights != IIR_WEIGHTS_VORONOI)
+        st = iir_fail(err, IIR_ERR_INVALID, "weights must be uniform or voronoi");
+    if (st == IIR_OK && p->visibility != IIR_VIS_SHADOWMAP && p->visibility != IIR_VIS_RAYS)
+        st = iir_fail(err, IIR_ERR_INVALID, "visibility must be shadowmap or rays");
+    return st;
+}
+
+iir_indirect_params iir_params_indirect(const iir_params *p)
+{
+    iir_indirect_params ind = iir_indirect_params_default();
+    ind.visibility = p->visibility;
+    ind.interleave = p->interleave;
+    ind.clamp = p->clamp;
+    ind.sm_bias = p->sm_bias;
+    return ind;
+}
+
+void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *stats)
+{
+    stats->phase_ms[IIR_PHASE_GBUFFER] = t->gbuffer_ms;
+    stats->phase_ms[IIR_PHASE_DIRECT] = t->direct_ms;
+    stats->phase_ms[IIR_PHASE_INDIRECT] = t->indirect_ms;
+    stats->phase_ms[IIR_PHASE_FILTER] = t->filter_ms;
+}
+
+iir_status iir_view_validate(const iir_view *view, iir_error *err)
+{
+    iir_status st = iir_camera_validate(&view->camera, err);
+    for (uint32_t i = 0; st == IIR_OK && i < view->num_lights; i++)
+        st = iir_light_validate(&view->lights[i], err);
+    return st;
 }
 
 const char *iir_phase_name(iir_phase phase)
 {
-    static const char *names[IIR_PHASE_COUNT] = {"trace"};
+    static const char *names[IIR_PHASE_COUNT] = {"trace",  "vpls",     "shadowmaps", "gbuffer",
+                                                 "direct", "indirect", "filter"};
     return phase < IIR_PHASE_COUNT ? names[phase] : "unknown";
 }
 
@@ -97,6 +167,12 @@ iir_status iir_method_render(iir_method *m, const iir_view *view, iir_image *out
 {
     memset(stats, 0, sizeof *stats);
     return m->ops->render(m->state, view, out, stats, err);
+}
+
+const iir_vpl *iir_method_vpls(const iir_method *m, uint32_t *n)
+{
+    *n = 0;
+    return m->ops->vpls ? m->ops->vpls(m->state, n) : NULL;
 }
 
 bool iir_method_can_refine(const iir_method *m)

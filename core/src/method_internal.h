@@ -14,8 +14,21 @@ typedef struct iir_method_ops {
                          iir_error *err);
     /* NULL when the method cannot refine. */
     iir_status (*refine)(void *state, iir_image *out, iir_frame_stats *stats, iir_error *err);
+    /* NULL when the method has no VPLs. */
+    const iir_vpl *(*vpls)(const void *state, uint32_t *n);
 } iir_method_ops;
 
 extern const iir_method_ops iir_method_pt;
+extern const iir_method_ops iir_method_ir;
+extern const iir_method_ops iir_method_iir;
+
+/* Shared by the VPL methods: validates the view (camera and lights), IIR_ERR_INVALID otherwise. */
+iir_status iir_view_validate(const iir_view *view, iir_error *err);
+
+/* The render.h settings a method's parameters ask for. */
+iir_indirect_params iir_params_indirect(const iir_params *p);
+
+/* Copies the renderer's phase times into the frame stats. */
+void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *stats);
 
 #endif

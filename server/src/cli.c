@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
+#include <omp.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -72,6 +73,109 @@ iir_status iird_parse_float(const char *text, const char *what, float lo, float 
                         (double)lo, (double)hi);
     *out = v;
     return IIR_OK;
+}
+
+const char IIRD_METHOD_HELP[] =
+    "method parameters (each method reads the ones it uses; see docs/cli.md):\n"
+    "  --spp N              pt: samples per pixel (default 16)\n"
+    "  --bounces B          pt, ir: 1 = direct only, 2 = one diffuse bounce (default 2)\n"
+    "  --seed S             random seed (default 1); same seed, same image\n"
+    "  --vpls N             ir: light paths; iir: VPL set size (default 256)\n"
+    "  --kmin K, --kmax K   iir: VPLs replaced per frame (default 4, 8)\n"
+    "  --weights W          iir: uniform | voronoi (default voronoi)\n"
+    "  --regen-threshold F  iir: regenerate all when more than F of the VPLs die (default 0.5)\n"
+    "  --visibility V       ir, iir: shadowmap | rays (default shadowmap)\n"
+    "  --sm-res R           shadow-map resolution (default 128)\n"
+    "  --sm-bias B          shadow-map bias (see docs/cli.md)\n"
+    "  --interleave N       N x N interleaved VPL subsets + filter; 1 = full (default 4)\n"
+    "  --clamp C            bound G at C / D^2, D the scene diagonal; 0 = no clamp\n"
+    "  --ir-same-random     ir: the same random numbers every frame (default: fresh)\n"
+    "  --threads N          OpenMP threads (default: all cores)\n";
+
+static iir_status parse_int_into(const char *arg, const char *what, long lo, long hi, int *out,
+                                 iir_error *err)
+{
+    long v;
+    iir_status st = iird_parse_int(arg, what, lo, hi, &v, err);
+    if (st == IIR_OK) *out = (int)v;
+    return st;
+}
+
+static iir_status parse_choice(const char *arg, const char *what, const char *a, const char *b,
+                               int *out, iir_error *err)
+{
+    if (!strcmp(arg, a))
+        *out = 0;
+    else if (!strcmp(arg, b))
+        *out = 1;
+    else
+        return iir_fail(err, IIR_ERR_INVALID, "%s '%s' must be %s or %s", what, arg, a, b);
+    return IIR_OK;
+}
+
+static iir_status parse_threads(const char *arg, iir_error *err)
+{
+    int n = 0;
+    iir_status st = parse_int_into(arg, "--threads", 1, 1024, &n, err);
+    if (st == IIR_OK) omp_set_num_threads(n);
+    return st;
+}
+
+bool iird_method_option(int c, const char *arg, iir_params *p, iir_status *st, iir_error *err)
+{
+    int choice = 0;
+    switch (c) {
+    case IIRD_OPT_SPP:
+        *st = parse_int_into(arg, "--spp", 1, 1 << 20, &p->spp, err);
+        break;
+    case IIRD_OPT_BOUNCES:
+        *st = parse_int_into(arg, "--bounces", 1, 1000, &p->bounces, err);
+        break;
+    case IIRD_OPT_SEED:
+        *st = iird_parse_u64(arg, "--seed", &p->seed, err);
+        break;
+    case IIRD_OPT_VPLS:
+        *st = parse_int_into(arg, "--vpls", 1, 16384, &p->vpls, err);
+        break;
+    case IIRD_OPT_KMIN:
+        *st = parse_int_into(arg, "--kmin", 0, 16384, &p->kmin, err);
+        break;
+    case IIRD_OPT_KMAX:
+        *st = parse_int_into(arg, "--kmax", 0, 16384, &p->kmax, err);
+        break;
+    case IIRD_OPT_REGEN:
+        *st = iird_parse_float(arg, "--regen-threshold", 1e-6f, 1.f, &p->regen_threshold, err);
+        break;
+    case IIRD_OPT_WEIGHTS:
+        *st = parse_choice(arg, "--weights", "uniform", "voronoi", &choice, err);
+        p->weights = choice ? IIR_WEIGHTS_VORONOI : IIR_WEIGHTS_UNIFORM;
+        break;
+    case IIRD_OPT_VISIBILITY:
+        *st = parse_choice(arg, "--visibility", "shadowmap", "rays", &choice, err);
+        p->visibility = choice ? IIR_VIS_RAYS : IIR_VIS_SHADOWMAP;
+        break;
+    case IIRD_OPT_SM_RES:
+        *st = parse_int_into(arg, "--sm-res", 8, 2048, &p->sm_res, err);
+        break;
+    case IIRD_OPT_SM_BIAS:
+        *st = iird_parse_float(arg, "--sm-bias", 0.f, 1.f, &p->sm_bias, err);
+        break;
+    case IIRD_OPT_INTERLEAVE:
+        *st = parse_int_into(arg, "--interleave", 1, 8, &p->interleave, err);
+        break;
+    case IIRD_OPT_CLAMP:
+        *st = iird_parse_float(arg, "--clamp", 0.f, 1e12f, &p->clamp, err);
+        break;
+    case IIRD_OPT_IR_SAME:
+        p->ir_fresh = false, *st = IIR_OK;
+        break;
+    case IIRD_OPT_THREADS:
+        *st = parse_threads(arg, err);
+        break;
+    default:
+        return false;
+    }
+    return true;
 }
 
 static bool is_dir(const char *path)

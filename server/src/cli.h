@@ -6,6 +6,9 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include <getopt.h>
+
+#include "iir/method.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
 #include "iir/status.h"
@@ -13,6 +16,52 @@
 /* Exit codes (docs/cli.md): 0 ok, 1 internal, 2 bad input, 3 io, 4 unsupported, 64 usage,
  * 130 interrupted. */
 enum { IIRD_EXIT_USAGE = 64 };
+
+/* ---- method parameters, shared by every command that renders ---- */
+
+enum iird_method_opt {
+    IIRD_OPT_SPP = 1000,
+    IIRD_OPT_BOUNCES,
+    IIRD_OPT_SEED,
+    IIRD_OPT_VPLS,
+    IIRD_OPT_KMIN,
+    IIRD_OPT_KMAX,
+    IIRD_OPT_WEIGHTS,
+    IIRD_OPT_REGEN,
+    IIRD_OPT_VISIBILITY,
+    IIRD_OPT_SM_RES,
+    IIRD_OPT_SM_BIAS,
+    IIRD_OPT_INTERLEAVE,
+    IIRD_OPT_CLAMP,
+    IIRD_OPT_IR_SAME,
+    IIRD_OPT_THREADS,
+};
+
+/* getopt_long entries for the method parameters; put inside a command's option table. */
+#define IIRD_METHOD_LONGOPTS                                                                       \
+    {"spp", required_argument, 0, IIRD_OPT_SPP},                                                   \
+        {"bounces", required_argument, 0, IIRD_OPT_BOUNCES},                                       \
+        {"seed", required_argument, 0, IIRD_OPT_SEED},                                             \
+        {"vpls", required_argument, 0, IIRD_OPT_VPLS},                                             \
+        {"kmin", required_argument, 0, IIRD_OPT_KMIN},                                             \
+        {"kmax", required_argument, 0, IIRD_OPT_KMAX},                                             \
+        {"weights", required_argument, 0, IIRD_OPT_WEIGHTS},                                       \
+        {"regen-threshold", required_argument, 0, IIRD_OPT_REGEN},                                 \
+        {"visibility", required_argument, 0, IIRD_OPT_VISIBILITY},                                 \
+        {"sm-res", required_argument, 0, IIRD_OPT_SM_RES},                                         \
+        {"sm-bias", required_argument, 0, IIRD_OPT_SM_BIAS},                                       \
+        {"interleave", required_argument, 0, IIRD_OPT_INTERLEAVE},                                 \
+        {"clamp", required_argument, 0, IIRD_OPT_CLAMP},                                           \
+        {"ir-same-random", no_argument, 0, IIRD_OPT_IR_SAME},                                      \
+    {                                                                                              \
+        "threads", required_argument, 0, IIRD_OPT_THREADS                                          \
+    }
+
+/* The --help text for those options. */
+extern const char IIRD_METHOD_HELP[];
+
+/* True when c is one of IIRD_METHOD_LONGOPTS; then *st says whether arg was valid. */
+bool iird_method_option(int c, const char *arg, iir_params *p, iir_status *st, iir_error *err);
 
 /* Parses "WxH" with 1 <= W, H <= max_dim. */
 iir_status iird_parse_size(const char *text, int max_dim, int *w, int *h, iir_error *err);

@@ -1,7 +1,6 @@
 /* cmd_raybench.c -- `iird raybench`: the raw Embree ray rate on a scene beside the path tracer's
  * own ray rate on the same scene, measured in one run so the ratio is honest. */
 #include <getopt.h>
-#include <omp.h>
 #include <stdio.h>
 
 #include "cli.h"
@@ -26,58 +25,34 @@ static void raybench_usage(FILE *f)
                "\n"
                "  --rays N       raw rays per kind (default 4000000)\n"
                "  --size WxH     path tracer image (default 320x240)\n"
-               "  --spp N        path tracer samples per pixel (default 32)\n"
-               "  --bounces B    path tracer bounces (default 2)\n"
-               "  --seed S       random seed (default 1)\n"
-               "  --threads N    OpenMP threads (default: all cores)\n"
-               "  --scenes DIR   where scene names are looked up\n");
+               "  --scenes DIR   where scene names are looked up\n"
+               "  --spp, --bounces, --seed, --threads  as for iird render (default spp 32)\n");
 }
+
+enum { OPT_RAYS = 1, OPT_SIZE, OPT_SCENES };
 
 static int parse_args(int argc, char **argv, bench_opts *o)
 {
-    static const struct option longopts[] = {{"rays", required_argument, 0, 'n'},
-                                             {"size", required_argument, 0, 'z'},
-                                             {"spp", required_argument, 0, 's'},
-                                             {"bounces", required_argument, 0, 'b'},
-                                             {"seed", required_argument, 0, 'r'},
-                                             {"threads", required_argument, 0, 't'},
-                                             {"scenes", required_argument, 0, 'S'},
+    static const struct option longopts[] = {{"rays", required_argument, 0, OPT_RAYS},
+                                             {"size", required_argument, 0, OPT_SIZE},
+                                             {"scenes", required_argument, 0, OPT_SCENES},
                                              {"help", no_argument, 0, 'h'},
+                                             IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
     int c;
-    long v = 0;
     iir_error err = {0};
     iir_status st = IIR_OK;
     optind = 1;
     while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
-        switch (c) {
-        case 'h':
-            return raybench_usage(stdout), 0;
-        case 'n':
+        if (c == 'h') return raybench_usage(stdout), 0;
+        if (iird_method_option(c, optarg, &o->params, &st, &err)) {
+        } else if (c == OPT_RAYS) {
             st = iird_parse_int(optarg, "--rays", 1, 1l << 28, &o->rays, &err);
-            break;
-        case 'z':
+        } else if (c == OPT_SIZE) {
             st = iird_parse_size(optarg, 4096, &o->width, &o->height, &err);
-            break;
-        case 's':
-            if ((st = iird_parse_int(optarg, "--spp", 1, 4096, &v, &err)) == IIR_OK)
-                o->params.spp = (int)v;
-            break;
-        case 'b':
-            if ((st = iird_parse_int(optarg, "--bounces", 1, 1000, &v, &err)) == IIR_OK)
-                o->params.bounces = (int)v;
-            break;
-        case 'r':
-            st = iird_parse_u64(optarg, "--seed", &o->params.seed, &err);
-            break;
-        case 't':
-            if ((st = iird_parse_int(optarg, "--threads", 1, 1024, &v, &err)) == IIR_OK)
-                omp_set_num_threads((int)v);
-            break;
-        case 'S':
+        } else if (c == OPT_SCENES) {
             o->scenes_dir = optarg;
-            break;
-        default:
+        } else {
             return raybench_usage(stderr), IIRD_EXIT_USAGE;
         }
         if (st != IIR_OK) return iird_report("raybench", &err);

@@ -1,7 +1,6 @@
 /* cmd_render.c -- `iird render`: one still of a scene with any method, written as PNG, EXR or
  * PFM. Long renders refine in chunks so the progress bar moves and Ctrl-C keeps what is done. */
 #include <getopt.h>
-#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,60 +19,45 @@ typedef struct render_opts {
 
 static void render_usage(FILE *f)
 {
-    fprintf(f,
-            "usage: iird render [SCENE] --out FILE.{png,exr,pfm} [options]\n"
-            "\n"
-            "Renders one still. SCENE is a name in the scenes directory, a scene folder or a file\n"
-            "(.obj, .gltf, .glb, .scene.json); without it, the built-in Cornell box.\n"
-            "\n"
-            "  --out FILE         output image; the format follows the extension (required)\n"
-            "  --method NAME      rendering method (default pt)\n"
-            "  --spp N            samples per pixel (default 16)\n"
-            "  --bounces B        1 = direct only, 2 = one diffuse bounce, ... (default 2)\n"
-            "  --size WxH         image size (default 512x512)\n"
-            "  --seed S           random seed (default 1); same seed, same image\n"
-            "  --exposure E       PNG exposure in stops (default 0)\n"
-            "  --threads N        OpenMP threads (default: all cores)\n"
-            "  --scenes DIR       where scene names are looked up (default ./scenes)\n"
-            "  -h, --help         this text\n"
-            "\n"
-            "Exit codes: 0 ok, 2 bad input, 3 file error, 64 usage, 130 interrupted.\n");
+    fprintf(
+        f,
+        "usage: iird render [SCENE] --out FILE.{png,exr,pfm} [options]\n"
+        "\n"
+        "Renders one still. SCENE is a name in the scenes directory, a scene folder or a file\n"
+        "(.obj, .gltf, .glb, .scene.json); without it, the built-in Cornell box.\n"
+        "\n"
+        "  --out FILE           output image; the format follows the extension (required)\n"
+        "  --method NAME        pt | ir | iir (default pt)\n"
+        "  --size WxH           image size (default 512x512)\n"
+        "  --exposure E         PNG exposure in stops (default 0)\n"
+        "  --scenes DIR         where scene names are looked up (default ./scenes)\n"
+        "  -h, --help           this text\n"
+        "\n%s\n"
+        "Exit codes: 0 ok, 2 bad input, 3 file error, 4 unsupported, 64 usage, 130 interrupted.\n",
+        IIRD_METHOD_HELP);
 }
+
+enum { OPT_OUT = 1, OPT_METHOD, OPT_SIZE, OPT_EXPOSURE, OPT_SCENES };
 
 static iir_status parse_option(render_opts *o, int c, const char *arg, iir_error *err)
 {
-    long v;
     iir_status st = IIR_OK;
+    if (iird_method_option(c, arg, &o->params, &st, err)) return st;
     switch (c) {
-    case 'o':
+    case OPT_OUT:
         o->out = arg;
         break;
-    case 'm':
+    case OPT_METHOD:
         o->method = arg;
         break;
-    case 'S':
+    case OPT_SCENES:
         o->scenes_dir = arg;
         break;
-    case 's':
-        if ((st = iird_parse_int(arg, "--spp", 1, 1 << 20, &v, err)) == IIR_OK)
-            o->params.spp = (int)v;
-        break;
-    case 'b':
-        if ((st = iird_parse_int(arg, "--bounces", 1, 1000, &v, err)) == IIR_OK)
-            o->params.bounces = (int)v;
-        break;
-    case 'z':
+    case OPT_SIZE:
         st = iird_parse_size(arg, IIR_IMAGE_MAX_DIM, &o->width, &o->height, err);
         break;
-    case 'r':
-        st = iird_parse_u64(arg, "--seed", &o->params.seed, err);
-        break;
-    case 'e':
+    case OPT_EXPOSURE:
         st = iird_parse_float(arg, "--exposure", -30.f, 30.f, &o->exposure, err);
-        break;
-    case 't':
-        if ((st = iird_parse_int(arg, "--threads", 1, 1024, &v, err)) == IIR_OK)
-            omp_set_num_threads((int)v);
         break;
     }
     return st;
@@ -82,16 +66,13 @@ static iir_status parse_option(render_opts *o, int c, const char *arg, iir_error
 /* Returns -1 when parsing succeeded, else the exit code. */
 static int parse_args(int argc, char **argv, render_opts *o)
 {
-    static const struct option longopts[] = {{"out", required_argument, 0, 'o'},
-                                             {"method", required_argument, 0, 'm'},
-                                             {"spp", required_argument, 0, 's'},
-                                             {"bounces", required_argument, 0, 'b'},
-                                             {"size", required_argument, 0, 'z'},
-                                             {"seed", required_argument, 0, 'r'},
-                                             {"exposure", required_argument, 0, 'e'},
-                                             {"threads", required_argument, 0, 't'},
-                                             {"scenes", required_argument, 0, 'S'},
+    static const struct option longopts[] = {{"out", required_argument, 0, OPT_OUT},
+                                             {"method", required_argument, 0, OPT_METHOD},
+                                             {"size", required_argument, 0, OPT_SIZE},
+                                             {"exposure", required_argument, 0, OPT_EXPOSURE},
+                                             {"scenes", required_argument, 0, OPT_SCENES},
                                              {"help", no_argument, 0, 'h'},
+                                             IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
     int c;
     iir_error err = {0};
@@ -151,10 +132,15 @@ static iir_status render_still(const render_opts *o, iir_method *m, const iir_sc
 static void print_summary(const render_opts *o, const iir_scene *scene, const iir_frame_stats *fs)
 {
     double rays = (double)iir_raystats_total(&fs->rays);
-    printf("wrote %s: %s, %dx%d, method %s, %llu spp, %d bounces, seed %llu, %.2f s, %.1f Mrays "
-           "(%.2f Mrays/s)\n",
-           o->out, scene->name, o->width, o->height, o->method,
-           (unsigned long long)fs->samples_per_pixel, o->params.bounces,
+    char work[64];
+    if (fs->samples_per_pixel > 0)
+        snprintf(work, sizeof work, "%llu spp, %d bounces",
+                 (unsigned long long)fs->samples_per_pixel, o->params.bounces);
+    else
+        snprintf(work, sizeof work, "%u VPLs (%u null), %u shadow maps", fs->vpl.count,
+                 fs->vpl.null_samples, fs->vpl.shadowmaps);
+    printf("wrote %s: %s, %dx%d, method %s, %s, seed %llu, %.2f s, %.1f Mrays (%.2f Mrays/s)\n",
+           o->out, scene->name, o->width, o->height, o->method, work,
            (unsigned long long)o->params.seed, fs->total_ms / 1e3, rays / 1e6,
            fs->total_ms > 0 ? rays / (fs->total_ms * 1e3) : 0.0);
 }

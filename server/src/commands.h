@@ -4,5 +4,6 @@
 
 int iird_cmd_render(int argc, char **argv);
 int iird_cmd_raybench(int argc, char **argv);
+int iird_cmd_bench(int argc, char **argv);
 
 #endif

@@ -13,6 +13,7 @@ static void usage(FILE *f)
                "\n"
                "commands:\n"
                "  render     render a still of a scene to PNG, EXR or PFM\n"
+               "  bench      time methods over a moving light against path-traced references\n"
                "  raybench   measure the machine's raw Embree ray rate and the path tracer's\n"
                "\n"
                "  --version  print the version and the libraries built in\n");
@@ -29,6 +30,7 @@ int main(int argc, char **argv)
     }
     if (!strcmp(cmd, "render")) return iird_cmd_render(argc - 1, argv + 1);
     if (!strcmp(cmd, "raybench")) return iird_cmd_raybench(argc - 1, argv + 1);
+    if (!strcmp(cmd, "bench")) return iird_cmd_bench(argc - 1, argv + 1);
     fprintf(stderr, "iird: unknown command '%s'\n", cmd);
     usage(stderr);
     return IIRD_EXIT_USAGE;

@@ -1,6 +1,7 @@
 /* test_tri.c -- libiirtri through its C header: every answer checked against brute force (closest
  * pair, second-nearest neighbours, a dense grid for cell areas and the largest empty circle), order
- * independence, edits against rebuilds, and each documented degenerate case. Not the VPL step. */
+ * independence, edits against rebuilds (the handle's per-site summaries, kept across edits, against
+ * a fresh handle that computes them all), and each documented degenerate case. Not the VPL step. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -749,6 +750,140 @@ static void test_edits_match_rebuild(void **state)
     set_free(&s);
 }
 
+/* A fresh handle over the same sites (ids and positions) as tri: nothing carried over from tri's
+ * edits, every per-site summary computed from scratch by the build. */
+static iir_tri *fresh_copy(const iir_tri *tri)
+{
+    size_t n;
+    assert_ok(iir_tri_ids(tri, NULL, 0, &n));
+    uint32_t *ids = malloc(n * sizeof *ids + 1);
+    double *xy = malloc(2 * n * sizeof *xy + 1);
+    assert_non_null(ids);
+    assert_non_null(xy);
+    assert_ok(iir_tri_ids(tri, ids, n, &n));
+    for (size_t i = 0; i < n; i++) assert_ok(iir_tri_position(tri, ids[i], &xy[2 * i]));
+    iir_tri *fresh = iir_tri_create(iir_tri_radius(tri));
+    assert_non_null(fresh);
+    assert_ok(iir_tri_build(fresh, xy, ids, n));
+    free(ids);
+    free(xy);
+    return fresh;
+}
+
+/* Every answer of the edited handle equals, bit for bit, the fresh handle's (with polygons when
+ * `polygons`). Exact only where the Delaunay triangulation is unique (no four cocircular sites). */
+static void assert_same_as_fresh(const iir_tri *tri, int polygons)
+{
+    static answers got, want;
+    iir_tri *fresh = fresh_copy(tri);
+    collect(tri, &got);
+    collect(fresh, &want);
+    assert_same(&got, &want);
+    assert_memory_equal(got.areas, want.areas, got.n * sizeof(double));
+    assert_memory_equal(got.centre, want.centre, sizeof got.centre);
+    assert_memory_equal(&got.radius, &want.radius, sizeof got.radius);
+    for (size_t i = 0; i < got.n; i++) {
+        double area;
+        assert_ok(iir_tri_cell_area(tri, got.ids[i], &area));
+        assert_memory_equal(&area, &got.areas[i], sizeof area);
+        if (!polygons) continue;
+        size_t m, mf;
+        double *poly = cell_polygon(tri, got.ids[i], &m);
+        double *pf = cell_polygon(fresh, got.ids[i], &mf);
+        assert_int_equal(m, mf);
+        assert_memory_equal(poly, pf, 2 * m * sizeof(double));
+        free(poly);
+        free(pf);
+    }
+    iir_tri_destroy(fresh);
+}
+
+/* Rebuilds tri from its own sites, most of them as they are (a build keeps their summaries), some
+ * dropped, some moved a little, one given a new id. */
+static void rebuild_changed(iir_tri *tri, uint64_t *seed, uint32_t new_id)
+{
+    uint32_t ids[512];
+    double xy[2 * 512];
+    size_t n, m = 0;
+    assert_ok(iir_tri_ids(tri, ids, 512, &n));
+    for (size_t i = 0; i < n; i++) {
+        uint64_t u = next_u64(seed) % 20;
+        if (u == 0) continue;
+        assert_ok(iir_tri_position(tri, ids[i], &xy[2 * m]));
+        if (u == 1) xy[2 * m] *= 0.999, xy[2 * m + 1] *= 0.999;
+        ids[m++] = ids[i];
+    }
+    ids[m / 2] = new_id;
+    assert_ok(iir_tri_build(tri, xy, ids, m));
+}
+
+/* 500 random edits of the kinds the VPL step makes (insert at the largest empty circle, insert
+ * anywhere, remove the denser end of the shortest edge, remove any site, now and then a rebuild of
+ * the same sites with a few changed), each followed by every query, against a fresh handle: the
+ * summaries an edit keeps are the ones it did not change. */
+static void test_edits_match_fresh_build(void **state)
+{
+    (void)state;
+    for (int kind = UNIFORM; kind <= WITH_CIRCLE; kind += WITH_CIRCLE - UNIFORM) {
+        set s = make_set((enum kind)kind, 200, 1, 31337 + (uint64_t)kind);
+        uint64_t seed = 0x5eed + (uint64_t)kind; /* not make_set's stream: no repeated points */
+        iir_tri *tri = build(&s);
+        uint32_t next_id = 1u << 30, ids[512];
+        for (int edit = 0; edit < 500; edit++) {
+            size_t n = iir_tri_count(tri);
+            int op = (int)(next_u64(&seed) % 4);
+            if (n < 150) op = op % 2;
+            if (n > 250) op = 2 + op % 2;
+            if (op == 0) {
+                double c[2], r;
+                assert_ok(iir_tri_largest_empty_circle(tri, c, &r));
+                assert_ok(iir_tri_insert(tri, c[0], c[1], next_id++));
+            } else if (op == 1) {
+                double r = sqrt(urand(&seed)), a = 2 * PI * urand(&seed);
+                assert_ok(iir_tri_insert(tri, r * cos(a), r * sin(a), next_id++));
+            } else if (op == 2) {
+                uint32_t denser;
+                assert_ok(iir_tri_shortest_edge(tri, &denser, NULL, NULL));
+                assert_ok(iir_tri_remove(tri, denser));
+            } else {
+                assert_ok(iir_tri_ids(tri, ids, 512, &n));
+                assert_ok(iir_tri_remove(tri, ids[next_u64(&seed) % n]));
+            }
+            if (edit % 50 == 49) rebuild_changed(tri, &seed, next_id++);
+            assert_same_as_fresh(tri, edit % 25 == 0);
+        }
+        iir_tri_destroy(tri);
+        set_free(&s);
+    }
+}
+
+/* Edits across dimensions: sites on a line (dimension 1, exactly collinear), one site off it
+ * (dimension 2) and back, then down to none; after each edit every answer equals a fresh build's.
+ */
+static void test_dimension_changes_match_fresh_build(void **state)
+{
+    (void)state;
+    const double t[7] = {0.25, -0.5, 0.75, 0, -0.625, 0.5, -0.25};
+    iir_tri *tri = iir_tri_create(1);
+    for (uint32_t i = 0; i < 7; i++) {
+        assert_ok(iir_tri_insert(tri, t[i], 0.5 * t[i] - 0.125, 10 + (i * 3) % 7));
+        assert_same_as_fresh(tri, 1);
+    }
+    for (int round = 0; round < 2; round++) {
+        assert_ok(iir_tri_insert(tri, round ? 0.1 : -0.3, round ? -0.6 : 0.5, 99));
+        assert_same_as_fresh(tri, 1);
+        assert_ok(iir_tri_remove(tri, 99));
+        assert_same_as_fresh(tri, 1);
+    }
+    const uint32_t order[7] = {13, 10, 16, 11, 15, 12, 14};
+    for (int i = 0; i < 7; i++) {
+        assert_ok(iir_tri_remove(tri, order[i]));
+        assert_same_as_fresh(tri, 1);
+    }
+    assert_int_equal(iir_tri_count(tri), 0);
+    iir_tri_destroy(tri);
+}
+
 /* The incremental step's loop on a large set: delete the denser end of the shortest edge, insert at
  * the largest empty circle. A sanity run, no timing asserted. */
 static void test_large_churn(void **state)
@@ -796,6 +931,8 @@ int main(void)
         cmocka_unit_test(test_random_sets_brute_force),
         cmocka_unit_test(test_permutation_invariance),
         cmocka_unit_test(test_edits_match_rebuild),
+        cmocka_unit_test(test_edits_match_fresh_build),
+        cmocka_unit_test(test_dimension_changes_match_fresh_build),
         cmocka_unit_test(test_large_churn),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

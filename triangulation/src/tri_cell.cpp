@@ -1,6 +1,6 @@
 // tri_cell.cpp -- one Voronoi cell clipped to the disk, computed exactly from its site and Delaunay
 // neighbours: half-plane clipping, then the walk that replaces the parts outside the circle by
-// arcs; not how sites or neighbours are found (tri_query.cpp).
+// arcs; not how sites or neighbours are found (tri_domain.cpp).
 //
 // The cell is first built as a convex polygon: a square of half-side 2R around the disk, cut by the
 // bisector half-plane of every neighbour (taken in the caller's order, ascending id, so the result
@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace iirtri
 {
@@ -47,80 +48,105 @@ double angle_between(Vec2 a, Vec2 b)
 
 // ---- step 1: the cell as a convex polygon ----
 
-// Keeps the part of the convex counter-clockwise polygon where (x - m).d <= 0 (Sutherland-Hodgman).
-void clip_halfplane(std::vector<Vec2> &poly, Vec2 m, Vec2 d, std::vector<Vec2> &tmp)
+// Returned by clip_halfplane when no vertex is cut off.
+constexpr size_t kUnchanged = SIZE_MAX;
+
+// Keeps the part of the convex counter-clockwise polygon in[0..n) where (x - m).d <= 0
+// (Sutherland-Hodgman): writes it to out (room for 2n vertices) and returns its vertex count, or
+// kUnchanged, writing nothing, when the polygon is already inside. Each vertex's side is evaluated
+// once into g[0..n) and shared by the two edges that meet there.
+size_t clip_halfplane(const Vec2 *in, size_t n, Vec2 m, Vec2 d, double *g, Vec2 *out)
 {
-    tmp.clear();
-    const size_t n = poly.size();
+    bool cut = false;
     for (size_t k = 0; k < n; k++) {
-        Vec2 a = poly[k], b = poly[(k + 1) % n];
-        double ga = dot(a - m, d), gb = dot(b - m, d);
-        if (ga <= 0) tmp.push_back(a);
-        if ((ga < 0 && gb > 0) || (ga > 0 && gb < 0)) tmp.push_back(lerp(a, b, ga / (ga - gb)));
+        g[k] = dot(in[k] - m, d);
+        cut |= !(g[k] <= 0);
     }
-    poly.swap(tmp);
+    if (!cut) return kUnchanged;
+    size_t w = 0;
+    for (size_t k = 0; k < n; k++) {
+        const size_t next = k + 1 == n ? 0 : k + 1;
+        const double ga = g[k], gb = g[next];
+        if (ga <= 0) out[w++] = in[k];
+        if ((ga < 0 && gb > 0) || (ga > 0 && gb < 0))
+            out[w++] = lerp(in[k], in[next], ga / (ga - gb));
+    }
+    return w;
 }
 
-std::vector<Vec2> cell_polygon_in_square(const Site &self, const std::vector<Site> &nbrs, double R)
+// The cell as a polygon in scratch.poly[0..returned count).
+size_t cell_polygon_in_square(const Site &self, const Site *nbrs, size_t n, double R,
+                              Cell_scratch &s)
 {
     const double h = 2 * R;
-    std::vector<Vec2> poly = {{-h, -h}, {h, -h}, {h, h}, {-h, h}}, tmp;
-    for (const Site &o : nbrs) {
+    if (s.poly.size() < 4) s.poly.resize(4);
+    s.poly[0] = {-h, -h}, s.poly[1] = {h, -h}, s.poly[2] = {h, h}, s.poly[3] = {-h, h};
+    size_t np = 4;
+    for (size_t k = 0; k < n; k++) {
+        const Site &o = nbrs[k];
         Vec2 m = {0.5 * (self.x + o.x), 0.5 * (self.y + o.y)};
         Vec2 d = {o.x - self.x, o.y - self.y};
-        clip_halfplane(poly, m, d, tmp);
+        if (s.tmp.size() < 2 * np) s.tmp.resize(2 * np);
+        if (s.side.size() < np) s.side.resize(np);
+        size_t w = clip_halfplane(s.poly.data(), np, m, d, s.side.data(), s.tmp.data());
+        if (w == kUnchanged) continue;
+        s.poly.swap(s.tmp);
+        np = w;
     }
-    return poly;
+    return np;
 }
 
 // ---- step 2: the polygon's boundary cut at the circle ----
 
-// A straight part of the polygon boundary, either inside the disk or outside it.
-struct Step {
-    Vec2 a, b;
-    bool inside;
-};
-
-// Cuts edge a->b at the circle. Whether an end is inside is decided once per vertex, so
-// neighbouring edges always agree about their shared vertex.
-void split_edge(Vec2 a, Vec2 b, bool ina, bool inb, double R, std::vector<Step> &out)
+// Cuts edge a->b at the circle into out (room for 3 steps); returns the number of steps. Whether an
+// end is inside is decided once per vertex, so neighbouring edges always agree about their shared
+// vertex.
+size_t split_edge(Vec2 a, Vec2 b, bool ina, bool inb, double R, Step *out)
 {
     if (ina && inb) {
-        out.push_back({a, b, true});
-        return;
+        out[0] = {a, b, true};
+        return 1;
     }
     Vec2 d = b - a;
     double A = dot(d, d), B = dot(a, d), C = dot(a, a) - R * R;
-    if (A == 0) return;
+    if (A == 0) return 0;
     double disc = B * B - A * C, sq = disc > 0 ? std::sqrt(disc) : 0.0;
     double t0 = (-B - sq) / A, t1 = (-B + sq) / A;
     if (ina) {
         Vec2 p = lerp(a, b, std::clamp(t1, 0.0, 1.0));
-        out.push_back({a, p, true});
-        out.push_back({p, b, false});
-    } else if (inb) {
-        Vec2 p = lerp(a, b, std::clamp(t0, 0.0, 1.0));
-        out.push_back({a, p, false});
-        out.push_back({p, b, true});
-    } else if (disc > 0 && t0 > 0 && t1 < 1) {
-        Vec2 p0 = lerp(a, b, t0), p1 = lerp(a, b, t1);
-        out.push_back({a, p0, false});
-        out.push_back({p0, p1, true});
-        out.push_back({p1, b, false});
-    } else {
-        out.push_back({a, b, false});
+        out[0] = {a, p, true};
+        out[1] = {p, b, false};
+        return 2;
     }
+    if (inb) {
+        Vec2 p = lerp(a, b, std::clamp(t0, 0.0, 1.0));
+        out[0] = {a, p, false};
+        out[1] = {p, b, true};
+        return 2;
+    }
+    if (disc > 0 && t0 > 0 && t1 < 1) {
+        Vec2 p0 = lerp(a, b, t0), p1 = lerp(a, b, t1);
+        out[0] = {a, p0, false};
+        out[1] = {p0, p1, true};
+        out[2] = {p1, b, false};
+        return 3;
+    }
+    out[0] = {a, b, false};
+    return 1;
 }
 
-std::vector<Step> split_at_circle(const std::vector<Vec2> &poly, double R)
+// The boundary of poly[0..n) cut at the circle, in scratch.steps[0..returned count).
+size_t split_at_circle(const Vec2 *poly, size_t n, double R, Cell_scratch &s)
 {
-    std::vector<Step> steps;
-    const size_t n = poly.size();
-    std::vector<char> in(n);
-    for (size_t k = 0; k < n; k++) in[k] = dot(poly[k], poly[k]) <= R * R;
-    for (size_t k = 0; k < n; k++)
-        split_edge(poly[k], poly[(k + 1) % n], in[k], in[(k + 1) % n], R, steps);
-    return steps;
+    if (s.inside.size() < n) s.inside.resize(n);
+    if (s.steps.size() < 3 * n) s.steps.resize(3 * n);
+    for (size_t k = 0; k < n; k++) s.inside[k] = dot(poly[k], poly[k]) <= R * R;
+    size_t w = 0;
+    for (size_t k = 0; k < n; k++) {
+        size_t next = k + 1 == n ? 0 : k + 1;
+        w += split_edge(poly[k], poly[next], s.inside[k], s.inside[next], R, &s.steps[w]);
+    }
+    return w;
 }
 
 // ---- step 3: runs outside the disk become arcs ----
@@ -135,18 +161,17 @@ Piece full_circle(double R)
     return {{R, 0}, {R, 0}, true, kTwoPi};
 }
 
-std::vector<Piece> join_into_ring(const std::vector<Step> &steps, double R)
+void join_into_ring(const Step *steps, size_t n, double R, std::vector<Piece> &ring)
 {
-    std::vector<Piece> ring;
-    const size_t n = steps.size();
-    size_t first = std::find_if(steps.begin(), steps.end(), is_side) - steps.begin();
+    ring.clear();
+    size_t first = std::find_if(steps, steps + n, is_side) - steps;
     if (first == n) {
         // No straight side: the polygon holds the whole disk (outside runs sweep a full turn) or
         // misses it (they sweep nothing).
         double total = 0;
-        for (const Step &s : steps) total += angle_between(s.a, s.b);
+        for (size_t k = 0; k < n; k++) total += angle_between(steps[k].a, steps[k].b);
         if (total > kPi) ring.push_back(full_circle(R));
-        return ring;
+        return;
     }
     double swept = 0;
     bool outside = false;
@@ -167,17 +192,20 @@ std::vector<Piece> join_into_ring(const std::vector<Step> &steps, double R)
         swept = 0;
         outside = false;
     }
-    return ring;
 }
 
 } // namespace
 
 // ---- the cell ----
 
-Cell clip_cell(const Site &self, const std::vector<Site> &nbrs, double R)
+const Cell &clip_cell(const Site &self, const Site *nbrs, size_t n, double R, Cell_scratch &scratch)
 {
-    Cell c{{self.x, self.y}, R, {}};
-    c.ring = join_into_ring(split_at_circle(cell_polygon_in_square(self, nbrs, R), R), R);
+    size_t np = cell_polygon_in_square(self, nbrs, n, R, scratch);
+    size_t ns = split_at_circle(scratch.poly.data(), np, R, scratch);
+    Cell &c = scratch.cell;
+    c.site = {self.x, self.y};
+    c.R = R;
+    join_into_ring(scratch.steps.data(), ns, R, c.ring);
     return c;
 }
 

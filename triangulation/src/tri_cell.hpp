@@ -5,6 +5,7 @@
 
 #include "tri_common.hpp"
 
+#include <cstddef>
 #include <vector>
 
 namespace iirtri
@@ -31,9 +32,33 @@ struct Cell {
     std::vector<Piece> ring;
 };
 
-// Clips the cell of `self` (bounded by the bisectors with `nbrs`, in the given order) to the disk.
-// With no neighbours the cell is the whole disk: a single full-circle arc starting at (R, 0).
-Cell clip_cell(const Site &self, const std::vector<Site> &nbrs, double R);
+// A straight part of the unclipped cell's boundary, either inside the disk or outside it (an
+// intermediate of clip_cell, here only so Cell_scratch can hold it).
+struct Step {
+    Vec2 a, b;
+    bool inside;
+};
+
+// Working buffers of clip_cell and of the cell summaries (tri_voronoi.cpp). Whoever owns one reuses
+// it across cells, so that clipping allocates only while the buffers still grow (the clipping
+// buffers are used up to a count kept aside, not up to their size). The contents between calls
+// mean nothing.
+struct Cell_scratch {
+    std::vector<Vec2> poly, tmp, points;
+    std::vector<double> side;
+    std::vector<Step> steps;
+    std::vector<char> inside;
+    std::vector<Site> nbrs;
+    std::vector<double> radii;
+    Cell cell;
+};
+
+// Clips the cell of `self` (bounded by the bisectors with nbrs[0..n), in that order) to the disk,
+// into scratch.cell (its ring is replaced). With no neighbours the cell is the whole disk: a single
+// full-circle arc starting at (R, 0). nbrs may point into scratch.nbrs (clipping does not touch
+// it). Throws std::bad_alloc only if a buffer must grow.
+const Cell &clip_cell(const Site &self, const Site *nbrs, size_t n, double R,
+                      Cell_scratch &scratch);
 
 // Exact area of the clipped cell: straight sides plus circular sectors.
 double cell_area(const Cell &c);

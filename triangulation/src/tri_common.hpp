@@ -44,9 +44,6 @@ inline iir_tri_status fits(const void *buf, size_t cap, size_t need, size_t *n)
 // ---- the bridge into the triangulation (tri_domain.cpp, tri_query.cpp); may throw, callers guard
 // ----
 
-// All sites, ascending id.
-void sites(const iir_tri *tri, std::vector<Site> &out);
-
 // The site `id` and its Delaunay neighbours (ascending id); false if there is no such site. With
 // collinear sites the neighbours are the previous and next site on the line.
 bool neighbours(const iir_tri *tri, uint32_t id, Site &self, std::vector<Site> &out);

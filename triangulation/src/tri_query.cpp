@@ -1,8 +1,10 @@
-// tri_query.cpp -- questions answered by the Delaunay graph itself: neighbours, the shortest edge
-// and its denser endpoint, the edge list for drawing; not the Voronoi cells (tri_voronoi.cpp).
+// tri_query.cpp -- questions answered by the Delaunay graph itself: the shortest edge (from the
+// per-site summaries) and its denser endpoint, the edge list for drawing; not the Voronoi cells
+// (tri_voronoi.cpp) nor keeping the summaries current (tri_domain.cpp).
 #include "tri_internal.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -18,49 +20,27 @@ double dist2(const Point &a, const Point &b)
     return dx * dx + dy * dy;
 }
 
-// Finite Delaunay neighbours of v. The circulator also works in dimension 1 (collinear sites),
-// where it alternates between the two edges at v; in dimension 0 it is empty.
-template <class Fn> void for_each_neighbour(const Delaunay &dt, Vertex_handle v, Fn &&fn)
-{
-    Delaunay::Vertex_circulator c = dt.incident_vertices(v), done = c;
-    if (c == nullptr) return;
-    do {
-        if (!dt.is_infinite(c)) fn(Vertex_handle(c));
-    } while (++c != done);
-}
-
-// An edge as its two endpoints, the younger (larger id) first.
-struct Edge {
-    Vertex_handle young, old;
-    double len2;
-};
-
-// Edge order for "shortest": shorter first; among equal lengths, the larger younger id, then the
-// larger older id. A strict weak order that depends only on positions and ids.
-bool shorter(const Edge &e, const Edge &f)
-{
-    if (e.len2 != f.len2) return e.len2 < f.len2;
-    if (e.young->info() != f.young->info()) return e.young->info() > f.young->info();
-    return e.old->info() > f.old->info();
-}
-
-Edge make_edge(const Delaunay::Edge &e)
+// A finite Delaunay edge as its key (tri_cache.hpp).
+Edge_key make_edge(const Delaunay::Edge &e)
 {
     Vertex_handle a = e.first->vertex(Delaunay::cw(e.second));
     Vertex_handle b = e.first->vertex(Delaunay::ccw(e.second));
-    if (a->info() < b->info()) std::swap(a, b);
-    return {a, b, dist2(a->point(), b->point())};
+    if (a->info().id < b->info().id) std::swap(a, b);
+    return {dist2(a->point(), b->point()), a->info().id, b->info().id};
 }
 
-Edge shortest_edge(const Delaunay &dt)
+// The shortest edge over the summaries: each site's shortest incident edge is remembered, and the
+// shortest of those is the shortest of all (the order is total, so this is the edge a scan of all
+// edges finds).
+Edge_key shortest_edge(const Site_table &table)
 {
-    auto it = dt.finite_edges_begin();
-    Edge best = make_edge(*it);
-    for (++it; it != dt.finite_edges_end(); ++it) {
-        Edge e = make_edge(*it);
-        if (shorter(e, best)) best = e;
+    const Edge_key *best = nullptr;
+    for (const Id_slot &e : table.order) {
+        const Site_summary &s = table.summary[e.slot];
+        if (s.has_edge && (!best || shorter(s.edge, *best))) best = &s.edge;
     }
-    return best;
+    assert(best && "two or more sites have an edge");
+    return *best;
 }
 
 // Squared distance from p to its nearest site other than p and q (infinity if there is none). That
@@ -76,20 +56,12 @@ double second_nearest2(const Delaunay &dt, Vertex_handle p, Vertex_handle q)
     return best;
 }
 
-} // namespace
-
-// ---- the bridge ----
-
-bool iirtri::neighbours(const iir_tri *tri, uint32_t id, Site &self, std::vector<Site> &out)
+Vertex_handle vertex_of(const iir_tri *tri, uint32_t id)
 {
-    out.clear();
-    auto it = tri->by_id.find(id);
-    if (it == tri->by_id.end()) return false;
-    self = site_of(it->second);
-    for_each_neighbour(tri->dt, it->second, [&](Vertex_handle o) { out.push_back(site_of(o)); });
-    std::sort(out.begin(), out.end(), [](const Site &a, const Site &b) { return a.id < b.id; });
-    return true;
+    return tri->vertex[tri->table.find(id)->slot];
 }
+
+} // namespace
 
 // ---- public queries ----
 
@@ -98,16 +70,15 @@ extern "C" iir_tri_status iir_tri_shortest_edge(const iir_tri *tri, uint32_t *de
 {
     if (!tri) return IIR_TRI_BAD_ARG;
     return guard([&] {
-        if (tri->by_id.size() < 2) return IIR_TRI_TOO_FEW;
-        Edge e = shortest_edge(tri->dt);
-        // Ties (including "no third site") go to the younger endpoint, e.young.
-        double dy = second_nearest2(tri->dt, e.young, e.old);
-        double dold = second_nearest2(tri->dt, e.old, e.young);
+        if (tri->table.order.size() < 2) return IIR_TRI_TOO_FEW;
+        Edge_key e = shortest_edge(tri->table);
+        Vertex_handle young = vertex_of(tri, e.young), old = vertex_of(tri, e.old);
+        // Ties (including "no third site") go to the younger endpoint.
+        double dy = second_nearest2(tri->dt, young, old);
+        double dold = second_nearest2(tri->dt, old, young);
         bool young_denser = dy <= dold;
-        Vertex_handle denser = young_denser ? e.young : e.old;
-        Vertex_handle other = young_denser ? e.old : e.young;
-        if (denser_id) *denser_id = denser->info();
-        if (other_id) *other_id = other->info();
+        if (denser_id) *denser_id = young_denser ? e.young : e.old;
+        if (other_id) *other_id = young_denser ? e.old : e.young;
         if (length) *length = std::sqrt(e.len2);
         return IIR_TRI_OK;
     });
@@ -119,8 +90,8 @@ extern "C" iir_tri_status iir_tri_edges(const iir_tri *tri, uint32_t *pairs, siz
     return guard([&] {
         std::vector<std::pair<uint32_t, uint32_t>> edges;
         for (auto it = tri->dt.finite_edges_begin(); it != tri->dt.finite_edges_end(); ++it) {
-            Edge e = make_edge(*it);
-            edges.emplace_back(e.old->info(), e.young->info());
+            Edge_key e = make_edge(*it);
+            edges.emplace_back(e.old, e.young);
         }
         iir_tri_status st = fits(pairs, cap, edges.size(), n);
         if (st != IIR_TRI_OK || !pairs) return st;

@@ -1,6 +1,7 @@
 /* pt.c -- the reference path tracer (method "pt"): next-event estimation with MIS for area
  * lights, Russian roulette, a maximum bounce count, deterministic seeds, OpenMP over tiles, and
- * progressive refinement (more samples into the same frame). Uses params spp, bounces, seed.
+ * progressive refinement (more samples into the same frame). Uses params spp, bounces, seed,
+ * jitter.
  *
  * Bounces count reflections: a light path light -> x_k -> ... -> x_1 -> camera has k of them, so
  * bounces = 1 is direct light only and bounces = 2 adds one diffuse bounce. Emitters seen directly
@@ -121,6 +122,7 @@ static void render_tile(pt_state *pt, int tile, int spp, iir_raystats *st)
             for (uint64_t s = pt->spp_done; s < pt->spp_done + (uint64_t)spp; s++) {
                 iir_rng rng = iir_rng_make(pt->params.seed, iir_hash3((uint64_t)x, (uint64_t)y, s));
                 iir_vec2 j = iir_rng_uniform2(&rng);
+                if (!pt->params.jitter) j = iir_v2(0.5f, 0.5f);
                 iir_vec3 dir = iir_camera_dir(cam, (float)x + j.x, (float)y + j.y);
                 iir_vec3 L = Li(pt, iir_make_ray(cam->origin, dir, 0.f, INFINITY), &rng, st);
                 if (iir_is_finite3(L)) sum = iir_add(sum, L);
@@ -180,19 +182,11 @@ static void pt_destroy(void *state)
     free(pt);
 }
 
-static iir_status check_view(const iir_view *view, iir_error *err)
-{
-    iir_status st = iir_camera_validate(&view->camera, err);
-    for (uint32_t i = 0; st == IIR_OK && i < view->num_lights; i++)
-        st = iir_light_validate(&view->lights[i], err);
-    return st;
-}
-
 static iir_status pt_render(void *state, const iir_view *view, iir_image *out,
                             iir_frame_stats *stats, iir_error *err)
 {
     pt_state *pt = state;
-    iir_status st = check_view(view, err);
+    iir_status st = iir_view_validate(view, err);
     if (st != IIR_OK) return st;
     iir_lightset_destroy(pt->lights);
     pt->lights = iir_lightset_create(pt->scene, view->lights, view->num_lights);
@@ -230,4 +224,5 @@ const iir_method_ops iir_method_pt = {
     .destroy = pt_destroy,
     .render = pt_render,
     .refine = pt_refine,
+    .vpls = NULL,
 };

@@ -52,8 +52,13 @@
  *   independent. There is no global mutable state.
  *
  * COST
- *   build O(n log n); insert/remove O(degree) expected; shortest edge O(n); largest empty circle,
- *   all areas O(n); one cell O(degree^2). Collinear sets (no triangles) are handled exactly.
+ *   The handle keeps a summary of every site's clipped cell (area, largest-empty-circle candidates)
+ *   and shortest edge; each mutation redoes exactly the summaries it can change, so queries only
+ *   read them and answer exactly as if every cell were recomputed. build O(n log n) plus one cell
+ *   per site whose position or neighbours changed since the previous set; insert/remove O(degree)
+ *   cells (O(degree^2) each) plus an O(n) move of small index entries; shortest edge, largest
+ *   empty circle and all areas O(n) reads; one area O(log n); one polygon O(degree^2). Collinear
+ *   sets (no triangles) are handled exactly.
  */
 #ifndef IIR_TRI_H
 #define IIR_TRI_H

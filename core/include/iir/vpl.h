@@ -1,0 +1,82 @@
+/* vpl.h -- virtual point lights: what a VPL is (shared by the incremental step, instant
+ * radiosity and the renderer) and its cached visibility, the paraboloid shadow map. Not how VPLs
+ * are chosen (incremental.h, methods/ir.c) or shaded (render.h).
+ *
+ * A VPL is a cosine emitter on a surface: it re-emits the flux `flux` it reflected, with radiant
+ * intensity I(w) = flux / pi * max(0, n . w). A pixel at x with albedo rho_x and normal n_x
+ * receives from it
+ *     L(x) = (rho_x / pi) (flux / pi) max(0, n . w) max(0, -n_x . w) V(x) / d^2,  w = (x - p) / d.
+ *
+ * The shadow map stores, for directions in the hemisphere about n (paraboloid parametrisation,
+ * Heidrich & Seidel 1998), the distance from the VPL to the first surface. The scene is static, so
+ * a map is rendered once when its VPL is born and kept until the VPL dies. */
+#ifndef IIR_VPL_H
+#define IIR_VPL_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+#include "iir/rt.h"
+#include "iir/vecmath.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- the shadow map ---- */
+
+typedef struct iir_smap {
+    int res;      /* res x res texels; 0 = not rendered */
+    float *depth; /* distance to the first hit per texel, INFINITY where the ray escaped */
+} iir_smap;
+
+/* Frees the map's texels (allocated with malloc by the shadow-map renderer) and marks it not
+ * rendered. Whoever removes a VPL calls this. */
+static inline void iir_smap_release(iir_smap *m)
+{
+    free(m->depth);
+    m->depth = NULL;
+    m->res = 0;
+}
+
+/* Paraboloid map of the hemisphere about +z: local direction d (d.z >= 0) <-> texel coordinates
+ * in [0, 1)^2: (u, v) = ((d.x / (1 + d.z) + 1) / 2, (d.y / (1 + d.z) + 1) / 2). */
+static inline iir_vec2 iir_paraboloid_uv(iir_vec3 d)
+{
+    float k = 1.f / (1.f + d.z);
+    return iir_v2(0.5f * (d.x * k + 1.f), 0.5f * (d.y * k + 1.f));
+}
+static inline iir_vec3 iir_paraboloid_dir(iir_vec2 uv)
+{
+    float x = 2.f * uv.x - 1.f, y = 2.f * uv.y - 1.f;
+    float r2 = x * x + y * y;
+    return iir_scale(iir_v3(2.f * x, 2.f * y, 1.f - r2), 1.f / (1.f + r2));
+}
+
+/* ---- the VPL ---- */
+
+typedef struct iir_vpl {
+    uint32_t id;       /* unique within its set for the set's whole life; never reused */
+    bool null_sample;  /* the light's ray escaped or hit an emitter: holds its place, no light */
+    iir_vec3 position; /* on the surface */
+    iir_vec3 normal;   /* unit, on the side the light arrived from */
+    iir_frame frame;   /* iir_frame_from_normal(normal): the shadow map's axes */
+    iir_vec3 albedo;   /* rho at the VPL */
+    iir_vec3 flux;     /* Phi_i, the flux it re-emits (W, RGB) */
+    iir_vec2 disk;     /* its point in the spot light's disk domain (incremental step only) */
+    uint32_t birth;    /* frame number it was created in */
+    iir_smap smap;     /* owned by whoever owns the VPL */
+} iir_vpl;
+
+/* Fills the frame from the normal. */
+static inline void iir_vpl_set_normal(iir_vpl *v, iir_vec3 n)
+{
+    v->normal = n;
+    v->frame = iir_frame_from_normal(n);
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif

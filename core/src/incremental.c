@@ -1,0 +1,576 @@
+/* incremental.c -- the incremental instant radiosity step: owns a spot light's VPL set across
+ * frames (creation, validation, deletion, insertion, weights, and the VPLs' lifetime including
+ * releasing their shadow maps); not rendering the maps and not shading.
+ *
+ * Design. The set is an array sorted by ascending id (ids only grow, new VPLs are appended,
+ * removals compact in place), so the triangulation's by-id answers (cell areas by ascending id)
+ * line up with the array without a map, and a VPL is found by binary search. Next to it lives a
+ * double-precision copy of every disk point (what the triangulation gets). A frame is the phases
+ * of DESIGN section 5 as visible blocks in iir_incr_update: reproject, validate, (regenerate),
+ * triangulate, delete, insert, weigh. Every choice the header documents is made here: null samples
+ * keep their world direction and are re-cast, new samples stay a margin inside the disk edge, a
+ * birth and a validation use the same facing predicate so a still light never invalidates its own
+ * VPLs. All buffers are sized for max(N, count) and reused across frames. */
+#include "iir/incremental.h"
+
+#include <assert.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "iir/rng.h"
+#include "iir/scene.h"
+#include "iir/tri.h"
+#include "sampling.h"
+#include "surface.h"
+#include "timer.h"
+
+struct iir_incr {
+    const iir_scene *scene;
+    const iir_rt *rt;
+    iir_incr_params params;
+    iir_tri *tri;         /* the disk points of the current set, ids as vertex info */
+    iir_vpl *vpls;        /* [count], ascending id */
+    double *xy;           /* [2 cap]: vpls[i]'s disk point in double, xy[2i], xy[2i + 1] */
+    uint32_t *ids;        /* [cap] scratch: ids for the triangulation */
+    double *areas;        /* [cap] scratch: clipped cell areas */
+    unsigned char *alive; /* [cap] scratch: VPLs kept by the phase running */
+    uint32_t count, cap;  /* cap >= max(N, count) */
+    uint32_t next_id;     /* the id of the next VPL created */
+    uint32_t frame;       /* updates so far: the birth of the VPLs made now */
+    uint32_t generations; /* Hammersley sets made so far: the scramble's stream */
+};
+
+/* The light's pose for one frame. */
+typedef struct pose {
+    const iir_light *spot;
+    iir_vec3 p;
+    iir_frame fr;
+    double R;
+} pose;
+
+/* What one ray from the light found: a VPL-to-be or a null sample. */
+typedef struct sample {
+    bool null_sample;
+    iir_vec3 x, n, albedo; /* VPL: position, normal on the light's side, albedo */
+    iir_vec3 w;            /* the ray's unit direction */
+} sample;
+
+/* ==== parameters ============================================================================= */
+
+iir_incr_params iir_incr_params_default(void)
+{
+    iir_incr_params p = {
+        .target = 256,
+        .k_min = 4,
+        .k_max = 8,
+        .weights = IIR_WEIGHTS_VORONOI,
+        .regen_threshold = 0.5f,
+        .seed = 1,
+    };
+    return p;
+}
+
+iir_status iir_incr_params_validate(const iir_incr_params *p, iir_error *err)
+{
+    if (p->target < 1 || p->target > IIR_INCR_MAX_TARGET)
+        return iir_fail(err, IIR_ERR_INVALID, "incremental step: target (N) %u is outside [1, %u]",
+                        p->target, IIR_INCR_MAX_TARGET);
+    if (p->k_max < 1 || p->k_max > IIR_INCR_MAX_TARGET)
+        return iir_fail(err, IIR_ERR_INVALID, "incremental step: k_max %u is outside [1, %u]",
+                        p->k_max, IIR_INCR_MAX_TARGET);
+    if (p->k_min > p->k_max)
+        return iir_fail(err, IIR_ERR_INVALID, "incremental step: k_min %u is larger than k_max %u",
+                        p->k_min, p->k_max);
+    if (p->weights != IIR_WEIGHTS_UNIFORM && p->weights != IIR_WEIGHTS_VORONOI)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "incremental step: weights %d is neither uniform nor voronoi",
+                        (int)p->weights);
+    if (!(p->regen_threshold > 0.f && p->regen_threshold <= 1.f))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "incremental step: regen_threshold %g is outside (0, 1]",
+                        (double)p->regen_threshold);
+    return IIR_OK;
+}
+
+const char *iir_incr_phase_name(iir_incr_phase phase)
+{
+    static const char *const names[IIR_INCR_PHASE_COUNT] = {"reproject", "validate", "triangulate",
+                                                            "delete",    "insert",   "weigh"};
+    return (unsigned)phase < IIR_INCR_PHASE_COUNT ? names[phase] : "?";
+}
+
+/* ==== lifetime =============================================================================== */
+
+/* Makes room for cap VPLs; on failure the old buffers stay (realloc keeps them). */
+static iir_status reserve(iir_incr *inc, uint32_t cap, iir_error *err)
+{
+    if (cap <= inc->cap) return IIR_OK;
+    iir_vpl *v = realloc(inc->vpls, cap * sizeof *v);
+    if (v) inc->vpls = v;
+    double *xy = realloc(inc->xy, 2 * (size_t)cap * sizeof *xy);
+    if (xy) inc->xy = xy;
+    uint32_t *ids = realloc(inc->ids, cap * sizeof *ids);
+    if (ids) inc->ids = ids;
+    double *areas = realloc(inc->areas, cap * sizeof *areas);
+    if (areas) inc->areas = areas;
+    unsigned char *alive = realloc(inc->alive, cap);
+    if (alive) inc->alive = alive;
+    if (!v || !xy || !ids || !areas || !alive)
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory for %u VPLs", cap);
+    inc->cap = cap;
+    return IIR_OK;
+}
+
+iir_status iir_incr_create(const iir_scene *scene, const iir_rt *rt, const iir_incr_params *p,
+                           iir_incr **out, iir_error *err)
+{
+    *out = NULL;
+    iir_status st = iir_incr_params_validate(p, err);
+    if (st != IIR_OK) return st;
+    iir_incr *inc = calloc(1, sizeof *inc);
+    if (!inc) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the incremental step");
+    inc->scene = scene;
+    inc->rt = rt;
+    inc->params = *p;
+    st = reserve(inc, p->target, err);
+    if (st != IIR_OK) {
+        iir_incr_destroy(inc);
+        return st;
+    }
+    *out = inc;
+    return IIR_OK;
+}
+
+void iir_incr_destroy(iir_incr *inc)
+{
+    if (!inc) return;
+    for (uint32_t i = 0; i < inc->count; i++) iir_smap_release(&inc->vpls[i].smap);
+    iir_tri_destroy(inc->tri);
+    free(inc->vpls);
+    free(inc->xy);
+    free(inc->ids);
+    free(inc->areas);
+    free(inc->alive);
+    free(inc);
+}
+
+iir_status iir_incr_set_params(iir_incr *inc, const iir_incr_params *p, iir_error *err)
+{
+    iir_status st = iir_incr_params_validate(p, err);
+    if (st == IIR_OK) st = reserve(inc, p->target, err);
+    if (st == IIR_OK) inc->params = *p;
+    return st;
+}
+
+iir_incr_params iir_incr_get_params(const iir_incr *inc)
+{
+    return inc->params;
+}
+
+iir_vpl *iir_incr_vpls(iir_incr *inc, uint32_t *n)
+{
+    *n = inc->count;
+    return inc->vpls;
+}
+
+const struct iir_tri *iir_incr_tri(const iir_incr *inc)
+{
+    return inc->tri;
+}
+
+/* ==== the disk domain ======================================================================== */
+
+/* Disk point of the direction d (any length > 0) from the light: s = (w.r, w.u), w = d / |d|, in
+ * double. Returns whether d is strictly inside the cone: w.f > 0 and |s| < R. */
+static bool disk_of(const pose *ps, iir_vec3 d, double s[2])
+{
+    double dx = d.x, dy = d.y, dz = d.z;
+    double len = sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(len > 0.0)) {
+        s[0] = s[1] = 0.0;
+        return false;
+    }
+    const iir_frame *fr = &ps->fr;
+    s[0] = (dx * fr->r.x + dy * fr->r.y + dz * fr->r.z) / len;
+    s[1] = (dx * fr->u.x + dy * fr->u.y + dz * fr->u.z) / len;
+    double wf = dx * fr->f.x + dy * fr->f.y + dz * fr->f.z;
+    return wf > 0.0 && s[0] * s[0] + s[1] * s[1] < ps->R * ps->R;
+}
+
+/* The world direction (x - p for a VPL, the ray's direction for a null sample) that places v. */
+static iir_vec3 direction_of(const pose *ps, const iir_vpl *v)
+{
+    return v->null_sample ? v->normal : iir_sub(v->position, ps->p);
+}
+
+/* A VPL faces the light when its normal points towards p. Birth and validation both use this. */
+static bool faces_light(const pose *ps, iir_vec3 x, iir_vec3 n)
+{
+    return iir_dot(n, iir_sub(ps->p, x)) > 0.f;
+}
+
+/* ==== rays =================================================================================== */
+
+/* One closest-hit ray from the light along unit w: a VPL on a reflecting surface facing the
+ * light, or a null sample (miss, emitter, grazing hit). */
+static sample trace_sample(const iir_incr *inc, const pose *ps, iir_vec3 w, iir_raystats *rays)
+{
+    sample sm = {.null_sample = true, .w = w};
+    iir_ray ray = iir_make_ray(ps->p, w, 0.f, INFINITY);
+    iir_hit hit;
+    if (!iir_rt_intersect(inc->rt, &ray, &hit, rays, IIR_RAYS_VPL)) return sm;
+    iir_surface sf = iir_surface_at(inc->scene, &hit, iir_neg(w));
+    if (!iir_is_black(sf.mat->emission) || !faces_light(ps, sf.p, sf.ns)) return sm;
+    sm.null_sample = false;
+    sm.x = sf.p;
+    sm.n = sf.ns;
+    sm.albedo = sf.mat->albedo;
+    return sm;
+}
+
+/* Whether the segment from the light to x is free (one occlusion ray, stopping short of x). */
+static bool unoccluded(const iir_incr *inc, const pose *ps, iir_vec3 x, iir_raystats *rays)
+{
+    iir_vec3 d = iir_sub(x, ps->p);
+    float len = iir_length(d);
+    float tfar = 1.f - iir_rt_epsilon(inc->rt) / len;
+    if (!(tfar > 0.f)) return true; /* x is within epsilon of the light: nothing between */
+    iir_ray ray = iir_make_ray(ps->p, d, 0.f, tfar);
+    return !iir_rt_occluded(inc->rt, &ray, rays, IIR_RAYS_VPL);
+}
+
+/* ==== the set ================================================================================ */
+
+/* Index of the VPL with this id (the array is sorted by id); asserts that it exists. */
+static uint32_t index_of(const iir_incr *inc, uint32_t id)
+{
+    uint32_t lo = 0, hi = inc->count;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (inc->vpls[mid].id < id)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    assert(lo < inc->count && inc->vpls[lo].id == id);
+    return lo;
+}
+
+/* Keeps the VPLs with alive[i] set, in order; releases the others' maps. Returns how many went. */
+static uint32_t compact(iir_incr *inc)
+{
+    uint32_t kept = 0;
+    for (uint32_t i = 0; i < inc->count; i++) {
+        if (!inc->alive[i]) {
+            iir_smap_release(&inc->vpls[i].smap);
+            continue;
+        }
+        inc->vpls[kept] = inc->vpls[i];
+        inc->xy[2 * kept] = inc->xy[2 * i];
+        inc->xy[2 * kept + 1] = inc->xy[2 * i + 1];
+        kept++;
+    }
+    uint32_t gone = inc->count - kept;
+    inc->count = kept;
+    return gone;
+}
+
+/* Writes the VPL for sample sm into slot `count` (not yet part of the set; see commit): a VPL at
+ * the reprojection of its position, or a null sample at that of its direction (also when the
+ * position fell outside the cone). Returns false when even that is not strictly inside. */
+static bool stage(iir_incr *inc, const pose *ps, const sample *sm)
+{
+    assert(inc->count < inc->cap);
+    iir_vpl *v = &inc->vpls[inc->count];
+    double *s = &inc->xy[2 * inc->count];
+    memset(v, 0, sizeof *v);
+    v->birth = inc->frame;
+    if (!sm->null_sample && disk_of(ps, iir_sub(sm->x, ps->p), s)) {
+        v->position = sm->x;
+        v->albedo = sm->albedo;
+        iir_vpl_set_normal(v, sm->n);
+    } else {
+        v->null_sample = true;
+        v->position = ps->p;
+        iir_vpl_set_normal(v, sm->w);
+        if (!disk_of(ps, sm->w, s)) return false;
+    }
+    v->disk = iir_v2((float)s[0], (float)s[1]);
+    return true;
+}
+
+/* Makes the staged VPL part of the set and gives it the next id. */
+static void commit(iir_incr *inc)
+{
+    inc->vpls[inc->count].id = inc->next_id++;
+    inc->count++;
+}
+
+/* ==== the phases ============================================================================= */
+
+/* REPROJECT: every disk point from the world position (direction) for the new frame; alive[i]
+ * says whether it is strictly inside the cone. */
+static void phase_reproject(iir_incr *inc, const pose *ps)
+{
+    for (uint32_t i = 0; i < inc->count; i++) {
+        iir_vpl *v = &inc->vpls[i];
+        double *s = &inc->xy[2 * i];
+        inc->alive[i] = disk_of(ps, direction_of(ps, v), s);
+        v->disk = iir_v2((float)s[0], (float)s[1]);
+    }
+}
+
+/* VALIDATE: inside the cone (from REPROJECT), facing the light and unoccluded; a null sample
+ * stays while its ray would still give a null sample. Returns how many died. */
+static uint32_t phase_validate(iir_incr *inc, const pose *ps, iir_raystats *rays)
+{
+    for (uint32_t i = 0; i < inc->count; i++) {
+        if (!inc->alive[i]) continue;
+        const iir_vpl *v = &inc->vpls[i];
+        if (v->null_sample)
+            inc->alive[i] = trace_sample(inc, ps, v->normal, rays).null_sample;
+        else
+            inc->alive[i] =
+                faces_light(ps, v->position, v->normal) && unoccluded(inc, ps, v->position, rays);
+    }
+    return compact(inc);
+}
+
+/* A Hammersley point (i / n, phi_2(i)) rotated by offsets o (Cranley-Patterson), in [0, 1)^2. */
+static iir_vec2 hammersley(uint32_t i, uint32_t n, const double o[2])
+{
+    double u0 = (double)i / n + o[0], u1 = (double)iir_radical_inverse(2, i) + o[1];
+    u0 -= floor(u0);
+    u1 -= floor(u1);
+    return iir_v2(fminf((float)u0, 0x1.fffffep-1f), fminf((float)u1, 0x1.fffffep-1f));
+}
+
+/* Whether the ids left before uint32_t wraps might not last this frame (after ~2^32 VPLs). */
+static bool ids_exhausted(const iir_incr *inc)
+{
+    return inc->next_id > UINT32_MAX - inc->params.target - inc->params.k_max;
+}
+
+/* REGENERATE: discards the whole set and makes N new VPLs from a scrambled Hammersley set, one
+ * ray each (ids restart at 0 only when they are exhausted). Returns how many were created. */
+static uint32_t regenerate(iir_incr *inc, const pose *ps, iir_raystats *rays)
+{
+    memset(inc->alive, 0, inc->count);
+    compact(inc);
+    if (ids_exhausted(inc)) inc->next_id = 0;
+    iir_rng rng = iir_rng_make(inc->params.seed, inc->generations++);
+    double o[2] = {iir_rng_uniform(&rng), iir_rng_uniform(&rng)};
+    float scale = (float)(ps->R * (1.0 - IIR_INCR_EDGE_MARGIN));
+    uint32_t n = inc->params.target, made = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        iir_vec2 d = iir_sample_uniform_disk_concentric(hammersley(i, n, o));
+        iir_vec3 w = iir_normalize(iir_spot_disk_to_dir(&ps->fr, iir_v2(d.x * scale, d.y * scale)));
+        sample sm = trace_sample(inc, ps, w, rays);
+        if (!stage(inc, ps, &sm)) continue;
+        commit(inc);
+        made++;
+    }
+    return made;
+}
+
+static iir_status tri_fail(iir_tri_status ts, const char *what, iir_error *err)
+{
+    iir_status st = ts == IIR_TRI_NO_MEMORY ? IIR_ERR_NOMEM : IIR_ERR_INTERNAL;
+    return iir_fail(err, st, "incremental step: %s failed in the triangulation (%s)", what,
+                    iir_tri_status_name(ts));
+}
+
+/* TRIANGULATE: rebuilds the triangulation of all disk points (a new handle when R changed).
+ * VPLs that coincide with an older one are dropped; *dropped gets how many. */
+static iir_status phase_triangulate(iir_incr *inc, const pose *ps, uint32_t *dropped,
+                                    iir_error *err)
+{
+    *dropped = 0;
+    if (!inc->tri || iir_tri_radius(inc->tri) != ps->R) {
+        iir_tri_destroy(inc->tri);
+        inc->tri = iir_tri_create(ps->R);
+        if (!inc->tri)
+            return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the triangulation");
+    }
+    for (uint32_t i = 0; i < inc->count; i++) inc->ids[i] = inc->vpls[i].id;
+    iir_tri_status ts = iir_tri_build(inc->tri, inc->xy, inc->ids, inc->count);
+    if (ts == IIR_TRI_OK) return IIR_OK;
+    if (ts != IIR_TRI_DUPLICATE_POINT) return tri_fail(ts, "building", err);
+    for (uint32_t i = 0; i < inc->count; i++) {
+        double xy[2];
+        inc->alive[i] = iir_tri_position(inc->tri, inc->vpls[i].id, xy) == IIR_TRI_OK;
+    }
+    *dropped = compact(inc);
+    return IIR_OK;
+}
+
+/* DELETE: while fewer than k_min replacements so far (`replaced` died already) or above N, remove
+ * the denser endpoint of the shortest Delaunay edge. Returns the status; *deleted gets how many. */
+static iir_status phase_delete(iir_incr *inc, uint32_t replaced, uint32_t *deleted, iir_error *err)
+{
+    const iir_incr_params *p = &inc->params;
+    uint32_t n = inc->count;
+    memset(inc->alive, 1, inc->count);
+    *deleted = 0;
+    while (replaced + *deleted < p->k_min || n > p->target) {
+        uint32_t id;
+        iir_tri_status ts = iir_tri_shortest_edge(inc->tri, &id, NULL, NULL);
+        if (ts == IIR_TRI_TOO_FEW) break;
+        if (ts == IIR_TRI_OK) ts = iir_tri_remove(inc->tri, id);
+        if (ts != IIR_TRI_OK) {
+            compact(inc);
+            return tri_fail(ts, "deleting", err);
+        }
+        inc->alive[index_of(inc, id)] = 0;
+        (*deleted)++;
+        n--;
+    }
+    compact(inc);
+    return IIR_OK;
+}
+
+/* The largest empty circle's centre, pulled to at most R (1 - margin) from the disk's centre. */
+static iir_vec2 insertion_point(const double c[2], double R)
+{
+    double r = sqrt(c[0] * c[0] + c[1] * c[1]), rmax = R * (1.0 - IIR_INCR_EDGE_MARGIN);
+    double k = r > rmax ? rmax / r : 1.0;
+    return iir_v2((float)(c[0] * k), (float)(c[1] * k));
+}
+
+/* INSERT: while below N and below `limit` insertions, a ray towards the largest empty circle's
+ * centre; the VPL or null sample it gives joins the triangulation before the next circle. */
+static iir_status phase_insert(iir_incr *inc, const pose *ps, uint32_t limit, uint32_t *inserted,
+                               iir_raystats *rays, iir_error *err)
+{
+    *inserted = 0;
+    while (inc->count < inc->params.target && *inserted < limit) {
+        double c[2], radius;
+        iir_tri_status ts = iir_tri_largest_empty_circle(inc->tri, c, &radius);
+        if (ts == IIR_TRI_TOO_FEW) break; /* an empty set: only when a regeneration found nothing */
+        if (ts != IIR_TRI_OK) return tri_fail(ts, "finding the largest empty circle", err);
+        iir_vec2 s = insertion_point(c, ps->R);
+        sample sm = trace_sample(inc, ps, iir_normalize(iir_spot_disk_to_dir(&ps->fr, s)), rays);
+        if (!stage(inc, ps, &sm)) break; /* only for a cone too narrow for float directions */
+        const double *xy = &inc->xy[2 * inc->count];
+        ts = iir_tri_insert(inc->tri, xy[0], xy[1], inc->next_id);
+        if (ts == IIR_TRI_DUPLICATE_POINT || ts == IIR_TRI_OUTSIDE) break; /* saturated */
+        if (ts != IIR_TRI_OK) return tri_fail(ts, "inserting", err);
+        commit(inc);
+        (*inserted)++;
+    }
+    return IIR_OK;
+}
+
+/* WEIGH: Phi_i = I0 rho_i A_i falloff(|s_i|); A_i the clipped Voronoi cell or pi R^2 / count. */
+static iir_status phase_weigh(iir_incr *inc, const pose *ps, iir_error *err)
+{
+    bool voronoi = inc->params.weights == IIR_WEIGHTS_VORONOI;
+    if (voronoi) {
+        size_t n = 0;
+        iir_tri_status ts = iir_tri_cell_areas(inc->tri, inc->ids, inc->areas, inc->cap, &n);
+        if (ts != IIR_TRI_OK) return tri_fail(ts, "computing cell areas", err);
+        assert(n == inc->count);
+    }
+    double uniform = M_PI * ps->R * ps->R / (inc->count ? inc->count : 1);
+    for (uint32_t i = 0; i < inc->count; i++) {
+        iir_vpl *v = &inc->vpls[i];
+        assert(!voronoi || inc->ids[i] == v->id);
+        double A = voronoi ? inc->areas[i] : uniform;
+        float rho =
+            (float)sqrt(inc->xy[2 * i] * inc->xy[2 * i] + inc->xy[2 * i + 1] * inc->xy[2 * i + 1]);
+        float k = (float)A * iir_spot_falloff(ps->spot, rho);
+        v->flux =
+            v->null_sample ? iir_v3s(0.f) : iir_scale(iir_mul(ps->spot->intensity, v->albedo), k);
+        assert(iir_is_finite3(v->flux) && v->flux.x >= 0.f && v->flux.y >= 0.f && v->flux.z >= 0.f);
+    }
+    return IIR_OK;
+}
+
+/* ==== one frame ============================================================================== */
+
+static iir_status check_spot(const iir_light *spot, iir_error *err)
+{
+    if (spot->type != IIR_LIGHT_SPOT)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "incremental step: light '%s' has type point; the VPL domain needs a spot",
+                        spot->name[0] ? spot->name : "(unnamed)");
+    return iir_light_validate(spot, err);
+}
+
+static uint32_t count_null_samples(const iir_incr *inc)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < inc->count; i++) n += inc->vpls[i].null_sample;
+    return n;
+}
+
+/* Adds the time since *t to phase ph and restarts *t. */
+static void lap(iir_incr_stats *st, iir_incr_phase ph, double *t)
+{
+    double now = iir_now_ms();
+    st->phase_ms[ph] += now - *t;
+    *t = now;
+}
+
+iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats *out,
+                           iir_error *err)
+{
+    iir_status status = check_spot(spot, err);
+    if (status != IIR_OK) return status;
+    iir_incr_stats st;
+    memset(&st, 0, sizeof st);
+    pose ps = {spot, spot->position, iir_spot_frame(spot), (double)iir_spot_radius(spot)};
+    const iir_incr_params *p = &inc->params;
+    uint32_t count_prev = inc->count, dropped = 0, limit = p->k_max;
+    double t0 = iir_now_ms(), t = t0;
+
+    /* 1. reproject */
+    phase_reproject(inc, &ps);
+    lap(&st, IIR_INCR_REPROJECT, &t);
+
+    /* 2. validate */
+    st.invalidated = phase_validate(inc, &ps, &st.rays);
+    st.valid = inc->count;
+    lap(&st, IIR_INCR_VALIDATE, &t);
+
+    /* fallback: regenerate when too many died at once, nothing is left, or ids run out */
+    bool regen = inc->count == 0 || ids_exhausted(inc) ||
+                 (double)st.invalidated > (double)p->regen_threshold * count_prev;
+    if (regen) {
+        st.initial = inc->frame == 0;
+        st.regenerated = !st.initial;
+        st.deleted = inc->count;
+        st.inserted = regenerate(inc, &ps, &st.rays);
+        limit = p->target;
+        lap(&st, IIR_INCR_INSERT, &t);
+    }
+
+    /* 3. triangulate */
+    status = phase_triangulate(inc, &ps, &dropped, err);
+    st.invalidated += regen ? 0 : dropped;
+    st.valid -= regen ? 0 : dropped;
+    st.inserted -= regen ? dropped : 0;
+    lap(&st, IIR_INCR_TRIANGULATE, &t);
+
+    /* 4. delete */
+    if (status == IIR_OK && !regen) status = phase_delete(inc, st.invalidated, &st.deleted, err);
+    lap(&st, IIR_INCR_DELETE, &t);
+
+    /* 5. insert */
+    uint32_t added = 0;
+    if (status == IIR_OK) status = phase_insert(inc, &ps, limit, &added, &st.rays, err);
+    st.inserted += added;
+    lap(&st, IIR_INCR_INSERT, &t);
+
+    /* 6. weigh */
+    if (status == IIR_OK) status = phase_weigh(inc, &ps, err);
+    lap(&st, IIR_INCR_WEIGH, &t);
+
+    st.count = inc->count;
+    st.null_samples = count_null_samples(inc);
+    st.total_ms = iir_now_ms() - t0;
+    assert(count_prev - st.invalidated - st.deleted + st.inserted == st.count);
+    inc->frame++;
+    if (out) *out = st;
+    return status;
+}

@@ -1,0 +1,212 @@
+/* ir.c -- instant radiosity (Keller 1997), method "ir": every frame, N light paths leave the
+ * lights (chosen by flux), and every diffuse vertex of a path becomes a VPL carrying the flux it
+ * reflects; paths end by Russian roulette or after `bounces - 1` VPL vertices (so bounces = 2 is
+ * one-bounce indirect light, like iir). All VPLs are new each frame, so all their shadow maps are
+ * rendered each frame: this is the baseline the incremental method must beat.
+ * Uses params vpls, bounces, seed, ir_fresh, visibility, sm_res, sm_bias, interleave, clamp.
+ *
+ * The first two dimensions of path i (the point on the spot's disk) are the Halton point i in
+ * bases 2 and 3, rotated by a per-frame offset (Cranley-Patterson): the same offset every frame
+ * when ir_fresh is false, a new one every frame otherwise. Later dimensions come from PCG streams.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "iir/method.h"
+#include "iir/rng.h"
+#include "iir/scene.h"
+#include "iir/shadowmap.h"
+#include "method_internal.h"
+#include "sampling.h"
+#include "surface.h"
+#include "timer.h"
+
+typedef struct ir_state {
+    const iir_scene *scene;
+    const iir_rt *rt;
+    iir_params params;
+    iir_renderer *renderer;
+    iir_vpl *vpls;
+    uint32_t num_vpls, cap;
+    uint32_t frame, next_id, escaped;
+} ir_state;
+
+/* ---- light paths ---- */
+
+static bool push_vpl(ir_state *ir, const iir_vpl *v)
+{
+    if (ir->num_vpls == ir->cap) {
+        uint32_t cap = ir->cap ? 2 * ir->cap : 256;
+        iir_vpl *grown = realloc(ir->vpls, sizeof(iir_vpl) * cap);
+        if (!grown) return false;
+        ir->vpls = grown;
+        ir->cap = cap;
+    }
+    ir->vpls[ir->num_vpls++] = *v;
+    return true;
+}
+
+/* Chooses a light in proportion to its flux; returns its index and pmf. */
+static uint32_t pick_light(const iir_view *view, float u, float *pmf)
+{
+    float total = 0.f;
+    for (uint32_t i = 0; i < view->num_lights; i++)
+        total += iir_luminance(iir_light_flux(&view->lights[i]));
+    float acc = 0.f;
+    for (uint32_t i = 0; i < view->num_lights; i++) {
+        float w = iir_luminance(iir_light_flux(&view->lights[i]));
+        acc += w;
+        if (u * total < acc || i + 1 == view->num_lights) {
+            *pmf = total > 0.f ? w / total : 0.f;
+            return i;
+        }
+    }
+    *pmf = 0.f;
+    return 0;
+}
+
+static iir_vec2 halton2(uint32_t i, iir_vec2 shift)
+{
+    float a = iir_radical_inverse(2, i) + shift.x, b = iir_radical_inverse(3, i) + shift.y;
+    return iir_v2(a - floorf(a), b - floorf(b));
+}
+
+/* One light path: a VPL at each reflecting vertex; false when out of memory. */
+static bool trace_path(ir_state *ir, const iir_light *light, iir_vec3 beta, iir_vec2 u,
+                       iir_rng *rng, iir_raystats *st)
+{
+    iir_light_ray lr = iir_light_sample_emission(light, u);
+    iir_ray ray = iir_make_ray(lr.origin, lr.dir, 0.f, INFINITY);
+    beta = iir_mul(beta, lr.beta); /* flux arriving at the next vertex */
+    float eps = iir_rt_epsilon(ir->rt);
+    for (int vertex = 1; vertex < ir->params.bounces; vertex++) {
+        iir_hit hit;
+        if (iir_is_black(beta) || !iir_rt_intersect(ir->rt, &ray, &hit, st, IIR_RAYS_VPL)) break;
+        iir_surface sf = iir_surface_at(ir->scene, &hit, iir_neg(ray.dir));
+        if (!iir_is_black(sf.mat->emission)) break; /* emitters absorb light paths */
+        iir_vpl v = {.id = ir->next_id++,
+                     .position = sf.p,
+                     .albedo = sf.mat->albedo,
+                     .flux = iir_mul(beta, sf.mat->albedo),
+                     .birth = ir->frame};
+        iir_vpl_set_normal(&v, sf.ns);
+        if (!push_vpl(ir, &v)) return false;
+        /* Continue: cosine sampling makes the throughput the albedo; roulette on it. */
+        float q = fminf(1.f, iir_max_comp(sf.mat->albedo));
+        if (q <= 0.f || iir_rng_uniform(rng) >= q) break;
+        beta = iir_scale(v.flux, 1.f / q);
+        iir_vec3 wi =
+            iir_frame_to_world(&v.frame, iir_sample_cosine_hemisphere(iir_rng_uniform2(rng)));
+        ray = iir_make_ray(iir_surface_offset(&sf, eps), wi, 0.f, INFINITY);
+    }
+    return true;
+}
+
+static iir_status generate_vpls(ir_state *ir, const iir_view *view, iir_raystats *st,
+                                iir_error *err)
+{
+    for (uint32_t i = 0; i < ir->num_vpls; i++) iir_smap_release(&ir->vpls[i].smap);
+    ir->num_vpls = 0;
+    ir->escaped = 0;
+    if (view->num_lights == 0) return IIR_OK;
+    uint64_t frame_seed = ir->params.ir_fresh ? iir_hash3(ir->params.seed, ir->frame, 0x1f)
+                                              : iir_hash3(ir->params.seed, 0, 0x1f);
+    iir_rng shift_rng = iir_rng_make(frame_seed, UINT64_MAX);
+    iir_vec2 shift = iir_rng_uniform2(&shift_rng);
+    uint32_t n = (uint32_t)ir->params.vpls;
+    for (uint32_t i = 0; i < n; i++) {
+        iir_rng rng = iir_rng_make(frame_seed, i);
+        float pmf;
+        const iir_light *light = &view->lights[pick_light(view, iir_rng_uniform(&rng), &pmf)];
+        if (pmf <= 0.f) continue;
+        uint32_t before = ir->num_vpls;
+        if (!trace_path(ir, light, iir_v3s(1.f / ((float)n * pmf)), halton2(i, shift), &rng, st))
+            return iir_fail(err, IIR_ERR_NOMEM, "ir: out of memory for VPLs");
+        ir->escaped += ir->num_vpls == before;
+    }
+    return IIR_OK;
+}
+
+/* ---- the method interface ---- */
+
+static iir_status ir_create(const iir_scene *scene, const iir_rt *rt, const iir_params *params,
+                            void **state, iir_error *err)
+{
+    ir_state *ir = calloc(1, sizeof *ir);
+    if (!ir) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating ir");
+    ir->scene = scene;
+    ir->rt = rt;
+    ir->params = *params;
+    ir->renderer = iir_renderer_create(scene, rt);
+    if (!ir->renderer) {
+        free(ir);
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating ir's renderer");
+    }
+    *state = ir;
+    return IIR_OK;
+}
+
+static void ir_destroy(void *state)
+{
+    ir_state *ir = state;
+    if (!ir) return;
+    for (uint32_t i = 0; i < ir->num_vpls; i++) iir_smap_release(&ir->vpls[i].smap);
+    free(ir->vpls);
+    iir_renderer_destroy(ir->renderer);
+    free(ir);
+}
+
+static void fill_counts(const ir_state *ir, uint32_t maps, iir_vpl_counts *c)
+{
+    c->count = ir->num_vpls;
+    c->valid = 0;
+    c->inserted = ir->num_vpls;
+    c->null_samples = ir->escaped;
+    c->regenerated = 1;
+    c->shadowmaps = maps;
+}
+
+static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
+                            iir_frame_stats *stats, iir_error *err)
+{
+    ir_state *ir = state;
+    iir_status st = iir_view_validate(view, err);
+    if (st != IIR_OK) return st;
+    double t0 = iir_now_ms();
+    st = generate_vpls(ir, view, &stats->rays, err);
+    if (st != IIR_OK) return st;
+    double t1 = iir_now_ms();
+    uint32_t maps = 0;
+    if (ir->params.visibility == IIR_VIS_SHADOWMAP)
+        maps = iir_smaps_build(ir->vpls, ir->num_vpls, ir->rt, ir->params.sm_res, &stats->rays);
+    double t2 = iir_now_ms();
+    iir_indirect_params ind = iir_params_indirect(&ir->params);
+    iir_render_timing rt;
+    st = iir_renderer_frame(ir->renderer, &view->camera, view->lights, view->num_lights, ir->vpls,
+                            ir->num_vpls, &ind, iir_hash3(ir->params.seed, ir->frame, 2), out, &rt,
+                            &stats->rays, err);
+    stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
+    stats->phase_ms[IIR_PHASE_SHADOWMAPS] = t2 - t1;
+    iir_render_timing_to_stats(&rt, stats);
+    stats->total_ms = iir_now_ms() - t0;
+    fill_counts(ir, maps, &stats->vpl);
+    ir->frame++;
+    return st;
+}
+
+static const iir_vpl *ir_vpls(const void *state, uint32_t *n)
+{
+    const ir_state *ir = state;
+    *n = ir->num_vpls;
+    return ir->vpls;
+}
+
+const iir_method_ops iir_method_ir = {
+    .name = "ir",
+    .summary = "instant radiosity: VPLs from light paths, regenerated every frame",
+    .create = ir_create,
+    .destroy = ir_destroy,
+    .render = ir_render,
+    .refine = NULL,
+    .vpls = ir_vpls,
+};

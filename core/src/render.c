@@ -1,0 +1,170 @@
+/* render.c -- the VPL renderer object (create/destroy, scratch ownership), its parameters and the
+ * order of one frame's phases; not the phases themselves (render_gbuffer.c, render_direct.c,
+ * render_indirect.c, render_filter.c). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "render_internal.h"
+#include "timer.h"
+
+/* ---- parameters ---- */
+
+iir_indirect_params iir_indirect_params_default(void)
+{
+    iir_indirect_params p = {
+        .visibility = IIR_VIS_SHADOWMAP,
+        .interleave = 4,
+        .filter = true,
+        .clamp = 100.f,
+        .sm_bias = 0.005f,
+        .filter_normal = 0.9f,
+        .filter_depth = 0.05f,
+    };
+    return p;
+}
+
+iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error *err)
+{
+    if (p->visibility != IIR_VIS_SHADOWMAP && p->visibility != IIR_VIS_RAYS)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "indirect visibility %d is neither shadowmap nor rays", (int)p->visibility);
+    if (p->interleave < 1 || p->interleave > IIR_MAX_INTERLEAVE)
+        return iir_fail(err, IIR_ERR_INVALID, "indirect interleave %d is outside [1, %d]",
+                        p->interleave, IIR_MAX_INTERLEAVE);
+    if (!(p->clamp >= 0.f) || isinf(p->clamp))
+        return iir_fail(err, IIR_ERR_INVALID, "indirect clamp %g must be finite and >= 0",
+                        (double)p->clamp);
+    if (!(p->sm_bias >= 0.f && p->sm_bias <= 1.f))
+        return iir_fail(err, IIR_ERR_INVALID, "indirect sm_bias %g is outside [0, 1]",
+                        (double)p->sm_bias);
+    if (!(p->filter_normal >= -1.f && p->filter_normal <= 1.f))
+        return iir_fail(err, IIR_ERR_INVALID, "indirect filter_normal %g is outside [-1, 1]",
+                        (double)p->filter_normal);
+    if (!(p->filter_depth > 0.f) || isinf(p->filter_depth))
+        return iir_fail(err, IIR_ERR_INVALID, "indirect filter_depth %g must be finite and > 0",
+                        (double)p->filter_depth);
+    return IIR_OK;
+}
+
+/* ---- the renderer ---- */
+
+iir_renderer *iir_renderer_create(const iir_scene *scene, const iir_rt *rt)
+{
+    iir_renderer *r = calloc(1, sizeof *r);
+    if (!r) return NULL;
+    r->scene = scene;
+    r->rt = rt;
+    r->eps = iir_rt_epsilon(rt);
+    r->diag2 = iir_length_sq(iir_sub(scene->bounds_max, scene->bounds_min));
+    iir_lightset *set = iir_lightset_create(scene, NULL, 0);
+    if (!set) {
+        free(r);
+        return NULL;
+    }
+    if (iir_lightset_has_area_lights(set))
+        r->area_lights = set;
+    else
+        iir_lightset_destroy(set);
+    return r;
+}
+
+void iir_renderer_destroy(iir_renderer *r)
+{
+    if (!r) return;
+    iir_lightset_destroy(r->area_lights);
+    iir_gbuffer_free(&r->gb);
+    free(r->raw);
+    free(r->rows);
+    free(r->vpl);
+    free(r);
+}
+
+const iir_gbuffer *iir_renderer_gbuffer(const iir_renderer *r)
+{
+    return &r->gb;
+}
+
+/* ---- one frame ---- */
+
+static bool same_camera(const iir_camera *a, const iir_camera *b)
+{
+    return a->position.x == b->position.x && a->position.y == b->position.y &&
+           a->position.z == b->position.z && a->target.x == b->target.x &&
+           a->target.y == b->target.y && a->target.z == b->target.z && a->up.x == b->up.x &&
+           a->up.y == b->up.y && a->up.z == b->up.z && a->fov_y == b->fov_y;
+}
+
+static iir_status check_inputs(const iir_camera *cam, const iir_light *lights, uint32_t num_lights,
+                               const iir_indirect_params *p, const iir_image *out, iir_error *err)
+{
+    if (out->width < 1 || out->height < 1 || out->width > IIR_IMAGE_MAX_DIM ||
+        out->height > IIR_IMAGE_MAX_DIM)
+        return iir_fail(err, IIR_ERR_INVALID, "frame size %dx%d is outside [1, %d]", out->width,
+                        out->height, IIR_IMAGE_MAX_DIM);
+    iir_status s = iir_camera_validate(cam, err);
+    for (uint32_t i = 0; s == IIR_OK && i < num_lights; i++)
+        s = iir_light_validate(&lights[i], err);
+    return s == IIR_OK ? iir_indirect_params_validate(p, err) : s;
+}
+
+/* Sizes the G-buffer and the per-pixel scratch for a w x h frame (only when the size changed). On
+ * failure everything is freed (width 0), so the next frame tries again. */
+static iir_status resize(iir_renderer *r, int w, int h, iir_error *err)
+{
+    if (r->gb.width == w && r->gb.height == h) return IIR_OK;
+    r->gb_valid = false;
+    free(r->raw);
+    free(r->rows);
+    r->raw = malloc(sizeof(iir_vec3) * (size_t)w * (size_t)h);
+    r->rows = malloc(sizeof(iir_filter_row) * (size_t)w * (size_t)h);
+    iir_status s = iir_gbuffer_resize(&r->gb, w, h, err);
+    if (s == IIR_OK && (!r->raw || !r->rows)) {
+        iir_gbuffer_free(&r->gb);
+        s = iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %dx%d frame", w, h);
+    }
+    return s;
+}
+
+/* Renders the G-buffer unless the camera and size are those of the last one. */
+static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, int h,
+                                iir_render_timing *t, iir_raystats *st, iir_error *err)
+{
+    double t0 = iir_now_ms();
+    iir_status s = resize(r, w, h, err);
+    if (s != IIR_OK) return s;
+    t->gbuffer_cached = r->gb_valid && same_camera(cam, &r->gb_camera);
+    if (!t->gbuffer_cached) {
+        iir_camera_frame cf = iir_camera_setup(cam, w, h);
+        iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, st);
+        r->gb_camera = *cam;
+        r->gb_valid = true;
+    }
+    t->gbuffer_ms = iir_now_ms() - t0;
+    return IIR_OK;
+}
+
+iir_status iir_renderer_frame(iir_renderer *r, const iir_camera *cam, const iir_light *lights,
+                              uint32_t num_lights, const iir_vpl *vpls, uint32_t num_vpls,
+                              const iir_indirect_params *p, uint64_t seed, iir_image *out,
+                              iir_render_timing *t, iir_raystats *st, iir_error *err)
+{
+    iir_render_timing tm = {0};
+    iir_raystats rays = {0};
+    iir_status s = check_inputs(cam, lights, num_lights, p, out, err);
+    if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, p, err);
+    if (s == IIR_OK) s = gbuffer_phase(r, cam, out->width, out->height, &tm, &rays, err);
+    if (s == IIR_OK) {
+        double t0 = iir_now_ms();
+        iir_render_direct(r, lights, num_lights, seed, out, &rays);
+        double t1 = iir_now_ms();
+        iir_render_indirect(r, p, &rays);
+        double t2 = iir_now_ms();
+        iir_render_filter(r, p, out);
+        tm.direct_ms = t1 - t0;
+        tm.indirect_ms = t2 - t1;
+        tm.filter_ms = iir_now_ms() - t2;
+    }
+    if (t) *t = tm;
+    if (st) iir_raystats_add(st, &rays);
+    return s;
+}

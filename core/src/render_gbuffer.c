@@ -1,0 +1,110 @@
+/* render_gbuffer.c -- the camera G-buffer: its storage and rendering it with 8-wide packets over
+ * 4x2 pixel blocks, OpenMP over tiles; not deciding when to re-render (render.c). Threads: each
+ * tile writes only its own pixels; ray counters are per thread, summed once. */
+#include <omp.h>
+#include <stdlib.h>
+
+#include "render_internal.h"
+#include "surface.h"
+
+enum { BLOCK_W = 4, BLOCK_H = 2 }; /* one packet; divides IIR_RENDER_TILE */
+
+void iir_gbuffer_free(iir_gbuffer *gb)
+{
+    free(gb->position);
+    free(gb->normal);
+    free(gb->albedo);
+    free(gb->emission);
+    free(gb->depth);
+    free(gb->prim);
+    iir_gbuffer empty = {0};
+    *gb = empty;
+}
+
+iir_status iir_gbuffer_resize(iir_gbuffer *gb, int width, int height, iir_error *err)
+{
+    if (gb->width == width && gb->height == height && gb->position) return IIR_OK;
+    iir_gbuffer_free(gb);
+    size_t n = (size_t)width * (size_t)height;
+    gb->position = malloc(sizeof(iir_vec3) * n);
+    gb->normal = malloc(sizeof(iir_vec3) * n);
+    gb->albedo = malloc(sizeof(iir_vec3) * n);
+    gb->emission = malloc(sizeof(iir_vec3) * n);
+    gb->depth = malloc(sizeof(float) * n);
+    gb->prim = malloc(sizeof(uint32_t) * n);
+    if (!gb->position || !gb->normal || !gb->albedo || !gb->emission || !gb->depth || !gb->prim) {
+        iir_gbuffer_free(gb);
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %dx%d G-buffer", width, height);
+    }
+    gb->width = width;
+    gb->height = height;
+    return IIR_OK;
+}
+
+/* Writes pixel i from its camera ray's hit (or background). */
+static void store(iir_gbuffer *gb, size_t i, const iir_scene *scene, const iir_hit *hit,
+                  iir_vec3 dir)
+{
+    iir_vec3 zero = iir_v3s(0.f);
+    gb->prim[i] = hit->prim;
+    if (hit->prim == IIR_NO_HIT) {
+        gb->position[i] = zero;
+        gb->normal[i] = zero;
+        gb->albedo[i] = zero;
+        gb->emission[i] = zero;
+        gb->depth[i] = INFINITY;
+        return;
+    }
+    iir_vec3 wo = iir_neg(dir);
+    iir_surface sf = iir_surface_at(scene, hit, wo);
+    gb->position[i] = sf.p;
+    gb->normal[i] = sf.ns;
+    gb->albedo[i] = sf.mat->albedo;
+    gb->emission[i] = iir_surface_Le(&sf, wo);
+    gb->depth[i] = hit->t;
+}
+
+/* One packet: the BLOCK_W x BLOCK_H pixels at (x0, y0) that lie inside the image. */
+static void render_block(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
+                         const iir_camera_frame *cf, int x0, int y0, iir_raystats *st)
+{
+    iir_ray8 rays;
+    iir_vec3 dirs[8];
+    for (int k = 0; k < 8; k++) {
+        int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
+        dirs[k] = iir_camera_dir(cf, (float)x + 0.5f, (float)y + 0.5f);
+        rays.ox[k] = cf->origin.x, rays.oy[k] = cf->origin.y, rays.oz[k] = cf->origin.z;
+        rays.dx[k] = dirs[k].x, rays.dy[k] = dirs[k].y, rays.dz[k] = dirs[k].z;
+        rays.tnear[k] = 0.f;
+        rays.tfar[k] = INFINITY;
+        rays.valid[k] = x < gb->width && y < gb->height;
+    }
+    iir_hit hits[8];
+    iir_rt_intersect8(rt, &rays, hits, st, IIR_RAYS_CAMERA);
+    for (int k = 0; k < 8; k++) {
+        if (!rays.valid[k]) continue;
+        int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
+        store(gb, (size_t)y * (size_t)gb->width + (size_t)x, scene, &hits[k], dirs[k]);
+    }
+}
+
+void iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
+                        const iir_camera_frame *cf, iir_raystats *st)
+{
+    int tiles = iir_tile_count(gb->width, gb->height, IIR_RENDER_TILE);
+    iir_raystats total = {0};
+#pragma omp parallel
+    {
+        iir_raystats local = {0};
+#pragma omp for schedule(dynamic, 1)
+        for (int t = 0; t < tiles; t++) {
+            iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_RENDER_TILE, t);
+            for (int y = tl.y0; y < tl.y1; y += BLOCK_H)
+                for (int x = tl.x0; x < tl.x1; x += BLOCK_W)
+                    render_block(gb, scene, rt, cf, x, y, &local);
+        }
+#pragma omp critical(iir_gbuffer_rays)
+        iir_raystats_add(&total, &local);
+    }
+    iir_raystats_add(st, &total);
+}

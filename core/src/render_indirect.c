@@ -1,0 +1,389 @@
+/* render_indirect.c -- indirect light from VPLs at the G-buffer's pixels: checking the VPL set,
+ * sorting the VPLs in use into interleaved subsets by id, and the per-pixel sum of vpl.h's formula
+ * with the clamped geometry term and shadow-map or exact-ray visibility; not the filter that
+ * gathers the subsets back (render_filter.c).
+ *
+ * The per-frame lists are built once, single-threaded (a counting sort over a few hundred VPLs),
+ * into scratch the renderer keeps; the pixel loop then only reads them. Threads: OpenMP over 64x64
+ * tiles, each writing only its own pixels of r->raw, with its pixel batch on its own stack and its
+ * own ray counters (summed once at the end). */
+#include <omp.h>
+#include <stdlib.h>
+
+#include "iir/shadowmap.h"
+#include "render_internal.h"
+
+/* ---- the VPL set of this frame ---- */
+
+static bool in_use(const iir_vpl *v)
+{
+    return !v->null_sample && !iir_is_black(v->flux);
+}
+
+static iir_status check_vpl(const iir_vpl *v, iir_visibility vis, iir_error *err)
+{
+    if (v->null_sample) return IIR_OK;
+    if (!iir_is_finite3(v->position) || !iir_is_finite3(v->normal) || !iir_is_finite3(v->frame.r) ||
+        !iir_is_finite3(v->frame.u))
+        return iir_fail(err, IIR_ERR_INVALID, "VPL %u: position or normal is not finite", v->id);
+    if (fabsf(iir_length(v->normal) - 1.f) > 1e-3f ||
+        iir_length_sq(iir_sub(v->frame.f, v->normal)) > 1e-6f)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "VPL %u: normal is not unit length or its frame does not match it (set "
+                        "both with iir_vpl_set_normal)",
+                        v->id);
+    if (!iir_is_finite3(v->flux) || v->flux.x < 0.f || v->flux.y < 0.f || v->flux.z < 0.f)
+        return iir_fail(err, IIR_ERR_INVALID, "VPL %u: flux must be finite and non-negative",
+                        v->id);
+    if (vis == IIR_VIS_SHADOWMAP && (v->smap.res < 1 || !v->smap.depth))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "VPL %u has no shadow map (build the maps with iir_smaps_build before "
+                        "rendering with shadow-map visibility)",
+                        v->id);
+    return IIR_OK;
+}
+
+static iir_status reserve(iir_renderer *r, uint32_t n, iir_error *err)
+{
+    if (n <= r->vpl_cap) return IIR_OK;
+    iir_shade_vpl *grown = realloc(r->vpl, sizeof(iir_shade_vpl) * n);
+    if (!grown) return iir_fail(err, IIR_ERR_NOMEM, "out of memory for %u VPLs", n);
+    r->vpl = grown;
+    r->vpl_cap = n;
+    return IIR_OK;
+}
+
+static iir_shade_vpl shade_vpl(const iir_vpl *v, float scale, float eps)
+{
+    iir_shade_vpl s;
+    s.p = v->position;
+    s.r = v->frame.r;
+    s.u = v->frame.u;
+    s.n = v->frame.f;
+    s.org = iir_madd(v->position, v->frame.f, eps);
+    s.power = iir_scale(v->flux, IIR_INV_PI * scale);
+    s.smap = &v->smap;
+    return s;
+}
+
+iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num_vpls,
+                              const iir_indirect_params *p, iir_error *err)
+{
+    uint32_t n2 = (uint32_t)(p->interleave * p->interleave), count[IIR_MAX_SUBSETS] = {0}, used = 0;
+    for (uint32_t i = 0; i < num_vpls; i++) {
+        iir_status s = check_vpl(&vpls[i], p->visibility, err);
+        if (s != IIR_OK) return s;
+        if (in_use(&vpls[i])) count[iir_vpl_subset(vpls[i].id, n2)]++, used++;
+    }
+    iir_status s = reserve(r, used, err);
+    if (s != IIR_OK) return s;
+    r->num_subsets = n2;
+    r->start[0] = 0;
+    for (uint32_t k = 0; k < n2; k++) r->start[k + 1] = r->start[k] + count[k];
+    uint32_t next[IIR_MAX_SUBSETS];
+    for (uint32_t k = 0; k < n2; k++) next[k] = r->start[k];
+    for (uint32_t i = 0; i < num_vpls; i++) {
+        if (!in_use(&vpls[i])) continue;
+        uint32_t k = iir_vpl_subset(vpls[i].id, n2);
+        r->vpl[next[k]++] = shade_vpl(&vpls[i], (float)used / (float)count[k], r->eps);
+    }
+    return IIR_OK;
+}
+
+/* ---- the pixel loop ----
+ *
+ * Order: per tile, per subset, the tile's pixels of that subset are collected into a batch; then
+ * each of the subset's VPLs is applied to the whole batch. Consecutive lookups thus hit one map at
+ * neighbouring texels (the batch spans a few degrees seen from the VPL), and everything about the
+ * VPL stays in registers. The batch is structure-of-arrays, padded to a multiple of 4 with pixels
+ * of zero normal (which no VPL lights), so the shadow-map kernel runs 4 pixels per step with SSE2.
+ */
+
+enum { BATCH = 256 }; /* pixels per batch: 10 KB of stack */
+
+typedef struct indirect_ctx {
+    const iir_renderer *r;
+    bool use_smap;
+    float g_max;    /* clamp / D^2, or INFINITY */
+    float rel_bias; /* sm_bias */
+} indirect_ctx;
+
+typedef struct pixel_batch {
+    int m; /* pixels; the arrays are valid up to m rounded up to 4 */
+    uint32_t index[BATCH];
+    _Alignas(16) float px[BATCH], py[BATCH], pz[BATCH]; /* position */
+    _Alignas(16) float nx[BATCH], ny[BATCH], nz[BATCH]; /* normal, facing the camera */
+    _Alignas(16) float Ex[BATCH], Ey[BATCH], Ez[BATCH]; /* sum of power G V */
+} pixel_batch;
+
+static inline float min_f(float a, float b)
+{
+    return a < b ? a : b;
+}
+
+/* The pixel's position and normal. */
+static inline iir_vec3 batch_x(const pixel_batch *b, int j)
+{
+    return iir_v3(b->px[j], b->py[j], b->pz[j]);
+}
+static inline iir_vec3 batch_n(const pixel_batch *b, int j)
+{
+    return iir_v3(b->nx[j], b->ny[j], b->nz[j]);
+}
+static inline void batch_add(pixel_batch *b, int j, iir_vec3 L)
+{
+    b->Ex[j] += L.x, b->Ey[j] += L.y, b->Ez[j] += L.z;
+}
+
+/* G and the cosines (times d) for VPL v at x (normal n); false when G = 0. */
+static inline bool geometry(const iir_shade_vpl *v, iir_vec3 x, iir_vec3 n, float g_max,
+                            iir_vec3 *w, float *d2, float *ci, float *cx, float *G)
+{
+    *w = iir_sub(x, v->p);
+    *d2 = iir_length_sq(*w);
+    *ci = iir_dot(v->n, *w);
+    *cx = -iir_dot(n, *w);
+    if (!(*ci > 0.f && *cx > 0.f && *d2 > 0.f)) return false;
+    float inv_d2 = 1.f / *d2;
+    *G = min_f(*ci * *cx * inv_d2 * inv_d2, g_max);
+    return true;
+}
+
+/* Lane k of a packet: the occlusion ray from x lifted along n to the VPL's lifted position. False
+ * (lane left invalid) when the two are closer than the lifts: nothing can lie between them. */
+static bool visibility_ray(const indirect_ctx *c, const iir_shade_vpl *v, iir_vec3 x, iir_vec3 n,
+                           iir_ray8 *rays, int k)
+{
+    float eps = c->r->eps;
+    iir_vec3 org = iir_madd(x, n, eps), d = iir_sub(v->org, org);
+    float len = iir_length(d);
+    rays->valid[k] = 0;
+    if (len <= 2.f * eps) return false;
+    d = iir_scale(d, 1.f / len);
+    rays->ox[k] = org.x, rays->oy[k] = org.y, rays->oz[k] = org.z;
+    rays->dx[k] = d.x, rays->dy[k] = d.y, rays->dz[k] = d.z;
+    rays->tnear[k] = 0.f;
+    rays->tfar[k] = len - 2.f * eps;
+    rays->valid[k] = 1;
+    return true;
+}
+
+/* Adds power G V of VPL v to every pixel of the batch, V by exact occlusion rays: 8 pixels per
+ * packet, all rays ending at the VPL (coherent). */
+static void apply_vpl_rays(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b,
+                           iir_raystats *st)
+{
+    for (int j0 = 0; j0 < b->m; j0 += 8) {
+        iir_ray8 rays;
+        float G[8];
+        bool any = false, occluded[8];
+        for (int k = 0; k < 8; k++) {
+            int j = j0 + k;
+            iir_vec3 w;
+            float d2, ci, cx;
+            G[k] = 0.f;
+            rays.valid[k] = 0;
+            if (j >= b->m ||
+                !geometry(v, batch_x(b, j), batch_n(b, j), c->g_max, &w, &d2, &ci, &cx, &G[k]))
+                continue;
+            any |= visibility_ray(c, v, batch_x(b, j), batch_n(b, j), &rays, k);
+        }
+        if (any) iir_rt_occluded8(c->r->rt, &rays, occluded, st, IIR_RAYS_VISIBILITY);
+        for (int k = 0; k < 8 && j0 + k < b->m; k++)
+            if (G[k] > 0.f && (!rays.valid[k] || !occluded[k]))
+                batch_add(b, j0 + k, iir_scale(v->power, G[k]));
+    }
+}
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+
+/* 4 lanes of a + b * c. */
+static inline __m128 madd4(__m128 a, __m128 b, __m128 c)
+{
+    return _mm_add_ps(a, _mm_mul_ps(b, c));
+}
+static inline __m128 dot4(__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz)
+{
+    return madd4(madd4(_mm_mul_ps(ax, bx), ay, by), az, bz);
+}
+
+/* iir_smap_pcf for 4 lanes: the texel loads are scalar (SSE2 has no gather). */
+static inline __m128 pcf4(const iir_smap_probe *p, __m128 s, __m128 t, __m128 dmb)
+{
+    __m128i i0 = _mm_cvttps_epi32(s), j0 = _mm_cvttps_epi32(t);
+    __m128 fx = _mm_sub_ps(s, _mm_cvtepi32_ps(i0)), fy = _mm_sub_ps(t, _mm_cvtepi32_ps(j0));
+    _Alignas(16) int32_t is[4], js[4];
+    _Alignas(16) float d00[4], d10[4], d01[4], d11[4];
+    _mm_store_si128((__m128i *)is, i0);
+    _mm_store_si128((__m128i *)js, j0);
+    for (int l = 0; l < 4; l++) {
+        int di = is[l] + 1 < p->res, dj = js[l] + 1 < p->res;
+        const float *row0 = p->depth + (size_t)js[l] * (size_t)p->res;
+        const float *row1 = row0 + (size_t)dj * (size_t)p->res;
+        d00[l] = row0[is[l]], d10[l] = row0[is[l] + di];
+        d01[l] = row1[is[l]], d11[l] = row1[is[l] + di];
+    }
+    __m128 one = _mm_set1_ps(1.f);
+    __m128 v00 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d00)), one);
+    __m128 v10 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d10)), one);
+    __m128 v01 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d01)), one);
+    __m128 v11 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d11)), one);
+    __m128 top = madd4(v00, fx, _mm_sub_ps(v10, v00)),
+           bottom = madd4(v01, fx, _mm_sub_ps(v11, v01));
+    return madd4(top, fy, _mm_sub_ps(bottom, top));
+}
+
+/* iir_smap_probe_visibility for 4 lanes (keep the two in step): the bias model of shadowmap.h and
+ * the texel-space point, then pcf4. wx, wy, wz: x - p in the VPL's frame; cx as there. */
+static inline __m128 visibility4(const iir_smap_probe *p, __m128 wx, __m128 wy, __m128 wz,
+                                 __m128 d2, __m128 cx)
+{
+    __m128 zero = _mm_setzero_ps(), d = _mm_sqrt_ps(d2);
+    cx = _mm_max_ps(cx, _mm_mul_ps(_mm_set1_ps(1e-6f), d));
+    __m128 sin_d = _mm_sqrt_ps(_mm_max_ps(zero, _mm_sub_ps(d2, _mm_mul_ps(cx, cx))));
+    __m128 dwz = _mm_add_ps(d, wz), inv = _mm_div_ps(_mm_set1_ps(1.f), _mm_mul_ps(dwz, cx));
+    __m128 k = _mm_mul_ps(_mm_set1_ps(p->half_res), _mm_mul_ps(cx, inv));
+    __m128 slope =
+        _mm_min_ps(_mm_mul_ps(sin_d, _mm_mul_ps(dwz, inv)), _mm_set1_ps(IIR_SMAP_MAX_SLOPE));
+    __m128 texel_d = _mm_mul_ps(dwz, _mm_set1_ps(p->texel));
+    __m128 bias = madd4(madd4(_mm_set1_ps(p->eps), d, _mm_set1_ps(p->rel_bias)),
+                        _mm_mul_ps(_mm_set1_ps(IIR_SMAP_SLOPE_TEXELS), texel_d), slope);
+    /* Clamped with max first: a NaN (a masked-out lane) becomes 0, a valid texel. */
+    __m128 c = _mm_set1_ps(p->half_res - 0.5f), hi = _mm_set1_ps(p->max_st);
+    __m128 s = _mm_min_ps(_mm_max_ps(madd4(c, wx, k), zero), hi);
+    __m128 t = _mm_min_ps(_mm_max_ps(madd4(c, wy, k), zero), hi);
+    return pcf4(p, s, t, _mm_sub_ps(d, bias));
+}
+
+/* Adds power G V of VPL v to every pixel of the batch, V from its shadow map, 4 pixels a step. */
+static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b)
+{
+    iir_smap_probe probe = iir_smap_probe_make(v->smap, c->rel_bias, c->r->eps);
+    __m128 zero = _mm_setzero_ps(), g_max = _mm_set1_ps(c->g_max), one = _mm_set1_ps(1.f);
+    __m128 vx = _mm_set1_ps(v->p.x), vy = _mm_set1_ps(v->p.y), vz = _mm_set1_ps(v->p.z);
+    __m128 nx = _mm_set1_ps(v->n.x), ny = _mm_set1_ps(v->n.y), nz = _mm_set1_ps(v->n.z);
+    __m128 rx = _mm_set1_ps(v->r.x), ry = _mm_set1_ps(v->r.y), rz = _mm_set1_ps(v->r.z);
+    __m128 ux = _mm_set1_ps(v->u.x), uy = _mm_set1_ps(v->u.y), uz = _mm_set1_ps(v->u.z);
+    for (int j = 0; j < b->m; j += 4) {
+        __m128 wx = _mm_sub_ps(_mm_load_ps(b->px + j), vx);
+        __m128 wy = _mm_sub_ps(_mm_load_ps(b->py + j), vy);
+        __m128 wz = _mm_sub_ps(_mm_load_ps(b->pz + j), vz);
+        __m128 d2 = dot4(wx, wy, wz, wx, wy, wz), ci = dot4(nx, ny, nz, wx, wy, wz);
+        __m128 cx = _mm_sub_ps(zero, dot4(_mm_load_ps(b->nx + j), _mm_load_ps(b->ny + j),
+                                          _mm_load_ps(b->nz + j), wx, wy, wz));
+        __m128 lit = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(ci, zero), _mm_cmpgt_ps(cx, zero)),
+                                _mm_cmpgt_ps(d2, zero));
+        if (!_mm_movemask_ps(lit)) continue;
+        __m128 inv_d2 = _mm_div_ps(one, d2);
+        __m128 G = _mm_min_ps(_mm_mul_ps(_mm_mul_ps(ci, cx), _mm_mul_ps(inv_d2, inv_d2)), g_max);
+        __m128 V = visibility4(&probe, dot4(rx, ry, rz, wx, wy, wz), dot4(ux, uy, uz, wx, wy, wz),
+                               ci, d2, cx);
+        __m128 GV = _mm_and_ps(lit, _mm_mul_ps(G, V));
+        _mm_store_ps(b->Ex + j, madd4(_mm_load_ps(b->Ex + j), _mm_set1_ps(v->power.x), GV));
+        _mm_store_ps(b->Ey + j, madd4(_mm_load_ps(b->Ey + j), _mm_set1_ps(v->power.y), GV));
+        _mm_store_ps(b->Ez + j, madd4(_mm_load_ps(b->Ez + j), _mm_set1_ps(v->power.z), GV));
+    }
+}
+
+#else
+
+/* Portable: adds power G V of VPL v to every pixel of the batch, V from its shadow map. */
+static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b)
+{
+    iir_smap_probe probe = iir_smap_probe_make(v->smap, c->rel_bias, c->r->eps);
+    for (int j = 0; j < b->m; j++) {
+        iir_vec3 w;
+        float d2, ci, cx, G;
+        if (!geometry(v, batch_x(b, j), batch_n(b, j), c->g_max, &w, &d2, &ci, &cx, &G)) continue;
+        float V = iir_smap_probe_visibility(&probe, iir_dot(w, v->r), iir_dot(w, v->u), ci,
+                                            sqrtf(d2), cx);
+        batch_add(b, j, iir_scale(v->power, G * V));
+    }
+}
+
+#endif
+
+static void batch_push(pixel_batch *b, uint32_t i, iir_vec3 x, iir_vec3 n)
+{
+    int j = b->m++;
+    b->index[j] = i;
+    b->px[j] = x.x, b->py[j] = x.y, b->pz[j] = x.z;
+    b->nx[j] = n.x, b->ny[j] = n.y, b->nz[j] = n.z;
+    b->Ex[j] = b->Ey[j] = b->Ez[j] = 0.f;
+}
+
+/* Fills b with the next (up to BATCH) pixels that see geometry of the lattice (x_first + a n,
+ * y + b n) inside the tile, from (*x, *y) on, advancing them, and pads it to a multiple of 4.
+ * False when none are left. */
+static bool collect(const iir_renderer *r, const iir_tile *tl, int x_first, int n, int *x, int *y,
+                    pixel_batch *b)
+{
+    const iir_gbuffer *gb = &r->gb;
+    b->m = 0;
+    while (*y < tl->y1 && b->m < BATCH) {
+        size_t i = (size_t)*y * (size_t)gb->width + (size_t)*x;
+        if (gb->prim[i] != IIR_NO_HIT) batch_push(b, (uint32_t)i, gb->position[i], gb->normal[i]);
+        *x += n;
+        if (*x >= tl->x1) *x = x_first, *y += n;
+    }
+    int m = b->m;
+    while (b->m % 4) batch_push(b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
+    b->m = m;
+    return m > 0;
+}
+
+/* Rounds the batch's count up to the padded length the SSE2 kernel steps through. */
+static int padded(int m)
+{
+    return (m + 3) & ~3;
+}
+
+static void indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *b, iir_raystats *st)
+{
+    const iir_renderer *r = c->r;
+    const iir_gbuffer *gb = &r->gb;
+    iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_INDIRECT_TILE, t);
+    for (int y = tl.y0; y < tl.y1; y++)
+        for (int x = tl.x0; x < tl.x1; x++)
+            r->raw[(size_t)y * (size_t)gb->width + (size_t)x] = iir_v3s(0.f);
+    /* The lattice through (x0 + i, y0 + j) is one subset. */
+    for (int j = 0; j < n && tl.y0 + j < tl.y1; j++)
+        for (int i = 0; i < n && tl.x0 + i < tl.x1; i++) {
+            uint32_t k = (uint32_t)(((tl.y0 + j) % n) * n + (tl.x0 + i) % n);
+            int x = tl.x0 + i, y = tl.y0 + j;
+            if (r->start[k] == r->start[k + 1]) continue;
+            while (collect(r, &tl, tl.x0 + i, n, &x, &y, b)) {
+                int m = b->m;
+                for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++) {
+                    if (c->use_smap) {
+                        b->m = padded(m);
+                        apply_vpl_smap(c, &r->vpl[v], b);
+                        b->m = m;
+                    } else {
+                        apply_vpl_rays(c, &r->vpl[v], b, st);
+                    }
+                }
+                for (int q = 0; q < m; q++)
+                    r->raw[b->index[q]] = iir_v3(b->Ex[q], b->Ey[q], b->Ez[q]);
+            }
+        }
+}
+
+void iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, iir_raystats *st)
+{
+    indirect_ctx c = {r, p->visibility == IIR_VIS_SHADOWMAP,
+                      p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY, p->sm_bias};
+    int tiles = iir_tile_count(r->gb.width, r->gb.height, IIR_INDIRECT_TILE), n = p->interleave;
+    iir_raystats total = {0};
+#pragma omp parallel
+    {
+        iir_raystats local = {0};
+        pixel_batch b; /* on the stack: no allocation */
+#pragma omp for schedule(dynamic, 1)
+        for (int t = 0; t < tiles; t++) indirect_tile(&c, n, t, &b, &local);
+#pragma omp critical(iir_indirect_rays)
+        iir_raystats_add(&total, &local);
+    }
+    iir_raystats_add(st, &total);
+}

@@ -1,0 +1,91 @@
+/* render_internal.h -- the VPL renderer's private state and the phase functions that
+ * render_gbuffer.c, render_direct.c, render_indirect.c and render_filter.c implement; internal
+ * to libiircore. Not the public contract (render.h). */
+#ifndef IIR_RENDER_INTERNAL_H
+#define IIR_RENDER_INTERNAL_H
+
+#include "iir/render.h"
+#include "iir/scene.h"
+
+/* Tiles of the G-buffer, direct and filter phases; the indirect phase uses larger ones so that a
+ * subset has more pixels per tile to share each VPL's map texels. */
+enum { IIR_RENDER_TILE = 16, IIR_INDIRECT_TILE = 64, IIR_MAX_INTERLEAVE = 8, IIR_MAX_SUBSETS = 64 };
+
+/* The filter's horizontal pass at one pixel: weighted sum of the accepted taps and their weight. */
+typedef struct iir_filter_row {
+    iir_vec3 sum;
+    float w;
+} iir_filter_row;
+
+/* A VPL as the pixel loop wants it: everything precomputed, flux already scaled for its subset. */
+typedef struct iir_shade_vpl {
+    iir_vec3 p, r, u, n; /* position and frame (n = normal) */
+    iir_vec3 org;        /* p lifted by eps along n: the end of exact visibility rays */
+    iir_vec3 power;      /* Phi_i / pi * N / |subset| */
+    const iir_smap *smap;
+} iir_shade_vpl;
+
+struct iir_renderer {
+    const iir_scene *scene;
+    const iir_rt *rt;
+    float eps;                 /* iir_rt_epsilon */
+    float diag2;               /* squared bounding-box diagonal D^2 */
+    iir_lightset *area_lights; /* the scene's emissive triangles; NULL when it has none */
+
+    iir_gbuffer gb;
+    bool gb_valid; /* gb matches gb_camera and the frame size */
+    iir_camera gb_camera;
+    iir_vec3 *raw;        /* per pixel: demodulated indirect (without rho / pi), unfiltered */
+    iir_filter_row *rows; /* per pixel: the filter's horizontal pass */
+
+    /* Per frame: the VPLs in use, sorted by subset; subset k is vpl[start[k] .. start[k+1]). */
+    iir_shade_vpl *vpl;
+    uint32_t vpl_cap;
+    uint32_t num_subsets; /* n^2 */
+    uint32_t start[IIR_MAX_SUBSETS + 1];
+};
+
+/* ---- tiles: size x size pixels, row-major ---- */
+
+typedef struct iir_tile {
+    int x0, y0, x1, y1; /* [x0, x1) x [y0, y1) */
+} iir_tile;
+
+static inline int iir_tile_count(int width, int height, int size)
+{
+    return ((width + size - 1) / size) * ((height + size - 1) / size);
+}
+
+static inline iir_tile iir_tile_at(int width, int height, int size, int t)
+{
+    int tiles_x = (width + size - 1) / size;
+    iir_tile tl;
+    tl.x0 = (t % tiles_x) * size;
+    tl.y0 = (t / tiles_x) * size;
+    tl.x1 = tl.x0 + size < width ? tl.x0 + size : width;
+    tl.y1 = tl.y0 + size < height ? tl.y0 + size : height;
+    return tl;
+}
+
+/* ---- phases ---- */
+
+/* render_gbuffer.c. Resize keeps the contents only when the size is unchanged; on failure the
+ * G-buffer is freed (width 0) and IIR_ERR_NOMEM returned. */
+iir_status iir_gbuffer_resize(iir_gbuffer *gb, int width, int height, iir_error *err);
+void iir_gbuffer_free(iir_gbuffer *gb);
+void iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
+                        const iir_camera_frame *cf, iir_raystats *st);
+
+/* render_direct.c: out = emission + direct light (every pixel written). */
+void iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t num_lights,
+                       uint64_t seed, iir_image *out, iir_raystats *st);
+
+/* render_indirect.c: builds the per-subset VPL lists (checking the VPLs), then fills r->raw. */
+iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num_vpls,
+                              const iir_indirect_params *p, iir_error *err);
+void iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, iir_raystats *st);
+
+/* render_filter.c: out += rho / pi * (filtered or raw) r->raw. */
+void iir_render_filter(const iir_renderer *r, const iir_indirect_params *p, iir_image *out);
+
+#endif

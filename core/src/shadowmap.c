@@ -1,0 +1,78 @@
+/* shadowmap.c -- rendering VPL paraboloid shadow maps with Embree packets, one map or a whole VPL
+ * set in parallel; not lookups (inline in shadowmap.h) and not the maps' lifetime (vpl.h).
+ *
+ * Threads: iir_smaps_build runs an OpenMP loop over VPLs; each iteration writes only its own
+ * VPL's map, and ray counters are per thread, summed once after the loop. */
+#include "iir/shadowmap.h"
+
+#include <assert.h>
+#include <stdlib.h>
+
+/* Local direction of the centre of texel (i, j); corners outside the parametrisation's unit disk
+ * go to the horizon direction of their angle. */
+static iir_vec3 texel_dir(int i, int j, int res)
+{
+    float x = 2.f * ((float)i + 0.5f) / (float)res - 1.f;
+    float y = 2.f * ((float)j + 0.5f) / (float)res - 1.f;
+    float r2 = x * x + y * y;
+    if (r2 > 1.f) {
+        float k = 1.f / sqrtf(r2);
+        return iir_v3(x * k, y * k, 0.f);
+    }
+    return iir_paraboloid_dir(iir_v2(0.5f * (x + 1.f), 0.5f * (y + 1.f)));
+}
+
+/* Traces texels i0 .. i0+7 of row j (those < res) as one packet. */
+static void trace_run(const iir_rt *rt, const iir_vpl *v, iir_vec3 org, int i0, int j, int res,
+                      float *row, iir_raystats *st)
+{
+    iir_ray8 rays;
+    for (int k = 0; k < 8; k++) {
+        int i = i0 + k < res ? i0 + k : res - 1;
+        iir_vec3 d = iir_frame_to_world(&v->frame, texel_dir(i, j, res));
+        rays.ox[k] = org.x, rays.oy[k] = org.y, rays.oz[k] = org.z;
+        rays.dx[k] = d.x, rays.dy[k] = d.y, rays.dz[k] = d.z;
+        rays.tnear[k] = 0.f;
+        rays.tfar[k] = INFINITY;
+        rays.valid[k] = i0 + k < res;
+    }
+    iir_hit hits[8];
+    iir_rt_intersect8(rt, &rays, hits, st, IIR_RAYS_SHADOWMAP);
+    for (int k = 0; k < 8 && i0 + k < res; k++) row[i0 + k] = hits[k].t;
+}
+
+bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, iir_raystats *st)
+{
+    assert(res >= 1 && res <= IIR_SMAP_MAX_RES && "iir_smap_render: resolution out of range");
+    if (!m->depth || m->res != res) {
+        iir_smap_release(m);
+        m->depth = malloc(sizeof(float) * (size_t)res * (size_t)res);
+        if (!m->depth) return false;
+    }
+    iir_vec3 org = iir_madd(v->position, v->frame.f, iir_rt_epsilon(rt));
+    for (int j = 0; j < res; j++)
+        for (int i0 = 0; i0 < res; i0 += 8)
+            trace_run(rt, v, org, i0, j, res, m->depth + (size_t)j * (size_t)res, st);
+    m->res = res;
+    return true;
+}
+
+uint32_t iir_smaps_build(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, iir_raystats *st)
+{
+    uint32_t built = 0;
+    iir_raystats total = {0};
+#pragma omp parallel reduction(+ : built)
+    {
+        iir_raystats local = {0};
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t i = 0; i < (int64_t)n; i++) {
+            iir_vpl *v = &vpls[i];
+            if (v->null_sample || v->smap.res == res) continue;
+            built += iir_smap_render(&v->smap, rt, v, res, &local);
+        }
+#pragma omp critical(iir_smap_rays)
+        iir_raystats_add(&total, &local);
+    }
+    if (st) iir_raystats_add(st, &total);
+    return built;
+}

@@ -1,0 +1,861 @@
+/* test_render.c -- the VPL renderer against independent answers: a VPL and point/spot lights over a
+ * diffuse plane (analytic, per pixel, both visibility backends), direct light against the pt
+ * method (the Cornell box and an area-light scene), shadow maps against exact rays on the Cornell
+ * box, interleaved sampling and its filter against full evaluation, clamping, G-buffer reuse,
+ * determinism and error statuses. Scenes are written as OBJ + sidecar and loaded for real.
+ * Set IIR_RENDER_BENCH=1 to print the timing of the 512x384 / 256-VPL / 4x4 / 128^2 frame. */
+#include <omp.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "iir/method.h"
+#include "iir/metrics.h"
+#include "iir/render.h"
+#include "iir/rng.h"
+#include "iir/rt.h"
+#include "iir/scene.h"
+#include "iir/shadowmap.h"
+#include "surface.h"
+#include "testutil.h"
+
+/* ---- scenes ---- */
+
+/* A quad centred at c spanned by +-a, +-b; its normal (winding) is cross(a, b). */
+static void write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b)
+{
+    iir_vec3 v[4] = {iir_sub(iir_sub(c, a), b), iir_sub(iir_add(c, a), b),
+                     iir_add(iir_add(c, a), b), iir_add(iir_sub(c, a), b)};
+    fprintf(f, "usemtl %s\n", mtl);
+    for (int i = 0; i < 4; i++) fprintf(f, "v %.9g %.9g %.9g\n", v[i].x, v[i].y, v[i].z);
+    fprintf(f, "f -4 -3 -2 -1\n");
+}
+
+typedef struct loaded {
+    iir_scene *scene;
+    iir_rt *rt;
+    iir_renderer *r;
+} loaded;
+
+static loaded load(const char *dir, const char *name)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s.obj", dir, name);
+    loaded l = {0};
+    iir_error err = {0};
+    if (iir_scene_load(path, &l.scene, &err) != IIR_OK) fail_msg("load %s: %s", path, err.msg);
+    if (iir_rt_create(l.scene, &l.rt, &err) != IIR_OK) fail_msg("rt: %s", err.msg);
+    l.r = iir_renderer_create(l.scene, l.rt);
+    assert_non_null(l.r);
+    return l;
+}
+
+static loaded load_cornell(void)
+{
+    loaded l = {iir_scene_create_cornell_box(), NULL, NULL};
+    iir_error err = {0};
+    if (iir_rt_create(l.scene, &l.rt, &err) != IIR_OK) fail_msg("rt: %s", err.msg);
+    l.r = iir_renderer_create(l.scene, l.rt);
+    assert_non_null(l.r);
+    return l;
+}
+
+static void unload(loaded *l)
+{
+    iir_renderer_destroy(l->r);
+    iir_rt_destroy(l->rt);
+    iir_scene_destroy(l->scene);
+}
+
+/* A 40 x 40 grey (rho 0.5) floor at y = 0, seen from straight above, no lights. With `step`, a
+ * platform at y = 0.5 covers x > 0 (a depth discontinuity down the middle of the image). */
+static loaded load_plane(bool step)
+{
+    const char *dir = iir_test_tmpdir(step ? "render-step" : "render-plane");
+    iir_test_write_file(dir, "plane.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
+    char path[1200];
+    snprintf(path, sizeof path, "%s/plane.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib plane.mtl\n");
+    write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 20), iir_v3(20, 0, 0)); /* normal +y */
+    if (step) write_quad(f, "grey", iir_v3(5, 0.5f, 0), iir_v3(0, 0, 20), iir_v3(5, 0, 0));
+    fclose(f);
+    iir_test_write_file(dir, "plane.scene.json",
+                        "{\"camera\": {\"position\": [0, 2.5, 0], \"target\": [0, 0, 0],"
+                        " \"up\": [0, 0, -1], \"fov_y\": 90}, \"lights\": []}");
+    return load(dir, "plane");
+}
+
+/* Floor (y = 0, x and z in [-1, 1]), a wall at x = 1 and a small downward lamp panel of
+ * radiance 10: an area-light scene for direct light. */
+static loaded load_lamp_scene(void)
+{
+    const char *dir = iir_test_tmpdir("render-lamp");
+    iir_test_write_file(dir, "lamp.mtl",
+                        "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 10 10 10\n");
+    char path[1200];
+    snprintf(path, sizeof path, "%s/lamp.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib lamp.mtl\n");
+    write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 1), iir_v3(1, 0, 0));
+    write_quad(f, "grey", iir_v3(1, 1, 0), iir_v3(0, 0, 1), iir_v3(0, 1, 0));
+    write_quad(f, "lamp", iir_v3(-0.4f, 1.5f, 0), iir_v3(0.2f, 0, 0), iir_v3(0, 0, 0.2f));
+    fclose(f);
+    iir_test_write_file(dir, "lamp.scene.json",
+                        "{\"camera\": {\"position\": [-0.9, 0.8, 0], \"target\": [1, 0.3, 0],"
+                        " \"up\": [0, 1, 0], \"fov_y\": 70}, \"lights\": []}");
+    return load(dir, "lamp");
+}
+
+/* ---- VPLs ---- */
+
+static iir_vpl make_vpl(uint32_t id, iir_vec3 p, iir_vec3 n, iir_vec3 flux)
+{
+    iir_vpl v = {0};
+    v.id = id;
+    v.position = p;
+    iir_vpl_set_normal(&v, iir_normalize(n));
+    v.albedo = iir_v3s(0.5f);
+    v.flux = flux;
+    return v;
+}
+
+/* n VPLs from the scene's first (spot) light: Hammersley points on its disk, one ray each; the
+ * first hit re-emits beta rho / n. Misses are null samples. */
+static void light_vpls(const loaded *l, uint32_t n, iir_vpl *out)
+{
+    const iir_light *spot = &l->scene->lights[0];
+    for (uint32_t i = 0; i < n; i++) {
+        iir_vec2 u = iir_v2(((float)i + 0.5f) / (float)n, iir_radical_inverse(2, i));
+        iir_light_ray lr = iir_light_sample_emission(spot, u);
+        iir_ray ray = iir_make_ray(lr.origin, lr.dir, 0.f, INFINITY);
+        iir_hit hit;
+        iir_vpl v = {0};
+        v.id = i;
+        v.null_sample = true;
+        if (iir_rt_intersect(l->rt, &ray, &hit, NULL, IIR_RAYS_VPL)) {
+            iir_surface sf = iir_surface_at(l->scene, &hit, iir_neg(lr.dir));
+            v = make_vpl(i, sf.p, sf.ns, iir_scale(iir_mul(lr.beta, sf.mat->albedo), 1.f / n));
+        }
+        out[i] = v;
+    }
+}
+
+static void release_vpls(iir_vpl *vpls, uint32_t n)
+{
+    for (uint32_t i = 0; i < n; i++) iir_smap_release(&vpls[i].smap);
+}
+
+/* ---- rendering ---- */
+
+/* Unclamped unless a test says otherwise: the analytic comparisons use the plain formula. */
+static iir_indirect_params params(iir_visibility vis, int interleave, bool filter)
+{
+    iir_indirect_params p = iir_indirect_params_default();
+    p.clamp = 0.f;
+    p.visibility = vis;
+    p.interleave = interleave;
+    p.filter = filter;
+    return p;
+}
+
+static iir_render_timing frame(const loaded *l, const iir_camera *cam, const iir_light *lights,
+                               uint32_t nl, const iir_vpl *vpls, uint32_t nv,
+                               const iir_indirect_params *p, uint64_t seed, iir_image *out,
+                               iir_raystats *st)
+{
+    iir_render_timing t;
+    iir_error err = {0};
+    if (iir_renderer_frame(l->r, cam, lights, nl, vpls, nv, p, seed, out, &t, st, &err) != IIR_OK)
+        fail_msg("frame: %s", err.msg);
+    return t;
+}
+
+/* Point of the plane y = h seen through the centre of pixel (x, y). */
+static iir_vec3 plane_point(const iir_camera_frame *cf, int x, int y, float h)
+{
+    iir_vec3 d = iir_camera_dir(cf, (float)x + 0.5f, (float)y + 0.5f);
+    return iir_madd(cf->origin, d, (h - cf->origin.y) / d.y);
+}
+
+/* vpl.h's formula at a point of the plane (normal +y), unclamped and with V = 1. */
+static iir_vec3 vpl_radiance(const iir_vpl *v, iir_vec3 x, float rho, float g_max)
+{
+    iir_vec3 w = iir_sub(x, v->position);
+    float d2 = iir_length_sq(w), d = sqrtf(d2);
+    float cos_i = fmaxf(0.f, iir_dot(v->normal, w) / d), cos_x = fmaxf(0.f, -w.y / d);
+    float G = fminf(cos_i * cos_x / d2, g_max);
+    return iir_scale(v->flux, rho * IIR_INV_PI * IIR_INV_PI * G);
+}
+
+static bool close3(iir_vec3 a, iir_vec3 b, float rel, float abs_tol)
+{
+    return fabsf(a.x - b.x) <= rel * fabsf(b.x) + abs_tol &&
+           fabsf(a.y - b.y) <= rel * fabsf(b.y) + abs_tol &&
+           fabsf(a.z - b.z) <= rel * fabsf(b.z) + abs_tol;
+}
+
+static double image_mean(const iir_image *img)
+{
+    double s = 0;
+    for (int i = 0; i < img->width * img->height; i++) s += iir_luminance(img->pixels[i]);
+    return s / (img->width * img->height);
+}
+
+/* ---- a VPL over a plane: every pixel is vpl.h's formula ---- */
+
+static void test_single_vpl_plane(void **state)
+{
+    (void)state;
+    loaded l = load_plane(false);
+    enum { W = 64, H = 64 };
+    iir_vpl v = make_vpl(7, iir_v3(0.3f, 1.f, -0.2f), iir_v3(0.1f, -1.f, 0.f), iir_v3(2, 4, 6));
+    assert_int_equal(iir_smaps_build(&v, 1, l.rt, 128, NULL), 1);
+    iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
+    iir_image *img = iir_image_create(W, H);
+    for (int b = 0; b < 2; b++) {
+        iir_indirect_params p = params(b ? IIR_VIS_RAYS : IIR_VIS_SHADOWMAP, 1, false);
+        iir_raystats st = {0};
+        frame(&l, &l.scene->camera, NULL, 0, &v, 1, &p, 1, img, &st);
+        assert_int_equal(st.n[IIR_RAYS_VISIBILITY], b ? W * H : 0);
+        int lit = 0;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                iir_vec3 want = vpl_radiance(&v, plane_point(&cf, x, y, 0.f), 0.5f, INFINITY);
+                iir_vec3 got = *iir_image_at(img, x, y);
+                lit += want.x > 0.f;
+                if (!close3(got, want, 1e-4f, 1e-9f))
+                    fail_msg("%s: pixel (%d,%d) = %g %g %g, expected %g %g %g",
+                             b ? "rays" : "shadowmap", x, y, got.x, got.y, got.z, want.x, want.y,
+                             want.z);
+            }
+        assert_true(lit > W * H / 2);
+    }
+    iir_image_destroy(img);
+    iir_smap_release(&v.smap);
+    unload(&l);
+}
+
+/* ---- direct light ---- */
+
+static void test_direct_point_and_spot_over_plane(void **state)
+{
+    (void)state;
+    loaded l = load_plane(false);
+    enum { W = 48, H = 48 };
+    iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
+    iir_image *img = iir_image_create(W, H);
+    iir_indirect_params p = params(IIR_VIS_RAYS, 1, false);
+    iir_light lights[2] = {{.type = IIR_LIGHT_POINT, .position = {0, 1, 0}, .intensity = {1, 1, 1}},
+                           {.type = IIR_LIGHT_SPOT,
+                            .position = {0.5f, 1.5f, 0.5f},
+                            .direction = {0, -1, 0},
+                            .up = {0, 0, 1},
+                            .cone_angle = iir_radians(25.f),
+                            .intensity = {3, 2, 1}}};
+    for (int which = 0; which < 2; which++) {
+        const iir_light *L = &lights[which];
+        iir_raystats st = {0};
+        frame(&l, &l.scene->camera, L, 1, NULL, 0, &p, 1, img, &st);
+        assert_int_equal(st.n[IIR_RAYS_SHADOW] > 0, 1);
+        int inside = 0, outside = 0;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                iir_vec3 q = plane_point(&cf, x, y, 0.f), w = iir_sub(q, L->position);
+                float d = iir_length(w), cos_x = -w.y / d, cos_axis = -w.y / d;
+                iir_vec3 got = *iir_image_at(img, x, y);
+                if (L->type == IIR_LIGHT_SPOT) {
+                    float angle = acosf(cos_axis);
+                    if (fabsf(angle - L->cone_angle) < 0.01f) continue; /* the edge itself */
+                    if (angle > L->cone_angle) {
+                        outside++;
+                        if (!iir_is_black(got)) fail_msg("light outside the cone at (%d,%d)", x, y);
+                        continue;
+                    }
+                    inside++;
+                }
+                float lobe = L->type == IIR_LIGHT_SPOT ? cos_axis : 1.f;
+                iir_vec3 want = iir_scale(L->intensity, 0.5f * IIR_INV_PI * lobe * cos_x / (d * d));
+                if (!close3(got, want, 1e-4f, 1e-9f))
+                    fail_msg("light %d pixel (%d,%d): %g, expected %g", which, x, y, got.x, want.x);
+            }
+        if (L->type == IIR_LIGHT_SPOT) assert_true(inside > 100 && outside > 100);
+    }
+    iir_image_destroy(img);
+    unload(&l);
+}
+
+static iir_image *render_pt(const loaded *l, int w, int h, int spp)
+{
+    iir_params p = iir_params_default();
+    p.spp = spp;
+    p.bounces = 1;
+    p.seed = 9;
+    iir_method *m = NULL;
+    iir_error err = {0};
+    iir_image *img = iir_image_create(w, h);
+    iir_frame_stats fs;
+    iir_view view = {l->scene->lights, l->scene->num_lights, l->scene->camera};
+    if (iir_method_create("pt", l->scene, l->rt, &p, &m, &err) != IIR_OK) fail_msg("%s", err.msg);
+    if (iir_method_render(m, &view, img, &fs, &err) != IIR_OK) fail_msg("%s", err.msg);
+    iir_method_destroy(m);
+    return img;
+}
+
+/* Mean luminance of the B x B block at (bx, by). */
+static double block_mean(const iir_image *img, int bx, int by, int B)
+{
+    double s = 0;
+    for (int y = by; y < by + B; y++)
+        for (int x = bx; x < bx + B; x++) s += iir_luminance(img->pixels[y * img->width + x]);
+    return s / (B * B);
+}
+
+/* pt box-filters pixels, the renderer point-samples their centres, and at 64x48 the difference
+ * along edges moves the image mean by several percent. So the renderer's frame is rendered SS x SS
+ * times larger and box-filtered down; then the image means agree within 1% and the 8x8 block means
+ * within 3% (plus 0.5% of the image mean, for dark blocks). */
+enum { SS = 8 };
+
+static iir_image *render_supersampled(const loaded *l, int W, int H)
+{
+    iir_image *big = iir_image_create(W * SS, H * SS), *img = iir_image_create(W, H);
+    iir_indirect_params p = params(IIR_VIS_RAYS, 1, false);
+    frame(l, &l->scene->camera, l->scene->lights, l->scene->num_lights, NULL, 0, &p, 3, big, NULL);
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            iir_vec3 sum = iir_v3s(0.f);
+            for (int j = 0; j < SS; j++)
+                for (int i = 0; i < SS; i++)
+                    sum = iir_add(sum, *iir_image_at(big, x * SS + i, y * SS + j));
+            *iir_image_at(img, x, y) = iir_scale(sum, 1.f / (SS * SS));
+        }
+    iir_image_destroy(big);
+    return img;
+}
+
+static void compare_with_pt(const loaded *l, const char *what, int W, int H, int spp)
+{
+    iir_image *ref = render_pt(l, W, H, spp), *img = render_supersampled(l, W, H);
+    double m_ref = image_mean(ref), m_img = image_mean(img);
+    print_message("%s: image mean %.5f, pt %.5f\n", what, m_img, m_ref);
+    assert_true(m_ref > 0);
+    if (fabs(m_img - m_ref) > 0.01 * m_ref)
+        fail_msg("%s: image mean %.5f, pt %.5f", what, m_img, m_ref);
+    double worst = 0;
+    for (int by = 0; by + 8 <= H; by += 8)
+        for (int bx = 0; bx + 8 <= W; bx += 8) {
+            double a = block_mean(img, bx, by, 8), b = block_mean(ref, bx, by, 8);
+            worst = fmax(worst, fabs(a - b) / (b + 0.005 * m_ref));
+            if (fabs(a - b) > 0.03 * b + 0.005 * m_ref)
+                fail_msg("%s: block (%d,%d) mean %.5f, pt %.5f", what, bx, by, a, b);
+        }
+    print_message("%s: worst block difference %.2f%%\n", what, 100 * worst);
+    iir_image_destroy(img);
+    iir_image_destroy(ref);
+}
+
+static void test_direct_matches_pt_cornell(void **state)
+{
+    (void)state;
+    loaded l = load_cornell();
+    compare_with_pt(&l, "cornell", 64, 48, 256);
+    unload(&l);
+}
+
+static void test_direct_matches_pt_area_light(void **state)
+{
+    (void)state;
+    loaded l = load_lamp_scene();
+    compare_with_pt(&l, "lamp", 64, 48, 256);
+    /* One light sample per pixel from the seed's stream: same seed, same image. */
+    iir_image *a = iir_image_create(32, 24), *b = iir_image_create(32, 24);
+    iir_indirect_params p = params(IIR_VIS_RAYS, 1, false);
+    frame(&l, &l.scene->camera, NULL, 0, NULL, 0, &p, 5, a, NULL);
+    frame(&l, &l.scene->camera, NULL, 0, NULL, 0, &p, 5, b, NULL);
+    assert_memory_equal(a->pixels, b->pixels, sizeof(iir_vec3) * 32 * 24);
+    frame(&l, &l.scene->camera, NULL, 0, NULL, 0, &p, 6, b, NULL);
+    assert_memory_not_equal(a->pixels, b->pixels, sizeof(iir_vec3) * 32 * 24);
+    iir_image_destroy(a);
+    iir_image_destroy(b);
+    unload(&l);
+}
+
+/* ---- shadow maps against exact rays ---- */
+
+/* The renderer's shadow-map image is the sum of the scalar lookups (iir_smap_visibility), so its
+ * 4-wide kernel follows the documented model. Over every pixel and every VPL with a non-zero
+ * geometry term, the 128^2 map's verdict (PCF visibility >= 1/2) and the exact ray's agree on at
+ * least 97% of the pairs, and the G-weighted mean of |V_map - V_ray| is below 3%. What differs: a
+ * band about a texel wide along shadow edges (at 2 m a 128^2 texel spans 3-6 cm), so light leaks
+ * into gaps narrower than that (the 1 cm between the ceiling and its patch); and receivers beyond
+ * the slope cap (within 7 degrees of grazing, where G is nearly 0). Measured here: 98.4% of pairs,
+ * 1.3% G-weighted; at 256^2 about 99%. The two images are close in relative MSE (dominated by the
+ * few pixels in the ceiling gap) and mean. */
+static void test_shadowmap_agrees_with_rays(void **state)
+{
+    (void)state;
+    loaded l = load_cornell();
+    enum { W = 96, H = 72, N = 64 };
+    iir_vpl vpls[N];
+    light_vpls(&l, N, vpls);
+    assert_true(iir_smaps_build(vpls, N, l.rt, 128, NULL) > N * 3 / 4);
+    iir_image *sm = iir_image_create(W, H), *ray = iir_image_create(W, H);
+    iir_indirect_params p = params(IIR_VIS_SHADOWMAP, 1, false);
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &p, 1, sm, NULL);
+    p.visibility = IIR_VIS_RAYS;
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &p, 1, ray, NULL);
+
+    const iir_gbuffer *gb = iir_renderer_gbuffer(l.r);
+    float eps = iir_rt_epsilon(l.rt);
+    long pairs = 0, agree = 0;
+    double g_sum = 0, g_diff = 0;
+    for (int i = 0; i < W * H; i++) {
+        if (gb->prim[i] == IIR_NO_HIT) continue;
+        iir_vec3 x = gb->position[i], n = gb->normal[i], org = iir_madd(x, n, eps);
+        iir_vec3 L = iir_v3s(0.f); /* the renderer's pixel, from the scalar lookup */
+        for (int k = 0; k < N; k++) {
+            const iir_vpl *v = &vpls[k];
+            iir_vec3 w = iir_sub(x, v->position);
+            if (v->null_sample || iir_dot(v->normal, w) <= 0.f || iir_dot(n, w) >= 0.f) continue;
+            float d2 = iir_length_sq(w), G = iir_dot(v->normal, w) * -iir_dot(n, w) / (d2 * d2);
+            float V = iir_smap_visibility(&v->smap, v, x, n, p.sm_bias, eps);
+            L = iir_madd(L, iir_mul(v->flux, gb->albedo[i]), G * V * IIR_INV_PI * IIR_INV_PI);
+            iir_vec3 to = iir_sub(iir_madd(v->position, v->normal, eps), org);
+            float len = iir_length(to);
+            iir_ray r = iir_make_ray(org, iir_scale(to, 1.f / len), 0.f, len - 2.f * eps);
+            bool vis_ray = !iir_rt_occluded(l.rt, &r, NULL, IIR_RAYS_BENCH);
+            pairs++;
+            agree += vis_ray == (V >= 0.5f);
+            g_sum += G;
+            g_diff += G * fabsf((vis_ray ? 1.f : 0.f) - V);
+        }
+        if (!close3(sm->pixels[i], L, 1e-4f, 1e-7f))
+            fail_msg("pixel %d: renderer %g, scalar lookups %g", i, sm->pixels[i].y, L.y);
+    }
+    double frac = (double)agree / (double)pairs, rel = iir_metric_relmse(sm, ray);
+    print_message("shadow map vs rays: %.2f%% of %ld pairs agree, G-weighted |dV| %.2f%%, image "
+                  "relative MSE %.2e\n",
+                  100 * frac, pairs, 100 * g_diff / g_sum, rel);
+    assert_true(pairs > 100000);
+    if (frac < 0.97) fail_msg("only %.2f%% of pixel-VPL pairs agree", 100 * frac);
+    if (g_diff > 0.03 * g_sum) fail_msg("G-weighted |dV| %.2f%%", 100 * g_diff / g_sum);
+    if (rel > 2e-3) fail_msg("relative MSE between the backends %.3e", rel);
+    double m_sm = image_mean(sm), m_ray = image_mean(ray);
+    if (fabs(m_sm - m_ray) > 0.02 * m_ray) fail_msg("means: maps %g, rays %g", m_sm, m_ray);
+    iir_image_destroy(sm);
+    iir_image_destroy(ray);
+    release_vpls(vpls, N);
+    unload(&l);
+}
+
+/* ---- interleaved sampling and the filter ---- */
+
+/* n VPLs 1 above the plane, facing down, Halton-spread over [-2, 2]^2, equal flux summing to 4. */
+static void plane_vpls(uint32_t n, iir_vpl *out)
+{
+    for (uint32_t i = 0; i < n; i++) {
+        iir_vec3 p = iir_v3(-2.f + 4.f * iir_radical_inverse(2, i + 1), 1.f,
+                            -2.f + 4.f * iir_radical_inverse(3, i + 1));
+        out[i] = make_vpl(i, p, iir_v3(0, -1, 0), iir_v3s(4.f / (float)n));
+    }
+}
+
+static void test_interleave_plane(void **state)
+{
+    (void)state;
+    loaded l = load_plane(false);
+    enum { W = 128, H = 128, N = 256 };
+    iir_vpl vpls[N];
+    plane_vpls(N, vpls);
+    assert_int_equal(iir_smaps_build(vpls, N, l.rt, 32, NULL), N);
+    iir_image *full = iir_image_create(W, H), *raw = iir_image_create(W, H),
+              *filt = iir_image_create(W, H);
+    iir_indirect_params p1 = params(IIR_VIS_SHADOWMAP, 1, true),
+                        praw = params(IIR_VIS_SHADOWMAP, 4, false),
+                        pf = params(IIR_VIS_SHADOWMAP, 4, true);
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &p1, 1, full, NULL);
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &praw, 1, raw, NULL);
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &pf, 1, filt, NULL);
+
+    /* Unbiased: the raw interleaved image has the full image's mean. */
+    double m_full = image_mean(full), m_raw = image_mean(raw), m_filt = image_mean(filt);
+    print_message("plane means: full %.5f, interleaved %.5f, filtered %.5f\n", m_full, m_raw,
+                  m_filt);
+    if (fabs(m_raw - m_full) > 0.01 * m_full) fail_msg("raw mean %g, full %g", m_raw, m_full);
+    if (fabs(m_filt - m_full) > 0.01 * m_full)
+        fail_msg("filtered mean %g, full %g", m_filt, m_full);
+    /* Filtered: within a few % of full evaluation away from the border (where the window is cut).
+     * The filter evaluates each subset up to 2 pixels away from the pixel, so its error is first
+     * order in the pixel size: here 1.2% on average, 4% at worst, halving when pixels halve. */
+    double worst = 0, mean_err = 0;
+    for (int y = 2; y < H - 2; y++)
+        for (int x = 2; x < W - 2; x++) {
+            double a = iir_luminance(*iir_image_at(filt, x, y)),
+                   b = iir_luminance(*iir_image_at(full, x, y));
+            worst = fmax(worst, fabs(a - b) / b);
+            mean_err += fabs(a - b) / b / ((W - 4) * (H - 4));
+        }
+    print_message("filtered vs full: worst relative difference %.2f%%, mean %.2f%%\n", 100 * worst,
+                  100 * mean_err);
+    if (worst > 0.05 || mean_err > 0.015)
+        fail_msg("filtered differs from full by %.2f%% (mean %.2f%%)", 100 * worst, 100 * mean_err);
+    /* Without the filter the image is visibly structured (that is what the filter removes). */
+    double raw_worst = 0;
+    for (int i = 0; i < W * H; i++)
+        raw_worst =
+            fmax(raw_worst, fabs(iir_luminance(raw->pixels[i]) - iir_luminance(full->pixels[i])) /
+                                iir_luminance(full->pixels[i]));
+    assert_true(raw_worst > 3 * worst);
+    iir_image_destroy(full);
+    iir_image_destroy(raw);
+    iir_image_destroy(filt);
+    release_vpls(vpls, N);
+    unload(&l);
+}
+
+/* Subsets go by id: reordering the array changes nothing, and removing one VPL changes the raw
+ * image only in its own subset's pixels, apart from the global N / |subset| factor. Unbalanced
+ * subsets (null samples, zero flux) each still carry the whole flux. */
+static void test_subsets_by_id(void **state)
+{
+    (void)state;
+    loaded l = load_plane(false);
+    enum { W = 64, H = 64, N = 160, n = 4 };
+    iir_vpl vpls[N], shuffled[N];
+    plane_vpls(N, vpls);
+    for (uint32_t i = 0; i < N; i++) vpls[i].id = 3 * i + 1; /* ids are not positions */
+    iir_indirect_params p = params(IIR_VIS_RAYS, n, false);
+    iir_image *a = iir_image_create(W, H), *b = iir_image_create(W, H);
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &p, 1, a, NULL);
+    for (uint32_t i = 0; i < N; i++) shuffled[i] = vpls[(i * 37) % N];
+    frame(&l, &l.scene->camera, NULL, 0, shuffled, N, &p, 1, b, NULL);
+    for (int i = 0; i < W * H; i++) assert_true(close3(b->pixels[i], a->pixels[i], 1e-5f, 0.f));
+
+    /* Remove VPL 40 (id 121, subset 121 mod 16 = 9): other subsets scale by (N-1)/N exactly. */
+    uint32_t gone = iir_vpl_subset(vpls[40].id, n * n);
+    for (uint32_t i = 0, j = 0; i < N; i++)
+        if (i != 40) shuffled[j++] = vpls[i];
+    frame(&l, &l.scene->camera, NULL, 0, shuffled, N - 1, &p, 1, b, NULL);
+    int changed = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            uint32_t k = (uint32_t)((y % n) * n + x % n);
+            iir_vec3 before = iir_scale(*iir_image_at(a, x, y), (float)(N - 1) / N),
+                     after = *iir_image_at(b, x, y);
+            if (k != gone)
+                assert_true(close3(after, before, 1e-5f, 0.f));
+            else
+                changed += !close3(after, before, 1e-3f, 0.f);
+        }
+    assert_true(changed > W * H / 32);
+
+    /* Unbalanced subsets each carry the whole flux: with every VPL at one place, every subset's
+     * estimate is the full one, however many of its VPLs are null samples or dark (subset 3 keeps
+     * one VPL, subset 7 half of them, every fifth VPL is a null sample). */
+    for (uint32_t i = 0; i < N; i++) {
+        vpls[i].id = i;
+        vpls[i].position = iir_v3(0.3f, 1.f, -0.2f);
+        vpls[i].null_sample = (i % 16 == 3 && i != 3) || i % 5 == 0;
+        if (i % 16 == 7 && i % 32 != 7) vpls[i].flux = iir_v3s(0.f);
+    }
+    iir_indirect_params full = params(IIR_VIS_RAYS, 1, false);
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &full, 1, b, NULL);
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &p, 1, a, NULL);
+    for (int i = 0; i < W * H; i++)
+        if (!close3(a->pixels[i], b->pixels[i], 1e-5f, 1e-12f))
+            fail_msg("pixel %d: interleaved %g, full %g", i, a->pixels[i].y, b->pixels[i].y);
+    iir_image_destroy(a);
+    iir_image_destroy(b);
+    unload(&l);
+}
+
+/* Across a depth step the filter keeps the two sides apart; a filter that ignores geometry mixes
+ * them. Compared on the floor pixels next to the step. */
+static void test_filter_respects_edges(void **state)
+{
+    (void)state;
+    loaded l = load_plane(true);
+    enum { W = 96, H = 96, N = 256 };
+    iir_vpl vpls[N];
+    plane_vpls(N, vpls);
+    for (uint32_t i = 0; i < N; i++) vpls[i].position.y = 1.2f;
+    iir_image *full = iir_image_create(W, H), *aware = iir_image_create(W, H),
+              *blind = iir_image_create(W, H);
+    iir_indirect_params p1 = params(IIR_VIS_RAYS, 1, false), pa = params(IIR_VIS_RAYS, 4, true),
+                        pb = pa;
+    pb.filter_depth = 1e9f;
+    pb.filter_normal = -1.f;
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &p1, 1, full, NULL);
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &pa, 1, aware, NULL);
+    frame(&l, &l.scene->camera, NULL, 0, vpls, N, &pb, 1, blind, NULL);
+    const iir_gbuffer *gb = iir_renderer_gbuffer(l.r);
+    double err_aware = 0, err_blind = 0;
+    for (int y = 4; y < H - 4; y++)
+        for (int x = 1; x < W - 1; x++) {
+            size_t i = (size_t)y * W + x;
+            bool floor_here = gb->position[i].y < 0.25f,
+                 floor_right = gb->position[i + 1].y < 0.25f;
+            if (!(floor_here && !floor_right)) continue;
+            double ref = iir_luminance(full->pixels[i]);
+            err_aware = fmax(err_aware, fabs(iir_luminance(aware->pixels[i]) - ref) / ref);
+            err_blind = fmax(err_blind, fabs(iir_luminance(blind->pixels[i]) - ref) / ref);
+        }
+    print_message("next to the step: geometry-aware %.1f%%, blind %.1f%%\n", 100 * err_aware,
+                  100 * err_blind);
+    /* Next to the step the aware filter gathers only the subsets of the pixels on the floor's
+     * side, so its error is that of a sub-sample of the VPLs (17% with hashed subsets on this
+     * grid); a filter blind to geometry averages in the wall's light instead (over 90%). */
+    assert_true(err_aware < 0.25);
+    assert_true(err_blind > 3 * err_aware);
+    iir_image_destroy(full);
+    iir_image_destroy(aware);
+    iir_image_destroy(blind);
+    unload(&l);
+}
+
+/* ---- clamping ---- */
+
+static void test_clamp(void **state)
+{
+    (void)state;
+    loaded l = load_plane(false);
+    enum { W = 64, H = 64 };
+    /* Low over the plane: G reaches 1 / 0.3^2 = 11 right below. D^2 = 40^2 + 40^2. */
+    iir_vpl v = make_vpl(0, iir_v3(0.2f, 0.3f, 0.1f), iir_v3(0, -1, 0), iir_v3(1, 1, 1));
+    float D2 = 3200.f, bound = 5.f;
+    iir_indirect_params p = params(IIR_VIS_RAYS, 1, false), pc = p, huge = p;
+    pc.clamp = bound * D2;
+    huge.clamp = 1e30f;
+    iir_image *plain = iir_image_create(W, H), *clamped = iir_image_create(W, H),
+              *unclamped = iir_image_create(W, H);
+    frame(&l, &l.scene->camera, NULL, 0, &v, 1, &p, 1, plain, NULL);
+    frame(&l, &l.scene->camera, NULL, 0, &v, 1, &pc, 1, clamped, NULL);
+    frame(&l, &l.scene->camera, NULL, 0, &v, 1, &huge, 1, unclamped, NULL);
+    assert_memory_equal(plain->pixels, unclamped->pixels, sizeof(iir_vec3) * W * H);
+    iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
+    int below = 0, above = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            iir_vec3 q = plane_point(&cf, x, y, 0.f), w = iir_sub(q, v.position);
+            float d2 = iir_length_sq(w), G = (w.y * w.y) / (d2 * d2);
+            iir_vec3 c = *iir_image_at(clamped, x, y), u = *iir_image_at(plain, x, y);
+            assert_true(c.y <= u.y * (1.f + 1e-6f));
+            if (G < 0.99f * bound) {
+                below++;
+                assert_true(close3(c, u, 1e-6f, 0.f));
+            } else if (G > 1.01f * bound) {
+                above++;
+                assert_true(c.y < u.y);
+                assert_true(close3(c, vpl_radiance(&v, q, 0.5f, bound), 1e-4f, 0.f));
+            }
+        }
+    assert_true(below > 100 && above > 20);
+    iir_image_destroy(plain);
+    iir_image_destroy(clamped);
+    iir_image_destroy(unclamped);
+    unload(&l);
+}
+
+/* ---- G-buffer reuse and determinism ---- */
+
+static void test_gbuffer_cache_and_determinism(void **state)
+{
+    (void)state;
+    loaded l = load_cornell();
+    enum { W = 64, H = 48, N = 64 };
+    iir_vpl vpls[N];
+    light_vpls(&l, N, vpls);
+    iir_smaps_build(vpls, N, l.rt, 64, NULL);
+    iir_indirect_params p = iir_indirect_params_default();
+    iir_image *a = iir_image_create(W, H), *b = iir_image_create(W, H);
+    iir_camera cam = l.scene->camera, moved = cam;
+    moved.position.x += 0.2f;
+    const iir_light *lights = l.scene->lights;
+
+    iir_raystats st = {0};
+    iir_render_timing t = frame(&l, &cam, lights, 1, vpls, N, &p, 1, a, &st);
+    assert_false(t.gbuffer_cached);
+    assert_int_equal(st.n[IIR_RAYS_CAMERA], W * H);
+    assert_int_equal(st.n[IIR_RAYS_SHADOW] > 0, 1);
+    const iir_gbuffer *gb = iir_renderer_gbuffer(l.r);
+    assert_int_equal(gb->width, W);
+    int hits = 0;
+    for (int i = 0; i < W * H; i++) {
+        if (gb->prim[i] == IIR_NO_HIT) {
+            assert_true(isinf(gb->depth[i]) && iir_is_black(gb->albedo[i]));
+            continue;
+        }
+        hits++;
+        assert_true(fabsf(iir_length(gb->normal[i]) - 1.f) < 1e-5f);
+        assert_true(iir_dot(gb->normal[i], iir_sub(cam.position, gb->position[i])) > 0.f);
+        float d = iir_length(iir_sub(gb->position[i], cam.position));
+        assert_true(fabsf(gb->depth[i] - d) < 1e-4f * d);
+    }
+    assert_true(hits > W * H / 2);
+
+    memset(&st, 0, sizeof st);
+    t = frame(&l, &cam, lights, 1, vpls, N, &p, 1, b, &st);
+    assert_true(t.gbuffer_cached);
+    assert_int_equal(st.n[IIR_RAYS_CAMERA], 0);
+    assert_memory_equal(a->pixels, b->pixels, sizeof(iir_vec3) * W * H);
+
+    t = frame(&l, &moved, lights, 1, vpls, N, &p, 1, b, &st);
+    assert_false(t.gbuffer_cached);
+    assert_int_equal(st.n[IIR_RAYS_CAMERA], W * H);
+    assert_memory_not_equal(a->pixels, b->pixels, sizeof(iir_vec3) * W * H);
+    t = frame(&l, &cam, lights, 1, vpls, N, &p, 1, b, &st);
+    assert_false(t.gbuffer_cached);
+    assert_memory_equal(a->pixels, b->pixels, sizeof(iir_vec3) * W * H);
+
+    /* A new size re-renders too. */
+    iir_image *small = iir_image_create(W / 2, H / 2);
+    t = frame(&l, &cam, lights, 1, vpls, N, &p, 1, small, NULL);
+    assert_false(t.gbuffer_cached);
+
+    /* Thread count does not matter; rays visibility too. */
+    p.visibility = IIR_VIS_RAYS;
+    omp_set_num_threads(1);
+    frame(&l, &cam, lights, 1, vpls, N, &p, 1, a, NULL);
+    omp_set_num_threads(2);
+    frame(&l, &cam, lights, 1, vpls, N, &p, 1, b, NULL);
+    assert_memory_equal(a->pixels, b->pixels, sizeof(iir_vec3) * W * H);
+    iir_image_destroy(a);
+    iir_image_destroy(b);
+    iir_image_destroy(small);
+    release_vpls(vpls, N);
+    unload(&l);
+}
+
+/* ---- errors ---- */
+
+static void test_errors(void **state)
+{
+    (void)state;
+    loaded l = load_cornell();
+    enum { N = 8 };
+    iir_vpl vpls[N];
+    light_vpls(&l, N, vpls);
+    iir_smaps_build(vpls, N, l.rt, 16, NULL);
+    iir_smap_release(&vpls[5].smap);
+    iir_image *img = iir_image_create(16, 12);
+    iir_indirect_params p = iir_indirect_params_default();
+    iir_error err = {0};
+    const iir_camera *cam = &l.scene->camera;
+    assert_false(vpls[5].null_sample);
+    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+                     IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "shadow map"));
+    /* Exact rays need no maps; a null sample needs none either. */
+    p.visibility = IIR_VIS_RAYS;
+    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+                     IIR_OK);
+    p.visibility = IIR_VIS_SHADOWMAP;
+    vpls[5].null_sample = true;
+    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+                     IIR_OK);
+    /* Bad parameters, VPLs, cameras, lights. */
+    p.interleave = 9;
+    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+                     IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "interleave"));
+    p = iir_indirect_params_default();
+    p.clamp = -1.f;
+    assert_int_equal(iir_indirect_params_validate(&p, &err), IIR_ERR_INVALID);
+    p = iir_indirect_params_default();
+    vpls[2].flux.y = NAN;
+    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+                     IIR_ERR_INVALID);
+    vpls[2].flux.y = 0.f;
+    vpls[3].normal = iir_scale(vpls[3].normal, 2.f);
+    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+                     IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "iir_vpl_set_normal"));
+    iir_vpl_set_normal(&vpls[3], iir_normalize(vpls[3].normal));
+    iir_camera bad = *cam;
+    bad.fov_y = 0.f;
+    assert_int_equal(iir_renderer_frame(l.r, &bad, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+                     IIR_ERR_INVALID);
+    iir_light light = l.scene->lights[0];
+    light.cone_angle = 2.f;
+    assert_int_equal(iir_renderer_frame(l.r, cam, &light, 1, vpls, N, &p, 1, img, NULL, NULL, &err),
+                     IIR_ERR_INVALID);
+    /* Still usable afterwards. */
+    assert_int_equal(
+        iir_renderer_frame(l.r, cam, l.scene->lights, 1, vpls, N, &p, 1, img, NULL, NULL, &err),
+        IIR_OK);
+    iir_image_destroy(img);
+    release_vpls(vpls, N);
+    unload(&l);
+}
+
+/* ---- timing (printed only; IIR_RENDER_BENCH=1) ---- */
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static void test_timing(void **state)
+{
+    (void)state;
+    if (!getenv("IIR_RENDER_BENCH")) skip();
+    loaded l = load_cornell();
+    enum { W = 512, H = 384, N = 256, FRAMES = 20 };
+    iir_vpl *vpls = calloc(N, sizeof *vpls);
+    light_vpls(&l, N, vpls);
+    iir_raystats st = {0};
+    double t0 = omp_get_wtime();
+    iir_smaps_build(vpls, N, l.rt, 128, &st);
+    double build_ms = 1e3 * (omp_get_wtime() - t0);
+    iir_indirect_params p = iir_indirect_params_default();
+    iir_image *img = iir_image_create(W, H);
+    double ph[3][FRAMES], tot[FRAMES];
+    iir_render_timing t =
+        frame(&l, &l.scene->camera, l.scene->lights, 1, vpls, N, &p, 1, img, NULL);
+    double g_ms = t.gbuffer_ms;
+    for (int f = 0; f < FRAMES; f++) {
+        t = frame(&l, &l.scene->camera, l.scene->lights, 1, vpls, N, &p, 1, img, NULL);
+        ph[0][f] = t.direct_ms, ph[1][f] = t.indirect_ms, ph[2][f] = t.filter_ms;
+        tot[f] = t.direct_ms + t.indirect_ms + t.filter_ms;
+    }
+    for (int k = 0; k < 3; k++) qsort(ph[k], FRAMES, sizeof(double), cmp_double);
+    qsort(tot, FRAMES, sizeof(double), cmp_double);
+    print_message("timing %dx%d, %d VPLs, 4x4, 128^2, %d threads: maps %.1f ms (%llu rays), "
+                  "G-buffer %.2f ms; median direct %.2f ms, indirect %.2f ms, filter %.2f ms; "
+                  "direct + indirect + filter: median %.2f ms, best %.2f ms\n",
+                  W, H, N, omp_get_max_threads(), build_ms,
+                  (unsigned long long)st.n[IIR_RAYS_SHADOWMAP], g_ms, ph[0][FRAMES / 2],
+                  ph[1][FRAMES / 2], ph[2][FRAMES / 2], tot[FRAMES / 2], tot[0]);
+    iir_image_destroy(img);
+    release_vpls(vpls, N);
+    free(vpls);
+    unload(&l);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_single_vpl_plane),
+        cmocka_unit_test(test_direct_point_and_spot_over_plane),
+        cmocka_unit_test(test_direct_matches_pt_cornell),
+        cmocka_unit_test(test_direct_matches_pt_area_light),
+        cmocka_unit_test(test_shadowmap_agrees_with_rays),
+        cmocka_unit_test(test_interleave_plane),
+        cmocka_unit_test(test_subsets_by_id),
+        cmocka_unit_test(test_filter_respects_edges),
+        cmocka_unit_test(test_clamp),
+        cmocka_unit_test(test_gbuffer_cache_and_determinism),
+        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_timing),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

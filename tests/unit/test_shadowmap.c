@@ -1,0 +1,227 @@
+/* test_shadowmap.c -- VPL paraboloid shadow maps: the parametrisation's round trips, a map's depths
+ * against the known Cornell box geometry, lookups against exact rays, and which maps
+ * iir_smaps_build renders. Agreement over whole frames is in test_render.c. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "iir/rng.h"
+#include "iir/rt.h"
+#include "iir/scene.h"
+#include "iir/shadowmap.h"
+#include "iir/vpl.h"
+
+typedef struct cornell {
+    iir_scene *scene;
+    iir_rt *rt;
+} cornell;
+
+static cornell cornell_load(void)
+{
+    cornell c = {iir_scene_create_cornell_box(), NULL};
+    iir_error err = {0};
+    assert_non_null(c.scene);
+    if (iir_rt_create(c.scene, &c.rt, &err) != IIR_OK) fail_msg("rt: %s", err.msg);
+    return c;
+}
+
+static void cornell_unload(cornell *c)
+{
+    iir_rt_destroy(c->rt);
+    iir_scene_destroy(c->scene);
+}
+
+static iir_vpl vpl_at(uint32_t id, iir_vec3 p, iir_vec3 n)
+{
+    iir_vpl v = {0};
+    v.id = id;
+    v.position = p;
+    iir_vpl_set_normal(&v, iir_normalize(n));
+    v.albedo = iir_v3s(0.5f);
+    v.flux = iir_v3s(1.f);
+    return v;
+}
+
+/* ---- the parametrisation ---- */
+
+static void test_paraboloid_round_trip(void **state)
+{
+    (void)state;
+    /* uv -> dir -> uv over the disk of the parametrisation. */
+    for (int j = 0; j < 64; j++)
+        for (int i = 0; i < 64; i++) {
+            iir_vec2 uv = iir_v2((i + 0.5f) / 64.f, (j + 0.5f) / 64.f);
+            float x = 2.f * uv.x - 1.f, y = 2.f * uv.y - 1.f;
+            if (x * x + y * y > 1.f) continue;
+            iir_vec3 d = iir_paraboloid_dir(uv);
+            assert_true(fabsf(iir_length(d) - 1.f) < 1e-5f);
+            assert_true(d.z >= -1e-6f);
+            iir_vec2 back = iir_paraboloid_uv(d);
+            if (fabsf(back.x - uv.x) > 1e-5f || fabsf(back.y - uv.y) > 1e-5f)
+                fail_msg("uv (%g, %g) -> (%g, %g)", uv.x, uv.y, back.x, back.y);
+        }
+    /* dir -> uv -> dir over random hemisphere directions. */
+    iir_rng rng = iir_rng_make(7, 0);
+    for (int k = 0; k < 1000; k++) {
+        float z = iir_rng_uniform(&rng), phi = 2.f * IIR_PI * iir_rng_uniform(&rng);
+        float s = sqrtf(1.f - z * z);
+        iir_vec3 d = iir_v3(s * cosf(phi), s * sinf(phi), z);
+        iir_vec2 uv = iir_paraboloid_uv(d);
+        assert_true(uv.x >= 0.f && uv.x <= 1.f && uv.y >= 0.f && uv.y <= 1.f);
+        assert_true(iir_length(iir_sub(iir_paraboloid_dir(uv), d)) < 1e-5f);
+    }
+    /* Straight up is the centre; the horizon is the unit circle. */
+    iir_vec2 c = iir_paraboloid_uv(iir_v3(0, 0, 1));
+    assert_true(fabsf(c.x - 0.5f) < 1e-7f && fabsf(c.y - 0.5f) < 1e-7f);
+    iir_vec2 e = iir_paraboloid_uv(iir_v3(1, 0, 0));
+    assert_true(fabsf(e.x - 1.f) < 1e-7f && fabsf(e.y - 0.5f) < 1e-7f);
+}
+
+/* ---- one map ---- */
+
+/* A VPL on the Cornell floor, away from the boxes and the ceiling patch: straight up it sees the
+ * ceiling (y = 1.99) at 1.99 minus the origin's lift. */
+static void test_floor_vpl_sees_ceiling(void **state)
+{
+    (void)state;
+    cornell c = cornell_load();
+    iir_vpl v = vpl_at(1, iir_v3(-0.5f, 0.f, 0.6f), iir_v3(0, 1, 0));
+    float eps = iir_rt_epsilon(c.rt);
+    for (int res = 64; res <= 128; res += 36) { /* 64, 100 (not a multiple of 8) */
+        iir_raystats st = {0};
+        assert_true(iir_smap_render(&v.smap, c.rt, &v, res, &st));
+        assert_int_equal(v.smap.res, res);
+        assert_int_equal(st.n[IIR_RAYS_SHADOWMAP], (uint64_t)res * (uint64_t)res);
+        assert_int_equal(iir_raystats_total(&st), (uint64_t)res * (uint64_t)res);
+        /* The texels around the centre look within a texel of straight up. */
+        for (int j = res / 2 - 1; j <= res / 2; j++)
+            for (int i = res / 2 - 1; i <= res / 2; i++) {
+                float depth = v.smap.depth[j * res + i];
+                iir_vec3 dir = iir_paraboloid_dir(iir_v2((i + 0.5f) / res, (j + 0.5f) / res));
+                float expect = (1.99f - eps) / dir.z;
+                if (fabsf(depth - expect) > 1e-4f)
+                    fail_msg("res %d texel (%d,%d): depth %g, expected %g", res, i, j, depth,
+                             expect);
+            }
+        /* The box is open only towards +z: a texel whose ray escaped looks that way. */
+        int escaped = 0;
+        for (int j = 0; j < res; j++)
+            for (int i = 0; i < res; i++) {
+                if (isfinite(v.smap.depth[j * res + i])) continue;
+                escaped++;
+                float x = 2.f * (i + 0.5f) / res - 1.f, y = 2.f * (j + 0.5f) / res - 1.f;
+                iir_vec3 d = iir_frame_to_world(&v.frame, iir_normalize(iir_v3(x, y, 0.f)));
+                if (x * x + y * y <= 1.f)
+                    d = iir_frame_to_world(
+                        &v.frame, iir_paraboloid_dir(iir_v2((i + 0.5f) / res, (j + 0.5f) / res)));
+                assert_true(d.z > 0.f);
+            }
+        print_message("res %d: %d of %d texels escape through the open side\n", res, escaped,
+                      res * res);
+        assert_true(escaped > 0 && escaped < res * res / 2);
+    }
+    iir_smap_release(&v.smap);
+    assert_null(v.smap.depth);
+    assert_int_equal(v.smap.res, 0);
+    cornell_unload(&c);
+}
+
+/* Lookups: the ceiling above is lit, a point beyond the ceiling and points behind the VPL are not,
+ * and points around the scene agree with exact occlusion rays away from shadow edges. */
+static void test_lookup_matches_rays(void **state)
+{
+    (void)state;
+    cornell c = cornell_load();
+    float eps = iir_rt_epsilon(c.rt);
+    iir_vpl v = vpl_at(2, iir_v3(0.5f, 0.f, -0.5f), iir_v3(0, 1, 0));
+    assert_true(iir_smap_render(&v.smap, c.rt, &v, 128, NULL));
+    iir_vec3 down = iir_v3(0, -1, 0);
+    assert_true(iir_smap_visibility(&v.smap, &v, iir_v3(0.5f, 1.99f, -0.5f), down, 0.01f, eps) ==
+                1.f);
+    assert_true(iir_smap_visibility(&v.smap, &v, iir_v3(0.5f, 2.5f, -0.5f), down, 0.01f, eps) ==
+                0.f);
+    assert_true(iir_smap_visibility(&v.smap, &v, iir_v3(0.5f, -0.5f, -0.5f), down, 0.01f, eps) ==
+                0.f);
+
+    /* Random points on the walls' inner sides: map and ray agree where the ray's verdict holds
+     * for the point's whole neighbourhood (a shadow edge within a few texels is left out). */
+    iir_rng rng = iir_rng_make(3, 1);
+    int agree = 0, total = 0;
+    for (int k = 0; k < 4000; k++) {
+        iir_vec3 q = iir_v3(-1.f + 2.f * iir_rng_uniform(&rng), 1.99f * iir_rng_uniform(&rng),
+                            -1.04f + 2.03f * iir_rng_uniform(&rng));
+        iir_vec3 w = iir_normalize(iir_sub(q, v.position));
+        if (w.y <= 0.05f) continue;
+        iir_ray ray = iir_make_ray(iir_madd(v.position, v.normal, eps), w, 0.f, INFINITY);
+        iir_hit hit;
+        if (!iir_rt_intersect(c.rt, &ray, &hit, NULL, IIR_RAYS_BENCH)) continue;
+        iir_vec3 n = c.scene->normals[hit.prim];
+        if (iir_dot(n, w) > 0.f) n = iir_neg(n);
+        iir_vec3 x = iir_madd(ray.org, w, hit.t);
+        /* The first hit is visible; a point 5% further along the ray is not (it is behind that
+         * surface) where the bias is below those 5%. */
+        agree += iir_smap_visibility(&v.smap, &v, x, n, 0.01f, eps) > 0.5f;
+        total++;
+        float cx = -iir_dot(n, w), tan_x = iir_safe_sqrt(1.f - cx * cx) / cx;
+        if (iir_smap_bias(hit.t, w.y, tan_x, 128, 0.01f, eps) > 0.04f * hit.t) continue;
+        iir_vec3 behind = iir_madd(x, w, 0.05f * hit.t);
+        agree += iir_smap_visibility(&v.smap, &v, behind, n, 0.01f, eps) < 0.5f;
+        total++;
+    }
+    assert_true(total > 3000);
+    if (agree < (int)(0.98 * total))
+        fail_msg("map and rays agree on %d of %d lookups", agree, total);
+    iir_smap_release(&v.smap);
+    cornell_unload(&c);
+}
+
+/* ---- a set of maps ---- */
+
+static void test_build_only_what_is_missing(void **state)
+{
+    (void)state;
+    cornell c = cornell_load();
+    enum { N = 6 };
+    iir_vpl vpls[N];
+    for (uint32_t i = 0; i < N; i++)
+        vpls[i] = vpl_at(i, iir_v3(-0.8f + 0.3f * (float)i, 0.f, 0.5f), iir_v3(0, 1, 0));
+    vpls[3].null_sample = true;
+    iir_raystats st = {0};
+    assert_int_equal(iir_smaps_build(vpls, N, c.rt, 32, &st), N - 1);
+    assert_int_equal(st.n[IIR_RAYS_SHADOWMAP], (uint64_t)(N - 1) * 32 * 32);
+    assert_int_equal(vpls[3].smap.res, 0);
+    assert_null(vpls[3].smap.depth);
+    /* Nothing new: nothing rendered, no rays. */
+    assert_int_equal(iir_smaps_build(vpls, N, c.rt, 32, &st), 0);
+    assert_int_equal(st.n[IIR_RAYS_SHADOWMAP], (uint64_t)(N - 1) * 32 * 32);
+    /* A VPL dies and another is born in its slot: only that one is rendered. */
+    iir_smap_release(&vpls[1].smap);
+    vpls[1] = vpl_at(17, iir_v3(0.2f, 0.f, 0.7f), iir_v3(0, 1, 0));
+    assert_int_equal(iir_smaps_build(vpls, N, c.rt, 32, NULL), 1);
+    /* Same result as rendering alone (the threads do not interfere). */
+    iir_smap alone = {0};
+    assert_true(iir_smap_render(&alone, c.rt, &vpls[1], 32, NULL));
+    assert_memory_equal(alone.depth, vpls[1].smap.depth, sizeof(float) * 32 * 32);
+    iir_smap_release(&alone);
+    /* Another resolution re-renders every non-null map. */
+    assert_int_equal(iir_smaps_build(vpls, N, c.rt, 16, NULL), N - 1);
+    for (int i = 0; i < N; i++) assert_int_equal(vpls[i].smap.res, i == 3 ? 0 : 16);
+    for (int i = 0; i < N; i++) iir_smap_release(&vpls[i].smap);
+    cornell_unload(&c);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_paraboloid_round_trip),
+        cmocka_unit_test(test_floor_vpl_sees_ceiling),
+        cmocka_unit_test(test_lookup_matches_rays),
+        cmocka_unit_test(test_build_only_what_is_missing),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
