@@ -37,15 +37,23 @@ iir_frame iir_spot_frame(const iir_light *spot)
     return iir_frame_from_forward(spot->direction, up);
 }
 
-float iir_spot_falloff(const iir_light *spot, float rho)
+/* 1 inside R_in, smoothstep down to 0 at R, 0 outside. */
+static float falloff(float R, float R_in, float rho)
 {
-    float R = iir_spot_radius(spot);
     if (rho >= R) return 0.f;
-    if (spot->smooth <= 0.f) return 1.f;
-    float R_in = sinf(spot->cone_angle - spot->smooth);
     if (rho <= R_in) return 1.f;
     float t = (R - rho) / (R - R_in);
     return t * t * (3.f - 2.f * t);
+}
+
+static float smooth_edge_start(const iir_light *spot)
+{
+    return spot->smooth > 0.f ? sinf(spot->cone_angle - spot->smooth) : iir_spot_radius(spot);
+}
+
+float iir_spot_falloff(const iir_light *spot, float rho)
+{
+    return falloff(iir_spot_radius(spot), smooth_edge_start(spot), rho);
 }
 
 /* Phi = I0 * integral over the disk of falloff(rho) dA (the cosine lobe is uniform on the disk). */
@@ -68,15 +76,32 @@ iir_vec3 iir_light_flux(const iir_light *l)
     return iir_scale(l->intensity, spot_flux_factor(l));
 }
 
+iir_light_eval iir_light_prepare(const iir_light *l)
+{
+    iir_light_eval e = {.light = l};
+    if (l->type == IIR_LIGHT_SPOT) {
+        e.frame = iir_spot_frame(l);
+        e.R = iir_spot_radius(l);
+        e.R_in = smooth_edge_start(l);
+    }
+    return e;
+}
+
+iir_vec3 iir_light_eval_intensity(const iir_light_eval *e, iir_vec3 w)
+{
+    const iir_light *l = e->light;
+    if (l->type == IIR_LIGHT_POINT) return l->intensity;
+    float cos_theta = iir_dot(w, e->frame.f);
+    if (cos_theta <= 0.f) return iir_v3s(0.f);
+    iir_vec2 s = iir_spot_dir_to_disk(&e->frame, w);
+    float rho = sqrtf(s.x * s.x + s.y * s.y);
+    return iir_scale(l->intensity, cos_theta * falloff(e->R, e->R_in, rho));
+}
+
 iir_vec3 iir_light_intensity(const iir_light *l, iir_vec3 w)
 {
-    if (l->type == IIR_LIGHT_POINT) return l->intensity;
-    iir_frame fr = iir_spot_frame(l);
-    float cos_theta = iir_dot(w, fr.f);
-    if (cos_theta <= 0.f) return iir_v3s(0.f);
-    iir_vec2 s = iir_spot_dir_to_disk(&fr, w);
-    float rho = sqrtf(s.x * s.x + s.y * s.y);
-    return iir_scale(l->intensity, cos_theta * iir_spot_falloff(l, rho));
+    iir_light_eval e = iir_light_prepare(l);
+    return iir_light_eval_intensity(&e, w);
 }
 
 iir_light_ray iir_light_sample_emission(const iir_light *l, iir_vec2 u)

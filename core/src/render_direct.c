@@ -53,9 +53,10 @@ static void resolve(const iir_renderer *r, block *b, iir_raystats *st)
         if (b->rays.valid[k] && !occluded[k]) b->L[k] = iir_add(b->L[k], b->pending[k]);
 }
 
-/* Lane k's unshadowed f I(-wi) cos / d^2 for punctual light l, and its shadow ray. */
-static void punctual_lane(const iir_renderer *r, const iir_light *l, block *b, int k)
+/* Lane k's unshadowed f I(-wi) cos / d^2 for the prepared punctual light e, and its shadow ray. */
+static void punctual_lane(const iir_renderer *r, const iir_light_eval *e, block *b, int k)
 {
+    const iir_light *l = e->light;
     const iir_gbuffer *gb = &r->gb;
     iir_vec3 p = gb->position[b->index[k]], n = gb->normal[b->index[k]];
     iir_vec3 d = iir_sub(l->position, p);
@@ -65,7 +66,7 @@ static void punctual_lane(const iir_renderer *r, const iir_light *l, block *b, i
     iir_vec3 wi = iir_scale(d, 1.f / dist);
     float cos_theta = iir_dot(n, wi);
     if (cos_theta <= 0.f) return;
-    iir_vec3 I = iir_light_intensity(l, iir_neg(wi));
+    iir_vec3 I = iir_light_eval_intensity(e, iir_neg(wi));
     if (iir_is_black(I)) return;
     b->pending[k] = iir_scale(iir_mul(b->f[k], I), cos_theta / dist2);
     set_lane(&b->rays, k, iir_madd(p, n, r->eps), wi, dist - 2.f * r->eps);
@@ -113,9 +114,10 @@ static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir
     block b;
     load_block(&c->r->gb, x0, y0, &b);
     for (uint32_t l = 0; l < c->num_lights; l++) {
+        iir_light_eval e = iir_light_prepare(&c->lights[l]);
         clear_rays(&b);
         for (int k = 0; k < 8; k++)
-            if (b.shaded[k]) punctual_lane(c->r, &c->lights[l], &b, k);
+            if (b.shaded[k]) punctual_lane(c->r, &e, &b, k);
         resolve(c->r, &b, st);
     }
     if (c->r->area_lights) {

@@ -48,6 +48,17 @@ iir_vec3 iir_light_flux(const iir_light *light);
  * light). */
 iir_vec3 iir_light_intensity(const iir_light *light, iir_vec3 w);
 
+/* A light prepared for evaluating many directions: the spot's frame and disk radii are computed
+ * once (iir_light_intensity recomputes them per call). Valid while *light is unchanged. */
+typedef struct iir_light_eval {
+    const iir_light *light;
+    iir_frame frame;
+    float R, R_in; /* disk radius sin(alpha) and where the smooth edge starts */
+} iir_light_eval;
+
+iir_light_eval iir_light_prepare(const iir_light *light);
+iir_vec3 iir_light_eval_intensity(const iir_light_eval *e, iir_vec3 w);
+
 /* ---- the spot's disk domain ---- */
 
 iir_frame iir_spot_frame(const iir_light *spot);
