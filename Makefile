@@ -43,9 +43,14 @@ test: deps format-check
 	cd $(TEST_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	    ctest --output-on-failure -j $(JOBS)
 
+# Benchmarks (not tests): ray rates, then the methods over a 200-frame orbit with references.
+# About 6 minutes on 2 cores. Results in out/bench/.
 bench: build
+	mkdir -p out/bench/cornell out/bench/conference
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
+	$(BUILD)/iird bench --frames 200 --ref-every 50 --ref-spp 256 --out out/bench/cornell
+	$(BUILD)/iird bench conference --frames 100 --ref-spp 0 --out out/bench/conference
 
 FORMAT_FILES = $(shell git ls-files '*.c' '*.h' '*.cpp' '*.hpp' 2>/dev/null)
 format:

@@ -178,6 +178,28 @@ bool iird_method_option(int c, const char *arg, iir_params *p, iir_status *st, i
     return true;
 }
 
+int iird_parse_command(const iird_command *cmd, int argc, char **argv, void *ctx,
+                       iir_params *params, const char **scene)
+{
+    int c;
+    iir_error err = {0};
+    optind = 1;
+    while ((c = getopt_long(argc, argv, "h", cmd->options, NULL)) != -1) {
+        iir_status st = IIR_OK;
+        if (c == 'h') return cmd->usage(stdout), 0;
+        if (c == '?') return cmd->usage(stderr), IIRD_EXIT_USAGE;
+        if (!iird_method_option(c, optarg, params, &st, &err))
+            st = cmd->option(ctx, c, optarg, &err);
+        if (st != IIR_OK) return iird_report(cmd->name, &err);
+    }
+    if (optind < argc) *scene = argv[optind++];
+    if (optind < argc) {
+        fprintf(stderr, "iird %s: unexpected argument '%s'\n", cmd->name, argv[optind]);
+        return IIRD_EXIT_USAGE;
+    }
+    return -1;
+}
+
 static bool is_dir(const char *path)
 {
     struct stat sb;

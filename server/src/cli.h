@@ -5,6 +5,7 @@
 
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include <getopt.h>
 
@@ -62,6 +63,21 @@ extern const char IIRD_METHOD_HELP[];
 
 /* True when c is one of IIRD_METHOD_LONGOPTS; then *st says whether arg was valid. */
 bool iird_method_option(int c, const char *arg, iir_params *p, iir_status *st, iir_error *err);
+
+/* A subcommand's command line: its options, its --help text, and a handler for its own options. */
+typedef struct iird_command {
+    const char *name; /* "render", for messages */
+    const struct option *options;
+    void (*usage)(FILE *f);
+    /* Applies one of the command's own options to ctx (method options never reach it). */
+    iir_status (*option)(void *ctx, int c, const char *arg, iir_error *err);
+} iird_command;
+
+/* Parses argv: method options into *params, the command's own through cmd->option, then at most
+ * one positional SCENE into *scene. Returns -1 to go on, else the exit code (0 after --help, 2 for
+ * a bad value, 64 for a usage error) with the reason printed. */
+int iird_parse_command(const iird_command *cmd, int argc, char **argv, void *ctx,
+                       iir_params *params, const char **scene);
 
 /* Parses "WxH" with 1 <= W, H <= max_dim. */
 iir_status iird_parse_size(const char *text, int max_dim, int *w, int *h, iir_error *err);

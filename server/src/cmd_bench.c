@@ -49,11 +49,11 @@ enum {
     OPT_REF_AA
 };
 
-static iir_status parse_option(iird_bench_opts *o, int c, const char *arg, iir_error *err)
+static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err)
 {
+    iird_bench_opts *o = ctx;
     long v = 0;
     iir_status st = IIR_OK;
-    if (iird_method_option(c, arg, &o->params, &st, err)) return st;
     switch (c) {
     case OPT_METHODS:
         o->methods = arg;
@@ -103,17 +103,8 @@ static int parse_args(int argc, char **argv, iird_bench_opts *o)
                                              {"help", no_argument, 0, 'h'},
                                              IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
-    int c;
-    iir_error err = {0};
-    optind = 1;
-    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
-        if (c == 'h') return bench_usage(stdout), 0;
-        if (c == '?') return bench_usage(stderr), IIRD_EXIT_USAGE;
-        if (parse_option(o, c, optarg, &err) != IIR_OK) return iird_report("bench", &err);
-    }
-    if (optind < argc) o->scene = argv[optind++];
-    if (optind < argc) return bench_usage(stderr), IIRD_EXIT_USAGE;
-    return -1;
+    static const iird_command cmd = {"bench", longopts, bench_usage, parse_option};
+    return iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
 }
 
 int iird_cmd_bench(int argc, char **argv)

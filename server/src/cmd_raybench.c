@@ -31,6 +31,21 @@ static void raybench_usage(FILE *f)
 
 enum { OPT_RAYS = 1, OPT_SIZE, OPT_SCENES };
 
+static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err)
+{
+    bench_opts *o = ctx;
+    switch (c) {
+    case OPT_RAYS:
+        return iird_parse_int(arg, "--rays", 1, 1l << 28, &o->rays, err);
+    case OPT_SIZE:
+        return iird_parse_size(arg, 4096, &o->width, &o->height, err);
+    case OPT_SCENES:
+        o->scenes_dir = arg;
+        return IIR_OK;
+    }
+    return iir_fail(err, IIR_ERR_INTERNAL, "unhandled option %d", c);
+}
+
 static int parse_args(int argc, char **argv, bench_opts *o)
 {
     static const struct option longopts[] = {{"rays", required_argument, 0, OPT_RAYS},
@@ -39,27 +54,8 @@ static int parse_args(int argc, char **argv, bench_opts *o)
                                              {"help", no_argument, 0, 'h'},
                                              IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
-    int c;
-    iir_error err = {0};
-    iir_status st = IIR_OK;
-    optind = 1;
-    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
-        if (c == 'h') return raybench_usage(stdout), 0;
-        if (iird_method_option(c, optarg, &o->params, &st, &err)) {
-        } else if (c == OPT_RAYS) {
-            st = iird_parse_int(optarg, "--rays", 1, 1l << 28, &o->rays, &err);
-        } else if (c == OPT_SIZE) {
-            st = iird_parse_size(optarg, 4096, &o->width, &o->height, &err);
-        } else if (c == OPT_SCENES) {
-            o->scenes_dir = optarg;
-        } else {
-            return raybench_usage(stderr), IIRD_EXIT_USAGE;
-        }
-        if (st != IIR_OK) return iird_report("raybench", &err);
-    }
-    if (optind < argc) o->scene = argv[optind++];
-    if (optind < argc) return raybench_usage(stderr), IIRD_EXIT_USAGE;
-    return -1;
+    static const iird_command cmd = {"raybench", longopts, raybench_usage, parse_option};
+    return iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
 }
 
 static iir_status run_pt(const bench_opts *o, const iir_scene *scene, const iir_rt *rt,

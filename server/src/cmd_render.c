@@ -39,10 +39,10 @@ static void render_usage(FILE *f)
 
 enum { OPT_OUT = 1, OPT_METHOD, OPT_SIZE, OPT_EXPOSURE, OPT_SCENES };
 
-static iir_status parse_option(render_opts *o, int c, const char *arg, iir_error *err)
+static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err)
 {
+    render_opts *o = ctx;
     iir_status st = IIR_OK;
-    if (iird_method_option(c, arg, &o->params, &st, err)) return st;
     switch (c) {
     case OPT_OUT:
         o->out = arg;
@@ -74,23 +74,14 @@ static int parse_args(int argc, char **argv, render_opts *o)
                                              {"help", no_argument, 0, 'h'},
                                              IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
-    int c;
-    iir_error err = {0};
-    optind = 1;
-    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
-        if (c == 'h') return render_usage(stdout), 0;
-        if (c == '?') return render_usage(stderr), IIRD_EXIT_USAGE;
-        if (parse_option(o, c, optarg, &err) != IIR_OK) return iird_report("render", &err);
-    }
-    if (optind < argc) o->scene = argv[optind++];
-    if (optind < argc) {
-        fprintf(stderr, "iird render: unexpected argument '%s'\n", argv[optind]);
-        return IIRD_EXIT_USAGE;
-    }
+    static const iird_command cmd = {"render", longopts, render_usage, parse_option};
+    int rc = iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
+    if (rc >= 0) return rc;
     if (!o->out) {
         fprintf(stderr, "iird render: --out FILE is required (see iird render --help)\n");
         return IIRD_EXIT_USAGE;
     }
+    iir_error err = {0};
     if (iird_check_output(o->out, &err) != IIR_OK) return iird_report("render", &err);
     return -1;
 }

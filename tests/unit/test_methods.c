@@ -10,34 +10,15 @@
 
 #include <cmocka.h>
 
+#include "testutil.h"
+
 #include "iir/method.h"
 #include "iir/render.h"
 #include "iir/scene.h"
 #include "iir/shadowmap.h"
 #include "method_internal.h"
 
-typedef struct fixture {
-    iir_scene *scene;
-    iir_rt *rt;
-} fixture;
-
-static int setup(void **state)
-{
-    static fixture f;
-    iir_error err = {0};
-    f.scene = iir_scene_create_cornell_box();
-    if (!f.scene || iir_rt_create(f.scene, &f.rt, &err) != IIR_OK) return -1;
-    *state = &f;
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    fixture *f = *state;
-    iir_rt_destroy(f->rt);
-    iir_scene_destroy(f->scene);
-    return 0;
-}
+typedef iir_test_cornell fixture;
 
 static iir_method *make(const fixture *f, const char *name, const iir_params *p)
 {
@@ -261,5 +242,5 @@ int main(void)
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_refusals),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

@@ -20,16 +20,6 @@
 
 /* ---- writing small scenes ---- */
 
-/* A quad centred at c spanned by +-a, +-b; its normal (winding) is cross(a, b). */
-static void write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b)
-{
-    iir_vec3 v[4] = {iir_sub(iir_sub(c, a), b), iir_sub(iir_add(c, a), b),
-                     iir_add(iir_add(c, a), b), iir_add(iir_sub(c, a), b)};
-    fprintf(f, "usemtl %s\n", mtl);
-    for (int i = 0; i < 4; i++) fprintf(f, "v %.9g %.9g %.9g\n", v[i].x, v[i].y, v[i].z);
-    fprintf(f, "f -4 -3 -2 -1\n");
-}
-
 typedef struct loaded {
     iir_scene *scene;
     iir_rt *rt;
@@ -88,7 +78,7 @@ static void write_furnace(const char *dir, float rho)
         for (int s = -1; s <= 1; s += 2) {
             iir_vec3 n = iir_scale(ax[k], (float)-s); /* inward */
             iir_vec3 a = ax[(k + 1) % 3], b = iir_cross(n, a);
-            write_quad(f, "wall", iir_scale(ax[k], (float)s), a, b);
+            iir_test_write_quad(f, "wall", iir_scale(ax[k], (float)s), a, b);
         }
     fclose(f);
     iir_test_write_file(dir, "furnace.scene.json",
@@ -155,7 +145,8 @@ static void test_point_light_plane(void **state)
     snprintf(path, sizeof path, "%s/plane.obj", dir);
     FILE *f = fopen(path, "w");
     fprintf(f, "mtllib plane.mtl\n");
-    write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 20), iir_v3(20, 0, 0)); /* normal +y */
+    iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 20),
+                        iir_v3(20, 0, 0)); /* normal +y */
     fclose(f);
     iir_test_write_file(dir, "plane.scene.json",
                         "{\"camera\": {\"position\": [0, 2.5, 0], \"target\": [0, 0, 0],"
@@ -197,9 +188,9 @@ static void write_bounce_scene(const char *dir)
     snprintf(path, sizeof path, "%s/bounce.obj", dir);
     FILE *f = fopen(path, "w");
     fprintf(f, "mtllib bounce.mtl\n");
-    write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 1), iir_v3(1, 0, 0));     /* A: +y */
-    write_quad(f, "grey", iir_v3(1, 1, 0), iir_v3(0, 0, 1), iir_v3(0, 1, 0));     /* B: -x */
-    write_quad(f, "lamp", PANEL_C, iir_v3(PANEL_H, 0, 0), iir_v3(0, 0, PANEL_H)); /* -y */
+    iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 1), iir_v3(1, 0, 0)); /* A: +y */
+    iir_test_write_quad(f, "grey", iir_v3(1, 1, 0), iir_v3(0, 0, 1), iir_v3(0, 1, 0)); /* B: -x */
+    iir_test_write_quad(f, "lamp", PANEL_C, iir_v3(PANEL_H, 0, 0), iir_v3(0, 0, PANEL_H)); /* -y */
     fclose(f);
     iir_test_write_file(dir, "bounce.scene.json",
                         "{\"camera\": {\"position\": [-0.9, 0.8, 0], \"target\": [1, 0.8, 0],"

@@ -26,16 +26,6 @@
 
 /* ---- scenes ---- */
 
-/* A quad centred at c spanned by +-a, +-b; its normal (winding) is cross(a, b). */
-static void write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b)
-{
-    iir_vec3 v[4] = {iir_sub(iir_sub(c, a), b), iir_sub(iir_add(c, a), b),
-                     iir_add(iir_add(c, a), b), iir_add(iir_sub(c, a), b)};
-    fprintf(f, "usemtl %s\n", mtl);
-    for (int i = 0; i < 4; i++) fprintf(f, "v %.9g %.9g %.9g\n", v[i].x, v[i].y, v[i].z);
-    fprintf(f, "f -4 -3 -2 -1\n");
-}
-
 typedef struct loaded {
     iir_scene *scene;
     iir_rt *rt;
@@ -83,8 +73,9 @@ static loaded load_plane(bool step)
     FILE *f = fopen(path, "w");
     assert_non_null(f);
     fprintf(f, "mtllib plane.mtl\n");
-    write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 20), iir_v3(20, 0, 0)); /* normal +y */
-    if (step) write_quad(f, "grey", iir_v3(5, 0.5f, 0), iir_v3(0, 0, 20), iir_v3(5, 0, 0));
+    iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 20),
+                        iir_v3(20, 0, 0)); /* normal +y */
+    if (step) iir_test_write_quad(f, "grey", iir_v3(5, 0.5f, 0), iir_v3(0, 0, 20), iir_v3(5, 0, 0));
     fclose(f);
     iir_test_write_file(dir, "plane.scene.json",
                         "{\"camera\": {\"position\": [0, 2.5, 0], \"target\": [0, 0, 0],"
@@ -104,9 +95,9 @@ static loaded load_lamp_scene(void)
     FILE *f = fopen(path, "w");
     assert_non_null(f);
     fprintf(f, "mtllib lamp.mtl\n");
-    write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 1), iir_v3(1, 0, 0));
-    write_quad(f, "grey", iir_v3(1, 1, 0), iir_v3(0, 0, 1), iir_v3(0, 1, 0));
-    write_quad(f, "lamp", iir_v3(-0.4f, 1.5f, 0), iir_v3(0.2f, 0, 0), iir_v3(0, 0, 0.2f));
+    iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 1), iir_v3(1, 0, 0));
+    iir_test_write_quad(f, "grey", iir_v3(1, 1, 0), iir_v3(0, 0, 1), iir_v3(0, 1, 0));
+    iir_test_write_quad(f, "lamp", iir_v3(-0.4f, 1.5f, 0), iir_v3(0.2f, 0, 0), iir_v3(0, 0, 0.2f));
     fclose(f);
     iir_test_write_file(dir, "lamp.scene.json",
                         "{\"camera\": {\"position\": [-0.9, 0.8, 0], \"target\": [1, 0.3, 0],"

@@ -8,33 +8,14 @@
 
 #include <cmocka.h>
 
+#include "testutil.h"
+
 #include "iir/raybench.h"
 #include "iir/rng.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
 
-typedef struct fixture {
-    iir_scene *scene;
-    iir_rt *rt;
-} fixture;
-
-static int setup(void **state)
-{
-    static fixture f;
-    iir_error err = {0};
-    f.scene = iir_scene_create_cornell_box();
-    if (!f.scene || iir_rt_create(f.scene, &f.rt, &err) != IIR_OK) return -1;
-    *state = &f;
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    fixture *f = *state;
-    iir_rt_destroy(f->rt);
-    iir_scene_destroy(f->scene);
-    return 0;
-}
+typedef iir_test_cornell fixture;
 
 static void test_known_hits(void **state)
 {
@@ -128,5 +109,5 @@ int main(void)
         cmocka_unit_test(test_packets_match_single_rays),
         cmocka_unit_test(test_raybench),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

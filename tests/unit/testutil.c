@@ -28,3 +28,30 @@ const char *iir_test_write_file(const char *dir, const char *name, const char *t
     fclose(f);
     return path;
 }
+
+void iir_test_write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b)
+{
+    iir_vec3 v[4] = {iir_sub(iir_sub(c, a), b), iir_sub(iir_add(c, a), b),
+                     iir_add(iir_add(c, a), b), iir_add(iir_sub(c, a), b)};
+    fprintf(f, "usemtl %s\n", mtl);
+    for (int i = 0; i < 4; i++) fprintf(f, "v %.9g %.9g %.9g\n", v[i].x, v[i].y, v[i].z);
+    fprintf(f, "f -4 -3 -2 -1\n");
+}
+
+int iir_test_cornell_setup(void **state)
+{
+    static iir_test_cornell f;
+    iir_error err = {0};
+    f.scene = iir_scene_create_cornell_box();
+    if (!f.scene || iir_rt_create(f.scene, &f.rt, &err) != IIR_OK) return -1;
+    *state = &f;
+    return 0;
+}
+
+int iir_test_cornell_teardown(void **state)
+{
+    iir_test_cornell *f = *state;
+    iir_rt_destroy(f->rt);
+    iir_scene_destroy(f->scene);
+    return 0;
+}

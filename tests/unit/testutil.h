@@ -4,6 +4,11 @@
 #define IIR_TESTUTIL_H
 
 #include <stddef.h>
+#include <stdio.h>
+
+#include "iir/rt.h"
+#include "iir/scene.h"
+#include "iir/vecmath.h"
 
 /* A fresh directory for this test executable (under $IIR_TEST_TMP or /tmp); returns its path. */
 const char *iir_test_tmpdir(const char *test_name);
@@ -11,5 +16,16 @@ const char *iir_test_tmpdir(const char *test_name);
 /* Writes text to dir/name, returns the full path in a static buffer (overwritten by the next call).
  */
 const char *iir_test_write_file(const char *dir, const char *name, const char *text);
+
+/* Writes an OBJ quad centred at c spanned by +-a, +-b (normal cross(a, b)) with material mtl. */
+void iir_test_write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b);
+
+/* cmocka group fixture: *state becomes an iir_test_cornell with the built-in box and its rays. */
+typedef struct iir_test_cornell {
+    iir_scene *scene;
+    iir_rt *rt;
+} iir_test_cornell;
+int iir_test_cornell_setup(void **state);
+int iir_test_cornell_teardown(void **state);
 
 #endif
