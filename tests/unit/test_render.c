@@ -3,7 +3,7 @@
  * method (the Cornell box and an area-light scene), shadow maps against exact rays on the Cornell
  * box, interleaved sampling and its filter against full evaluation, clamping, G-buffer reuse,
  * determinism and error statuses. Scenes are written as OBJ + sidecar and loaded for real.
- * Set IIR_RENDER_BENCH=1 to print the timing of the 512x384 / 256-VPL / 4x4 / 128^2 frame. */
+ * Timing is not a test: `iird bench` reports the renderer's phases per frame. */
 #include <omp.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -787,51 +787,6 @@ static void test_errors(void **state)
     unload(&l);
 }
 
-/* ---- timing (printed only; IIR_RENDER_BENCH=1) ---- */
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static void test_timing(void **state)
-{
-    (void)state;
-    if (!getenv("IIR_RENDER_BENCH")) skip();
-    loaded l = load_cornell();
-    enum { W = 512, H = 384, N = 256, FRAMES = 20 };
-    iir_vpl *vpls = calloc(N, sizeof *vpls);
-    light_vpls(&l, N, vpls);
-    iir_raystats st = {0};
-    double t0 = omp_get_wtime();
-    iir_smaps_build(vpls, N, l.rt, 128, &st);
-    double build_ms = 1e3 * (omp_get_wtime() - t0);
-    iir_indirect_params p = iir_indirect_params_default();
-    iir_image *img = iir_image_create(W, H);
-    double ph[3][FRAMES], tot[FRAMES];
-    iir_render_timing t =
-        frame(&l, &l.scene->camera, l.scene->lights, 1, vpls, N, &p, 1, img, NULL);
-    double g_ms = t.gbuffer_ms;
-    for (int f = 0; f < FRAMES; f++) {
-        t = frame(&l, &l.scene->camera, l.scene->lights, 1, vpls, N, &p, 1, img, NULL);
-        ph[0][f] = t.direct_ms, ph[1][f] = t.indirect_ms, ph[2][f] = t.filter_ms;
-        tot[f] = t.direct_ms + t.indirect_ms + t.filter_ms;
-    }
-    for (int k = 0; k < 3; k++) qsort(ph[k], FRAMES, sizeof(double), cmp_double);
-    qsort(tot, FRAMES, sizeof(double), cmp_double);
-    print_message("timing %dx%d, %d VPLs, 4x4, 128^2, %d threads: maps %.1f ms (%llu rays), "
-                  "G-buffer %.2f ms; median direct %.2f ms, indirect %.2f ms, filter %.2f ms; "
-                  "direct + indirect + filter: median %.2f ms, best %.2f ms\n",
-                  W, H, N, omp_get_max_threads(), build_ms,
-                  (unsigned long long)st.n[IIR_RAYS_SHADOWMAP], g_ms, ph[0][FRAMES / 2],
-                  ph[1][FRAMES / 2], ph[2][FRAMES / 2], tot[FRAMES / 2], tot[0]);
-    iir_image_destroy(img);
-    release_vpls(vpls, N);
-    free(vpls);
-    unload(&l);
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -846,7 +801,6 @@ int main(void)
         cmocka_unit_test(test_clamp),
         cmocka_unit_test(test_gbuffer_cache_and_determinism),
         cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_timing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
