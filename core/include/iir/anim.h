@@ -1,0 +1,69 @@
+/* anim.h -- animation scripts: parsing and validating a JSON script (docs/animation-format.md)
+ * and evaluating "the light and camera at time t / frame f". Not rendering or benchmarking them.
+ *
+ * A script has an optional light track and an optional camera track, each either keyframes
+ * (linear, Catmull-Rom or step) or a parametric path (orbit, sweep). Evaluation starts from the
+ * scene's own light or camera and overrides only what the script animates. An iir_anim is
+ * immutable after parsing, so any number of threads may evaluate the same one. */
+#ifndef IIR_ANIM_H
+#define IIR_ANIM_H
+
+#include <stdbool.h>
+
+#include "iir/camera.h"
+#include "iir/light.h"
+#include "iir/status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct iir_anim iir_anim;
+
+/* Parses and validates a script held in json_text (NUL-terminated). source_name (may be NULL)
+ * only prefixes error messages, e.g. "orbit.json: light.keys[2].postion: unknown field".
+ * On success *out is a new script the caller frees with iir_anim_destroy. On error returns
+ * IIR_ERR_FORMAT (bad JSON, unknown field, wrong type), IIR_ERR_INVALID (a value out of range,
+ * not finite, times not increasing, zero direction, target == position) or IIR_ERR_NOMEM, fills
+ * err with a message naming the JSON path of the field, and leaves *out NULL. */
+iir_status iir_anim_parse(const char *json_text, const char *source_name, iir_anim **out,
+                          iir_error *err);
+
+/* Reads the file at path (at most 16 MiB) and parses it as iir_anim_parse does, with the file's
+ * path in messages. IIR_ERR_IO when the file cannot be read; *out is left NULL on error. */
+iir_status iir_anim_load(const char *path, iir_anim **out, iir_error *err);
+
+/* Frees a script; NULL is ignored. */
+void iir_anim_destroy(iir_anim *a);
+
+/* Script length in seconds, and frames per second, as given. */
+double iir_anim_duration(const iir_anim *a);
+double iir_anim_fps(const iir_anim *a);
+
+/* Number of frames: floor(duration * fps) + 1 (frame 0 is t = 0; the last frame is at or just
+ * before t = duration). Always >= 1. */
+int iir_anim_frame_count(const iir_anim *a);
+
+/* Time in seconds of a frame: frame / fps. Frames outside [0, frame_count) are clamped into it. */
+double iir_anim_frame_time(const iir_anim *a, int frame);
+
+/* True when the script animates the light / the camera. Without a track, iir_anim_light and
+ * iir_anim_camera return the base unchanged. */
+bool iir_anim_has_light(const iir_anim *a);
+bool iir_anim_has_camera(const iir_anim *a);
+
+/* The light at time t (seconds; clamped into [0, duration]): a copy of *base (the scene's spot)
+ * with what the script animates overridden. Keeps base's type, name and up hint. If base passes
+ * iir_light_validate, so does the result: the direction is unit length, the cone angle is kept
+ * in (0, 90] degrees, the smooth edge within the cone and the intensity non-negative (a
+ * Catmull-Rom overshoot is clamped). */
+iir_light iir_anim_light(const iir_anim *a, const iir_light *base, double t);
+
+/* The camera at time t, likewise from *base: position, target and fov_y (kept in (0, 180)) are
+ * overridden where animated; up is base's. */
+iir_camera iir_anim_camera(const iir_anim *a, const iir_camera *base, double t);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,60 @@
+/* anim_internal.h -- the parsed form of an animation script, shared by anim_parse.c (which builds
+ * it) and anim_eval.c (which reads it). Not part of the public API. */
+#ifndef IIR_ANIM_INTERNAL_H
+#define IIR_ANIM_INTERNAL_H
+
+#include <stdbool.h>
+
+#include "iir/anim.h"
+#include "iir/vecmath.h"
+
+/* Which fields a key gives (bit mask). */
+enum {
+    IIR_AF_POSITION = 1u << 0,
+    IIR_AF_DIRECTION = 1u << 1,
+    IIR_AF_TARGET = 1u << 2,
+    IIR_AF_CONE = 1u << 3,
+    IIR_AF_SMOOTH = 1u << 4,
+    IIR_AF_INTENSITY = 1u << 5,
+    IIR_AF_FOV = 1u << 6,
+};
+
+typedef struct iir_anim_key {
+    double t;        /* seconds */
+    unsigned fields; /* IIR_AF_* given by this key */
+    bool step;       /* the fields this key gives jump to it (no interpolation into it) */
+    iir_vec3 position;
+    iir_vec3 direction; /* unit */
+    iir_vec3 target;
+    iir_vec3 intensity;
+    float cone, smooth, fov; /* degrees, as written */
+} iir_anim_key;
+
+typedef enum iir_anim_interp {
+    IIR_ANIM_LINEAR,
+    IIR_ANIM_CATMULL_ROM,
+    IIR_ANIM_STEP
+} iir_anim_interp;
+
+typedef enum iir_anim_path { IIR_ANIM_KEYS, IIR_ANIM_ORBIT, IIR_ANIM_SWEEP } iir_anim_path;
+
+/* One track. Parametric paths keep their constant fields (aim, cone, ...) in a single key at
+ * t = 0 and compute the position from the parameters below. */
+typedef struct iir_anim_track {
+    bool present;
+    iir_anim_path path;
+    iir_anim_interp interp;
+    int num_keys;
+    iir_anim_key *keys;
+    iir_vec3 center;      /* orbit */
+    double radius, turns; /* orbit */
+    double phase;         /* orbit, radians */
+    iir_vec3 from, to;    /* sweep */
+} iir_anim_track;
+
+struct iir_anim {
+    double fps, duration;
+    iir_anim_track light, camera;
+};
+
+#endif

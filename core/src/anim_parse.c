@@ -1,0 +1,455 @@
+/* anim_parse.c -- reading and validating animation scripts into an iir_anim, and the frame
+ * arithmetic; not evaluating tracks (anim_eval.c). The format is docs/animation-format.md. */
+#include "anim_internal.h"
+
+#include <cjson/cJSON.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define IIR_ANIM_MAX_BYTES (16u << 20)
+#define IIR_ANIM_PATH 160
+
+typedef struct iir_anim_ctx {
+    const char *src; /* prefix of messages */
+    iir_error *err;
+    double duration;
+    bool camera; /* parsing the camera track (fov_y instead of cone/smooth/intensity) */
+} iir_anim_ctx;
+
+static iir_status anim_fail(const iir_anim_ctx *c, iir_status st, const char *path, const char *fmt,
+                            ...) __attribute__((format(printf, 4, 5)));
+
+static iir_status anim_fail(const iir_anim_ctx *c, iir_status st, const char *path, const char *fmt,
+                            ...)
+{
+    char msg[384];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return iir_fail(c->err, st, "%s: %s: %s", c->src, path, msg);
+}
+
+/* out = path.name (or name at the top level). */
+static void path_join(char *out, const char *path, const char *name)
+{
+    /* a path longer than the buffer is cut short; the message stays readable */
+    if (snprintf(out, IIR_ANIM_PATH, "%s%s%s", path, *path ? "." : "", name) >= IIR_ANIM_PATH)
+        out[IIR_ANIM_PATH - 1] = '\0';
+}
+
+/* ======================== fields ======================== */
+
+static bool name_in(const char *name, const char *const *allowed)
+{
+    for (; *allowed; allowed++)
+        if (strcmp(name, *allowed) == 0) return true;
+    return false;
+}
+
+/* IIR_ERR_FORMAT naming the first member of obj not in allowed (NULL-terminated). */
+static iir_status check_fields(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                               const char *const *allowed)
+{
+    char p[IIR_ANIM_PATH];
+    if (!cJSON_IsObject(obj))
+        return anim_fail(c, IIR_ERR_FORMAT, *path ? path : "(top level)", "must be an object");
+    for (const cJSON *m = obj->child; m; m = m->next) {
+        if (name_in(m->string, allowed)) continue;
+        path_join(p, path, m->string);
+        return anim_fail(c, IIR_ERR_FORMAT, p, "unknown field");
+    }
+    return IIR_OK;
+}
+
+/* A finite number member; *present tells whether it was there. */
+static iir_status get_number(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                             const char *name, double *out, bool *present)
+{
+    char p[IIR_ANIM_PATH];
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
+    *present = m != NULL;
+    if (!m) return IIR_OK;
+    path_join(p, path, name);
+    if (!cJSON_IsNumber(m)) return anim_fail(c, IIR_ERR_FORMAT, p, "must be a number");
+    if (!isfinite(m->valuedouble) || !isfinite((float)m->valuedouble))
+        return anim_fail(c, IIR_ERR_INVALID, p, "must be a finite number");
+    *out = m->valuedouble;
+    return IIR_OK;
+}
+
+/* A number member that must lie in [lo, hi] (lo excluded when open_lo). */
+static iir_status get_ranged(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                             const char *name, double lo, bool open_lo, double hi, double *out,
+                             bool *present)
+{
+    char p[IIR_ANIM_PATH];
+    iir_status st = get_number(c, obj, path, name, out, present);
+    if (st != IIR_OK || !*present) return st;
+    if (*out < lo || (open_lo && *out == lo) || *out > hi) {
+        path_join(p, path, name);
+        return anim_fail(c, IIR_ERR_INVALID, p, "%g is outside %s%g, %g]", *out,
+                         open_lo ? "(" : "[", lo, hi);
+    }
+    return IIR_OK;
+}
+
+/* A member [x, y, z] of finite numbers. A plain number is accepted as [v, v, v] when
+ * allow_scalar. */
+static iir_status get_vec3(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                           const char *name, bool allow_scalar, iir_vec3 *out, bool *present)
+{
+    char p[IIR_ANIM_PATH];
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
+    *present = m != NULL;
+    if (!m) return IIR_OK;
+    path_join(p, path, name);
+    if (allow_scalar && cJSON_IsNumber(m)) {
+        bool dummy;
+        double v = 0.0;
+        iir_status st = get_number(c, obj, path, name, &v, &dummy);
+        *out = iir_v3s((float)v);
+        return st;
+    }
+    if (!cJSON_IsArray(m) || cJSON_GetArraySize(m) != 3)
+        return anim_fail(c, IIR_ERR_FORMAT, p, "must be an array of 3 numbers%s",
+                         allow_scalar ? " or a number" : "");
+    float v[3];
+    for (int i = 0; i < 3; i++) {
+        const cJSON *e = cJSON_GetArrayItem(m, i);
+        if (!cJSON_IsNumber(e)) return anim_fail(c, IIR_ERR_FORMAT, p, "must hold numbers");
+        v[i] = (float)e->valuedouble;
+        if (!isfinite(e->valuedouble) || !isfinite(v[i]))
+            return anim_fail(c, IIR_ERR_INVALID, p, "element %d is not a finite number", i);
+    }
+    *out = iir_v3(v[0], v[1], v[2]);
+    return IIR_OK;
+}
+
+/* ======================== keys ======================== */
+
+/* Position, aim (direction XOR target) of a key or parametric object. */
+static iir_status parse_placement(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                                  iir_anim_key *k)
+{
+    char p[IIR_ANIM_PATH];
+    bool has_p, has_d = false, has_t;
+    iir_status st = get_vec3(c, obj, path, "position", false, &k->position, &has_p);
+    if (st == IIR_OK && !c->camera)
+        st = get_vec3(c, obj, path, "direction", false, &k->direction, &has_d);
+    if (st == IIR_OK) st = get_vec3(c, obj, path, "target", false, &k->target, &has_t);
+    if (st != IIR_OK) return st;
+    k->fields |= (has_p ? IIR_AF_POSITION : 0u) | (has_d ? IIR_AF_DIRECTION : 0u) |
+                 (has_t ? IIR_AF_TARGET : 0u);
+    path_join(p, path, "direction");
+    if (has_d && has_t)
+        return anim_fail(c, IIR_ERR_INVALID, p, "give direction or target, not both");
+    if (has_d && !(iir_length(k->direction) > 1e-12f))
+        return anim_fail(c, IIR_ERR_INVALID, p, "must not be zero");
+    k->direction = iir_normalize(k->direction);
+    path_join(p, path, "target");
+    if (has_p && has_t && iir_length(iir_sub(k->target, k->position)) < 1e-6f)
+        return anim_fail(c, IIR_ERR_INVALID, p, "equals position");
+    return IIR_OK;
+}
+
+/* Light: cone_angle, smooth, intensity; camera: fov_y. */
+static iir_status parse_optics(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                               iir_anim_key *k)
+{
+    char p[IIR_ANIM_PATH];
+    bool has;
+    double v = 0.0;
+    if (c->camera) {
+        iir_status st = get_ranged(c, obj, path, "fov_y", 0.0, true, 179.999, &v, &has);
+        k->fov = (float)v;
+        k->fields |= has ? IIR_AF_FOV : 0u;
+        return st;
+    }
+    iir_status st = get_ranged(c, obj, path, "cone_angle", 0.0, true, 90.0, &v, &has);
+    k->cone = (float)v;
+    k->fields |= has ? IIR_AF_CONE : 0u;
+    if (st == IIR_OK) st = get_ranged(c, obj, path, "smooth", 0.0, false, 90.0, &v, &has);
+    k->smooth = (float)v;
+    k->fields |= has ? IIR_AF_SMOOTH : 0u;
+    path_join(p, path, "smooth");
+    if (st == IIR_OK && (k->fields & IIR_AF_CONE) && has && k->smooth > k->cone)
+        return anim_fail(c, IIR_ERR_INVALID, p, "%g is wider than cone_angle %g", k->smooth,
+                         k->cone);
+    if (st == IIR_OK) st = get_vec3(c, obj, path, "intensity", true, &k->intensity, &has);
+    k->fields |= has ? IIR_AF_INTENSITY : 0u;
+    path_join(p, path, "intensity");
+    if (st == IIR_OK && has && fminf(k->intensity.x, fminf(k->intensity.y, k->intensity.z)) < 0.f)
+        return anim_fail(c, IIR_ERR_INVALID, p, "must not be negative");
+    return st;
+}
+
+static const char *const LIGHT_KEY_FIELDS[] = {
+    "t", "step", "position", "direction", "target", "cone_angle", "smooth", "intensity", NULL};
+static const char *const CAMERA_KEY_FIELDS[] = {"t", "step", "position", "target", "fov_y", NULL};
+
+/* One keyframe; prev_t is the previous key's time (-inf for the first). */
+static iir_status parse_key(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                            double prev_t, iir_anim_key *k)
+{
+    char p[IIR_ANIM_PATH];
+    bool has;
+    iir_status st = check_fields(c, obj, path, c->camera ? CAMERA_KEY_FIELDS : LIGHT_KEY_FIELDS);
+    if (st == IIR_OK) st = get_ranged(c, obj, path, "t", 0.0, false, c->duration, &k->t, &has);
+    if (st != IIR_OK) return st;
+    path_join(p, path, "t");
+    if (!has) return anim_fail(c, IIR_ERR_FORMAT, p, "is missing");
+    if (!(k->t > prev_t))
+        return anim_fail(c, IIR_ERR_INVALID, p, "%g is not after the previous key's %g", k->t,
+                         prev_t);
+    const cJSON *step = cJSON_GetObjectItemCaseSensitive(obj, "step");
+    path_join(p, path, "step");
+    if (step && !cJSON_IsBool(step)) return anim_fail(c, IIR_ERR_FORMAT, p, "must be true/false");
+    k->step = cJSON_IsTrue(step);
+    st = parse_placement(c, obj, path, k);
+    return st == IIR_OK ? parse_optics(c, obj, path, k) : st;
+}
+
+static iir_status parse_interp(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                               iir_anim_interp *out)
+{
+    char p[IIR_ANIM_PATH];
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, "interpolation");
+    *out = IIR_ANIM_LINEAR;
+    if (!m) return IIR_OK;
+    path_join(p, path, "interpolation");
+    const char *s = cJSON_GetStringValue(m);
+    if (!s) return anim_fail(c, IIR_ERR_FORMAT, p, "must be a string");
+    if (strcmp(s, "linear") == 0) return IIR_OK;
+    *out = strcmp(s, "catmull-rom") == 0 ? IIR_ANIM_CATMULL_ROM : IIR_ANIM_STEP;
+    if (*out == IIR_ANIM_STEP && strcmp(s, "step") != 0)
+        return anim_fail(c, IIR_ERR_INVALID, p,
+                         "'%s' is not one of \"linear\", \"catmull-rom\", \"step\"", s);
+    return IIR_OK;
+}
+
+static iir_status parse_keys(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                             iir_anim_track *tr)
+{
+    char p[IIR_ANIM_PATH], kp[IIR_ANIM_PATH];
+    const cJSON *keys = cJSON_GetObjectItemCaseSensitive(obj, "keys");
+    path_join(p, path, "keys");
+    if (!cJSON_IsArray(keys) || cJSON_GetArraySize(keys) < 1)
+        return anim_fail(c, IIR_ERR_FORMAT, p, "must be a non-empty array of keys");
+    iir_status st = parse_interp(c, obj, path, &tr->interp);
+    if (st != IIR_OK) return st;
+    tr->path = IIR_ANIM_KEYS;
+    tr->num_keys = cJSON_GetArraySize(keys);
+    tr->keys = calloc((size_t)tr->num_keys, sizeof *tr->keys);
+    if (!tr->keys) return anim_fail(c, IIR_ERR_NOMEM, p, "out of memory");
+    double prev_t = -INFINITY;
+    for (int i = 0; i < tr->num_keys && st == IIR_OK; i++) {
+        if (snprintf(kp, sizeof kp, "%s[%d]", p, i) >= (int)sizeof kp) kp[sizeof kp - 1] = '\0';
+        st = parse_key(c, cJSON_GetArrayItem(keys, i), kp, prev_t, &tr->keys[i]);
+        prev_t = tr->keys[i].t;
+    }
+    return st;
+}
+
+/* ======================== parametric paths ======================== */
+
+static const char *const LIGHT_ORBIT_FIELDS[] = {"center",    "radius", "turns",      "phase",
+                                                 "direction", "target", "cone_angle", "smooth",
+                                                 "intensity", NULL};
+static const char *const CAMERA_ORBIT_FIELDS[] = {"center", "radius", "turns", "phase",
+                                                  "target", "fov_y",  NULL};
+static const char *const LIGHT_SWEEP_FIELDS[] = {"from",       "to",     "direction", "target",
+                                                 "cone_angle", "smooth", "intensity", NULL};
+static const char *const CAMERA_SWEEP_FIELDS[] = {"from", "to", "target", "fov_y", NULL};
+
+/* A required vec3 member. */
+static iir_status need_vec3(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                            const char *name, iir_vec3 *out)
+{
+    char p[IIR_ANIM_PATH];
+    bool has;
+    iir_status st = get_vec3(c, obj, path, name, false, out, &has);
+    path_join(p, path, name);
+    if (st == IIR_OK && !has) return anim_fail(c, IIR_ERR_FORMAT, p, "is missing");
+    return st;
+}
+
+static iir_status parse_orbit(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                              iir_anim_track *tr)
+{
+    char p[IIR_ANIM_PATH];
+    bool has;
+    double phase = 0.0;
+    tr->path = IIR_ANIM_ORBIT;
+    tr->turns = 1.0;
+    iir_status st = need_vec3(c, obj, path, "center", &tr->center);
+    if (st == IIR_OK) st = get_ranged(c, obj, path, "radius", 0.0, true, 1e6, &tr->radius, &has);
+    path_join(p, path, "radius");
+    if (st == IIR_OK && !has) return anim_fail(c, IIR_ERR_FORMAT, p, "is missing");
+    if (st == IIR_OK) st = get_ranged(c, obj, path, "turns", -1e4, false, 1e4, &tr->turns, &has);
+    if (st == IIR_OK) st = get_ranged(c, obj, path, "phase", -360, false, 360, &phase, &has);
+    tr->phase = phase * (3.14159265358979323846 / 180.0);
+    return st;
+}
+
+static iir_status parse_sweep(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                              iir_anim_track *tr)
+{
+    tr->path = IIR_ANIM_SWEEP;
+    iir_status st = need_vec3(c, obj, path, "from", &tr->from);
+    return st == IIR_OK ? need_vec3(c, obj, path, "to", &tr->to) : st;
+}
+
+/* "orbit": {...} or "sweep": {...}: the position from the parameters, the rest in one key. */
+static iir_status parse_parametric(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                                   bool orbit, iir_anim_track *tr)
+{
+    const char *const *allowed = orbit ? (c->camera ? CAMERA_ORBIT_FIELDS : LIGHT_ORBIT_FIELDS)
+                                       : (c->camera ? CAMERA_SWEEP_FIELDS : LIGHT_SWEEP_FIELDS);
+    iir_status st = check_fields(c, obj, path, allowed);
+    if (st != IIR_OK) return st;
+    tr->interp = IIR_ANIM_LINEAR;
+    tr->num_keys = 1;
+    tr->keys = calloc(1, sizeof *tr->keys);
+    if (!tr->keys) return anim_fail(c, IIR_ERR_NOMEM, path, "out of memory");
+    st = orbit ? parse_orbit(c, obj, path, tr) : parse_sweep(c, obj, path, tr);
+    if (st == IIR_OK) st = parse_placement(c, obj, path, &tr->keys[0]);
+    return st == IIR_OK ? parse_optics(c, obj, path, &tr->keys[0]) : st;
+}
+
+static const char *const TRACK_FIELDS[] = {"interpolation", "keys", "orbit", "sweep", NULL};
+
+static iir_status parse_track(iir_anim_ctx *c, const cJSON *obj, const char *name,
+                              iir_anim_track *tr)
+{
+    char p[IIR_ANIM_PATH];
+    if (!obj) return IIR_OK;
+    c->camera = strcmp(name, "camera") == 0;
+    tr->present = true;
+    iir_status st = check_fields(c, obj, name, TRACK_FIELDS);
+    if (st != IIR_OK) return st;
+    const cJSON *keys = cJSON_GetObjectItemCaseSensitive(obj, "keys");
+    const cJSON *orbit = cJSON_GetObjectItemCaseSensitive(obj, "orbit");
+    const cJSON *sweep = cJSON_GetObjectItemCaseSensitive(obj, "sweep");
+    if ((keys != NULL) + (orbit != NULL) + (sweep != NULL) != 1)
+        return anim_fail(c, IIR_ERR_FORMAT, name, "needs exactly one of keys, orbit, sweep");
+    if (keys) return parse_keys(c, obj, name, tr);
+    path_join(p, name, "interpolation");
+    if (cJSON_GetObjectItemCaseSensitive(obj, "interpolation"))
+        return anim_fail(c, IIR_ERR_FORMAT, p, "only applies to keys");
+    path_join(p, name, orbit ? "orbit" : "sweep");
+    return parse_parametric(c, orbit ? orbit : sweep, p, orbit != NULL, tr);
+}
+
+/* ======================== the script ======================== */
+
+static const char *const TOP_FIELDS[] = {"fps", "duration", "light", "camera", "description", NULL};
+
+static iir_status parse_root(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
+{
+    bool has;
+    iir_status st = check_fields(c, root, "", TOP_FIELDS);
+    const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
+    if (st == IIR_OK && desc && !cJSON_IsString(desc))
+        return anim_fail(c, IIR_ERR_FORMAT, "description", "must be a string");
+    a->fps = 30.0;
+    if (st == IIR_OK) st = get_ranged(c, root, "", "fps", 1.0, false, 1000.0, &a->fps, &has);
+    if (st == IIR_OK)
+        st = get_ranged(c, root, "", "duration", 0.0, true, 36000.0, &a->duration, &has);
+    if (st == IIR_OK && !has) return anim_fail(c, IIR_ERR_FORMAT, "duration", "is missing");
+    c->duration = a->duration;
+    if (st == IIR_OK)
+        st = parse_track(c, cJSON_GetObjectItemCaseSensitive(root, "light"), "light", &a->light);
+    if (st == IIR_OK)
+        st = parse_track(c, cJSON_GetObjectItemCaseSensitive(root, "camera"), "camera", &a->camera);
+    return st;
+}
+
+iir_status iir_anim_parse(const char *json_text, const char *source_name, iir_anim **out,
+                          iir_error *err)
+{
+    iir_anim_ctx c = {source_name ? source_name : "animation", err, 0.0, false};
+    *out = NULL;
+    const char *end = NULL;
+    cJSON *root = json_text ? cJSON_ParseWithOpts(json_text, &end, true) : NULL;
+    if (!root) {
+        long at = json_text && end ? (long)(end - json_text) : 0;
+        return iir_fail(err, IIR_ERR_FORMAT, "%s: not valid JSON near byte %ld", c.src, at);
+    }
+    iir_anim *a = calloc(1, sizeof *a);
+    iir_status st = a ? parse_root(&c, root, a) : iir_fail(err, IIR_ERR_NOMEM, "out of memory");
+    cJSON_Delete(root);
+    if (st != IIR_OK) {
+        iir_anim_destroy(a);
+        return st;
+    }
+    *out = a;
+    return IIR_OK;
+}
+
+iir_status iir_anim_load(const char *path, iir_anim **out, iir_error *err)
+{
+    *out = NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) return iir_fail(err, IIR_ERR_IO, "cannot read %s: %s", path, strerror(errno));
+    char *buf = malloc(IIR_ANIM_MAX_BYTES + 1);
+    size_t n = buf ? fread(buf, 1, IIR_ANIM_MAX_BYTES + 1, f) : 0;
+    bool failed = buf && ferror(f);
+    fclose(f);
+    if (!buf) return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", path);
+    if (failed || n > IIR_ANIM_MAX_BYTES) {
+        free(buf);
+        return iir_fail(err, IIR_ERR_IO, "cannot read %s: %s", path,
+                        failed ? "read error" : "larger than 16 MiB");
+    }
+    buf[n] = '\0';
+    iir_status st = iir_anim_parse(buf, path, out, err);
+    free(buf);
+    return st;
+}
+
+void iir_anim_destroy(iir_anim *a)
+{
+    if (!a) return;
+    free(a->light.keys);
+    free(a->camera.keys);
+    free(a);
+}
+
+/* ======================== frames ======================== */
+
+double iir_anim_duration(const iir_anim *a)
+{
+    return a->duration;
+}
+double iir_anim_fps(const iir_anim *a)
+{
+    return a->fps;
+}
+
+int iir_anim_frame_count(const iir_anim *a)
+{
+    /* the epsilon keeps 2 s at 30 fps at 61 frames despite rounding in duration * fps */
+    return (int)floor(a->duration * a->fps + 1e-9) + 1;
+}
+
+double iir_anim_frame_time(const iir_anim *a, int frame)
+{
+    int last = iir_anim_frame_count(a) - 1;
+    frame = frame < 0 ? 0 : (frame > last ? last : frame);
+    return fmin((double)frame / a->fps, a->duration);
+}
+
+bool iir_anim_has_light(const iir_anim *a)
+{
+    return a->light.present;
+}
+bool iir_anim_has_camera(const iir_anim *a)
+{
+    return a->camera.present;
+}
