@@ -45,20 +45,36 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     if (st == IIR_OK)
         st = iird_load_scene(o->scene, iird_scenes_dir(o->scenes_dir), &b->scene, &b->rt, err);
     if (st == IIR_OK) st = find_spot(b, err);
+    if (st == IIR_OK && o->anim_path) st = iir_anim_load(o->anim_path, &b->anim, err);
     if (st != IIR_OK) return st;
+    b->frames = o->frames;
+    if (b->anim) {
+        int n = iir_anim_frame_count(b->anim);
+        b->frames = o->frames_given && o->frames < n ? o->frames : n;
+        if (b->frames < 2)
+            return iir_fail(err, IIR_ERR_INVALID, "%s: %d frame(s); bench needs at least 2",
+                            o->anim_path, b->frames);
+    }
     b->lights = malloc(sizeof(iir_light) * b->scene->num_lights);
-    b->refs = calloc((size_t)o->frames, sizeof(iir_image *));
-    b->rows = calloc((size_t)o->frames * (size_t)b->num_methods, sizeof(iird_bench_row));
+    b->refs = calloc((size_t)b->frames, sizeof(iir_image *));
+    b->rows = calloc((size_t)b->frames * (size_t)b->num_methods, sizeof(iird_bench_row));
     if (!b->lights || !b->refs || !b->rows) return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
     return IIR_OK;
 }
 
+/* The lights and camera of frame f: from the script, or the built-in orbit. */
 static iir_view view_at(iird_bench *b, int f)
 {
+    const iir_light *base = &b->scene->lights[b->spot];
     memcpy(b->lights, b->scene->lights, sizeof(iir_light) * b->scene->num_lights);
-    b->lights[b->spot] =
-        iird_orbit_light(b->scene, b->rt, &b->scene->lights[b->spot], f, b->o->frames);
     iir_view v = {b->lights, b->scene->num_lights, b->scene->camera};
+    if (b->anim) {
+        double t = iir_anim_frame_time(b->anim, f);
+        b->lights[b->spot] = iir_anim_light(b->anim, base, t);
+        v.camera = iir_anim_camera(b->anim, &b->scene->camera, t);
+    } else {
+        b->lights[b->spot] = iird_orbit_light(b->scene, b->rt, base, f, b->frames);
+    }
     return v;
 }
 
@@ -89,10 +105,10 @@ iir_status iird_bench_references(iird_bench *b, iir_error *err)
     iir_method *pt = NULL;
     iir_status st = iir_method_create("pt", b->scene, b->rt, &p, &pt, err);
     int total = 0, done = 0;
-    for (int f = 0; f < b->o->frames; f++) total += is_ref_frame(b, f);
+    for (int f = 0; f < b->frames; f++) total += is_ref_frame(b, f);
     iird_progress bar;
     iird_progress_start(&bar, "references", total);
-    for (int f = 0; st == IIR_OK && f < b->o->frames; f++) {
+    for (int f = 0; st == IIR_OK && f < b->frames; f++) {
         if (!is_ref_frame(b, f)) continue;
         if (iird_interrupted()) st = iir_fail(err, IIR_ERR_INTERRUPTED, "interrupted");
         b->refs[f] = iir_image_create(b->o->width, b->o->height);
@@ -131,9 +147,9 @@ iir_status iird_bench_method(iird_bench *b, int m, iir_error *err)
     char label[64];
     snprintf(label, sizeof label, "%-10s", b->names[m]);
     iird_progress bar;
-    iird_progress_start(&bar, label, b->o->frames);
-    for (int f = 0; st == IIR_OK && f < b->o->frames; f++) {
-        iird_bench_row *row = &b->rows[(size_t)m * b->o->frames + f];
+    iird_progress_start(&bar, label, b->frames);
+    for (int f = 0; st == IIR_OK && f < b->frames; f++) {
+        iird_bench_row *row = &b->rows[(size_t)m * b->frames + f];
         iir_view v = view_at(b, f);
         st = iir_method_render(method, &v, img, &row->stats, err);
         if (st == IIR_OK) score(b, f, img, f > 0 ? prev : NULL, row);
@@ -194,8 +210,8 @@ iir_status iird_bench_write_csv(const iird_bench *b, iir_error *err)
     setting_of(&b->o->params, setting, sizeof setting);
     csv_header(f);
     for (int m = 0; m < b->num_methods; m++)
-        for (int fr = 0; fr < b->o->frames; fr++)
-            csv_row(f, b->names[m], setting, fr, &b->rows[(size_t)m * b->o->frames + fr]);
+        for (int fr = 0; fr < b->frames; fr++)
+            csv_row(f, b->names[m], setting, fr, &b->rows[(size_t)m * b->frames + fr]);
     if (fclose(f) != 0) return iir_fail(err, IIR_ERR_IO, "cannot write %s", path);
     return IIR_OK;
 }
@@ -215,14 +231,14 @@ static method_summary summarise(const iird_bench *b, int m)
 {
     method_summary s = {0};
     double rmse = 0, rel = 0, fl = 0;
-    int n_err = 0, n_fl = 0, n = b->o->frames - 1;
-    for (int f = 1; f < b->o->frames; f++) {
-        const iird_bench_row *r = &b->rows[(size_t)m * b->o->frames + f];
+    int n_err = 0, n_fl = 0, n = b->frames - 1;
+    for (int f = 1; f < b->frames; f++) {
+        const iird_bench_row *r = &b->rows[(size_t)m * b->frames + f];
         s.ms += r->stats.total_ms / n;
         for (int p = 0; p < IIR_PHASE_COUNT; p++) s.phase[p] += r->stats.phase_ms[p] / n;
     }
-    for (int f = 0; f < b->o->frames; f++) {
-        const iird_bench_row *r = &b->rows[(size_t)m * b->o->frames + f];
+    for (int f = 0; f < b->frames; f++) {
+        const iird_bench_row *r = &b->rows[(size_t)m * b->frames + f];
         if (!isnan(r->relmse)) rmse += r->rmse, rel += r->relmse, n_err++;
         if (!isnan(r->flicker)) fl += r->flicker, n_fl++;
     }
@@ -243,9 +259,10 @@ static int method_index(const iird_bench *b, const char *name)
 void iird_bench_summary(const iird_bench *b, FILE *f)
 {
     method_summary s[IIRD_BENCH_MAX_METHODS];
-    fprintf(f, "scene %s, %dx%d, %d frames (timing over frames 1..%d), references %d spp\n",
-            b->scene->name, b->o->width, b->o->height, b->o->frames, b->o->frames - 1,
-            b->o->ref_spp);
+    fprintf(f,
+            "scene %s, path %s, %dx%d, %d frames (timing over frames 1..%d), references %d spp\n",
+            b->scene->name, b->o->anim_path ? b->o->anim_path : "built-in orbit", b->o->width,
+            b->o->height, b->frames, b->frames - 1, b->o->ref_spp);
     fprintf(f, "%-8s %9s %7s %9s %9s %9s", "method", "ms/frame", "fps", "rmse", "relmse",
             "flicker");
     for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, " %10s", iir_phase_name((iir_phase)p));
@@ -266,10 +283,11 @@ void iird_bench_summary(const iird_bench *b, FILE *f)
 
 void iird_bench_free(iird_bench *b)
 {
-    for (int f = 0; b->refs && f < b->o->frames; f++) iir_image_destroy(b->refs[f]);
+    for (int f = 0; b->refs && f < b->frames; f++) iir_image_destroy(b->refs[f]);
     free(b->refs);
     free(b->rows);
     free(b->lights);
+    iir_anim_destroy(b->anim);
     iir_rt_destroy(b->rt);
     iir_scene_destroy(b->scene);
 }

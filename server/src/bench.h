@@ -6,6 +6,7 @@
 #include <stdbool.h>
 #include <stdio.h>
 
+#include "iir/anim.h"
 #include "iir/image.h"
 #include "iir/method.h"
 #include "iir/rt.h"
@@ -15,9 +16,11 @@ enum { IIRD_BENCH_MAX_METHODS = 8 };
 
 typedef struct iird_bench_opts {
     const char *scene, *scenes_dir, *methods, *out_dir;
+    const char *anim_path; /* animation script driving light and camera; NULL = built-in orbit */
     int frames, width, height, ref_spp, ref_every;
-    bool save_images; /* write reference-frame images (PFM) into out_dir */
-    bool ref_aa;      /* box-filtered references instead of pixel-centred ones */
+    bool frames_given; /* --frames was given: with a script, at most that many frames */
+    bool save_images;  /* write reference-frame images (PFM) into out_dir */
+    bool ref_aa;       /* box-filtered references instead of pixel-centred ones */
     iir_params params;
 } iird_bench_opts;
 
@@ -30,7 +33,9 @@ typedef struct iird_bench {
     const iird_bench_opts *o;
     iir_scene *scene;
     iir_rt *rt;
-    uint32_t spot; /* index of the scene light that moves */
+    uint32_t spot;  /* index of the scene light that moves */
+    iir_anim *anim; /* NULL: the built-in orbit */
+    int frames;     /* frames in this run */
     iir_light *lights;
     char names[IIRD_BENCH_MAX_METHODS][16];
     int num_methods;

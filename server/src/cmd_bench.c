@@ -19,11 +19,14 @@ static void bench_usage(FILE *f)
     fprintf(f,
             "usage: iird bench [SCENE] [options]\n"
             "\n"
-            "Runs each method over a smooth orbit of the scene's spot light and compares it with\n"
-            "path-traced references: frame times per phase, rays, VPL churn, error and flicker.\n"
+            "Runs each method over a light path -- an animation script, or a smooth orbit of the\n"
+            "scene's spot light -- and compares it with path-traced references: frame times per\n"
+            "phase, rays, VPL churn, error and flicker.\n"
             "\n"
+            "  --anim PATH          animation script (docs/animation-format.md) moving the spot\n"
+            "                       and camera; frames from the script\n"
             "  --methods LIST       comma-separated methods (default iir,ir)\n"
-            "  --frames N           frames on the orbit (default 200)\n"
+            "  --frames N           frames on the orbit (default 200); with --anim, at most N\n"
             "  --size WxH           image size (default 512x384)\n"
             "  --ref-spp N          reference samples per pixel (default 256; 0 = no references)\n"
             "  --ref-every K        references at frames 0, 1, K, K+1, ... (default 50)\n"
@@ -46,7 +49,8 @@ enum {
     OPT_OUT,
     OPT_SCENES,
     OPT_SAVE,
-    OPT_REF_AA
+    OPT_REF_AA,
+    OPT_ANIM
 };
 
 static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err)
@@ -70,12 +74,15 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
     case OPT_REF_AA:
         o->ref_aa = true;
         break;
+    case OPT_ANIM:
+        o->anim_path = arg;
+        break;
     case OPT_SIZE:
         st = iird_parse_size(arg, 4096, &o->width, &o->height, err);
         break;
     case OPT_FRAMES:
         if ((st = iird_parse_int(arg, "--frames", 2, 100000, &v, err)) == IIR_OK)
-            o->frames = (int)v;
+            o->frames = (int)v, o->frames_given = true;
         break;
     case OPT_REF_SPP:
         if ((st = iird_parse_int(arg, "--ref-spp", 0, 1 << 20, &v, err)) == IIR_OK)
@@ -100,6 +107,7 @@ static int parse_args(int argc, char **argv, iird_bench_opts *o)
                                              {"scenes", required_argument, 0, OPT_SCENES},
                                              {"save-images", no_argument, 0, OPT_SAVE},
                                              {"ref-aa", no_argument, 0, OPT_REF_AA},
+                                             {"anim", required_argument, 0, OPT_ANIM},
                                              {"help", no_argument, 0, 'h'},
                                              IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};

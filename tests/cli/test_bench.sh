@@ -49,6 +49,15 @@ for f in ref_00000 ref_00003 iir_00001 ir_00002; do
     [ -s "$tmp/$f.pfm" ] || fail "missing $f.pfm"
 done
 
+# A script drives the light: its frame count, cut by --frames; the summary names the path.
+src=$2
+out=$("$iird" bench --anim "$src/scenes/cornell_box/paths/teleport.json" --frames 3 --ref-spp 0 \
+    --size 16x12 --vpls 32 2>&1) || fail "bench --anim: $out"
+echo "$out" | grep -q "path .*teleport.json, 16x12, 3 frames" || fail "bench --anim summary: $out"
+printf '{"fps": 30, "duration": 1, "light": {"keys": [{"t": 0, "postion": [0, 1, 0]}]}}' > "$tmp/bad.json"
+out=$("$iird" bench --anim "$tmp/bad.json" --ref-spp 0 --size 8x8 2>&1)
+[ $? = 2 ] && echo "$out" | grep -q "postion" || fail "bad script not refused by field: $out"
+
 out=$("$iird" bench --methods iir,nope --frames 2 --ref-spp 0 --size 8x8 2>&1)
 [ $? = 2 ] && echo "$out" | grep -q "unknown method 'nope'" || fail "unknown method: $out"
 out=$("$iird" bench --frames 1 2>&1)
