@@ -27,12 +27,9 @@ typedef struct loaded {
 
 static loaded load(const char *dir, const char *name)
 {
-    char path[1200];
-    snprintf(path, sizeof path, "%s/%s.obj", dir, name);
     loaded l = {0};
     iir_error err = {0};
-    if (iir_scene_load(path, &l.scene, &err) != IIR_OK) fail_msg("load %s: %s", path, err.msg);
-    if (iir_rt_create(l.scene, &l.rt, &err) != IIR_OK) fail_msg("rt: %s", err.msg);
+    if (iir_test_load_obj(dir, name, &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
     return l;
 }
 

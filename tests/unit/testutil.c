@@ -38,6 +38,21 @@ void iir_test_write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_v
     fprintf(f, "f -4 -3 -2 -1\n");
 }
 
+iir_status iir_test_load_obj(const char *dir, const char *name, iir_scene **scene, iir_rt **rt,
+                             iir_error *err)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s.obj", dir, name);
+    *rt = NULL;
+    iir_status st = iir_scene_load(path, scene, err);
+    if (st == IIR_OK) st = iir_rt_create(*scene, rt, err);
+    if (st != IIR_OK) {
+        iir_scene_destroy(*scene);
+        *scene = NULL;
+    }
+    return st;
+}
+
 int iir_test_cornell_setup(void **state)
 {
     static iir_test_cornell f;

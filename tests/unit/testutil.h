@@ -20,6 +20,11 @@ const char *iir_test_write_file(const char *dir, const char *name, const char *t
 /* Writes an OBJ quad centred at c spanned by +-a, +-b (normal cross(a, b)) with material mtl. */
 void iir_test_write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b);
 
+/* Loads dir/name.obj (with its sidecar, if any) and builds its ray tracer; on error both stay NULL
+ * and err says why. */
+iir_status iir_test_load_obj(const char *dir, const char *name, iir_scene **scene, iir_rt **rt,
+                             iir_error *err);
+
 /* cmocka group fixture: *state becomes an iir_test_cornell with the built-in box and its rays. */
 typedef struct iir_test_cornell {
     iir_scene *scene;
