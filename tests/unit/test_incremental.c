@@ -15,6 +15,7 @@
 #include <cmocka.h>
 
 #include "iir/incremental.h"
+#include "iir/rng.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
 #include "iir/tri.h"
@@ -45,12 +46,12 @@ static int teardown(void **state)
     return 0;
 }
 
+/* splitmix64 over a counter: iir_mix64 adds the increment itself. */
 static uint64_t next_u64(uint64_t *s)
 {
-    uint64_t z = (*s += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
+    uint64_t z = *s;
+    *s += 0x9e3779b97f4a7c15ull;
+    return iir_mix64(z);
 }
 
 static double urand(uint64_t *s)

@@ -29,6 +29,8 @@ typedef struct ir_state {
     iir_vpl *vpls;
     uint32_t num_vpls, cap;
     uint32_t frame, next_id, escaped;
+    float *light_pmf; /* per view light, rebuilt each frame; grows with the light count */
+    uint32_t pmf_cap;
 } ir_state;
 
 /* ---- light paths ---- */
@@ -46,22 +48,30 @@ static bool push_vpl(ir_state *ir, const iir_vpl *v)
     return true;
 }
 
-/* Chooses a light in proportion to its flux; returns its index and pmf. */
-static uint32_t pick_light(const iir_view *view, float u, float *pmf)
+/* Each light's share of the total flux (luminance), computed once per frame: a smooth-edged
+ * spot's flux is a numeric integral. pmf[i] = 0 for all lights when none emits. */
+static void light_pmf(const iir_view *view, float *pmf)
 {
     float total = 0.f;
-    for (uint32_t i = 0; i < view->num_lights; i++)
-        total += iir_luminance(iir_light_flux(&view->lights[i]));
-    float acc = 0.f;
     for (uint32_t i = 0; i < view->num_lights; i++) {
-        float w = iir_luminance(iir_light_flux(&view->lights[i]));
-        acc += w;
-        if (u * total < acc || i + 1 == view->num_lights) {
-            *pmf = total > 0.f ? w / total : 0.f;
+        pmf[i] = iir_luminance(iir_light_flux(&view->lights[i]));
+        total += pmf[i];
+    }
+    for (uint32_t i = 0; i < view->num_lights; i++) pmf[i] = total > 0.f ? pmf[i] / total : 0.f;
+}
+
+/* Chooses a light with probability pmf[i]; returns its index and pmf. */
+static uint32_t pick_light(const float *pmf, uint32_t n, float u, float *p)
+{
+    float acc = 0.f;
+    for (uint32_t i = 0; i < n; i++) {
+        acc += pmf[i];
+        if (u < acc || i + 1 == n) {
+            *p = pmf[i];
             return i;
         }
     }
-    *pmf = 0.f;
+    *p = 0.f;
     return 0;
 }
 
@@ -109,6 +119,13 @@ static iir_status generate_vpls(ir_state *ir, const iir_view *view, iir_raystats
     ir->num_vpls = 0;
     ir->escaped = 0;
     if (view->num_lights == 0) return IIR_OK;
+    if (view->num_lights > ir->pmf_cap) {
+        float *grown = realloc(ir->light_pmf, sizeof(float) * view->num_lights);
+        if (!grown) return iir_fail(err, IIR_ERR_NOMEM, "ir: out of memory for the lights");
+        ir->light_pmf = grown;
+        ir->pmf_cap = view->num_lights;
+    }
+    light_pmf(view, ir->light_pmf);
     uint64_t frame_seed = ir->params.ir_fresh ? iir_hash3(ir->params.seed, ir->frame, 0x1f)
                                               : iir_hash3(ir->params.seed, 0, 0x1f);
     iir_rng shift_rng = iir_rng_make(frame_seed, UINT64_MAX);
@@ -117,7 +134,8 @@ static iir_status generate_vpls(ir_state *ir, const iir_view *view, iir_raystats
     for (uint32_t i = 0; i < n; i++) {
         iir_rng rng = iir_rng_make(frame_seed, i);
         float pmf;
-        const iir_light *light = &view->lights[pick_light(view, iir_rng_uniform(&rng), &pmf)];
+        uint32_t k = pick_light(ir->light_pmf, view->num_lights, iir_rng_uniform(&rng), &pmf);
+        const iir_light *light = &view->lights[k];
         if (pmf <= 0.f) continue;
         uint32_t before = ir->num_vpls;
         if (!trace_path(ir, light, iir_v3s(1.f / ((float)n * pmf)), halton2(i, shift), &rng, st))
@@ -152,6 +170,7 @@ static void ir_destroy(void *state)
     if (!ir) return;
     for (uint32_t i = 0; i < ir->num_vpls; i++) iir_smap_release(&ir->vpls[i].smap);
     free(ir->vpls);
+    free(ir->light_pmf);
     iir_renderer_destroy(ir->renderer);
     free(ir);
 }
