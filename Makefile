@@ -1,6 +1,6 @@
 # Makefile -- thin wrapper over CMake. `make run` and `make test` do all set-up on a fresh Debian 12:
 # they install missing packages (apt-get; sudo only when not root), configure, build, then run.
-.PHONY: all deps build run test bench format format-check clean
+.PHONY: all deps web-deps build run still test bench format format-check clean
 
 BUILD      ?= build
 TEST_BUILD ?= build-asan
@@ -12,12 +12,16 @@ PACKAGES := build-essential cmake pkg-config git clang-format \
             libembree-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev \
             libwebsockets-dev libssl-dev libcap-dev zlib1g-dev \
             libassimp-dev libcjson-dev libturbojpeg0-dev libopenexr-dev libpng-dev \
-            libcmocka-dev ffmpeg python3 python3-matplotlib
+            libcmocka-dev ffmpeg python3 python3-matplotlib python3-websockets python3-pil chromium
+# Node.js and npm only where no node/npm is on the PATH: a machine may have its own, and Debian's npm
+# installed over another npm can break it.
+NODE_PACKAGES := $(shell command -v node >/dev/null || echo nodejs) \
+                 $(shell command -v npm >/dev/null || echo npm)
 
 all: build
 
 deps:
-	@missing=$$(for p in $(PACKAGES); do \
+	@missing=$$(for p in $(PACKAGES) $(NODE_PACKAGES); do \
 	    dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'install ok installed' || echo $$p; done); \
 	if [ -n "$$missing" ]; then \
 	    echo "Installing: $$missing"; \
@@ -25,32 +29,60 @@ deps:
 	    DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
 	fi
 
-build: deps
+# The web client's npm packages (package-lock.json: uPlot, and playwright-core for the browser
+# test): `npm ci` when node_modules is missing or older than the lock file, then uPlot into
+# web/vendor/ (not in git), where iird's mount of web/ serves it.
+web-deps: deps
+	@if [ ! -d node_modules ] || [ package-lock.json -nt node_modules ]; then \
+	    npm ci --no-audit --no-fund && touch node_modules; fi
+	@mkdir -p web/vendor/uplot
+	cp node_modules/uplot/dist/uPlot.esm.js node_modules/uplot/dist/uPlot.min.css web/vendor/uplot/
+
+build: deps web-deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DIIR_WERROR=ON >/dev/null
 	cmake --build $(BUILD) -j $(JOBS)
 
-# The main job on the built-in Cornell box.
+# The main job: the daemon on the built-in Cornell box; it prints the URL to open. Ctrl-C stops it.
 run: build
+	$(BUILD)/iird serve
+
+# One path-traced still of the built-in Cornell box.
+still: build
 	mkdir -p out
 	$(BUILD)/iird render --method pt --spp 256 --bounces 2 --size 512x512 --out out/cornell.png
 	@echo "Wrote out/cornell.png (open it in an image viewer)."
 
 # Sanitizer build (ASan + UBSan) and the whole suite through ctest, plus the format check.
-test: deps format-check
+test: deps web-deps format-check
 	cmake -S . -B $(TEST_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIIR_WERROR=ON \
 	    -DIIR_SANITIZE=address,undefined >/dev/null
 	cmake --build $(TEST_BUILD) -j $(JOBS)
 	cd $(TEST_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	    ctest --output-on-failure -j $(JOBS)
 
-# Benchmarks (not tests): ray rates, then the methods over a 200-frame orbit with references.
-# About 6 minutes on 2 cores. Results in out/bench/.
+# Benchmarks (not tests; docs/experiments.md reads them): ray rates, then `iird bench` over the
+# standard set -- the Cornell box orbit with a VPL sweep for iir and ir and pt at 1/4/16 spp (the
+# time-against-error chart), its stress paths, and the conference room's orbit -- each with
+# references (cached in $(REFCACHE): a second run skips them), frames.csv, summary.json and charts
+# in out/bench/<scene>-<path>/. About 15 minutes on 2 quiet cores with an empty cache.
+REFCACHE ?= out/refcache
+BENCH     = $(BUILD)/iird bench --ref-cache $(REFCACHE)
+STRESS    = sweep-fast corner grazing void
 bench: build
-	mkdir -p out/bench/cornell out/bench/conference
+	mkdir -p out/bench/cornell-orbit out/bench/conference-orbit \
+	    $(foreach p,teleport occluder $(STRESS),out/bench/cornell-$(p))
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
-	$(BUILD)/iird bench --frames 200 --ref-every 50 --ref-spp 256 --out out/bench/cornell
-	$(BUILD)/iird bench conference --frames 100 --ref-spp 0 --out out/bench/conference
+	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods iir,ir,pt \
+	    --sweep vpls=64,256,1024 --sweep spp=1,4,16 --ref-spp 1024 --ref-every 25 \
+	    --out out/bench/cornell-orbit
+	$(foreach p,teleport occluder,$(BENCH) --anim $(p) --size 256x192 --methods iir,ir \
+	    --ref-spp 128 --ref-every 10 --out out/bench/cornell-$(p) &&) true
+	$(foreach p,$(STRESS),$(BENCH) --anim $(p) --size 256x192 --methods iir,ir \
+	    --ref-spp 64 --ref-every 15 --out out/bench/cornell-$(p) &&) true
+	$(BENCH) conference --anim orbit --size 320x240 --methods iir,ir --ref-spp 256 \
+	    --ref-every 100 --out out/bench/conference-orbit
+	/usr/bin/python3 tools/live_bench.py --iird $(BUILD)/iird --out out/bench/live.json
 
 FORMAT_FILES = $(shell git ls-files '*.c' '*.h' '*.cpp' '*.hpp' 2>/dev/null)
 format:

@@ -28,9 +28,17 @@ static bool seg_find(const iir_anim_track *tr, unsigned mask, double t, iir_anim
 {
     s->c = s->b = s->d = -1;
     s->u = 0.0;
-    s->a = -1;
-    for (int i = 0; i < tr->num_keys && tr->keys[i].t <= t; i++)
-        if (tr->keys[i].fields & mask) s->a = i;
+    /* Keys are in increasing time: binary search for the first key after t, then step back to
+     * the last one that gives this field (recorded paths have 1e5 keys, all with every field). */
+    int lo = 0, hi = tr->num_keys;
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (tr->keys[mid].t <= t)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    s->a = next_with(tr, mask, lo - 1, -1);
     if (s->a < 0) {
         s->a = next_with(tr, mask, 0, 1); /* before the first key: hold it */
         return s->a >= 0;

@@ -248,9 +248,11 @@ static iir_status parse_keys(const iir_anim_ctx *c, const cJSON *obj, const char
     tr->keys = calloc((size_t)tr->num_keys, sizeof *tr->keys);
     if (!tr->keys) return anim_fail(c, IIR_ERR_NOMEM, p, "out of memory");
     double prev_t = -INFINITY;
-    for (int i = 0; i < tr->num_keys && st == IIR_OK; i++) {
+    /* Walk the child list: cJSON_GetArrayItem(keys, i) is O(i), so indexing is quadratic. */
+    const cJSON *key = keys->child;
+    for (int i = 0; i < tr->num_keys && st == IIR_OK; i++, key = key->next) {
         if (snprintf(kp, sizeof kp, "%s[%d]", p, i) >= (int)sizeof kp) kp[sizeof kp - 1] = '\0';
-        st = parse_key(c, cJSON_GetArrayItem(keys, i), kp, prev_t, &tr->keys[i]);
+        st = parse_key(c, key, kp, prev_t, &tr->keys[i]);
         prev_t = tr->keys[i].t;
     }
     return st;

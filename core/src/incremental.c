@@ -1,6 +1,7 @@
 /* incremental.c -- the incremental instant radiosity step: owns a spot light's VPL set across
  * frames (creation, validation, deletion, insertion, weights, and the VPLs' lifetime including
- * releasing their shadow maps); not rendering the maps and not shading.
+ * releasing their shadow maps), the points each frame removed (for drawing the domain) and fresh
+ * sets sampled apart from the live one (for refinement); not rendering the maps and not shading.
  *
  * Design. The set is an array sorted by ascending id (ids only grow, new VPLs are appended,
  * removals compact in place), so the triangulation's by-id answers (cell areas by ascending id)
@@ -34,6 +35,8 @@ struct iir_incr {
     uint32_t *ids;        /* [cap] scratch: ids for the triangulation */
     double *areas;        /* [cap] scratch: clipped cell areas */
     unsigned char *alive; /* [cap] scratch: VPLs kept by the phase running */
+    double *removed;      /* [2 cap]: disk points of the VPLs the last update removed */
+    uint32_t num_removed; /* <= the count before that update <= cap */
     uint32_t count, cap;  /* cap >= max(N, count) */
     uint32_t next_id;     /* the id of the next VPL created */
     uint32_t frame;       /* updates so far: the birth of the VPLs made now */
@@ -115,7 +118,9 @@ static iir_status reserve(iir_incr *inc, uint32_t cap, iir_error *err)
     if (areas) inc->areas = areas;
     unsigned char *alive = realloc(inc->alive, cap);
     if (alive) inc->alive = alive;
-    if (!v || !xy || !ids || !areas || !alive)
+    double *removed = realloc(inc->removed, 2 * (size_t)cap * sizeof *removed);
+    if (removed) inc->removed = removed;
+    if (!v || !xy || !ids || !areas || !alive || !removed)
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory for %u VPLs", cap);
     inc->cap = cap;
     return IIR_OK;
@@ -151,6 +156,7 @@ void iir_incr_destroy(iir_incr *inc)
     free(inc->ids);
     free(inc->areas);
     free(inc->alive);
+    free(inc->removed);
     free(inc);
 }
 
@@ -256,13 +262,19 @@ static uint32_t index_of(const iir_incr *inc, uint32_t id)
     return lo;
 }
 
-/* Keeps the VPLs with alive[i] set, in order; releases the others' maps. Returns how many went. */
-static uint32_t compact(iir_incr *inc)
+/* Keeps the VPLs with alive[i] set, in order; releases the others' maps and, when `record`,
+ * appends their disk points to the removed list. Returns how many went. */
+static uint32_t compact(iir_incr *inc, bool record)
 {
     uint32_t kept = 0;
     for (uint32_t i = 0; i < inc->count; i++) {
         if (!inc->alive[i]) {
             iir_smap_release(&inc->vpls[i].smap);
+            if (record && inc->num_removed < inc->cap) {
+                inc->removed[2 * inc->num_removed] = inc->xy[2 * i];
+                inc->removed[2 * inc->num_removed + 1] = inc->xy[2 * i + 1];
+                inc->num_removed++;
+            }
             continue;
         }
         inc->vpls[kept] = inc->vpls[i];
@@ -275,16 +287,13 @@ static uint32_t compact(iir_incr *inc)
     return gone;
 }
 
-/* Writes the VPL for sample sm into slot `count` (not yet part of the set; see commit): a VPL at
- * the reprojection of its position, or a null sample at that of its direction (also when the
- * position fell outside the cone). Returns false when even that is not strictly inside. */
-static bool stage(iir_incr *inc, const pose *ps, const sample *sm)
+/* Writes the VPL for sample sm into *v and its disk point into s (id 0): a VPL at the reprojection
+ * of its position, or a null sample at that of its direction (also when the position fell outside
+ * the cone). Returns false when even that is not strictly inside. */
+static bool make_vpl(const pose *ps, const sample *sm, uint32_t birth, iir_vpl *v, double s[2])
 {
-    assert(inc->count < inc->cap);
-    iir_vpl *v = &inc->vpls[inc->count];
-    double *s = &inc->xy[2 * inc->count];
     memset(v, 0, sizeof *v);
-    v->birth = inc->frame;
+    v->birth = birth;
     if (!sm->null_sample && disk_of(ps, iir_sub(sm->x, ps->p), s)) {
         v->position = sm->x;
         v->albedo = sm->albedo;
@@ -297,6 +306,14 @@ static bool stage(iir_incr *inc, const pose *ps, const sample *sm)
     }
     v->disk = iir_v2((float)s[0], (float)s[1]);
     return true;
+}
+
+/* Writes the VPL for sample sm into slot `count` (not yet part of the set; see commit); false when
+ * its point is not strictly inside the disk (see make_vpl). */
+static bool stage(iir_incr *inc, const pose *ps, const sample *sm)
+{
+    assert(inc->count < inc->cap);
+    return make_vpl(ps, sm, inc->frame, &inc->vpls[inc->count], &inc->xy[2 * inc->count]);
 }
 
 /* Makes the staged VPL part of the set and gives it the next id. */
@@ -333,7 +350,7 @@ static uint32_t phase_validate(iir_incr *inc, const pose *ps, iir_raystats *rays
             inc->alive[i] =
                 faces_light(ps, v->position, v->normal) && unoccluded(inc, ps, v->position, rays);
     }
-    return compact(inc);
+    return compact(inc, true);
 }
 
 /* A Hammersley point (i / n, phi_2(i)) rotated by offsets o (Cranley-Patterson), in [0, 1)^2. */
@@ -351,21 +368,27 @@ static bool ids_exhausted(const iir_incr *inc)
     return inc->next_id > UINT32_MAX - inc->params.target - inc->params.k_max;
 }
 
+/* The direction of point i of n of a regeneration's Hammersley set rotated by o: concentric map
+ * to the disk, shrunk by the edge margin. */
+static iir_vec3 regen_dir(const pose *ps, uint32_t i, uint32_t n, const double o[2])
+{
+    float scale = (float)(ps->R * (1.0 - IIR_INCR_EDGE_MARGIN));
+    iir_vec2 d = iir_sample_uniform_disk_concentric(hammersley(i, n, o));
+    return iir_normalize(iir_spot_disk_to_dir(&ps->fr, iir_v2(d.x * scale, d.y * scale)));
+}
+
 /* REGENERATE: discards the whole set and makes N new VPLs from a scrambled Hammersley set, one
  * ray each (ids restart at 0 only when they are exhausted). Returns how many were created. */
 static uint32_t regenerate(iir_incr *inc, const pose *ps, iir_raystats *rays)
 {
     memset(inc->alive, 0, inc->count);
-    compact(inc);
+    compact(inc, true);
     if (ids_exhausted(inc)) inc->next_id = 0;
     iir_rng rng = iir_rng_make(inc->params.seed, inc->generations++);
     double o[2] = {iir_rng_uniform(&rng), iir_rng_uniform(&rng)};
-    float scale = (float)(ps->R * (1.0 - IIR_INCR_EDGE_MARGIN));
     uint32_t n = inc->params.target, made = 0;
     for (uint32_t i = 0; i < n; i++) {
-        iir_vec2 d = iir_sample_uniform_disk_concentric(hammersley(i, n, o));
-        iir_vec3 w = iir_normalize(iir_spot_disk_to_dir(&ps->fr, iir_v2(d.x * scale, d.y * scale)));
-        sample sm = trace_sample(inc, ps, w, rays);
+        sample sm = trace_sample(inc, ps, regen_dir(ps, i, n, o), rays);
         if (!stage(inc, ps, &sm)) continue;
         commit(inc);
         made++;
@@ -381,8 +404,9 @@ static iir_status tri_fail(iir_tri_status ts, const char *what, iir_error *err)
 }
 
 /* TRIANGULATE: rebuilds the triangulation of all disk points (a new handle when R changed).
- * VPLs that coincide with an older one are dropped; *dropped gets how many. */
-static iir_status phase_triangulate(iir_incr *inc, const pose *ps, uint32_t *dropped,
+ * VPLs that coincide with an older one are dropped (recorded as removed when `record`: they were
+ * in the set before this frame); *dropped gets how many. */
+static iir_status phase_triangulate(iir_incr *inc, const pose *ps, bool record, uint32_t *dropped,
                                     iir_error *err)
 {
     *dropped = 0;
@@ -400,7 +424,7 @@ static iir_status phase_triangulate(iir_incr *inc, const pose *ps, uint32_t *dro
         double xy[2];
         inc->alive[i] = iir_tri_position(inc->tri, inc->vpls[i].id, xy) == IIR_TRI_OK;
     }
-    *dropped = compact(inc);
+    *dropped = compact(inc, record);
     return IIR_OK;
 }
 
@@ -418,14 +442,14 @@ static iir_status phase_delete(iir_incr *inc, uint32_t replaced, uint32_t *delet
         if (ts == IIR_TRI_TOO_FEW) break;
         if (ts == IIR_TRI_OK) ts = iir_tri_remove(inc->tri, id);
         if (ts != IIR_TRI_OK) {
-            compact(inc);
+            compact(inc, true);
             return tri_fail(ts, "deleting", err);
         }
         inc->alive[index_of(inc, id)] = 0;
         (*deleted)++;
         n--;
     }
-    compact(inc);
+    compact(inc, true);
     return IIR_OK;
 }
 
@@ -523,6 +547,7 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
     const iir_incr_params *p = &inc->params;
     uint32_t count_prev = inc->count, dropped = 0, limit = p->k_max;
     double t0 = iir_now_ms(), t = t0;
+    inc->num_removed = 0;
 
     /* 1. reproject */
     phase_reproject(inc, &ps);
@@ -546,7 +571,7 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
     }
 
     /* 3. triangulate */
-    status = phase_triangulate(inc, &ps, &dropped, err);
+    status = phase_triangulate(inc, &ps, !regen, &dropped, err);
     st.invalidated += regen ? 0 : dropped;
     st.valid -= regen ? 0 : dropped;
     st.inserted -= regen ? dropped : 0;
@@ -573,4 +598,48 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
     inc->frame++;
     if (out) *out = st;
     return status;
+}
+
+/* ==== refinement and drawing ================================================================= */
+
+iir_status iir_incr_sample_set(const iir_incr *inc, const iir_light *spot, uint64_t stream,
+                               iir_vpl *out, uint32_t cap, uint32_t *n, iir_raystats *rays,
+                               iir_error *err)
+{
+    *n = 0;
+    iir_status status = check_spot(spot, err);
+    if (status != IIR_OK) return status;
+    uint32_t N = inc->params.target, made = 0;
+    if (cap < N)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "incremental step: a sample set needs room for %u VPLs, got %u", N, cap);
+    pose ps = {spot, spot->position, iir_spot_frame(spot), (double)iir_spot_radius(spot)};
+    iir_rng rng = iir_rng_make(iir_hash3(inc->params.seed, 0x5a3b1e, 0), stream);
+    double o[2] = {iir_rng_uniform(&rng), iir_rng_uniform(&rng)};
+    uint32_t birth = inc->frame ? inc->frame - 1 : 0;
+    for (uint32_t i = 0; i < N; i++) {
+        sample sm = trace_sample(inc, &ps, regen_dir(&ps, i, N, o), rays);
+        double s[2];
+        iir_vpl *v = &out[made];
+        if (!make_vpl(&ps, &sm, birth, v, s)) continue;
+        v->id = made++;
+        /* I0 rho falloff now, times the cell area A once the count is known */
+        float k = iir_spot_falloff(spot, (float)sqrt(s[0] * s[0] + s[1] * s[1]));
+        v->flux = v->null_sample ? iir_v3s(0.f) : iir_scale(iir_mul(spot->intensity, v->albedo), k);
+    }
+    float A = (float)(M_PI * ps.R * ps.R / (made ? made : 1));
+    for (uint32_t i = 0; i < made; i++) out[i].flux = iir_scale(out[i].flux, A);
+    *n = made;
+    return IIR_OK;
+}
+
+const double *iir_incr_removed(const iir_incr *inc, uint32_t *n)
+{
+    *n = inc->num_removed;
+    return inc->removed;
+}
+
+uint32_t iir_incr_updates(const iir_incr *inc)
+{
+    return inc->frame;
 }

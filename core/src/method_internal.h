@@ -3,6 +3,7 @@
 #define IIR_METHOD_INTERNAL_H
 
 #include "iir/method.h"
+#include "iir/refine.h"
 
 typedef struct iir_method_ops {
     const char *name;
@@ -16,6 +17,10 @@ typedef struct iir_method_ops {
     iir_status (*refine)(void *state, iir_image *out, iir_frame_stats *stats, iir_error *err);
     /* NULL when the method has no VPLs. */
     const iir_vpl *(*vpls)(const void *state, uint32_t *n);
+    /* NULL when the method has no disk domain; false when it has none now. */
+    bool (*domain)(void *state, iir_domain *out);
+    /* NULL when the method's refinement cannot stop early. */
+    void (*set_stop)(void *state, iir_stop_fn fn, void *ctx);
 } iir_method_ops;
 
 extern const iir_method_ops iir_method_pt;
@@ -30,5 +35,11 @@ iir_indirect_params iir_params_indirect(const iir_params *p);
 
 /* Copies the renderer's phase times into the frame stats. */
 void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *stats);
+
+/* The refine.h settings a method's parameters ask for. */
+iir_refine_params iir_params_refine(const iir_params *p);
+
+/* A refinement pass's stats as frame stats (samples_per_pixel = passes, converged, phases). */
+void iir_refine_to_stats(const iir_refine_stats *rs, iir_frame_stats *stats);
 
 #endif

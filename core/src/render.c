@@ -1,6 +1,6 @@
 /* render.c -- the VPL renderer object (create/destroy, scratch ownership), its parameters and the
- * order of one frame's phases; not the phases themselves (render_gbuffer.c, render_direct.c,
- * render_indirect.c, render_filter.c). */
+ * order of one frame's (and one refinement pass's) phases; not the phases themselves
+ * (render_gbuffer.c, render_direct.c, render_indirect.c, render_filter.c). */
 #include <stdlib.h>
 #include <string.h>
 
@@ -135,7 +135,7 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
     t->gbuffer_cached = r->gb_valid && same_camera(cam, &r->gb_camera);
     if (!t->gbuffer_cached) {
         iir_camera_frame cf = iir_camera_setup(cam, w, h);
-        iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, st);
+        iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, iir_v2(0.5f, 0.5f), st);
         r->gb_camera = *cam;
         r->gb_valid = true;
     }
@@ -151,19 +151,96 @@ iir_status iir_renderer_frame(iir_renderer *r, const iir_camera *cam, const iir_
     iir_render_timing tm = {0};
     iir_raystats rays = {0};
     iir_status s = check_inputs(cam, lights, num_lights, p, out, err);
-    if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, p, err);
+    if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, p, false, err);
     if (s == IIR_OK) s = gbuffer_phase(r, cam, out->width, out->height, &tm, &rays, err);
     if (s == IIR_OK) {
         double t0 = iir_now_ms();
         iir_render_direct(r, lights, num_lights, seed, out, &rays);
         double t1 = iir_now_ms();
-        iir_render_indirect(r, p, &rays);
+        iir_render_indirect(r, p, 0, false, &rays);
         double t2 = iir_now_ms();
         iir_render_filter(r, p, out);
         tm.direct_ms = t1 - t0;
         tm.indirect_ms = t2 - t1;
         tm.filter_ms = iir_now_ms() - t2;
     }
+    if (t) *t = tm;
+    if (st) iir_raystats_add(st, &rays);
+    return s;
+}
+
+/* ---- one refinement pass ---- */
+
+static iir_status check_pass(const iir_pass_params *p, iir_error *err)
+{
+    if (p->interleave < 1 || p->interleave > IIR_MAX_INTERLEAVE)
+        return iir_fail(err, IIR_ERR_INVALID, "pass interleave %d is outside [1, %d]",
+                        p->interleave, IIR_MAX_INTERLEAVE);
+    uint32_t n2 = (uint32_t)(p->interleave * p->interleave);
+    if (p->shift >= n2)
+        return iir_fail(err, IIR_ERR_INVALID, "pass shift %u is outside [0, %u)", p->shift, n2);
+    if (!(p->jitter.x >= 0.f && p->jitter.x <= 1.f && p->jitter.y >= 0.f && p->jitter.y <= 1.f))
+        return iir_fail(err, IIR_ERR_INVALID, "pass jitter (%g, %g) is outside [0, 1]^2",
+                        (double)p->jitter.x, (double)p->jitter.y);
+    return IIR_OK;
+}
+
+/* The G-buffer of a pass: the cached pixel-centre one when the jitter is the centre, else one
+ * rendered through the jittered points, which is not kept for frames (gb_valid is cleared). */
+static iir_status pass_gbuffer(iir_renderer *r, const iir_camera *cam, iir_vec2 jitter, int w,
+                               int h, iir_render_timing *t, iir_raystats *st, iir_error *err)
+{
+    if (jitter.x == 0.5f && jitter.y == 0.5f) return gbuffer_phase(r, cam, w, h, t, st, err);
+    double t0 = iir_now_ms();
+    iir_status s = resize(r, w, h, err);
+    if (s != IIR_OK) return s;
+    iir_camera_frame cf = iir_camera_setup(cam, w, h);
+    iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, jitter, st);
+    r->gb_valid = false;
+    t->gbuffer_ms = iir_now_ms() - t0;
+    return IIR_OK;
+}
+
+void iir_renderer_set_stop(iir_renderer *r, iir_stop_fn fn, void *ctx)
+{
+    r->stop = fn;
+    r->stop_ctx = ctx;
+}
+
+static bool stop_requested(const iir_renderer *r)
+{
+    return r->stop && r->stop(r->stop_ctx);
+}
+
+iir_status iir_renderer_pass(iir_renderer *r, const iir_camera *cam, const iir_light *lights,
+                             uint32_t num_lights, const iir_vpl *vpls, uint32_t num_vpls,
+                             const iir_pass_params *p, uint64_t seed, iir_image *out,
+                             iir_render_timing *t, iir_raystats *st, iir_error *err)
+{
+    iir_render_timing tm = {0};
+    iir_raystats rays = {0};
+    iir_indirect_params ind = iir_indirect_params_default();
+    ind.visibility = IIR_VIS_RAYS;
+    ind.interleave = p->interleave;
+    ind.filter = false;
+    ind.clamp = p->clamp;
+    iir_status s = check_pass(p, err);
+    if (s == IIR_OK) s = check_inputs(cam, lights, num_lights, &ind, out, err);
+    if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, &ind, true, err);
+    if (s == IIR_OK) s = pass_gbuffer(r, cam, p->jitter, out->width, out->height, &tm, &rays, err);
+    bool stopped = s == IIR_OK && stop_requested(r);
+    if (s == IIR_OK && !stopped) {
+        double t0 = iir_now_ms();
+        iir_render_direct(r, lights, num_lights, seed, out, &rays);
+        double t1 = iir_now_ms();
+        stopped = iir_render_indirect(r, &ind, p->shift, true, &rays);
+        double t2 = iir_now_ms();
+        if (!stopped) iir_render_filter(r, &ind, out);
+        tm.direct_ms = t1 - t0;
+        tm.indirect_ms = t2 - t1;
+        tm.filter_ms = iir_now_ms() - t2;
+    }
+    if (stopped) s = iir_fail(err, IIR_ERR_INTERRUPTED, "refinement pass stopped early");
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);
     return s;

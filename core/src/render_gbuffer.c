@@ -66,13 +66,14 @@ static void store(iir_gbuffer *gb, size_t i, const iir_scene *scene, const iir_h
 
 /* One packet: the BLOCK_W x BLOCK_H pixels at (x0, y0) that lie inside the image. */
 static void render_block(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
-                         const iir_camera_frame *cf, int x0, int y0, iir_raystats *st)
+                         const iir_camera_frame *cf, iir_vec2 jitter, int x0, int y0,
+                         iir_raystats *st)
 {
     iir_ray8 rays;
     iir_vec3 dirs[8];
     for (int k = 0; k < 8; k++) {
         int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
-        dirs[k] = iir_camera_dir(cf, (float)x + 0.5f, (float)y + 0.5f);
+        dirs[k] = iir_camera_dir(cf, (float)x + jitter.x, (float)y + jitter.y);
         rays.ox[k] = cf->origin.x, rays.oy[k] = cf->origin.y, rays.oz[k] = cf->origin.z;
         rays.dx[k] = dirs[k].x, rays.dy[k] = dirs[k].y, rays.dz[k] = dirs[k].z;
         rays.tnear[k] = 0.f;
@@ -89,7 +90,7 @@ static void render_block(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *
 }
 
 void iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
-                        const iir_camera_frame *cf, iir_raystats *st)
+                        const iir_camera_frame *cf, iir_vec2 jitter, iir_raystats *st)
 {
     int tiles = iir_tile_count(gb->width, gb->height, IIR_RENDER_TILE);
     iir_raystats total = {0};
@@ -101,7 +102,7 @@ void iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *r
             iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_RENDER_TILE, t);
             for (int y = tl.y0; y < tl.y1; y += BLOCK_H)
                 for (int x = tl.x0; x < tl.x1; x += BLOCK_W)
-                    render_block(gb, scene, rt, cf, x, y, &local);
+                    render_block(gb, scene, rt, cf, jitter, x, y, &local);
         }
 #pragma omp critical(iir_gbuffer_rays)
         iir_raystats_add(&total, &local);

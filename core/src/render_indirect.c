@@ -67,7 +67,7 @@ static iir_shade_vpl shade_vpl(const iir_vpl *v, float scale, float eps)
 }
 
 iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num_vpls,
-                              const iir_indirect_params *p, iir_error *err)
+                              const iir_indirect_params *p, bool exact_mean, iir_error *err)
 {
     uint32_t n2 = (uint32_t)(p->interleave * p->interleave), count[IIR_MAX_SUBSETS] = {0}, used = 0;
     for (uint32_t i = 0; i < num_vpls; i++) {
@@ -85,7 +85,8 @@ iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num
     for (uint32_t i = 0; i < num_vpls; i++) {
         if (!in_use(&vpls[i])) continue;
         uint32_t k = iir_vpl_subset(vpls[i].id, n2);
-        r->vpl[next[k]++] = shade_vpl(&vpls[i], (float)used / (float)count[k], r->eps);
+        float scale = exact_mean ? (float)n2 : (float)used / (float)count[k];
+        r->vpl[next[k]++] = shade_vpl(&vpls[i], scale, r->eps);
     }
     return IIR_OK;
 }
@@ -103,6 +104,8 @@ enum { BATCH = 256 }; /* pixels per batch: 10 KB of stack */
 
 typedef struct indirect_ctx {
     const iir_renderer *r;
+    iir_stop_fn stop; /* NULL when the work must not stop early */
+    uint32_t shift;   /* added to every pixel's subset (mod n^2) */
     bool use_smap;
     float g_max;    /* clamp / D^2, or INFINITY */
     float rel_bias; /* sm_bias */
@@ -350,7 +353,8 @@ static void indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *b, i
     /* The lattice through (x0 + i, y0 + j) is one subset. */
     for (int j = 0; j < n && tl.y0 + j < tl.y1; j++)
         for (int i = 0; i < n && tl.x0 + i < tl.x1; i++) {
-            uint32_t k = (uint32_t)(((tl.y0 + j) % n) * n + (tl.x0 + i) % n);
+            uint32_t k = ((uint32_t)(((tl.y0 + j) % n) * n + (tl.x0 + i) % n) + c->shift) %
+                         (uint32_t)(n * n);
             int x = tl.x0 + i, y = tl.y0 + j;
             if (r->start[k] == r->start[k + 1]) continue;
             while (collect(r, &tl, tl.x0 + i, n, &x, &y, b)) {
@@ -370,20 +374,33 @@ static void indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *b, i
         }
 }
 
-void iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, iir_raystats *st)
+bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t shift,
+                         bool stoppable, iir_raystats *st)
 {
-    indirect_ctx c = {r, p->visibility == IIR_VIS_SHADOWMAP,
-                      p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY, p->sm_bias};
+    indirect_ctx c = {r,
+                      stoppable ? r->stop : NULL,
+                      shift,
+                      p->visibility == IIR_VIS_SHADOWMAP,
+                      p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
+                      p->sm_bias};
     int tiles = iir_tile_count(r->gb.width, r->gb.height, IIR_INDIRECT_TILE), n = p->interleave;
     iir_raystats total = {0};
-#pragma omp parallel
+    int skipped = 0;
+#pragma omp parallel reduction(+ : skipped)
     {
         iir_raystats local = {0};
         pixel_batch b; /* on the stack: no allocation */
 #pragma omp for schedule(dynamic, 1)
-        for (int t = 0; t < tiles; t++) indirect_tile(&c, n, t, &b, &local);
+        for (int t = 0; t < tiles; t++) {
+            if (c.stop && (skipped || c.stop(r->stop_ctx))) {
+                skipped = 1; /* this thread's remaining tiles are skipped without asking again */
+                continue;
+            }
+            indirect_tile(&c, n, t, &b, &local);
+        }
 #pragma omp critical(iir_indirect_rays)
         iir_raystats_add(&total, &local);
     }
     iir_raystats_add(st, &total);
+    return skipped > 0;
 }

@@ -43,6 +43,9 @@ struct iir_renderer {
     uint32_t vpl_cap;
     uint32_t num_subsets; /* n^2 */
     uint32_t start[IIR_MAX_SUBSETS + 1];
+
+    iir_stop_fn stop; /* refinement passes poll it; NULL = never */
+    void *stop_ctx;
 };
 
 /* ---- tiles: size x size pixels, row-major ---- */
@@ -70,20 +73,26 @@ static inline iir_tile iir_tile_at(int width, int height, int size, int t)
 /* ---- phases ---- */
 
 /* render_gbuffer.c. Resize keeps the contents only when the size is unchanged; on failure the
- * G-buffer is freed (width 0) and IIR_ERR_NOMEM returned. */
+ * G-buffer is freed (width 0) and IIR_ERR_NOMEM returned. Render shoots pixel (x, y)'s camera ray
+ * through (x + jitter.x, y + jitter.y); (0.5, 0.5) is the pixel centre of interactive frames. */
 iir_status iir_gbuffer_resize(iir_gbuffer *gb, int width, int height, iir_error *err);
 void iir_gbuffer_free(iir_gbuffer *gb);
 void iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
-                        const iir_camera_frame *cf, iir_raystats *st);
+                        const iir_camera_frame *cf, iir_vec2 jitter, iir_raystats *st);
 
 /* render_direct.c: out = emission + direct light (every pixel written). */
 void iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t num_lights,
                        uint64_t seed, iir_image *out, iir_raystats *st);
 
-/* render_indirect.c: builds the per-subset VPL lists (checking the VPLs), then fills r->raw. */
+/* render_indirect.c: builds the per-subset VPL lists (checking the VPLs), a subset's flux scaled
+ * by N / |subset| (frames) or by n^2 (refinement passes: exact_mean), then fills r->raw, pixel
+ * (x, y) evaluating subset ((y mod n) n + (x mod n) + shift) mod n^2. */
 iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num_vpls,
-                              const iir_indirect_params *p, iir_error *err);
-void iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, iir_raystats *st);
+                              const iir_indirect_params *p, bool exact_mean, iir_error *err);
+/* With `stoppable`, each tile first polls r->stop and is skipped once it said stop; returns true
+ * when tiles were skipped (r->raw is then incomplete). */
+bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t shift,
+                         bool stoppable, iir_raystats *st);
 
 /* render_filter.c: out += rho / pi * (filtered or raw) r->raw. */
 void iir_render_filter(const iir_renderer *r, const iir_indirect_params *p, iir_image *out);

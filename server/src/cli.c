@@ -1,7 +1,10 @@
-/* cli.c -- argument parsing helpers, scene lookup and loading, error reporting and interrupt
- * handling shared by the iird subcommands. */
+/* cli.c -- argument parsing helpers, scene lookup and loading, animation scripts named by a
+ * scene, error reporting and interrupt handling shared by the iird subcommands. */
 #include "cli.h"
 
+#include "iir/refine.h"
+
+#include <ctype.h>
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -13,6 +16,8 @@
 #include <strings.h>
 #include <sys/stat.h>
 #include <time.h>
+
+#include <cjson/cJSON.h>
 
 iir_status iird_parse_size(const char *text, int max_dim, int *w, int *h, iir_error *err)
 {
@@ -90,6 +95,8 @@ const char IIRD_METHOD_HELP[] =
     "  --interleave N       N x N interleaved VPL subsets + filter; 1 = full (default 4)\n"
     "  --clamp C            bound G at C / D^2, D the scene diagonal; 0 = no clamp\n"
     "  --ir-same-random     ir: the same random numbers every frame (default: fresh)\n"
+    "  --refine-passes P    refinement converges after P passes (ir, iir: one VPL subset per\n"
+    "                       pixel each; pt: P x spp samples) (default 64)\n"
     "  --threads N          OpenMP threads (default: all cores)\n";
 
 static iir_status parse_int_into(const char *arg, const char *what, long lo, long hi, int *out,
@@ -172,6 +179,10 @@ bool iird_method_option(int c, const char *arg, iir_params *p, iir_status *st, i
     case IIRD_OPT_THREADS:
         *st = parse_threads(arg, err);
         break;
+    case IIRD_OPT_REFINE_PASSES:
+        *st = parse_int_into(arg, "--refine-passes", 1, IIR_REFINE_MAX_PASSES, &p->refine_passes,
+                             err);
+        break;
     default:
         return false;
     }
@@ -249,6 +260,109 @@ iir_status iird_load_scene(const char *arg, const char *scenes_dir, iir_scene **
         iir_scene_destroy(*scene);
         *scene = NULL;
     }
+    return st;
+}
+
+/* ---- animation scripts named by a scene ---- */
+
+static bool is_bare_name(const char *s)
+{
+    if (!*s || strstr(s, "..")) return false;
+    for (; *s; s++)
+        if (!isalnum((unsigned char)*s) && *s != '_' && *s != '-' && *s != '.') return false;
+    return true;
+}
+
+static bool ends_with(const char *s, const char *suffix)
+{
+    size_t a = strlen(s), b = strlen(suffix);
+    return a >= b && strcmp(s + a - b, suffix) == 0;
+}
+
+/* The text of a small file (at most 1 MiB), NUL-terminated, malloc'ed; NULL if unreadable. */
+static char *read_small_file(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    enum { MAX = 1 << 20 };
+    char *buf = malloc(MAX + 1);
+    size_t n = buf ? fread(buf, 1, MAX, f) : 0;
+    fclose(f);
+    if (buf) buf[n] = '\0';
+    return buf;
+}
+
+/* The "paths" object of the scene's sidecar (a new cJSON tree, or NULL when it names none), the
+ * sidecar's path and its folder. The built-in box borrows the shipped box's sidecar. */
+static cJSON *scene_paths(const iir_scene *scene, const char *scenes_dir, char *sidecar, char *dir,
+                          size_t n)
+{
+    cJSON *paths = NULL;
+    if (scene->paths_json) {
+        snprintf(sidecar, n, "%s", scene->source);
+        paths = cJSON_Parse(scene->paths_json);
+    } else if (!scene->source[0]) {
+        snprintf(sidecar, n, "%s/%s/%s.scene.json", scenes_dir, scene->name, scene->name);
+        char *text = read_small_file(sidecar);
+        cJSON *root = text ? cJSON_Parse(text) : NULL;
+        paths = root ? cJSON_DetachItemFromObjectCaseSensitive(root, "paths") : NULL;
+        cJSON_Delete(root);
+        free(text);
+    }
+    const char *slash = strrchr(sidecar, '/');
+    snprintf(dir, n, "%.*s", slash ? (int)(slash - sidecar) : 1, slash ? sidecar : ".");
+    return cJSON_IsObject(paths) ? paths : (cJSON_Delete(paths), NULL);
+}
+
+static iir_status unknown_path(const iir_scene *scene, const char *arg, const cJSON *paths,
+                               iir_error *err)
+{
+    char names[512] = "";
+    size_t used = 0;
+    for (const cJSON *it = paths ? paths->child : NULL; it && used < sizeof names; it = it->next)
+        used += (size_t)snprintf(names + used, sizeof names - used, "%s%s", used ? ", " : "",
+                                 it->string);
+    return iir_fail(
+        err, IIR_ERR_INVALID, "--anim %s: no such file, and scene '%s' names no path '%s' (%s%s)",
+        arg, scene->name, arg, used ? "its paths: " : "its sidecar lists no \"paths\"", names);
+}
+
+iir_status iird_resolve_anim(const iir_scene *scene, const char *scenes_dir, const char *arg,
+                             iir_anim **out, char *label, size_t n, iir_error *err)
+{
+    struct stat sb;
+    *out = NULL;
+    if (stat(arg, &sb) == 0 || strchr(arg, '/') || ends_with(arg, ".json") || !is_bare_name(arg)) {
+        snprintf(label, n, "%s", arg);
+        return iir_anim_load(arg, out, err);
+    }
+    char sidecar[4096], dir[4096], path[8192];
+    cJSON *paths = scene_paths(scene, scenes_dir, sidecar, dir, sizeof sidecar);
+    const cJSON *item = paths ? cJSON_GetObjectItemCaseSensitive(paths, arg) : NULL;
+    iir_status st = IIR_OK;
+    if (!item) {
+        st = unknown_path(scene, arg, paths, err);
+    } else if (cJSON_IsString(item)) {
+        const char *rel = item->valuestring;
+        snprintf(path, sizeof path, "%s/%s", dir, rel);
+        snprintf(label, n, "%s", path);
+        st = rel[0] == '/' || strstr(rel, "..")
+                 ? iir_fail(err, IIR_ERR_INVALID,
+                            "%s: paths.%s: '%s' must be a path inside the sidecar's folder (no "
+                            "'..', not absolute)",
+                            sidecar, arg, rel)
+                 : iir_anim_load(path, out, err);
+    } else if (cJSON_IsObject(item)) {
+        char *text = cJSON_PrintUnformatted(item);
+        snprintf(label, n, "%s: paths.%s", sidecar, arg);
+        st = text ? iir_anim_parse(text, label, out, err)
+                  : iir_fail(err, IIR_ERR_NOMEM, "out of memory");
+        cJSON_free(text);
+    } else {
+        st = iir_fail(err, IIR_ERR_FORMAT,
+                      "%s: paths.%s: must be a script file name or a script object", sidecar, arg);
+    }
+    cJSON_Delete(paths);
     return st;
 }
 

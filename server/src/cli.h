@@ -9,6 +9,7 @@
 
 #include <getopt.h>
 
+#include "iir/anim.h"
 #include "iir/method.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
@@ -36,6 +37,7 @@ enum iird_method_opt {
     IIRD_OPT_CLAMP,
     IIRD_OPT_IR_SAME,
     IIRD_OPT_THREADS,
+    IIRD_OPT_REFINE_PASSES,
 };
 
 /* getopt_long entries for the method parameters; put inside a command's option table. */
@@ -54,6 +56,7 @@ enum iird_method_opt {
         {"interleave", required_argument, 0, IIRD_OPT_INTERLEAVE},                                 \
         {"clamp", required_argument, 0, IIRD_OPT_CLAMP},                                           \
         {"ir-same-random", no_argument, 0, IIRD_OPT_IR_SAME},                                      \
+        {"refine-passes", required_argument, 0, IIRD_OPT_REFINE_PASSES},                           \
     {                                                                                              \
         "threads", required_argument, 0, IIRD_OPT_THREADS                                          \
     }
@@ -100,6 +103,17 @@ const char *iird_scenes_dir(const char *option);
  * builds its ray tracer. On error both outputs stay NULL. */
 iir_status iird_load_scene(const char *arg, const char *scenes_dir, iir_scene **scene, iir_rt **rt,
                            iir_error *err);
+
+/* Finds and loads the animation script that --anim ARG names for scene (both iird render and
+ * iird bench use it; docs/scene-format.md section 5): an existing file, or any ARG with a '/' or
+ * ending in ".json", is loaded as a file; otherwise ARG must be a bare name listed in the scene
+ * sidecar's "paths" object, whose value is a script file relative to the sidecar's folder (no
+ * "..", not absolute) or an inline script object. The built-in Cornell box uses the paths of the
+ * shipped box's sidecar, scenes_dir/cornell_box/cornell_box.scene.json. Writes what was loaded
+ * (a file path, or "SIDECAR: paths.NAME") into label (size n). On error *out stays NULL: an
+ * unknown name is IIR_ERR_INVALID listing the names the scene has; a missing file IIR_ERR_IO. */
+iir_status iird_resolve_anim(const iir_scene *scene, const char *scenes_dir, const char *arg,
+                             iir_anim **out, char *label, size_t n, iir_error *err);
 
 /* Reports an error to stderr as "iird <cmd>: <message>" and returns its exit code. */
 int iird_report(const char *cmd, const iir_error *err);

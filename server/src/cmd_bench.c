@@ -1,7 +1,9 @@
-/* cmd_bench.c -- `iird bench`: frame-coherence experiments. Every method runs over the same light
- * path; pt references (one bounce, like iir) are rendered at every K-th frame and its successor,
- * and each method's frames there get RMSE, relative MSE and flicker (DESIGN section 10). Writes a
- * per-frame CSV and prints a summary with the ratios measured in this one run. */
+/* cmd_bench.c -- `iird bench`'s command line: frame-coherence experiments (DESIGN section 10).
+ * Every method runs over the same light path, once per setting of the --sweep values it uses; pt
+ * references with the method's bounce count are rendered (or read from their cache) at every K-th
+ * frame and its successor, and each run's frames there get RMSE, relative MSE and flicker. Writes
+ * frames.csv, summary.json and charts, and prints a summary with the ratios of this one run.
+ * The work itself is bench*.c's. */
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -11,8 +13,6 @@
 #include "bench.h"
 #include "cli.h"
 #include "commands.h"
-#include "iir/metrics.h"
-#include "orbit.h"
 
 static void bench_usage(FILE *f)
 {
@@ -21,20 +21,28 @@ static void bench_usage(FILE *f)
             "\n"
             "Runs each method over a light path -- an animation script, or a smooth orbit of the\n"
             "scene's spot light -- and compares it with path-traced references: frame times per\n"
-            "phase, rays, VPL churn, error and flicker.\n"
+            "phase, rays, VPL churn, memory, error and flicker.\n"
             "\n"
-            "  --anim PATH          animation script (docs/animation-format.md) moving the spot\n"
-            "                       and camera; frames from the script\n"
+            "  --anim PATH|NAME     animation script (docs/animation-format.md), or the name of a\n"
+            "                       path the scene's sidecar lists (e.g. orbit, teleport)\n"
             "  --methods LIST       comma-separated methods (default iir,ir)\n"
-            "  --frames N           frames on the orbit (default 200); with --anim, at most N\n"
+            "  --sweep NAME=V1,...  run every method that reads method option NAME once per value\n"
+            "                       (e.g. vpls=64,256,1024 or spp=1,4,16); several --sweep flags\n"
+            "                       multiply; the CSV's setting column says which\n"
+            "  --frames N | A:B     N frames from 0, or the half-open range A:B of the path\n"
+            "                       (orbit: default 200; script: all of its frames)\n"
             "  --size WxH           image size (default 512x384)\n"
             "  --ref-spp N          reference samples per pixel (default 256; 0 = no references)\n"
-            "  --ref-every K        references at frames 0, 1, K, K+1, ... (default 50)\n"
-            "  --ref-aa             antialiased references (default: through pixel centres, as\n"
-            "                       the interactive methods shade)\n"
-            "  --out DIR            write DIR/frames.csv (the directory must exist)\n"
-            "  --save-images        also write DIR/ref_NNNNN.pfm and DIR/<method>_NNNNN.pfm at\n"
-            "                       the reference frames\n"
+            "  --ref-every K        references at range frames 0, 1, K, K+1, ... (default 50)\n"
+            "  --ref-aa             antialiased references and pt runs (default: through pixel\n"
+            "                       centres, as the interactive methods shade)\n"
+            "  --ref-cache DIR      reference cache (default $XDG_CACHE_HOME/iir/refs, else\n"
+            "                       out/refcache); --no-ref-cache to always render\n"
+            "  --out DIR            write DIR/frames.csv, DIR/summary.json and charts (the\n"
+            "                       directory must exist)\n"
+            "  --no-charts          do not run tools/plot_bench.py\n"
+            "  --save-images        also write DIR/ref_NNNNN.pfm and DIR/<method>[_<setting>]_\n"
+            "                       NNNNN.pfm at the reference frames\n"
             "  --scenes DIR         where scene names are looked up\n"
             "\n%s",
             IIRD_METHOD_HELP);
@@ -50,8 +58,92 @@ enum {
     OPT_SCENES,
     OPT_SAVE,
     OPT_REF_AA,
-    OPT_ANIM
+    OPT_ANIM,
+    OPT_SWEEP,
+    OPT_REF_CACHE,
+    OPT_NO_REF_CACHE,
+    OPT_NO_CHARTS
 };
+
+/* --frames N (= 0:N) or A:B, half-open, at least two frames. */
+static iir_status parse_frames(iird_bench_opts *o, const char *arg, iir_error *err)
+{
+    char *end = NULL;
+    long a = 0, b = strtol(arg, &end, 10);
+    if (end != arg && *end == ':') {
+        const char *rest = end + 1;
+        a = b, b = strtol(rest, &end, 10);
+        if (end == rest || *end || a < 0 || b > 1000000)
+            return iir_fail(err, IIR_ERR_INVALID,
+                            "--frames '%s' is not N or A:B (0 <= A < B <= 1000000)", arg);
+        if (b - a < 2)
+            return iir_fail(err, IIR_ERR_INVALID, "--frames %ld:%ld: bench needs at least 2 frames",
+                            a, b);
+        o->range_given = true;
+    } else {
+        iir_status st = iird_parse_int(arg, "--frames", 2, 1000000, &b, err);
+        if (st != IIR_OK) return st;
+    }
+    o->first = (int)a, o->frames = (int)b, o->frames_given = true;
+    return IIR_OK;
+}
+
+/* The method option called `name` that takes a value (not --threads): its code, or 0. */
+static int sweepable(const char *name)
+{
+    static const struct option opts[] = {IIRD_METHOD_LONGOPTS, {0, 0, 0, 0}};
+    for (const struct option *p = opts; p->name; p++)
+        if (!strcmp(p->name, name))
+            return p->has_arg == required_argument && p->val != IIRD_OPT_THREADS ? p->val : 0;
+    return 0;
+}
+
+/* Checks each value with the option's own parser, on a scratch copy of the parameters. */
+static iir_status add_sweep_values(iird_bench_sweep *s, const char *list, iir_error *err)
+{
+    char buf[1024];
+    snprintf(buf, sizeof buf, "%s", list);
+    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
+         tok = strtok_r(NULL, ",", &save)) {
+        if (s->num_values == IIRD_BENCH_MAX_VALUES || strlen(tok) >= sizeof s->values[0])
+            return iir_fail(err, IIR_ERR_INVALID, "--sweep %s: at most %d values of %zu characters",
+                            s->name, IIRD_BENCH_MAX_VALUES, sizeof s->values[0] - 1);
+        iir_params scratch = iir_params_default();
+        iir_status st = IIR_OK;
+        iir_error verr = {0};
+        iird_method_option(s->code, tok, &scratch, &st, &verr);
+        if (st != IIR_OK) return iir_fail(err, st, "--sweep %s: %s", s->name, verr.msg);
+        snprintf(s->values[s->num_values++], sizeof s->values[0], "%s", tok);
+    }
+    if (s->num_values == 0) return iir_fail(err, IIR_ERR_INVALID, "--sweep %s: no values", s->name);
+    return IIR_OK;
+}
+
+static iir_status parse_sweep(iird_bench_opts *o, const char *arg, iir_error *err)
+{
+    const char *eq = strchr(arg, '=');
+    size_t len = eq ? (size_t)(eq - arg) : 0;
+    if (!eq || len == 0 || len >= sizeof o->sweeps[0].name)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "--sweep '%s' is not NAME=V1,V2,... (e.g. vpls=64,256,1024)", arg);
+    if (o->num_sweeps == IIRD_BENCH_MAX_SWEEPS)
+        return iir_fail(err, IIR_ERR_INVALID, "--sweep: at most %d of them", IIRD_BENCH_MAX_SWEEPS);
+    iird_bench_sweep *s = &o->sweeps[o->num_sweeps];
+    memset(s, 0, sizeof *s);
+    snprintf(s->name, sizeof s->name, "%.*s", (int)len, arg);
+    if (!(s->code = sweepable(s->name)))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "--sweep %s: not a method option with a value (spp, bounces, seed, vpls, "
+                        "kmin, kmax, weights, regen-threshold, visibility, sm-res, sm-bias, "
+                        "interleave, clamp)",
+                        s->name);
+    for (int i = 0; i < o->num_sweeps; i++)
+        if (!strcmp(o->sweeps[i].name, s->name))
+            return iir_fail(err, IIR_ERR_INVALID, "--sweep %s: given twice", s->name);
+    iir_status st = add_sweep_values(s, eq + 1, err);
+    if (st == IIR_OK) o->num_sweeps++;
+    return st;
+}
 
 static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err)
 {
@@ -75,14 +167,25 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
         o->ref_aa = true;
         break;
     case OPT_ANIM:
-        o->anim_path = arg;
+        o->anim = arg;
+        break;
+    case OPT_REF_CACHE:
+        o->ref_cache = arg;
+        break;
+    case OPT_NO_REF_CACHE:
+        o->ref_cache = "";
+        break;
+    case OPT_NO_CHARTS:
+        o->no_charts = true;
+        break;
+    case OPT_SWEEP:
+        st = parse_sweep(o, arg, err);
         break;
     case OPT_SIZE:
         st = iird_parse_size(arg, 4096, &o->width, &o->height, err);
         break;
     case OPT_FRAMES:
-        if ((st = iird_parse_int(arg, "--frames", 2, 100000, &v, err)) == IIR_OK)
-            o->frames = (int)v, o->frames_given = true;
+        st = parse_frames(o, arg, err);
         break;
     case OPT_REF_SPP:
         if ((st = iird_parse_int(arg, "--ref-spp", 0, 1 << 20, &v, err)) == IIR_OK)
@@ -103,15 +206,20 @@ static int parse_args(int argc, char **argv, iird_bench_opts *o)
                                              {"size", required_argument, 0, OPT_SIZE},
                                              {"ref-spp", required_argument, 0, OPT_REF_SPP},
                                              {"ref-every", required_argument, 0, OPT_REF_EVERY},
+                                             {"ref-cache", required_argument, 0, OPT_REF_CACHE},
+                                             {"no-ref-cache", no_argument, 0, OPT_NO_REF_CACHE},
                                              {"out", required_argument, 0, OPT_OUT},
+                                             {"no-charts", no_argument, 0, OPT_NO_CHARTS},
                                              {"scenes", required_argument, 0, OPT_SCENES},
                                              {"save-images", no_argument, 0, OPT_SAVE},
                                              {"ref-aa", no_argument, 0, OPT_REF_AA},
                                              {"anim", required_argument, 0, OPT_ANIM},
+                                             {"sweep", required_argument, 0, OPT_SWEEP},
                                              {"help", no_argument, 0, 'h'},
                                              IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
     static const iird_command cmd = {"bench", longopts, bench_usage, parse_option};
+    o->argc = argc, o->argv = argv;
     return iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
 }
 
@@ -128,12 +236,16 @@ int iird_cmd_bench(int argc, char **argv)
     if (rc >= 0) return rc;
     iir_error err = {0};
     iird_bench run = {0};
+    double t0 = iird_now_ms();
     iird_catch_interrupts();
     iir_status st = iird_bench_setup(&run, &o, &err);
     if (st == IIR_OK) st = iird_bench_references(&run, &err);
-    for (int m = 0; st == IIR_OK && m < run.num_methods; m++) st = iird_bench_method(&run, m, &err);
+    for (int r = 0; st == IIR_OK && r < run.num_runs; r++) st = iird_bench_run_one(&run, r, &err);
+    run.wall_s = (iird_now_ms() - t0) / 1e3;
     if (st == IIR_OK) st = iird_bench_write_csv(&run, &err);
+    if (st == IIR_OK) st = iird_bench_write_json(&run, &err);
     if (st == IIR_OK) iird_bench_summary(&run, stdout);
+    if (st == IIR_OK) iird_bench_charts(&run, stdout);
     rc = st == IIR_OK ? 0 : iird_report("bench", &err);
     iird_bench_free(&run);
     return rc;

@@ -1,5 +1,6 @@
 /* cmd_render.c -- `iird render`: one still of a scene with any method, written as PNG, EXR or
- * PFM. Long renders refine in chunks so the progress bar moves and Ctrl-C keeps what is done. */
+ * PFM. Long renders refine in chunks so the progress bar moves and Ctrl-C keeps what is done.
+ * With --anim it parses the animation options and hands over to cmd_render_anim.c. */
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -9,27 +10,34 @@
 #include "commands.h"
 #include "iir/image.h"
 #include "iir/method.h"
+#include "render_anim.h"
 
-typedef struct render_opts {
-    const char *scene, *scenes_dir, *method, *out;
-    int width, height;
-    float exposure;
-    iir_params params;
-} render_opts;
+typedef iird_render_opts render_opts;
 
 static void render_usage(FILE *f)
 {
     fprintf(
         f,
         "usage: iird render [SCENE] --out FILE.{png,exr,pfm} [options]\n"
+        "       iird render [SCENE] --anim PATH --out DIR [--frames A:B] [--format F]\n"
+        "                   [--video FILE.mp4] [options]\n"
         "\n"
-        "Renders one still. SCENE is a name in the scenes directory, a scene folder or a file\n"
-        "(.obj, .gltf, .glb, .scene.json); without it, the built-in Cornell box.\n"
+        "Renders one still, or with --anim every frame of an animation script in order.\n"
+        "SCENE is a name in the scenes directory, a scene folder or a file (.obj, .gltf, .glb,\n"
+        ".scene.json); without it, the built-in Cornell box.\n"
         "\n"
-        "  --out FILE           output image; the format follows the extension (required)\n"
-        "  --method NAME        pt | ir | iir (default pt)\n"
-        "  --size WxH           image size (default 512x512)\n"
-        "  --exposure E         PNG exposure in stops (default 0)\n"
+        "  --out FILE|DIR       output image; the format follows the extension (required).\n"
+        "                       With --anim a directory (created if missing) that gets\n"
+        "                       frame_NNNNN.<format> and render.json\n"
+        "  --method NAME        pt | ir | iir (default pt; with --anim iir)\n"
+        "  --size WxH           image size (default 512x512; with --anim 1280x720)\n"
+        "  --exposure E         PNG (and video) exposure in stops (default 0)\n"
+        "  --anim PATH          animation script (docs/animation-format.md), or a path the\n"
+        "                       scene's sidecar names\n"
+        "  --frames A:B         with --anim: script frames A..B-1 (B excluded); A: = to the end.\n"
+        "                       Frames before A are re-rendered small, unwritten, to warm up\n"
+        "  --format F           with --anim: png | exr | pfm (default png)\n"
+        "  --video FILE.mp4     with --anim: also an H.264 video of the frames (needs ffmpeg)\n"
         "  --scenes DIR         where scene names are looked up (default ./scenes)\n"
         "  -h, --help           this text\n"
         "\n%s\n"
@@ -37,7 +45,17 @@ static void render_usage(FILE *f)
         IIRD_METHOD_HELP);
 }
 
-enum { OPT_OUT = 1, OPT_METHOD, OPT_SIZE, OPT_EXPOSURE, OPT_SCENES };
+enum {
+    OPT_OUT = 1,
+    OPT_METHOD,
+    OPT_SIZE,
+    OPT_EXPOSURE,
+    OPT_SCENES,
+    OPT_ANIM,
+    OPT_FRAMES,
+    OPT_FORMAT,
+    OPT_VIDEO
+};
 
 static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err)
 {
@@ -55,6 +73,21 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
         break;
     case OPT_SIZE:
         st = iird_parse_size(arg, IIR_IMAGE_MAX_DIM, &o->width, &o->height, err);
+        o->size_given = true;
+        break;
+    case OPT_ANIM:
+        o->anim = arg;
+        break;
+    case OPT_VIDEO:
+        o->video = arg;
+        break;
+    case OPT_FRAMES:
+        o->frames_arg = arg;
+        st = iird_parse_frame_range(arg, &o->first, &o->end, err);
+        break;
+    case OPT_FORMAT:
+        o->format_arg = arg;
+        st = iird_parse_format(arg, &o->format, err);
         break;
     case OPT_EXPOSURE:
         st = iird_parse_float(arg, "--exposure", -30.f, 30.f, &o->exposure, err);
@@ -71,6 +104,10 @@ static int parse_args(int argc, char **argv, render_opts *o)
                                              {"size", required_argument, 0, OPT_SIZE},
                                              {"exposure", required_argument, 0, OPT_EXPOSURE},
                                              {"scenes", required_argument, 0, OPT_SCENES},
+                                             {"anim", required_argument, 0, OPT_ANIM},
+                                             {"frames", required_argument, 0, OPT_FRAMES},
+                                             {"format", required_argument, 0, OPT_FORMAT},
+                                             {"video", required_argument, 0, OPT_VIDEO},
                                              {"help", no_argument, 0, 'h'},
                                              IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
@@ -78,9 +115,18 @@ static int parse_args(int argc, char **argv, render_opts *o)
     int rc = iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
     if (rc >= 0) return rc;
     if (!o->out) {
-        fprintf(stderr, "iird render: --out FILE is required (see iird render --help)\n");
+        fprintf(stderr, "iird render: --out %s is required (see iird render --help)\n",
+                o->anim ? "DIR" : "FILE");
         return IIRD_EXIT_USAGE;
     }
+    const char *anim_only = o->frames_arg ? "--frames" : o->format_arg ? "--format" : "--video";
+    if (!o->anim && (o->frames_arg || o->format_arg || o->video)) {
+        fprintf(stderr, "iird render: %s needs --anim (see iird render --help)\n", anim_only);
+        return IIRD_EXIT_USAGE;
+    }
+    if (!o->method) o->method = o->anim ? "iir" : "pt";
+    if (!o->size_given && o->anim) o->width = 1280, o->height = 720;
+    if (o->anim) return -1;
     iir_error err = {0};
     if (iird_check_output(o->out, &err) != IIR_OK) return iird_report("render", &err);
     return -1;
@@ -104,7 +150,7 @@ static iir_status render_still(const render_opts *o, iir_method *m, const iir_sc
     iird_progress_start(&bar, "render", o->params.spp);
     iir_status st = iir_method_render(m, &view, img, &fs, err);
     *sum = fs;
-    while (st == IIR_OK && iir_method_can_refine(m) &&
+    while (st == IIR_OK && iir_method_can_refine(m) && !fs.converged &&
            fs.samples_per_pixel < (uint64_t)o->params.spp) {
         iird_progress_update(&bar, (double)fs.samples_per_pixel);
         if (iird_interrupted())
@@ -138,9 +184,15 @@ static void print_summary(const render_opts *o, const iir_scene *scene, const ii
 
 int iird_cmd_render(int argc, char **argv)
 {
-    render_opts o = {.method = "pt", .width = 512, .height = 512, .params = iir_params_default()};
+    render_opts o = {.width = 512,
+                     .height = 512,
+                     .end = -1,
+                     .argc = argc,
+                     .argv = argv,
+                     .params = iir_params_default()};
     int rc = parse_args(argc, argv, &o);
     if (rc >= 0) return rc;
+    if (o.anim) return iird_render_anim(&o);
 
     iir_error err = {0};
     iir_scene *scene = NULL;

@@ -12,6 +12,7 @@ static void usage(FILE *f)
     fprintf(f, "usage: iird <command> [options]   (iird <command> --help for details)\n"
                "\n"
                "commands:\n"
+               "  serve      serve the web client and live frames over WebSockets\n"
                "  render     render a still of a scene to PNG, EXR or PFM\n"
                "  bench      time methods over a moving light against path-traced references\n"
                "  raybench   measure the machine's raw Embree ray rate and the path tracer's\n"
@@ -28,6 +29,7 @@ int main(int argc, char **argv)
         printf("iird %s (CGAL %s)\n", IIR_VERSION, iir_tri_cgal_version());
         return 0;
     }
+    if (!strcmp(cmd, "serve")) return iird_cmd_serve(argc - 1, argv + 1);
     if (!strcmp(cmd, "render")) return iird_cmd_render(argc - 1, argv + 1);
     if (!strcmp(cmd, "raybench")) return iird_cmd_raybench(argc - 1, argv + 1);
     if (!strcmp(cmd, "bench")) return iird_cmd_bench(argc - 1, argv + 1);

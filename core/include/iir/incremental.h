@@ -167,6 +167,27 @@ iir_incr_params iir_incr_get_params(const iir_incr *inc);
  * next update/destroy; read it only with tri.h's const functions. */
 const struct iir_tri *iir_incr_tri(const iir_incr *inc);
 
+/* For drawing the domain: the disk points (x y interleaved, disk units of the last update's pose,
+ * so outside the disk for VPLs that left the cone) of the VPLs the last update removed --
+ * invalidated, then deleted (a regeneration's discarded survivors included); *n gets their
+ * number, invalidated + deleted of that update. Valid until the next update/destroy. */
+const double *iir_incr_removed(const iir_incr *inc, uint32_t *n);
+
+/* Updates so far; the VPLs the last update created have birth == iir_incr_updates - 1. */
+uint32_t iir_incr_updates(const iir_incr *inc);
+
+/* For progressive refinement: a fresh VPL set independent of the live one, made as a
+ * regeneration makes it -- N points of a Hammersley set on the spot's disk, rotated by offsets
+ * from (seed, stream) (a family of streams apart from the regenerations' own), one closest-hit
+ * ray each -- and weighted uniformly, Phi_i = I0 rho_i falloff(|s_i|) pi R^2 / count (the rotated
+ * set is uniform on the disk, so this is unbiased). Written to out[0 .. *n) with ids 0 .. *n - 1,
+ * birth iir_incr_updates - 1, no shadow maps; *n <= N (a point off the disk is skipped, as in a
+ * regeneration). The live set, its triangulation and its counters are not touched; rays are
+ * added to *rays (may be NULL). IIR_ERR_INVALID for a bad spot or cap < N. */
+iir_status iir_incr_sample_set(const iir_incr *inc, const iir_light *spot, uint64_t stream,
+                               iir_vpl *out, uint32_t cap, uint32_t *n, iir_raystats *rays,
+                               iir_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -25,12 +25,15 @@ struct iir_scene;
 /* Every parameter any method reads; each method documents which ones it uses. Ranges are checked
  * by iir_params_validate. */
 typedef struct iir_params {
-    int spp;       /* pt: samples per pixel per render/refine call, [1, 1<<20] */
-    int bounces;   /* pt, ir: light bounces: 1 = direct only, 2 = one diffuse bounce, [1, 1000];
-                      iir is one bounce by construction */
-    uint64_t seed; /* all randomness derives from it */
-    bool jitter;   /* pt: box-filter each pixel (true) or shoot through its centre, as the
-                      interactive methods do (false; for references that compare like with like) */
+    int spp;           /* pt: samples per pixel per render/refine call, [1, 1<<20] */
+    int bounces;       /* pt, ir: light bounces: 1 = direct only, 2 = one diffuse bounce, [1, 1000];
+                          iir is one bounce by construction */
+    uint64_t seed;     /* all randomness derives from it */
+    bool jitter;       /* pt and the refinement of ir/iir: box-filter each pixel (true) or shoot
+                          through its centre, as interactive frames do (false; for references that
+                          compare like with like) */
+    int refine_passes; /* progressive refinement is converged after this many passes (ir, iir:
+                          refine calls; pt: render + refine calls of `spp` each), [1, 4096] */
 
     /* VPL methods (ir, iir) */
     int vpls;                  /* N: light paths (ir) or the VPL set's size (iir), [1, 16384] */
@@ -83,8 +86,10 @@ typedef struct iir_frame_stats {
     double total_ms;
     double phase_ms[IIR_PHASE_COUNT];
     iir_raystats rays;
-    uint64_t samples_per_pixel; /* pt: accumulated in the image so far */
-    iir_vpl_counts vpl;
+    uint64_t samples_per_pixel; /* pt: samples accumulated in the image so far; ir, iir: refinement
+                                   passes in the image (0 for an interactive frame) */
+    bool converged;             /* refinement reached params.refine_passes (see refine) */
+    iir_vpl_counts vpl;         /* refinement: count = the size of the pass's VPL set */
 } iir_frame_stats;
 
 const char *iir_phase_name(iir_phase phase);
@@ -109,11 +114,61 @@ iir_status iir_method_render(iir_method *m, const iir_view *view, iir_image *out
  * *n = 0 for methods without VPLs. Valid until the next render or destroy. */
 const iir_vpl *iir_method_vpls(const iir_method *m, uint32_t *n);
 
-/* Optional (check iir_method_can_refine): improves the last rendered frame with more work (for pt,
- * `spp` more samples per pixel) and writes the improved frame to out, which must have the size of
- * that frame. IIR_ERR_UNSUPPORTED if the method cannot, IIR_ERR_INVALID if nothing was rendered. */
+/* Optional (check iir_method_can_refine): improves the last rendered frame with more work and
+ * writes the improved frame to out, which must have the size of that frame. Any render starts
+ * over (a new view). IIR_ERR_UNSUPPORTED if the method cannot, IIR_ERR_INVALID if nothing was
+ * rendered (or the last render failed).
+ *  - pt: `spp` more samples per pixel per call; converged once the image holds refine_passes x spp
+ *    samples, but it keeps adding samples when asked (iird render asks for an exact count).
+ *  - ir, iir: one pass of refine.h per call (jittered camera rays, one interleaved VPL subset per
+ *    pixel with exact visibility, no filter; after every interleave^2 passes a fresh, independent
+ *    VPL set; the live set is left exactly as it was). samples_per_pixel = passes so far. Once
+ *    converged (refine_passes passes) a call does no work and only writes the frame again.
+ * The caller stops asking when stats->converged. */
 bool iir_method_can_refine(const iir_method *m);
 iir_status iir_method_refine(iir_method *m, iir_image *out, iir_frame_stats *stats, iir_error *err);
+
+/* Optional: lets a refine call end early (a live session's new input): fn(ctx) is polled from the
+ * method's threads during refine; once it returns true the call returns IIR_ERR_INTERRUPTED with
+ * the passes before it kept and `out` unspecified. Render calls never stop early. A no-op for
+ * methods whose refine steps are short (pt). fn NULL = never stop. */
+void iir_method_set_stop(iir_method *m, iir_stop_fn fn, void *ctx);
+
+/* ---- the light's domain, for drawing (optional) ---- */
+
+/* One VPL site in the spot's disk, in disk units normalised to radius 1 (s / R). */
+typedef struct iir_domain_site {
+    float x, y;
+    uint32_t id; /* the VPL's id (iir_method_vpls) */
+    uint8_t flags;
+} iir_domain_site;
+
+enum {
+    IIR_SITE_NEW = 1, /* born in the last frame */
+    IIR_SITE_NULL = 2 /* null sample: its ray escaped or hit an emitter */
+};
+
+/* The domain of the last frame. Sites are in the order (ascending id) of iir_method_vpls. */
+typedef struct iir_domain {
+    uint32_t num_sites;
+    const iir_domain_site *sites;
+    uint32_t num_edges;
+    const uint32_t (*edges)[2];    /* Delaunay edges, indices into sites, first < second */
+    uint32_t num_cells;            /* == num_sites; cell k belongs to sites[k] */
+    const uint32_t *cell_start;    /* num_cells + 1 entries: cell k is
+                                      cell_points[cell_start[k] .. cell_start[k + 1]) */
+    const float (*cell_points)[2]; /* Voronoi cells clipped to the unit disk, counter-clockwise,
+                                      not closed; arcs drawn as chords (tri.h) */
+    uint32_t num_removed;
+    const float (*removed)[2]; /* sites removed in the last frame (invalidated or deleted), where
+                                  the frame's light saw them: outside the unit disk for sites that
+                                  left the cone */
+} iir_domain;
+
+/* Fills *out for methods with a disk domain (iir, after a frame); false (and *out zeroed)
+ * otherwise or when out of memory. The pointers are owned by the method and valid until the next
+ * render or destroy. */
+bool iir_method_domain(iir_method *m, iir_domain *out);
 
 #ifdef __cplusplus
 }

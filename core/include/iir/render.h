@@ -130,6 +130,40 @@ iir_status iir_renderer_frame(iir_renderer *r, const iir_camera *cam, const iir_
                               const iir_indirect_params *p, uint64_t seed, iir_image *out,
                               iir_render_timing *t, iir_raystats *st, iir_error *err);
 
+/* ---- one pass of progressive refinement (refine.h averages them) ----
+ *
+ * A pass differs from a frame in three ways:
+ *  - Pixel (x, y)'s camera ray goes through (x + jitter.x, y + jitter.y). Unless that is the
+ *    centre (0.5, 0.5), the pass renders its own G-buffer and the renderer forgets its cached
+ *    pixel-centre one, so the next frame renders it again (frames stay exactly as without passes).
+ *  - Visibility is always exact occlusion rays; there is no filter.
+ *  - Pixel (x, y) evaluates subset ((y mod n) n + (x mod n) + shift) mod n^2 with the subset's flux
+ *    scaled by n^2 (not N / |subset|). The n^2 passes with shift 0 .. n^2 - 1 thus give every
+ *    pixel every subset once, and their mean is exactly the all-VPL sum (at pixel centres:
+ *    iir_renderer_frame with interleave 1 and exact rays), whatever the subsets' sizes.
+ * Direct light is a frame's: with emissive triangles pass a new seed per pass for new samples. */
+typedef struct iir_pass_params {
+    int interleave;  /* n, [1, 8] */
+    uint32_t shift;  /* [0, n^2) */
+    iir_vec2 jitter; /* in [0, 1]^2; (0.5, 0.5) = the pixel centre */
+    float clamp;     /* as iir_indirect_params.clamp */
+} iir_pass_params;
+
+/* A hook that lets a long pass end early: called (from any of the renderer's threads, so it must
+ * be thread-safe, e.g. an atomic load) between a pass's phases and before each of its indirect
+ * tiles; once it returns true the pass skips its remaining work and fails with
+ * IIR_ERR_INTERRUPTED. Frames (iir_renderer_frame) never stop early. fn NULL = never stop. */
+typedef bool (*iir_stop_fn)(void *ctx);
+void iir_renderer_set_stop(iir_renderer *r, iir_stop_fn fn, void *ctx);
+
+/* Renders one pass into out (every pixel written), as iir_renderer_frame does a frame; the same
+ * errors, plus IIR_ERR_INVALID for a shift or jitter out of range, and IIR_ERR_INTERRUPTED when
+ * the stop hook asked (out is then unspecified). */
+iir_status iir_renderer_pass(iir_renderer *r, const iir_camera *cam, const iir_light *lights,
+                             uint32_t num_lights, const iir_vpl *vpls, uint32_t num_vpls,
+                             const iir_pass_params *p, uint64_t seed, iir_image *out,
+                             iir_render_timing *t, iir_raystats *st, iir_error *err);
+
 #ifdef __cplusplus
 }
 #endif

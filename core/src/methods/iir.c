@@ -3,15 +3,42 @@
  * light of the view, renders shadow maps only for the VPLs born this frame (a map lives as long as
  * its VPL: the scene is static), and shades with the shared VPL renderer. One bounce by
  * construction. Uses params vpls, kmin, kmax, weights, regen_threshold, seed, visibility, sm_res,
- * sm_bias, interleave, clamp. Direct light comes from every light of the view. */
+ * sm_bias, interleave, clamp. Direct light comes from every light of the view.
+ *
+ * Refinement (refine.h; uses refine_passes, jitter, interleave, clamp): sweep 0 shades the live
+ * set, sweep s >= 1 a fresh set sampled as a regeneration would (iir_incr_sample_set, stream
+ * (frame, s)) into a buffer of this file, so the live set is exactly as before when frames resume.
+ * The domain (iir_method_domain) is drawn from the step's triangulation on demand into buffers of
+ * this file that grow with the set and are reused. */
 #include <stdlib.h>
+#include <string.h>
 
 #include "iir/method.h"
+#include "iir/refine.h"
 #include "iir/rng.h"
 #include "iir/scene.h"
 #include "iir/shadowmap.h"
+#include "iir/tri.h"
 #include "method_internal.h"
 #include "timer.h"
+
+/* The domain drawing's buffers (grown, never shrunk) and whether they hold the last frame's. */
+typedef struct domain_bufs {
+    bool valid;
+    iir_domain_site *sites;
+    size_t sites_cap;
+    uint32_t *pairs; /* [2 edges_cap]: id pairs from tri.h, then index pairs in place */
+    size_t edges_cap;
+    uint32_t *cell_start; /* [num_sites + 1] */
+    size_t cell_start_cap;
+    float (*points)[2];
+    size_t points_cap;
+    double *xy; /* one cell polygon from tri.h */
+    size_t xy_cap;
+    float (*removed)[2];
+    size_t removed_cap;
+    iir_domain d;
+} domain_bufs;
 
 typedef struct iir_state {
     const iir_scene *scene;
@@ -20,7 +47,35 @@ typedef struct iir_state {
     iir_renderer *renderer;
     iir_incr *incr;
     uint32_t frame;
+    iir_refine *refine;
+    iir_light spot; /* the spot of the frame being refined */
+    iir_vpl *fresh; /* [params.vpls]: refinement's fresh sets */
+    uint32_t fresh_n;
+    uint32_t refine_frame; /* the frame being refined: the fresh sets' stream */
+    domain_bufs dom;
 } iir_state;
+
+static void free_domain(domain_bufs *b)
+{
+    free(b->sites);
+    free(b->pairs);
+    free(b->cell_start);
+    free(b->points);
+    free(b->xy);
+    free(b->removed);
+}
+
+static void iir_m_destroy(void *state)
+{
+    iir_state *s = state;
+    if (!s) return;
+    iir_renderer_destroy(s->renderer);
+    iir_refine_destroy(s->refine);
+    iir_incr_destroy(s->incr);
+    free(s->fresh);
+    free_domain(&s->dom);
+    free(s);
+}
 
 static iir_incr_params incr_params(const iir_params *p)
 {
@@ -45,24 +100,16 @@ static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const i
     iir_incr_params ip = incr_params(params);
     iir_status st = iir_incr_create(scene, rt, &ip, &s->incr, err);
     s->renderer = st == IIR_OK ? iir_renderer_create(scene, rt) : NULL;
-    if (st == IIR_OK && !s->renderer)
+    s->refine = st == IIR_OK ? iir_refine_create() : NULL;
+    s->fresh = st == IIR_OK ? malloc(sizeof(iir_vpl) * (size_t)params->vpls) : NULL;
+    if (st == IIR_OK && (!s->renderer || !s->refine || !s->fresh))
         st = iir_fail(err, IIR_ERR_NOMEM, "out of memory creating iir's renderer");
     if (st != IIR_OK) {
-        iir_incr_destroy(s->incr);
-        free(s);
+        iir_m_destroy(s);
         return st;
     }
     *state = s;
     return IIR_OK;
-}
-
-static void iir_m_destroy(void *state)
-{
-    iir_state *s = state;
-    if (!s) return;
-    iir_renderer_destroy(s->renderer);
-    iir_incr_destroy(s->incr);
-    free(s);
 }
 
 static const iir_light *first_spot(const iir_view *view)
@@ -88,6 +135,8 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
                                iir_frame_stats *stats, iir_error *err)
 {
     iir_state *s = state;
+    iir_refine_end(s->refine);
+    s->dom.valid = false;
     iir_status st = iir_view_validate(view, err);
     if (st != IIR_OK) return st;
     const iir_light *spot = first_spot(view);
@@ -112,6 +161,12 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     st = iir_renderer_frame(s->renderer, &view->camera, view->lights, view->num_lights, vpls, n,
                             &ind, iir_hash3(s->params.seed, s->frame, 2), out, &rt, &stats->rays,
                             err);
+    iir_refine_params rp = iir_params_refine(&s->params);
+    if (st == IIR_OK)
+        st = iir_refine_begin(s->refine, &view->camera, view->lights, view->num_lights, out->width,
+                              out->height, &rp, err);
+    s->spot = *spot;
+    s->refine_frame = s->frame;
     stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
     stats->phase_ms[IIR_PHASE_SHADOWMAPS] = t2 - t1;
     iir_render_timing_to_stats(&rt, stats);
@@ -127,12 +182,176 @@ static const iir_vpl *iir_m_vpls(const void *state, uint32_t *n)
     return iir_incr_vpls(s->incr, n);
 }
 
+/* ---- refinement ---- */
+
+/* Sweep 0: the live set; sweep s: a fresh set sampled as a regeneration would. */
+static iir_status refine_vpls(void *ctx, uint32_t sweep, const iir_vpl **vpls, uint32_t *n,
+                              iir_raystats *st, iir_error *err)
+{
+    iir_state *s = ctx;
+    if (sweep == 0) {
+        *vpls = iir_incr_vpls(s->incr, n);
+        return IIR_OK;
+    }
+    uint64_t stream = ((uint64_t)s->refine_frame << 32) | sweep;
+    iir_status status = iir_incr_sample_set(s->incr, &s->spot, stream, s->fresh,
+                                            (uint32_t)s->params.vpls, &s->fresh_n, st, err);
+    *vpls = s->fresh;
+    *n = s->fresh_n;
+    return status;
+}
+
+static iir_status iir_m_refine(void *state, iir_image *out, iir_frame_stats *stats, iir_error *err)
+{
+    iir_state *s = state;
+    iir_refine_stats rs;
+    iir_status st = iir_refine_pass(s->refine, s->renderer, refine_vpls, s, out, &rs, err);
+    iir_refine_to_stats(&rs, stats);
+    return st;
+}
+
+/* ---- the domain, for drawing ---- */
+
+/* Grows *buf to hold n elements of size `size` (doubling); false when out of memory. */
+static bool grow(void **buf, size_t *cap, size_t n, size_t size)
+{
+    if (n <= *cap) return true;
+    size_t c = *cap ? *cap : 64;
+    while (c < n) c *= 2;
+    void *p = realloc(*buf, c * size);
+    if (!p) return false;
+    *buf = p;
+    *cap = c;
+    return true;
+}
+
+/* Index of the site with this id (sites sorted by id); UINT32_MAX when absent. */
+static uint32_t site_index(const iir_domain_site *sites, uint32_t n, uint32_t id)
+{
+    uint32_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (sites[mid].id < id)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < n && sites[lo].id == id ? lo : UINT32_MAX;
+}
+
+static bool domain_sites(iir_state *s, float inv_r, domain_bufs *b)
+{
+    uint32_t n = 0;
+    const iir_vpl *v = iir_incr_vpls(s->incr, &n);
+    if (!grow((void **)&b->sites, &b->sites_cap, n, sizeof *b->sites) ||
+        !grow((void **)&b->cell_start, &b->cell_start_cap, (size_t)n + 1, sizeof *b->cell_start))
+        return false;
+    uint32_t born = iir_incr_updates(s->incr) - 1;
+    for (uint32_t i = 0; i < n; i++)
+        b->sites[i] = (iir_domain_site){v[i].disk.x * inv_r, v[i].disk.y * inv_r, v[i].id,
+                                        (uint8_t)((v[i].birth == born ? IIR_SITE_NEW : 0) |
+                                                  (v[i].null_sample ? IIR_SITE_NULL : 0))};
+    b->d.num_sites = b->d.num_cells = n;
+    return true;
+}
+
+/* Delaunay edges as index pairs; edges whose ids are not sites are dropped. */
+static bool domain_edges(const iir_tri *tri, domain_bufs *b)
+{
+    size_t n = 0;
+    if (iir_tri_edges(tri, NULL, 0, &n) != IIR_TRI_OK) return false;
+    if (!grow((void **)&b->pairs, &b->edges_cap, n, 2 * sizeof *b->pairs)) return false;
+    if (iir_tri_edges(tri, b->pairs, b->edges_cap, &n) != IIR_TRI_OK) return false;
+    uint32_t kept = 0;
+    for (size_t e = 0; e < n; e++) {
+        uint32_t a = site_index(b->sites, b->d.num_sites, b->pairs[2 * e]);
+        uint32_t c = site_index(b->sites, b->d.num_sites, b->pairs[2 * e + 1]);
+        if (a == UINT32_MAX || c == UINT32_MAX) continue;
+        b->pairs[2 * kept] = a < c ? a : c;
+        b->pairs[2 * kept + 1] = a < c ? c : a;
+        kept++;
+    }
+    b->d.num_edges = kept;
+    return true;
+}
+
+/* Appends site k's clipped cell (empty when the triangulation does not know the id). */
+static bool domain_cell(const iir_tri *tri, uint32_t k, float inv_r, domain_bufs *b, size_t *total)
+{
+    size_t n = 0;
+    iir_tri_status ts = iir_tri_cell_polygon(tri, b->sites[k].id, b->xy, b->xy_cap / 2, &n);
+    if (ts == IIR_TRI_CAPACITY) {
+        if (!grow((void **)&b->xy, &b->xy_cap, 2 * n, sizeof *b->xy)) return false;
+        ts = iir_tri_cell_polygon(tri, b->sites[k].id, b->xy, b->xy_cap / 2, &n);
+    }
+    if (ts != IIR_TRI_OK) n = 0;
+    if (!grow((void **)&b->points, &b->points_cap, *total + n, sizeof *b->points)) return false;
+    for (size_t j = 0; j < n; j++) {
+        b->points[*total + j][0] = (float)(b->xy[2 * j] * inv_r);
+        b->points[*total + j][1] = (float)(b->xy[2 * j + 1] * inv_r);
+    }
+    *total += n;
+    return true;
+}
+
+static bool domain_removed(const iir_incr *inc, float inv_r, domain_bufs *b)
+{
+    uint32_t n = 0;
+    const double *xy = iir_incr_removed(inc, &n);
+    if (!grow((void **)&b->removed, &b->removed_cap, n, sizeof *b->removed)) return false;
+    for (uint32_t i = 0; i < n; i++) {
+        b->removed[i][0] = (float)(xy[2 * i] * inv_r);
+        b->removed[i][1] = (float)(xy[2 * i + 1] * inv_r);
+    }
+    b->d.num_removed = n;
+    return true;
+}
+
+static bool build_domain(iir_state *s, domain_bufs *b)
+{
+    const iir_tri *tri = iir_incr_tri(s->incr);
+    if (!tri || iir_tri_radius(tri) <= 0.0) return false;
+    float inv_r = (float)(1.0 / iir_tri_radius(tri));
+    memset(&b->d, 0, sizeof b->d);
+    /* a non-NULL polygon buffer, so that tri.h answers IIR_TRI_CAPACITY, not a size query */
+    if (!grow((void **)&b->xy, &b->xy_cap, 2 * 64, sizeof *b->xy)) return false;
+    if (!domain_sites(s, inv_r, b) || !domain_edges(tri, b)) return false;
+    size_t total = 0;
+    for (uint32_t k = 0; k < b->d.num_sites; k++) {
+        b->cell_start[k] = (uint32_t)total;
+        if (!domain_cell(tri, k, inv_r, b, &total)) return false;
+    }
+    b->cell_start[b->d.num_sites] = (uint32_t)total;
+    if (!domain_removed(s->incr, inv_r, b)) return false;
+    b->d.sites = b->sites;
+    b->d.edges = (const uint32_t(*)[2])b->pairs;
+    b->d.cell_start = b->cell_start;
+    b->d.cell_points = (const float(*)[2])b->points;
+    b->d.removed = (const float(*)[2])b->removed;
+    return true;
+}
+
+static bool iir_m_domain(void *state, iir_domain *out)
+{
+    iir_state *s = state;
+    if (!s->dom.valid) s->dom.valid = build_domain(s, &s->dom);
+    if (s->dom.valid) *out = s->dom.d;
+    return s->dom.valid;
+}
+
+static void iir_m_set_stop(void *state, iir_stop_fn fn, void *ctx)
+{
+    iir_renderer_set_stop(((iir_state *)state)->renderer, fn, ctx);
+}
+
 const iir_method_ops iir_method_iir = {
     .name = "iir",
     .summary = "incremental instant radiosity: VPLs kept across frames, few replaced per frame",
     .create = iir_m_create,
     .destroy = iir_m_destroy,
     .render = iir_m_render,
-    .refine = NULL,
+    .refine = iir_m_refine,
     .vpls = iir_m_vpls,
+    .domain = iir_m_domain,
+    .set_stop = iir_m_set_stop,
 };

@@ -8,11 +8,16 @@
  * The first two dimensions of path i (the point on the spot's disk) are the Halton point i in
  * bases 2 and 3, rotated by a per-frame offset (Cranley-Patterson): the same offset every frame
  * when ir_fresh is false, a new one every frame otherwise. Later dimensions come from PCG streams.
+ *
+ * Refinement (refine.h; uses refine_passes, jitter, interleave, clamp): sweep 0 shades the frame's
+ * own paths, sweep s >= 1 a second list of N paths traced with the frame seed hashed with s (new
+ * random numbers, same count), so the frame's list and the frame counter stay untouched.
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "iir/method.h"
+#include "iir/refine.h"
 #include "iir/rng.h"
 #include "iir/scene.h"
 #include "iir/shadowmap.h"
@@ -21,43 +26,60 @@
 #include "surface.h"
 #include "timer.h"
 
+/* A list of VPLs from N light paths; grows, never shrinks. */
+typedef struct vpl_list {
+    iir_vpl *v;
+    uint32_t n, cap;
+    uint32_t escaped; /* paths that left no VPL */
+    uint32_t next_id; /* the id of the next VPL */
+} vpl_list;
+
 typedef struct ir_state {
     const iir_scene *scene;
     const iir_rt *rt;
     iir_params params;
     iir_renderer *renderer;
-    iir_vpl *vpls;
-    uint32_t num_vpls, cap;
-    uint32_t frame, next_id, escaped;
+    vpl_list live;          /* the frame's VPLs (with shadow maps) */
+    vpl_list fresh;         /* refinement: the current sweep's VPLs (no maps) */
+    uint64_t seed_rendered; /* the frame seed of the last frame */
+    uint32_t frame;
     float *light_pmf; /* per view light, rebuilt each frame; grows with the light count */
     uint32_t pmf_cap;
+    iir_refine *refine;
 } ir_state;
 
 /* ---- light paths ---- */
 
-static bool push_vpl(ir_state *ir, const iir_vpl *v)
+static bool push_vpl(vpl_list *l, const iir_vpl *v)
 {
-    if (ir->num_vpls == ir->cap) {
-        uint32_t cap = ir->cap ? 2 * ir->cap : 256;
-        iir_vpl *grown = realloc(ir->vpls, sizeof(iir_vpl) * cap);
+    if (l->n == l->cap) {
+        uint32_t cap = l->cap ? 2 * l->cap : 256;
+        iir_vpl *grown = realloc(l->v, sizeof(iir_vpl) * cap);
         if (!grown) return false;
-        ir->vpls = grown;
-        ir->cap = cap;
+        l->v = grown;
+        l->cap = cap;
     }
-    ir->vpls[ir->num_vpls++] = *v;
+    l->v[l->n++] = *v;
     return true;
+}
+
+static void clear_list(vpl_list *l)
+{
+    for (uint32_t i = 0; i < l->n; i++) iir_smap_release(&l->v[i].smap);
+    l->n = 0;
+    l->escaped = 0;
 }
 
 /* Each light's share of the total flux (luminance), computed once per frame: a smooth-edged
  * spot's flux is a numeric integral. pmf[i] = 0 for all lights when none emits. */
-static void light_pmf(const iir_view *view, float *pmf)
+static void light_pmf(const iir_light *lights, uint32_t num_lights, float *pmf)
 {
     float total = 0.f;
-    for (uint32_t i = 0; i < view->num_lights; i++) {
-        pmf[i] = iir_luminance(iir_light_flux(&view->lights[i]));
+    for (uint32_t i = 0; i < num_lights; i++) {
+        pmf[i] = iir_luminance(iir_light_flux(&lights[i]));
         total += pmf[i];
     }
-    for (uint32_t i = 0; i < view->num_lights; i++) pmf[i] = total > 0.f ? pmf[i] / total : 0.f;
+    for (uint32_t i = 0; i < num_lights; i++) pmf[i] = total > 0.f ? pmf[i] / total : 0.f;
 }
 
 /* Chooses a light with probability pmf[i]; returns its index and pmf. */
@@ -81,8 +103,8 @@ static iir_vec2 halton2(uint32_t i, iir_vec2 shift)
     return iir_v2(a - floorf(a), b - floorf(b));
 }
 
-/* One light path: a VPL at each reflecting vertex; false when out of memory. */
-static bool trace_path(ir_state *ir, const iir_light *light, iir_vec3 beta, iir_vec2 u,
+/* One light path: a VPL at each reflecting vertex, appended to l; false when out of memory. */
+static bool trace_path(ir_state *ir, vpl_list *l, const iir_light *light, iir_vec3 beta, iir_vec2 u,
                        iir_rng *rng, iir_raystats *st)
 {
     iir_light_ray lr = iir_light_sample_emission(light, u);
@@ -94,13 +116,13 @@ static bool trace_path(ir_state *ir, const iir_light *light, iir_vec3 beta, iir_
         if (iir_is_black(beta) || !iir_rt_intersect(ir->rt, &ray, &hit, st, IIR_RAYS_VPL)) break;
         iir_surface sf = iir_surface_at(ir->scene, &hit, iir_neg(ray.dir));
         if (!iir_is_black(sf.mat->emission)) break; /* emitters absorb light paths */
-        iir_vpl v = {.id = ir->next_id++,
+        iir_vpl v = {.id = l->next_id++,
                      .position = sf.p,
                      .albedo = sf.mat->albedo,
                      .flux = iir_mul(beta, sf.mat->albedo),
                      .birth = ir->frame};
         iir_vpl_set_normal(&v, sf.ns);
-        if (!push_vpl(ir, &v)) return false;
+        if (!push_vpl(l, &v)) return false;
         /* Continue: cosine sampling makes the throughput the albedo; roulette on it. */
         float q = fminf(1.f, iir_max_comp(sf.mat->albedo));
         if (q <= 0.f || iir_rng_uniform(rng) >= q) break;
@@ -112,35 +134,33 @@ static bool trace_path(ir_state *ir, const iir_light *light, iir_vec3 beta, iir_
     return true;
 }
 
-static iir_status generate_vpls(ir_state *ir, const iir_view *view, iir_raystats *st,
+/* Replaces l by the VPLs of N light paths from `lights`, all randomness from frame_seed. */
+static iir_status generate_vpls(ir_state *ir, vpl_list *l, const iir_light *lights,
+                                uint32_t num_lights, uint64_t frame_seed, iir_raystats *st,
                                 iir_error *err)
 {
-    for (uint32_t i = 0; i < ir->num_vpls; i++) iir_smap_release(&ir->vpls[i].smap);
-    ir->num_vpls = 0;
-    ir->escaped = 0;
-    if (view->num_lights == 0) return IIR_OK;
-    if (view->num_lights > ir->pmf_cap) {
-        float *grown = realloc(ir->light_pmf, sizeof(float) * view->num_lights);
+    clear_list(l);
+    if (num_lights == 0) return IIR_OK;
+    if (num_lights > ir->pmf_cap) {
+        float *grown = realloc(ir->light_pmf, sizeof(float) * num_lights);
         if (!grown) return iir_fail(err, IIR_ERR_NOMEM, "ir: out of memory for the lights");
         ir->light_pmf = grown;
-        ir->pmf_cap = view->num_lights;
+        ir->pmf_cap = num_lights;
     }
-    light_pmf(view, ir->light_pmf);
-    uint64_t frame_seed = ir->params.ir_fresh ? iir_hash3(ir->params.seed, ir->frame, 0x1f)
-                                              : iir_hash3(ir->params.seed, 0, 0x1f);
+    light_pmf(lights, num_lights, ir->light_pmf);
     iir_rng shift_rng = iir_rng_make(frame_seed, UINT64_MAX);
     iir_vec2 shift = iir_rng_uniform2(&shift_rng);
     uint32_t n = (uint32_t)ir->params.vpls;
     for (uint32_t i = 0; i < n; i++) {
         iir_rng rng = iir_rng_make(frame_seed, i);
         float pmf;
-        uint32_t k = pick_light(ir->light_pmf, view->num_lights, iir_rng_uniform(&rng), &pmf);
-        const iir_light *light = &view->lights[k];
+        uint32_t k = pick_light(ir->light_pmf, num_lights, iir_rng_uniform(&rng), &pmf);
+        const iir_light *light = &lights[k];
         if (pmf <= 0.f) continue;
-        uint32_t before = ir->num_vpls;
-        if (!trace_path(ir, light, iir_v3s(1.f / ((float)n * pmf)), halton2(i, shift), &rng, st))
+        uint32_t before = l->n;
+        if (!trace_path(ir, l, light, iir_v3s(1.f / ((float)n * pmf)), halton2(i, shift), &rng, st))
             return iir_fail(err, IIR_ERR_NOMEM, "ir: out of memory for VPLs");
-        ir->escaped += ir->num_vpls == before;
+        l->escaped += l->n == before;
     }
     return IIR_OK;
 }
@@ -156,7 +176,10 @@ static iir_status ir_create(const iir_scene *scene, const iir_rt *rt, const iir_
     ir->rt = rt;
     ir->params = *params;
     ir->renderer = iir_renderer_create(scene, rt);
-    if (!ir->renderer) {
+    ir->refine = iir_refine_create();
+    if (!ir->renderer || !ir->refine) {
+        iir_renderer_destroy(ir->renderer);
+        iir_refine_destroy(ir->refine);
         free(ir);
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating ir's renderer");
     }
@@ -168,19 +191,22 @@ static void ir_destroy(void *state)
 {
     ir_state *ir = state;
     if (!ir) return;
-    for (uint32_t i = 0; i < ir->num_vpls; i++) iir_smap_release(&ir->vpls[i].smap);
-    free(ir->vpls);
+    clear_list(&ir->live);
+    clear_list(&ir->fresh);
+    free(ir->live.v);
+    free(ir->fresh.v);
     free(ir->light_pmf);
     iir_renderer_destroy(ir->renderer);
+    iir_refine_destroy(ir->refine);
     free(ir);
 }
 
 static void fill_counts(const ir_state *ir, uint32_t maps, iir_vpl_counts *c)
 {
-    c->count = ir->num_vpls;
+    c->count = ir->live.n;
     c->valid = 0;
-    c->inserted = ir->num_vpls;
-    c->null_samples = ir->escaped;
+    c->inserted = ir->live.n;
+    c->null_samples = ir->live.escaped;
     c->regenerated = 1;
     c->shadowmaps = maps;
 }
@@ -189,21 +215,29 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
                             iir_frame_stats *stats, iir_error *err)
 {
     ir_state *ir = state;
+    iir_refine_end(ir->refine);
     iir_status st = iir_view_validate(view, err);
     if (st != IIR_OK) return st;
     double t0 = iir_now_ms();
-    st = generate_vpls(ir, view, &stats->rays, err);
+    ir->seed_rendered = ir->params.ir_fresh ? iir_hash3(ir->params.seed, ir->frame, 0x1f)
+                                            : iir_hash3(ir->params.seed, 0, 0x1f);
+    st = generate_vpls(ir, &ir->live, view->lights, view->num_lights, ir->seed_rendered,
+                       &stats->rays, err);
     if (st != IIR_OK) return st;
     double t1 = iir_now_ms();
     uint32_t maps = 0;
     if (ir->params.visibility == IIR_VIS_SHADOWMAP)
-        maps = iir_smaps_build(ir->vpls, ir->num_vpls, ir->rt, ir->params.sm_res, &stats->rays);
+        maps = iir_smaps_build(ir->live.v, ir->live.n, ir->rt, ir->params.sm_res, &stats->rays);
     double t2 = iir_now_ms();
     iir_indirect_params ind = iir_params_indirect(&ir->params);
     iir_render_timing rt;
-    st = iir_renderer_frame(ir->renderer, &view->camera, view->lights, view->num_lights, ir->vpls,
-                            ir->num_vpls, &ind, iir_hash3(ir->params.seed, ir->frame, 2), out, &rt,
+    st = iir_renderer_frame(ir->renderer, &view->camera, view->lights, view->num_lights, ir->live.v,
+                            ir->live.n, &ind, iir_hash3(ir->params.seed, ir->frame, 2), out, &rt,
                             &stats->rays, err);
+    iir_refine_params rp = iir_params_refine(&ir->params);
+    if (st == IIR_OK)
+        st = iir_refine_begin(ir->refine, &view->camera, view->lights, view->num_lights, out->width,
+                              out->height, &rp, err);
     stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
     stats->phase_ms[IIR_PHASE_SHADOWMAPS] = t2 - t1;
     iir_render_timing_to_stats(&rt, stats);
@@ -216,8 +250,44 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
 static const iir_vpl *ir_vpls(const void *state, uint32_t *n)
 {
     const ir_state *ir = state;
-    *n = ir->num_vpls;
-    return ir->vpls;
+    *n = ir->live.n;
+    return ir->live.v;
+}
+
+/* ---- refinement ---- */
+
+/* Sweep 0: the frame's paths; sweep s: N new paths from the frame seed hashed with s. */
+static iir_status refine_vpls(void *ctx, uint32_t sweep, const iir_vpl **vpls, uint32_t *n,
+                              iir_raystats *st, iir_error *err)
+{
+    ir_state *ir = ctx;
+    vpl_list *l = &ir->live;
+    if (sweep > 0) {
+        uint32_t num_lights;
+        const iir_light *lights = iir_refine_lights(ir->refine, &num_lights);
+        l = &ir->fresh;
+        l->next_id = 0;
+        iir_status s = generate_vpls(ir, l, lights, num_lights,
+                                     iir_hash3(ir->seed_rendered, sweep, 0x3e), st, err);
+        if (s != IIR_OK) return s;
+    }
+    *vpls = l->v;
+    *n = l->n;
+    return IIR_OK;
+}
+
+static iir_status ir_refine(void *state, iir_image *out, iir_frame_stats *stats, iir_error *err)
+{
+    ir_state *ir = state;
+    iir_refine_stats rs;
+    iir_status st = iir_refine_pass(ir->refine, ir->renderer, refine_vpls, ir, out, &rs, err);
+    iir_refine_to_stats(&rs, stats);
+    return st;
+}
+
+static void ir_set_stop(void *state, iir_stop_fn fn, void *ctx)
+{
+    iir_renderer_set_stop(((ir_state *)state)->renderer, fn, ctx);
 }
 
 const iir_method_ops iir_method_ir = {
@@ -226,6 +296,8 @@ const iir_method_ops iir_method_ir = {
     .create = ir_create,
     .destroy = ir_destroy,
     .render = ir_render,
-    .refine = NULL,
+    .refine = ir_refine,
     .vpls = ir_vpls,
+    .domain = NULL,
+    .set_stop = ir_set_stop,
 };

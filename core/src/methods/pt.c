@@ -1,7 +1,8 @@
 /* pt.c -- the reference path tracer (method "pt"): next-event estimation with MIS for area
  * lights, Russian roulette, a maximum bounce count, deterministic seeds, OpenMP over tiles, and
  * progressive refinement (more samples into the same frame). Uses params spp, bounces, seed,
- * jitter.
+ * jitter, refine_passes (converged once render + refines put refine_passes x spp samples in the
+ * image; a refine call still adds its samples after that, so a caller can reach any count).
  *
  * Bounces count reflections: a light path light -> x_k -> ... -> x_1 -> camera has k of them, so
  * bounces = 1 is direct light only and bounces = 2 adds one diffuse bounce. Emitters seen directly
@@ -150,6 +151,7 @@ static void accumulate(pt_state *pt, int spp, iir_frame_stats *stats)
     stats->phase_ms[IIR_PHASE_TRACE] = iir_now_ms() - t0;
     stats->total_ms = stats->phase_ms[IIR_PHASE_TRACE];
     stats->samples_per_pixel = pt->spp_done;
+    stats->converged = pt->spp_done >= (uint64_t)pt->params.refine_passes * (uint64_t)spp;
 }
 
 static void resolve(const pt_state *pt, iir_image *out)

@@ -1,0 +1,200 @@
+/* bench_refs.c -- the path-traced references of `iird bench` and their on-disk cache keyed by a
+ * content hash (see bench.h). Not scoring (bench.c). */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "bench.h"
+#include "cli.h"
+
+/* Bump when pt or the reference settings change what a cached file would hold. */
+static const char CACHE_TAG[] = "iir-bench-ref-v1";
+
+/* ---- hashing ---- */
+
+static uint64_t fnv1a(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 0x100000001b3ull;
+    return h;
+}
+
+#define HASH(h, x) fnv1a((h), &(x), sizeof(x))
+
+uint64_t iird_bench_scene_hash(const iir_scene *s)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    h = HASH(h, s->num_triangles);
+    for (uint32_t t = 0; t < s->num_triangles; t++) {
+        for (int k = 0; k < 3; k++) h = HASH(h, s->positions[s->indices[3 * t + k]]);
+        const iir_material *m = &s->material_list[s->materials[t]];
+        h = HASH(h, m->albedo);
+        h = HASH(h, m->emission);
+    }
+    return h;
+}
+
+/* Field by field, so padding and the name's unused bytes never enter the key. */
+static uint64_t hash_light(uint64_t h, const iir_light *l)
+{
+    int32_t type = (int32_t)l->type;
+    h = HASH(h, type);
+    h = HASH(h, l->position);
+    h = HASH(h, l->direction);
+    h = HASH(h, l->up);
+    h = HASH(h, l->cone_angle);
+    h = HASH(h, l->smooth);
+    return HASH(h, l->intensity);
+}
+
+static uint64_t ref_key(const iird_bench *b, const iir_view *v, const iir_params *p)
+{
+    uint64_t h = fnv1a(0xcbf29ce484222325ull, CACHE_TAG, sizeof CACHE_TAG);
+    h = HASH(h, b->scene_hash);
+    h = HASH(h, v->num_lights);
+    for (uint32_t i = 0; i < v->num_lights; i++) h = hash_light(h, &v->lights[i]);
+    h = HASH(h, v->camera.position);
+    h = HASH(h, v->camera.target);
+    h = HASH(h, v->camera.up);
+    h = HASH(h, v->camera.fov_y);
+    int32_t ints[4] = {b->o->width, b->o->height, p->spp, p->bounces};
+    uint8_t jitter = p->jitter;
+    h = HASH(h, ints);
+    h = HASH(h, p->seed);
+    return HASH(h, jitter);
+}
+
+/* ---- the cache folder ---- */
+
+/* mkdir -p; true when the folder exists afterwards. */
+static bool make_dirs(const char *path)
+{
+    char buf[4096];
+    snprintf(buf, sizeof buf, "%s", path);
+    for (char *p = buf + 1; *p; p++)
+        if (*p == '/') {
+            *p = '\0';
+            if (mkdir(buf, 0777) != 0 && errno != EEXIST) return false;
+            *p = '/';
+        }
+    struct stat sb;
+    return (mkdir(buf, 0777) == 0 || errno == EEXIST) && stat(buf, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+/* --ref-cache DIR, else $XDG_CACHE_HOME/iir/refs, else out/refcache; "" turns the cache off. */
+static void choose_cache_dir(iird_bench *b)
+{
+    const char *opt = b->o->ref_cache, *xdg = getenv("XDG_CACHE_HOME");
+    if (opt)
+        snprintf(b->cache_dir, sizeof b->cache_dir, "%s", opt);
+    else if (xdg && *xdg)
+        snprintf(b->cache_dir, sizeof b->cache_dir, "%s/iir/refs", xdg);
+    else
+        snprintf(b->cache_dir, sizeof b->cache_dir, "out/refcache");
+    if (b->cache_dir[0] && !make_dirs(b->cache_dir)) {
+        fprintf(stderr, "iird bench: warning: cannot create the reference cache %s: %s\n",
+                b->cache_dir, strerror(errno));
+        b->cache_dir[0] = '\0';
+    }
+}
+
+/* The cached reference, or NULL (missing, unreadable or of another size). */
+static iir_image *cache_get(const iird_bench *b, uint64_t key)
+{
+    char path[4200];
+    iir_image *img = NULL;
+    snprintf(path, sizeof path, "%s/%016llx.pfm", b->cache_dir, (unsigned long long)key);
+    if (access(path, R_OK) != 0 || iir_image_read_pfm(path, &img, NULL) != IIR_OK) return NULL;
+    if (img->width != b->o->width || img->height != b->o->height) {
+        iir_image_destroy(img);
+        return NULL;
+    }
+    return img;
+}
+
+/* Writes through a temporary file and a rename, so a concurrent or interrupted run never leaves
+ * half a file under the key. */
+static void cache_put(const iird_bench *b, uint64_t key, const iir_image *img)
+{
+    char path[4200], tmp[4300];
+    iir_error err = {0};
+    snprintf(path, sizeof path, "%s/%016llx.pfm", b->cache_dir, (unsigned long long)key);
+    snprintf(tmp, sizeof tmp, "%s.%ld.tmp.pfm", path, (long)getpid());
+    if (iir_image_write_pfm(img, tmp, &err) != IIR_OK || rename(tmp, path) != 0) {
+        fprintf(stderr, "iird bench: warning: reference cache: cannot write %s\n", path);
+        remove(tmp);
+    }
+}
+
+/* ---- rendering ---- */
+
+static iir_status save_image(const iird_bench *b, const iird_bench_refset *rs, int i,
+                             iir_error *err)
+{
+    if (!b->o->save_images || !b->o->out_dir) return IIR_OK;
+    char path[4200];
+    if (rs->bounces == 2)
+        snprintf(path, sizeof path, "%s/ref_%05d.pfm", b->o->out_dir, b->first + i);
+    else
+        snprintf(path, sizeof path, "%s/ref_b%d_%05d.pfm", b->o->out_dir, rs->bounces,
+                 b->first + i);
+    return iir_image_write(rs->img[i], path, 0.f, err);
+}
+
+/* Reference of run frame i into rs->img[i]: from the cache, else rendered with pt (created on
+ * first need into *pt) and cached. */
+static iir_status reference(iird_bench *b, iird_bench_refset *rs, const iir_params *p,
+                            iir_method **pt, int i, iir_error *err)
+{
+    iir_view v = iird_bench_view(b, i);
+    uint64_t key = ref_key(b, &v, p);
+    if (b->cache_dir[0] && (rs->img[i] = cache_get(b, key))) return b->refs_cached++, IIR_OK;
+    iir_status st = *pt ? IIR_OK : iir_method_create("pt", b->scene, b->rt, p, pt, err);
+    rs->img[i] = iir_image_create(b->o->width, b->o->height);
+    if (!rs->img[i]) return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
+    iir_frame_stats fs;
+    if (st == IIR_OK) st = iir_method_render(*pt, &v, rs->img[i], &fs, err);
+    if (st == IIR_OK && b->cache_dir[0]) cache_put(b, key, rs->img[i]);
+    return st;
+}
+
+static iir_status refset_render(iird_bench *b, iird_bench_refset *rs, iird_progress *bar, int *done,
+                                iir_error *err)
+{
+    iir_params p = b->o->params;
+    p.spp = b->o->ref_spp;
+    p.bounces = rs->bounces;
+    p.jitter = b->o->ref_aa;
+    iir_method *pt = NULL;
+    iir_status st = IIR_OK;
+    for (int i = 0; st == IIR_OK && i < b->frames; i++) {
+        if (!iird_bench_is_ref_frame(b, i)) continue;
+        if (iird_interrupted()) st = iir_fail(err, IIR_ERR_INTERRUPTED, "interrupted");
+        if (st == IIR_OK) st = reference(b, rs, &p, &pt, i, err);
+        if (st == IIR_OK) st = save_image(b, rs, i, err);
+        iird_progress_update(bar, ++*done);
+    }
+    iir_method_destroy(pt);
+    return st;
+}
+
+iir_status iird_bench_references(iird_bench *b, iir_error *err)
+{
+    if (b->o->ref_spp == 0) return IIR_OK;
+    double t0 = iird_now_ms();
+    choose_cache_dir(b);
+    for (int i = 0; i < b->frames; i++) b->refs_total += iird_bench_is_ref_frame(b, i);
+    b->refs_total *= b->num_refsets;
+    int done = 0;
+    iird_progress bar;
+    iird_progress_start(&bar, "references", b->refs_total);
+    iir_status st = IIR_OK;
+    for (int s = 0; st == IIR_OK && s < b->num_refsets; s++)
+        st = refset_render(b, &b->refsets[s], &bar, &done, err);
+    iird_progress_finish(&bar);
+    b->refs_s = (iird_now_ms() - t0) / 1e3;
+    return st;
+}

@@ -1,0 +1,244 @@
+/* cmd_serve.c -- `iird serve`: options, checks and the server's configuration; the daemon itself
+ * is server.c's. */
+#include <arpa/inet.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "server.h"
+
+typedef struct serve_opts {
+    iird_server_config cfg;
+    const char *scene_arg, *web_opt, *method;
+    bool size_given;
+} serve_opts;
+
+static void serve_usage(FILE *f)
+{
+    fprintf(
+        f,
+        "usage: iird serve [SCENE] [options]\n"
+        "\n"
+        "Serves the web client and live frames over WebSockets (docs/protocol.md) until\n"
+        "Ctrl-C or SIGTERM. Prints 'iird: serving URL (scene)' on stdout once listening.\n"
+        "SCENE (or --scene) is what new sessions show: a name in the scenes directory, a\n"
+        "folder or a file; without it, the built-in Cornell box.\n"
+        "\n"
+        "  --host ADDR          IP address to bind (default 127.0.0.1; 0.0.0.0 = every one)\n"
+        "  --port N             TCP port (default 8080; 0 = any free port)\n"
+        "  --scene NAME|PATH    the startup scene\n"
+        "  --scenes DIR         where clients' scene names are looked up (default ./scenes)\n"
+        "  --web DIR            the web client's folder (default $IIR_WEB, ./web, the source's)\n"
+        "  --max-sessions N     open WebSocket sessions at most (default 8)\n"
+        "  --max-size WxH       largest frame a client may ask for (default 1920x1080)\n"
+        "  --max-vpls N         most VPLs a client may ask for (default 4096)\n"
+        "  --origin URL         allowed browser origin, repeatable (default: any origin on a\n"
+        "                       loopback address, else only the server's own)\n"
+        "  --token T            clients must send this token in hello\n"
+        "  --tls-cert F --tls-key F  serve https/wss with this PEM certificate and key\n"
+        "  --method NAME        a new session's method: pt | ir | iir (default iir)\n"
+        "  --size WxH           a new session's frame size (default 512x384)\n"
+        "  --verbose            libwebsockets notices on stderr\n"
+        "  -h, --help           this text\n"
+        "\n%s"
+        "  (here they set a new session's defaults, which are otherwise those of the state\n"
+        "  message in docs/protocol.md, e.g. spp 1; clients change them with params)\n"
+        "\n"
+        "Exit codes: 0 stopped by a signal, 1 cannot listen, 2 bad input, 3 file error,\n"
+        "64 usage.\n",
+        IIRD_METHOD_HELP);
+}
+
+enum {
+    OPT_HOST = 1,
+    OPT_PORT,
+    OPT_SCENE,
+    OPT_SCENES,
+    OPT_WEB,
+    OPT_MAX_SESSIONS,
+    OPT_MAX_SIZE,
+    OPT_MAX_VPLS,
+    OPT_ORIGIN,
+    OPT_TOKEN,
+    OPT_TLS_CERT,
+    OPT_TLS_KEY,
+    OPT_METHOD,
+    OPT_SIZE,
+    OPT_VERBOSE,
+};
+
+static iir_status parse_host(const char *arg, const char **out, iir_error *err)
+{
+    unsigned char addr[16];
+    if (!strcmp(arg, "localhost")) arg = "127.0.0.1";
+    if (inet_pton(AF_INET, arg, addr) != 1 && inet_pton(AF_INET6, arg, addr) != 1)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "--host '%s' is not an IP address (e.g. 127.0.0.1, 0.0.0.0, ::1)", arg);
+    *out = arg;
+    return IIR_OK;
+}
+
+static iir_status parse_int_opt(const char *arg, const char *what, long lo, long hi, int *out,
+                                iir_error *err)
+{
+    long v = 0;
+    iir_status st = iird_parse_int(arg, what, lo, hi, &v, err);
+    if (st == IIR_OK) *out = (int)v;
+    return st;
+}
+
+static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err)
+{
+    serve_opts *o = ctx;
+    iird_server_config *cfg = &o->cfg;
+    switch (c) {
+    case OPT_HOST:
+        return parse_host(arg, &cfg->host, err);
+    case OPT_PORT:
+        return parse_int_opt(arg, "--port", 0, 65535, &cfg->port, err);
+    case OPT_SCENE:
+        return o->scene_arg = arg, IIR_OK;
+    case OPT_SCENES:
+        return cfg->scenes_dir = arg, IIR_OK;
+    case OPT_WEB:
+        return o->web_opt = arg, IIR_OK;
+    case OPT_MAX_SESSIONS:
+        return parse_int_opt(arg, "--max-sessions", 1, 1024, &cfg->max_sessions, err);
+    case OPT_MAX_SIZE:
+        return iird_parse_size(arg, 4096, &cfg->limits.max_width, &cfg->limits.max_height, err);
+    case OPT_MAX_VPLS:
+        return parse_int_opt(arg, "--max-vpls", 1, 16384, &cfg->limits.max_vpls, err);
+    case OPT_ORIGIN:
+        if (cfg->num_origins == IIRD_MAX_ORIGINS)
+            return iir_fail(err, IIR_ERR_INVALID, "--origin: at most %d origins", IIRD_MAX_ORIGINS);
+        return cfg->origins[cfg->num_origins++] = arg, IIR_OK;
+    case OPT_TOKEN:
+        if (!*arg || strlen(arg) > 256)
+            return iir_fail(err, IIR_ERR_INVALID, "--token must have 1 to 256 bytes");
+        return cfg->token = arg, IIR_OK;
+    case OPT_TLS_CERT:
+        return cfg->tls_cert = arg, IIR_OK;
+    case OPT_TLS_KEY:
+        return cfg->tls_key = arg, IIR_OK;
+    case OPT_METHOD:
+        return o->method = arg, IIR_OK;
+    case OPT_SIZE:
+        o->size_given = true;
+        return iird_parse_size(arg, 4096, &cfg->defaults.width, &cfg->defaults.height, err);
+    case OPT_VERBOSE:
+        return cfg->verbose = true, IIR_OK;
+    }
+    return IIR_OK;
+}
+
+static bool is_dir(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+/* --web if given, else $IIR_WEB, else ./web, else the source tree's. */
+static const char *web_dir(const char *option)
+{
+    if (option) return option;
+    const char *env = getenv("IIR_WEB");
+    if (env && *env) return env;
+    if (is_dir("web")) return "web";
+    return IIR_SOURCE_DIR "/web";
+}
+
+static bool known_method(const char *name)
+{
+    for (const char *const *m = iir_method_names(); *m; m++)
+        if (!strcmp(*m, name)) return true;
+    return false;
+}
+
+static iir_status check_files(const iird_server_config *cfg, iir_error *err)
+{
+    if (!is_dir(cfg->web_dir))
+        return iir_fail(err, IIR_ERR_IO,
+                        "the web client's folder %s does not exist (give --web DIR or set "
+                        "IIR_WEB)",
+                        cfg->web_dir);
+    if (!cfg->tls_cert != !cfg->tls_key)
+        return iir_fail(err, IIR_ERR_INVALID, "--tls-cert and --tls-key go together");
+    const char *files[2] = {cfg->tls_cert, cfg->tls_key};
+    for (int i = 0; i < 2; i++) {
+        FILE *f = files[i] ? fopen(files[i], "rb") : NULL;
+        if (files[i] && !f)
+            return iir_fail(err, IIR_ERR_IO, "%s %s cannot be read", i ? "--tls-key" : "--tls-cert",
+                            files[i]);
+        if (f) fclose(f);
+    }
+    return IIR_OK;
+}
+
+/* Cross-option checks once everything is parsed. */
+static iir_status check(serve_opts *o, iir_error *err)
+{
+    iird_server_config *cfg = &o->cfg;
+    iird_settings *d = &cfg->defaults;
+    if (o->method) {
+        if (!known_method(o->method))
+            return iir_fail(err, IIR_ERR_INVALID, "--method %s is not a method (pt, ir, iir)",
+                            o->method);
+        snprintf(d->method, sizeof d->method, "%s", o->method);
+    }
+    if (d->width > cfg->limits.max_width || d->height > cfg->limits.max_height)
+        return iir_fail(err, IIR_ERR_INVALID, "--size %dx%d is larger than --max-size %dx%d",
+                        d->width, d->height, cfg->limits.max_width, cfg->limits.max_height);
+    if (d->width < 16 || d->height < 16)
+        return iir_fail(err, IIR_ERR_INVALID, "--size: each side must be at least 16");
+    if (d->params.vpls > cfg->limits.max_vpls)
+        return iir_fail(err, IIR_ERR_INVALID, "--vpls %d is more than --max-vpls %d",
+                        d->params.vpls, cfg->limits.max_vpls);
+    iir_status st = iir_params_validate(&d->params, err);
+    return st == IIR_OK ? check_files(cfg, err) : st;
+}
+
+int iird_cmd_serve(int argc, char **argv)
+{
+    static const struct option longopts[] = {
+        {"host", required_argument, 0, OPT_HOST},
+        {"port", required_argument, 0, OPT_PORT},
+        {"scene", required_argument, 0, OPT_SCENE},
+        {"scenes", required_argument, 0, OPT_SCENES},
+        {"web", required_argument, 0, OPT_WEB},
+        {"max-sessions", required_argument, 0, OPT_MAX_SESSIONS},
+        {"max-size", required_argument, 0, OPT_MAX_SIZE},
+        {"max-vpls", required_argument, 0, OPT_MAX_VPLS},
+        {"origin", required_argument, 0, OPT_ORIGIN},
+        {"token", required_argument, 0, OPT_TOKEN},
+        {"tls-cert", required_argument, 0, OPT_TLS_CERT},
+        {"tls-key", required_argument, 0, OPT_TLS_KEY},
+        {"method", required_argument, 0, OPT_METHOD},
+        {"size", required_argument, 0, OPT_SIZE},
+        {"verbose", no_argument, 0, OPT_VERBOSE},
+        {"help", no_argument, 0, 'h'},
+        IIRD_METHOD_LONGOPTS,
+        {0, 0, 0, 0}};
+    static const iird_command cmd = {"serve", longopts, serve_usage, parse_option};
+    serve_opts o = {.cfg = {.host = "127.0.0.1",
+                            .port = 8080,
+                            .max_sessions = 8,
+                            .limits = iird_limits_default(),
+                            .defaults = iird_settings_default()}};
+    const char *positional = NULL;
+    int rc = iird_parse_command(&cmd, argc, argv, &o, &o.cfg.defaults.params, &positional);
+    if (rc >= 0) return rc;
+    if (positional && o.scene_arg) {
+        fprintf(stderr, "iird serve: give the scene once (SCENE or --scene)\n");
+        return IIRD_EXIT_USAGE;
+    }
+    o.cfg.scene = o.scene_arg ? o.scene_arg : positional;
+    o.cfg.scenes_dir = iird_scenes_dir(o.cfg.scenes_dir);
+    o.cfg.web_dir = web_dir(o.web_opt);
+    iir_error err = {0};
+    if (check(&o, &err) != IIR_OK) return iird_report("serve", &err);
+    return iird_server_run(&o.cfg);
+}

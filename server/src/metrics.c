@@ -1,0 +1,123 @@
+/* metrics.c -- the daemon's counters and the /metrics and /healthz texts; not the stats message. */
+#include "metrics.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+
+static const double frame_bucket_s[IIRD_FRAME_BUCKETS] = {0.005, 0.01, 0.025, 0.05, 0.1,
+                                                          0.25,  0.5,  1.0,   2.5};
+
+void iird_metrics_init(iird_metrics *m)
+{
+    memset(m, 0, sizeof *m);
+    m->start_ms = iird_now_ms();
+    atomic_init(&m->sessions, 0);
+}
+
+void iird_metrics_frame_sent(iird_metrics *m, double render_ms)
+{
+    double s = render_ms / 1e3;
+    int b = 0;
+    while (b < IIRD_FRAME_BUCKETS && s > frame_bucket_s[b]) b++;
+    atomic_fetch_add(&m->frame_buckets[b], 1);
+    atomic_fetch_add(&m->frame_us_sum, (uint_fast64_t)(render_ms > 0 ? render_ms * 1e3 : 0));
+    atomic_fetch_add(&m->frames_sent, 1);
+}
+
+void iird_metrics_error(iird_metrics *m, iird_err code)
+{
+    if ((int)code >= 0 && code < IIRD_E_COUNT) atomic_fetch_add(&m->errors[code], 1);
+}
+
+static unsigned long long load(const atomic_uint_fast64_t *v)
+{
+    return (unsigned long long)atomic_load(v);
+}
+
+static void metric_head(FILE *f, const char *name, const char *type, const char *help)
+{
+    fprintf(f, "# HELP %s %s\n# TYPE %s %s\n", name, help, name, type);
+}
+
+static void section_sessions(FILE *f, const iird_metrics *m, const iird_metrics_session *sessions,
+                             size_t n)
+{
+    metric_head(f, "iird_sessions", "gauge", "Open WebSocket sessions.");
+    fprintf(f, "iird_sessions %d\n", atomic_load(&m->sessions));
+    metric_head(f, "iird_sessions_total", "counter", "Sessions ever opened.");
+    fprintf(f, "iird_sessions_total %llu\n", load(&m->sessions_total));
+    metric_head(f, "iird_session_memory_bytes", "gauge",
+                "Estimated memory of each open session (images, method, encoder, frames).");
+    for (size_t i = 0; i < n; i++)
+        fprintf(f, "iird_session_memory_bytes{session=\"%u\"} %llu\n", sessions[i].session,
+                (unsigned long long)sessions[i].bytes);
+}
+
+static void section_frames(FILE *f, const iird_metrics *m)
+{
+    metric_head(f, "iird_frames_sent_total", "counter", "Frames sent.");
+    fprintf(f, "iird_frames_sent_total %llu\n", load(&m->frames_sent));
+    metric_head(f, "iird_frames_dropped_total", "counter", "Frames replaced before sending.");
+    fprintf(f, "iird_frames_dropped_total %llu\n", load(&m->frames_dropped));
+    metric_head(f, "iird_frame_seconds", "histogram", "Render time of sent frames.");
+    unsigned long long cum = 0;
+    for (int b = 0; b < IIRD_FRAME_BUCKETS; b++) {
+        cum += load(&m->frame_buckets[b]);
+        fprintf(f, "iird_frame_seconds_bucket{le=\"%g\"} %llu\n", frame_bucket_s[b], cum);
+    }
+    cum += load(&m->frame_buckets[IIRD_FRAME_BUCKETS]);
+    fprintf(f, "iird_frame_seconds_bucket{le=\"+Inf\"} %llu\n", cum);
+    fprintf(f, "iird_frame_seconds_sum %.6f\n", (double)load(&m->frame_us_sum) / 1e6);
+    fprintf(f, "iird_frame_seconds_count %llu\n", cum);
+}
+
+static void section_traffic(FILE *f, const iird_metrics *m)
+{
+    metric_head(f, "iird_bytes_sent_total", "counter", "WebSocket payload bytes sent.");
+    fprintf(f, "iird_bytes_sent_total %llu\n", load(&m->bytes_sent));
+    metric_head(f, "iird_messages_total", "counter", "Client messages received.");
+    fprintf(f, "iird_messages_total %llu\n", load(&m->messages));
+    metric_head(f, "iird_errors_total", "counter", "Error replies by code.");
+    for (int c = 0; c < IIRD_E_COUNT; c++)
+        fprintf(f, "iird_errors_total{code=\"%s\"} %llu\n", iird_err_name((iird_err)c),
+                load(&m->errors[c]));
+}
+
+char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session *sessions,
+                              size_t num_sessions, size_t scenes_loaded)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    if (!f) return NULL;
+    section_sessions(f, m, sessions, num_sessions);
+    section_frames(f, m);
+    section_traffic(f, m);
+    metric_head(f, "iird_scenes_loaded", "gauge", "Scenes in memory.");
+    fprintf(f, "iird_scenes_loaded %zu\n", scenes_loaded);
+    metric_head(f, "iird_uptime_seconds", "gauge", "Seconds since start.");
+    fprintf(f, "iird_uptime_seconds %.3f\n", (iird_now_ms() - m->start_ms) / 1e3);
+    if (fclose(f) != 0) {
+        free(text);
+        return NULL;
+    }
+    return text;
+}
+
+char *iird_metrics_healthz(const iird_metrics *m)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    if (!f) return NULL;
+    fprintf(f, "{\"status\":\"ok\",\"sessions\":%d,\"uptime_s\":%.3f}\n", atomic_load(&m->sessions),
+            (iird_now_ms() - m->start_ms) / 1e3);
+    if (fclose(f) != 0) {
+        free(text);
+        return NULL;
+    }
+    return text;
+}

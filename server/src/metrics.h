@@ -1,0 +1,50 @@
+/* metrics.h -- the daemon's counters and the frame-time histogram, and the two texts built from
+ * them: GET /metrics (Prometheus text format 0.0.4, names in docs/protocol.md) and GET /healthz
+ * (JSON). Not the per-frame `stats` message (protocol.h) and not who calls what (server.c).
+ *
+ * Threads: every counter is a C11 atomic, so render workers (frames dropped) and the service
+ * thread (everything else) update them without a lock. The texts are built on the service thread.
+ */
+#ifndef IIRD_METRICS_H
+#define IIRD_METRICS_H
+
+#include <stdatomic.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "protocol.h"
+
+/* Upper bounds of the frame-time histogram buckets in seconds, +Inf implied after the last. */
+#define IIRD_FRAME_BUCKETS 9
+
+typedef struct iird_metrics {
+    double start_ms; /* iird_now_ms() at start, for the uptime */
+    atomic_int sessions;
+    atomic_uint_fast64_t sessions_total;
+    atomic_uint_fast64_t frames_sent, frames_dropped, bytes_sent, messages;
+    atomic_uint_fast64_t errors[IIRD_E_COUNT];
+    atomic_uint_fast64_t frame_buckets[IIRD_FRAME_BUCKETS + 1]; /* per bucket, not cumulative */
+    atomic_uint_fast64_t frame_us_sum;                          /* sum of render times, us */
+} iird_metrics;
+
+/* One open session as the memory gauge reports it. */
+typedef struct iird_metrics_session {
+    uint32_t session;
+    uint64_t bytes;
+} iird_metrics_session;
+
+void iird_metrics_init(iird_metrics *m);
+
+/* Counts one sent frame that took `render_ms` to render. */
+void iird_metrics_frame_sent(iird_metrics *m, double render_ms);
+void iird_metrics_error(iird_metrics *m, iird_err code);
+
+/* The /metrics text: malloc'd, NUL-terminated; NULL only when out of memory. */
+char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session *sessions,
+                              size_t num_sessions, size_t scenes_loaded);
+
+/* The /healthz JSON: {"status":"ok","sessions":N,"uptime_s":S}; malloc'd, NULL when out of
+ * memory. */
+char *iird_metrics_healthz(const iird_metrics *m);
+
+#endif

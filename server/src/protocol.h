@@ -1,0 +1,256 @@
+/* protocol.h -- the live protocol's messages (docs/protocol.md) as C values: parsing and validating
+ * client messages, applying them to a session's state all-or-nothing, and building the server's
+ * replies as JSON text and binary frame headers. No sockets, threads or sessions live here. */
+#ifndef IIRD_PROTOCOL_H
+#define IIRD_PROTOCOL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "iir/camera.h"
+#include "iir/light.h"
+#include "iir/method.h"
+
+struct iir_domain; /* method.h: the light's disk domain (sites, Delaunay edges, Voronoi cells) */
+
+enum {
+    IIRD_PROTOCOL_VERSION = 1,
+    IIRD_MAX_MESSAGE_BYTES = 65536,
+    IIRD_FRAME_HEADER_BYTES = 40,
+    IIRD_NO_SEQ = -1, /* a message without "seq" */
+};
+
+typedef enum iird_msg_type {
+    IIRD_MSG_HELLO,
+    IIRD_MSG_LIGHT,
+    IIRD_MSG_CAMERA,
+    IIRD_MSG_PARAMS,
+    IIRD_MSG_SCENE,
+    IIRD_MSG_PICK,
+    IIRD_MSG_SNAPSHOT,
+    IIRD_MSG_RECORD,
+} iird_msg_type;
+
+/* Error codes, in the order of docs/protocol.md's table; names via iird_err_name. */
+typedef enum iird_err {
+    IIRD_E_BAD_JSON,
+    IIRD_E_TOO_LARGE,
+    IIRD_E_BAD_TYPE,
+    IIRD_E_UNKNOWN_TYPE,
+    IIRD_E_UNKNOWN_FIELD,
+    IIRD_E_OUT_OF_RANGE,
+    IIRD_E_BAD_FIELD,
+    IIRD_E_NOT_READY,
+    IIRD_E_UNAUTHORIZED,
+    IIRD_E_UNSUPPORTED,
+    IIRD_E_RATE_LIMITED,
+    IIRD_E_SCENE_ERROR,
+    IIRD_E_BUSY,
+    IIRD_E_INTERNAL,
+    IIRD_E_COUNT
+} iird_err;
+
+const char *iird_err_name(iird_err code); /* "bad_json", ... */
+
+/* An error reply: code, the offending field as a path ("light.position[1]", "" for none), a
+ * message a user can act on, and the seq of the message when it had a valid one. */
+typedef struct iird_proto_error {
+    iird_err code;
+    char field[96];
+    char message[256];
+    int64_t seq; /* IIRD_NO_SEQ when absent */
+} iird_proto_error;
+
+/* Fills e's code, field (NULL or "" for none) and printf-style message, cut to fit at a UTF-8
+ * character boundary; leaves e->seq unchanged. Returns false, so callers can write
+ * `return iird_proto_fail(err, IIRD_E_BUSY, NULL, "...")`. For the daemon's own errors too. */
+bool iird_proto_fail(iird_proto_error *e, iird_err code, const char *field, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+/* Server limits that bound client values (from the serve command line). */
+typedef struct iird_limits {
+    int max_width, max_height, max_vpls;
+} iird_limits;
+
+/* The defaults of `iird serve`: 1920 x 1080, 4096 VPLs. */
+iird_limits iird_limits_default(void);
+
+/* Everything a `params` message can set: the method, its parameters, the frame and the stream. */
+typedef struct iird_settings {
+    char method[16];
+    iir_params params;
+    int width, height;
+    int quality; /* JPEG, [1, 100] */
+    float exposure;
+    bool refine; /* progressive refinement when idle */
+    bool domain; /* send domain messages */
+} iird_settings;
+
+iird_settings iird_settings_default(void);
+
+/* Which optional fields a message carried: bit (1u << field enum) set when present. */
+enum { IIRD_L_POSITION, IIRD_L_DIRECTION, IIRD_L_TARGET, IIRD_L_CONE, IIRD_L_INTENSITY };
+enum { IIRD_C_POSITION, IIRD_C_TARGET, IIRD_C_UP, IIRD_C_FOV };
+
+typedef struct iird_msg_light {
+    unsigned has;
+    iir_vec3 position, direction, target;
+    float cone_angle_deg;
+    bool intensity_is_scalar;
+    iir_vec3 intensity; /* RGB, or the scalar in .x */
+} iird_msg_light;
+
+typedef struct iird_msg_camera {
+    unsigned has;
+    iir_vec3 position, target, up;
+    float fov;
+} iird_msg_camera;
+
+/* Bits of iird_msg_params.has, in the order of docs/protocol.md's params table. */
+enum {
+    IIRD_P_METHOD,
+    IIRD_P_VPLS,
+    IIRD_P_KMIN,
+    IIRD_P_KMAX,
+    IIRD_P_WEIGHTS,
+    IIRD_P_VISIBILITY,
+    IIRD_P_INTERLEAVE,
+    IIRD_P_CLAMP,
+    IIRD_P_SM_RES,
+    IIRD_P_BOUNCES,
+    IIRD_P_SPP,
+    IIRD_P_WIDTH,
+    IIRD_P_HEIGHT,
+    IIRD_P_QUALITY,
+    IIRD_P_EXPOSURE,
+    IIRD_P_REFINE,
+    IIRD_P_REFINE_PASSES,
+    IIRD_P_DOMAIN,
+    IIRD_P_SEED,
+    IIRD_P_COUNT
+};
+
+/* A params message: the fields it had, applied onto a copy of the current settings. */
+typedef struct iird_msg_params {
+    unsigned long long has; /* bit per field, in the order of docs/protocol.md's params table */
+    iird_settings values;   /* only fields with their bit set are meaningful */
+} iird_msg_params;
+
+typedef struct iird_msg {
+    iird_msg_type type;
+    int64_t seq; /* IIRD_NO_SEQ when absent */
+    union {
+        struct {
+            int protocol;
+            char token[257];
+            char client[129];
+            bool has_token;
+        } hello;
+        iird_msg_light light;
+        iird_msg_camera camera;
+        iird_msg_params params;
+        struct {
+            char name[129];
+        } scene;
+        struct {
+            double x, y; /* checked against the frame size by the session */
+        } pick;
+        struct {
+            bool exr;
+        } snapshot;
+        struct {
+            bool start;
+            int fps;
+        } record;
+    } u;
+} iird_msg;
+
+/* Parses and validates one client text message (len bytes, not NUL-terminated) against the
+ * protocol's types and ranges (not against the session's state: see the apply functions).
+ * Returns false with *err filled on any problem; *out is then unspecified. */
+bool iird_parse_message(const char *text, size_t len, const iird_limits *limits, iird_msg *out,
+                        iird_proto_error *err);
+
+/* Apply a message to the session's state, all or nothing: on false *err is filled (but for
+ * err->seq, which is left as iird_parse_message set it) and the state is unchanged. Light:
+ * target/direction/position combined, intensity scalar scaling, then iir_light_validate. Camera:
+ * iir_camera_validate. Params: merged, then cross-field checks (kmin <= kmax <= vpls, limits) and
+ * iir_params_validate. */
+bool iird_apply_light(const iird_msg_light *m, iir_light *light, iird_proto_error *err);
+bool iird_apply_camera(const iird_msg_camera *m, iir_camera *camera, iird_proto_error *err);
+bool iird_apply_params(const iird_msg_params *m, const iird_limits *limits, iird_settings *settings,
+                       iird_proto_error *err);
+
+/* The session's check of a parsed `pick` against the current frame size: out_of_range naming
+ * pick.x or pick.y unless 0 <= x < width and 0 <= y < height. Sets err->seq from m. */
+bool iird_check_pick(const iird_msg *m, int width, int height, iird_proto_error *err);
+
+/* ---- replies: each returns a malloc'd NUL-terminated JSON text (NULL only on out-of-memory) ----
+ */
+
+typedef struct iird_state_view {
+    const char *scene;
+    const iir_light *light;
+    const iir_camera *camera;
+    const iird_settings *settings;
+} iird_state_view;
+
+char *iird_json_error(const iird_proto_error *e);
+char *iird_json_state(const iird_state_view *s, int64_t seq);
+/* scenes: NULL-terminated names; methods: iir_method_names(). */
+char *iird_json_welcome(const iird_state_view *s, uint32_t session, const char *const *scenes,
+                        const iird_limits *limits, int64_t seq);
+
+typedef struct iird_stats_view {
+    uint32_t frame;
+    int64_t seq;
+    const char *method;
+    uint32_t pass;
+    bool converged;
+    const iir_frame_stats *stats;
+    double encode_ms, latency_ms, fps;
+    size_t bytes;
+    uint64_t dropped, memory_bytes;
+} iird_stats_view;
+char *iird_json_stats(const iird_stats_view *v);
+
+/* vpl_px: per VPL its pixel position (x, y; -1, -1 when not visible) and flags; dom may be NULL
+ * for methods without a disk domain. */
+char *iird_json_domain(uint32_t frame, const float (*vpl_px)[2], const uint8_t *vpl_flags,
+                       uint32_t num_vpls, const struct iir_domain *dom);
+char *iird_json_pick(int64_t seq, bool hit, iir_vec3 position, iir_vec3 normal, float distance);
+char *iird_json_snapshot(int64_t seq, const char *format, uint32_t frame, uint32_t pass,
+                         size_t bytes, int width, int height);
+
+/* ---- recording: light states over time, written as an animation script ---- */
+typedef struct iird_recording iird_recording;
+iird_recording *iird_recording_create(int fps);
+void iird_recording_destroy(iird_recording *r);
+/* false (too_large) past 100000 keyframes or 36000 s; t in seconds since start, increasing
+ * (rounded to microseconds; a t at or before the last key's replaces that key's light). The
+ * session should add the light at t = 0 on `start`, so the script starts where the light was. */
+bool iird_recording_add(iird_recording *r, double t, const iir_light *light, iird_proto_error *err);
+/* The script (docs/animation-format.md) that iir_anim_parse accepts and that reproduces the light
+ * at every recorded time; wrapped in the `record` reply. */
+char *iird_json_record_stop(const iird_recording *r, int64_t seq);
+char *iird_json_record_start(int64_t seq);
+/* The script alone (malloc'd JSON text, NULL on out-of-memory), e.g. to save it to a file. */
+char *iird_recording_script(const iird_recording *r);
+
+/* ---- binary frames ---- */
+typedef struct iird_frame_header {
+    uint8_t kind; /* 1 frame (JPEG), 2 snapshot */
+    uint32_t frame_id;
+    uint32_t seq; /* 0xFFFFFFFF: no input yet */
+    uint16_t width, height;
+    float render_ms, encode_ms;
+    uint32_t pass;
+    uint32_t flags; /* bit 0 converged, bit 1 refinement frame */
+    uint32_t payload_bytes;
+} iird_frame_header;
+
+/* Writes the 40-byte little-endian header of docs/protocol.md. */
+void iird_frame_header_write(const iird_frame_header *h, uint8_t out[IIRD_FRAME_HEADER_BYTES]);
+
+#endif

@@ -1,0 +1,383 @@
+/* render_log.c -- DIR/render.json of `iird render --anim` (see render_log.h): settings and the
+ * resume check, per-frame and per-run entries, totals, atomic writes. */
+#include "render_log.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+struct iird_render_log {
+    char path[4096], tmp[4200];
+    cJSON *settings;  /* this run's, owned */
+    cJSON *old_runs;  /* runs of the earlier render.json (an array, maybe empty), owned */
+    cJSON **by_frame; /* script_frames entries, owned, NULL where a frame has none */
+    int frames, kept;
+    char scene_source[1024], script_label[4096];
+    const iird_render_run *run;
+};
+
+/* ---- settings ---- */
+
+/* Rounds to 1e-4, enough for milliseconds in a log and much shorter to print. */
+static double r4(double x)
+{
+    return round(x * 1e4) / 1e4;
+}
+
+/* The shortest decimal that reads back as the same float: 0.005, not 0.00499999988824129. */
+static double float_value(float v)
+{
+    char buf[32];
+    for (int prec = 6; prec < 9; prec++) {
+        snprintf(buf, sizeof buf, "%.*g", prec, (double)v);
+        if (strtof(buf, NULL) == v) return strtod(buf, NULL);
+    }
+    return v;
+}
+
+/* Keys are the option names without "--", so a mismatch names the option. */
+static cJSON *params_json(const iir_params *p)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "spp", p->spp);
+    cJSON_AddNumberToObject(o, "bounces", p->bounces);
+    if (p->seed <= (1ull << 53)) {
+        cJSON_AddNumberToObject(o, "seed", (double)p->seed);
+    } else {
+        char s[32];
+        snprintf(s, sizeof s, "%llu", (unsigned long long)p->seed);
+        cJSON_AddStringToObject(o, "seed", s);
+    }
+    cJSON_AddBoolToObject(o, "jitter", p->jitter);
+    cJSON_AddNumberToObject(o, "vpls", p->vpls);
+    cJSON_AddNumberToObject(o, "kmin", p->kmin);
+    cJSON_AddNumberToObject(o, "kmax", p->kmax);
+    cJSON_AddStringToObject(o, "weights",
+                            p->weights == IIR_WEIGHTS_VORONOI ? "voronoi" : "uniform");
+    cJSON_AddNumberToObject(o, "regen-threshold", float_value(p->regen_threshold));
+    cJSON_AddStringToObject(o, "visibility", p->visibility == IIR_VIS_RAYS ? "rays" : "shadowmap");
+    cJSON_AddNumberToObject(o, "sm-res", p->sm_res);
+    cJSON_AddNumberToObject(o, "sm-bias", float_value(p->sm_bias));
+    cJSON_AddNumberToObject(o, "interleave", p->interleave);
+    cJSON_AddNumberToObject(o, "clamp", float_value(p->clamp));
+    cJSON_AddBoolToObject(o, "ir-same-random", !p->ir_fresh);
+    return o;
+}
+
+static cJSON *settings_json(const iird_render_setup *s)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "scene", s->scene_name);
+    cJSON *script = cJSON_AddObjectToObject(o, "script");
+    char hash[32];
+    snprintf(hash, sizeof hash, "%016llx", (unsigned long long)s->script_hash);
+    cJSON_AddNumberToObject(script, "frames", s->script_frames);
+    cJSON_AddNumberToObject(script, "fps", s->fps);
+    cJSON_AddStringToObject(script, "hash", hash);
+    cJSON_AddStringToObject(o, "method", s->method);
+    cJSON *size = cJSON_AddArrayToObject(o, "size");
+    cJSON_AddItemToArray(size, cJSON_CreateNumber(s->width));
+    cJSON_AddItemToArray(size, cJSON_CreateNumber(s->height));
+    cJSON_AddStringToObject(o, "format", s->format);
+    cJSON_AddNumberToObject(o, "exposure", float_value(s->exposure));
+    cJSON_AddItemToObject(o, "params", params_json(s->params));
+    return o;
+}
+
+/* The command-line spelling of a settings key, for messages. */
+static const char *option_name(const char *key, char *buf, size_t n)
+{
+    if (!strcmp(key, "scene")) return "SCENE";
+    if (!strcmp(key, "script")) return "--anim (the script's frames)";
+    snprintf(buf, n, "--%s", key);
+    return buf;
+}
+
+static iir_status differs(const char *path, const char *key, const cJSON *was, const cJSON *now,
+                          iir_error *err)
+{
+    char opt[64];
+    char *a = was ? cJSON_PrintUnformatted(was) : NULL, *b = cJSON_PrintUnformatted(now);
+    iir_status st =
+        iir_fail(err, IIR_ERR_INVALID,
+                 "%s differs from the earlier run recorded in %s (%.120s there, "
+                 "%.120s now): resume with the same settings, or render into "
+                 "another --out directory",
+                 option_name(key, opt, sizeof opt), path, a ? a : "nothing", b ? b : "?");
+    cJSON_free(a);
+    cJSON_free(b);
+    return st;
+}
+
+/* Every setting of `now` must equal the one in `was`; the params one by one. */
+static iir_status check_settings(const char *path, const cJSON *was, const cJSON *now,
+                                 iir_error *err)
+{
+    for (const cJSON *it = now->child; it; it = it->next) {
+        const cJSON *old = cJSON_GetObjectItemCaseSensitive(was, it->string);
+        if (!strcmp(it->string, "params") && cJSON_IsObject(old)) {
+            iir_status st = check_settings(path, old, it, err);
+            if (st != IIR_OK) return st;
+        } else if (!old || !cJSON_Compare(old, it, true)) {
+            return differs(path, it->string, old, it, err);
+        }
+    }
+    return IIR_OK;
+}
+
+/* ---- reading an earlier render.json ---- */
+
+/* The whole file, NUL-terminated, malloc'ed; NULL with errno set when unreadable. */
+static char *read_text(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    char *buf = NULL;
+    long n = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+    if (n >= 0 && fseek(f, 0, SEEK_SET) == 0 && (buf = malloc((size_t)n + 1)) &&
+        fread(buf, 1, (size_t)n, f) == (size_t)n) {
+        buf[n] = '\0';
+    } else {
+        free(buf), buf = NULL;
+        errno = errno ? errno : EIO;
+    }
+    fclose(f);
+    return buf;
+}
+
+/* Moves the earlier file's frame entries into l->by_frame, checking each names a frame of the
+ * script and has a total_ms. */
+static iir_status adopt_frames(iird_render_log *l, cJSON *frames, iir_error *err)
+{
+    int i = 0;
+    for (cJSON *e; (e = cJSON_DetachItemFromArray(frames, 0)); i++) {
+        const cJSON *f = cJSON_GetObjectItemCaseSensitive(e, "frame");
+        double v = cJSON_IsNumber(f) ? f->valuedouble : -1;
+        if (v < 0 || v >= l->frames || v != floor(v) ||
+            !cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(e, "total_ms"))) {
+            cJSON_Delete(e);
+            return iir_fail(err, IIR_ERR_FORMAT,
+                            "%s: frames[%d]: needs a \"frame\" in [0, %d) and a \"total_ms\"",
+                            l->path, i, l->frames);
+        }
+        if (!l->by_frame[(int)v]) l->kept++;
+        cJSON_Delete(l->by_frame[(int)v]);
+        l->by_frame[(int)v] = e;
+    }
+    return IIR_OK;
+}
+
+/* Reads an existing render.json: checks its settings and keeps its frames and runs. */
+static iir_status resume_from(iird_render_log *l, iir_error *err)
+{
+    errno = 0;
+    char *text = read_text(l->path);
+    if (!text && errno == ENOENT) return IIR_OK;
+    if (!text) return iir_fail(err, IIR_ERR_IO, "cannot read %s: %s", l->path, strerror(errno));
+    cJSON *root = cJSON_Parse(text);
+    free(text);
+    cJSON *settings = cJSON_GetObjectItemCaseSensitive(root, "settings");
+    cJSON *frames = cJSON_GetObjectItemCaseSensitive(root, "frames");
+    cJSON *runs = cJSON_GetObjectItemCaseSensitive(root, "runs");
+    iir_status st = IIR_OK;
+    if (!cJSON_IsObject(settings) || !cJSON_IsArray(frames) || !cJSON_IsArray(runs))
+        st = iir_fail(err, IIR_ERR_FORMAT,
+                      "%s is not a render log of iird render --anim (no settings, frames and "
+                      "runs); move it away or use another --out directory",
+                      l->path);
+    if (st == IIR_OK) st = check_settings(l->path, settings, l->settings, err);
+    if (st == IIR_OK) st = adopt_frames(l, frames, err);
+    if (st == IIR_OK) {
+        cJSON_Delete(l->old_runs);
+        l->old_runs = cJSON_DetachItemViaPointer(root, runs);
+    }
+    cJSON_Delete(root);
+    return st;
+}
+
+iir_status iird_render_log_open(const char *dir, const iird_render_setup *setup,
+                                const iird_render_run *run, iird_render_log **out, iir_error *err)
+{
+    *out = NULL;
+    iird_render_log *l = calloc(1, sizeof *l);
+    if (!l) return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
+    snprintf(l->path, sizeof l->path, "%s/render.json", dir);
+    snprintf(l->tmp, sizeof l->tmp, "%s.part", l->path);
+    snprintf(l->scene_source, sizeof l->scene_source, "%s", setup->scene_source);
+    snprintf(l->script_label, sizeof l->script_label, "%s", setup->script_label);
+    l->frames = setup->script_frames;
+    l->run = run;
+    l->settings = settings_json(setup);
+    l->old_runs = cJSON_CreateArray();
+    l->by_frame = calloc((size_t)l->frames, sizeof(cJSON *));
+    iir_status st = l->settings && l->old_runs && l->by_frame
+                        ? resume_from(l, err)
+                        : iir_fail(err, IIR_ERR_NOMEM, "out of memory");
+    if (st != IIR_OK) {
+        iird_render_log_destroy(l);
+        return st;
+    }
+    *out = l;
+    return IIR_OK;
+}
+
+int iird_render_log_kept(const iird_render_log *l)
+{
+    return l->kept;
+}
+
+int iird_render_log_count(const iird_render_log *l)
+{
+    int n = 0;
+    for (int f = 0; f < l->frames; f++) n += l->by_frame[f] != NULL;
+    return n;
+}
+
+/* ---- entries ---- */
+
+static cJSON *vpl_json(const iir_vpl_counts *c)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "count", c->count);
+    cJSON_AddNumberToObject(o, "valid", c->valid);
+    cJSON_AddNumberToObject(o, "invalidated", c->invalidated);
+    cJSON_AddNumberToObject(o, "deleted", c->deleted);
+    cJSON_AddNumberToObject(o, "inserted", c->inserted);
+    cJSON_AddNumberToObject(o, "null", c->null_samples);
+    cJSON_AddNumberToObject(o, "regenerated", c->regenerated);
+    cJSON_AddNumberToObject(o, "shadowmaps", c->shadowmaps);
+    return o;
+}
+
+void iird_render_log_frame(iird_render_log *l, int f, double time_s, const char *file,
+                           const iir_frame_stats *fs, double write_ms)
+{
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddNumberToObject(e, "frame", f);
+    cJSON_AddNumberToObject(e, "time_s", time_s);
+    cJSON_AddStringToObject(e, "file", file);
+    cJSON_AddNumberToObject(e, "total_ms", r4(fs->total_ms));
+    cJSON_AddNumberToObject(e, "write_ms", r4(write_ms));
+    cJSON *ph = cJSON_AddObjectToObject(e, "phase_ms");
+    for (int p = 0; p < IIR_PHASE_COUNT; p++)
+        cJSON_AddNumberToObject(ph, iir_phase_name((iir_phase)p), r4(fs->phase_ms[p]));
+    cJSON *rays = cJSON_AddObjectToObject(e, "rays");
+    for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
+        cJSON_AddNumberToObject(rays, iir_ray_kind_name((iir_ray_kind)k), (double)fs->rays.n[k]);
+    cJSON_AddItemToObject(e, "vpls", vpl_json(&fs->vpl));
+    cJSON_AddNumberToObject(e, "spp", (double)fs->samples_per_pixel);
+    cJSON_Delete(l->by_frame[f]);
+    l->by_frame[f] = e;
+}
+
+static cJSON *run_json(const iird_render_run *r)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON *range = cJSON_AddArrayToObject(o, "frames");
+    cJSON_AddItemToArray(range, cJSON_CreateNumber(r->first));
+    cJSON_AddItemToArray(range, cJSON_CreateNumber(r->end));
+    cJSON_AddNumberToObject(o, "done", r->done);
+    cJSON_AddStringToObject(o, "status", r->status);
+    cJSON *w = cJSON_AddObjectToObject(o, "warmup");
+    cJSON_AddNumberToObject(w, "frames", r->warmup_frames);
+    if (r->warmup_frames > 0) {
+        cJSON *size = cJSON_AddArrayToObject(w, "size");
+        cJSON_AddItemToArray(size, cJSON_CreateNumber(r->warmup_width));
+        cJSON_AddItemToArray(size, cJSON_CreateNumber(r->warmup_height));
+        cJSON_AddNumberToObject(w, "ms", r4(r->warmup_ms));
+        cJSON_AddStringToObject(w, "note",
+                                "frames 0..first-1 were rendered, unwritten and small, to carry "
+                                "the method's state (the VPL set) up to the first frame");
+    }
+    cJSON_AddNumberToObject(o, "wall_ms", r4(r->wall_ms));
+    cJSON_AddNumberToObject(o, "threads", r->threads);
+    if (r->video) cJSON_AddStringToObject(o, "video", r->video);
+    return o;
+}
+
+/* Sums over every frame entry, earlier runs' included. */
+static cJSON *totals_json(const iird_render_log *l)
+{
+    double ms = 0, rays[IIR_RAY_KIND_COUNT] = {0};
+    int n = 0, regen = 0, first_missing = -1;
+    for (int f = 0; f < l->frames; f++) {
+        const cJSON *e = l->by_frame[f];
+        if (!e) {
+            if (first_missing < 0) first_missing = f;
+            continue;
+        }
+        n++;
+        ms += cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(e, "total_ms"));
+        const cJSON *r = cJSON_GetObjectItemCaseSensitive(e, "rays");
+        for (int k = 0; k < IIR_RAY_KIND_COUNT; k++) {
+            const cJSON *v =
+                cJSON_GetObjectItemCaseSensitive(r, iir_ray_kind_name((iir_ray_kind)k));
+            rays[k] += cJSON_IsNumber(v) ? v->valuedouble : 0;
+        }
+        const cJSON *v = cJSON_GetObjectItemCaseSensitive(e, "vpls");
+        regen += cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(v, "regenerated")) > 0;
+    }
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "frames", n);
+    cJSON_AddNumberToObject(o, "missing", l->frames - n);
+    if (first_missing >= 0) cJSON_AddNumberToObject(o, "first_missing", first_missing);
+    cJSON_AddNumberToObject(o, "total_ms", r4(ms));
+    cJSON_AddNumberToObject(o, "mean_ms", n ? r4(ms / n) : 0);
+    cJSON_AddNumberToObject(o, "fps", ms > 0 ? r4(1000.0 * n / ms) : 0);
+    cJSON *ro = cJSON_AddObjectToObject(o, "rays");
+    for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
+        cJSON_AddNumberToObject(ro, iir_ray_kind_name((iir_ray_kind)k), rays[k]);
+    cJSON_AddNumberToObject(o, "regenerations", regen);
+    return o;
+}
+
+/* ---- writing ---- */
+
+static cJSON *document(const iird_render_log *l)
+{
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "generator", "iird " IIR_VERSION " render --anim");
+    cJSON_AddItemReferenceToObject(root, "settings", l->settings);
+    cJSON_AddStringToObject(root, "scene_source", l->scene_source);
+    cJSON_AddStringToObject(root, "script", l->script_label);
+    cJSON *runs = cJSON_AddArrayToObject(root, "runs");
+    for (cJSON *r = l->old_runs->child; r; r = r->next) cJSON_AddItemReferenceToArray(runs, r);
+    cJSON_AddItemToArray(runs, run_json(l->run));
+    cJSON *frames = cJSON_AddArrayToObject(root, "frames");
+    for (int f = 0; f < l->frames; f++)
+        if (l->by_frame[f]) cJSON_AddItemReferenceToArray(frames, l->by_frame[f]);
+    cJSON_AddItemToObject(root, "totals", totals_json(l));
+    return root;
+}
+
+iir_status iird_render_log_write(iird_render_log *l, iir_error *err)
+{
+    cJSON *root = document(l);
+    char *text = root ? cJSON_Print(root) : NULL;
+    cJSON_Delete(root);
+    if (!text) return iir_fail(err, IIR_ERR_NOMEM, "out of memory writing %s", l->path);
+    FILE *f = fopen(l->tmp, "wb");
+    size_t n = strlen(text);
+    bool ok = f && fwrite(text, 1, n, f) == n && fputc('\n', f) != EOF;
+    ok = (f && fclose(f) == 0) && ok;
+    cJSON_free(text);
+    if (ok && rename(l->tmp, l->path) == 0) return IIR_OK;
+    iir_status st = iir_fail(err, IIR_ERR_IO, "cannot write %s: %s", l->path, strerror(errno));
+    remove(l->tmp);
+    return st;
+}
+
+void iird_render_log_destroy(iird_render_log *l)
+{
+    if (!l) return;
+    for (int f = 0; l->by_frame && f < l->frames; f++) cJSON_Delete(l->by_frame[f]);
+    free(l->by_frame);
+    cJSON_Delete(l->settings);
+    cJSON_Delete(l->old_runs);
+    free(l);
+}

@@ -1,0 +1,303 @@
+/* scene_cache.c -- scenes loaded once, shared read-only and reference-counted between sessions;
+ * the list of scene names clients may ask for. Not sessions. */
+#include "scene_cache.h"
+
+#include <assert.h>
+#include <dirent.h>
+#include <limits.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+#include "cli.h"
+
+typedef struct cache_slot {
+    iird_scene_entry entry; /* first: a slot's address is its entry's */
+    char key[PATH_MAX];     /* canonical path, or "builtin" */
+    iir_scene *scene;
+    iir_rt *rt;
+    int refs;
+    bool loading, pinned;
+    struct cache_slot *next;
+} cache_slot;
+
+struct iird_scene_cache {
+    char *dir;
+    char **names; /* NULL-terminated */
+    pthread_mutex_t lock;
+    pthread_cond_t loaded; /* broadcast when a load finishes (either way) */
+    cache_slot *slots;     /* guarded by lock */
+};
+
+/* ======================== the list of names ======================== */
+
+static int cmp_names(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static bool is_scene_file(const char *name)
+{
+    const char *dot = strrchr(name, '.');
+    return dot && (!strcasecmp(dot, ".obj") || !strcasecmp(dot, ".gltf") ||
+                   !strcasecmp(dot, ".glb") || strstr(name, ".scene.json"));
+}
+
+/* Folders and scene files directly in dir, as bare names. */
+static bool list_dir(const char *dir, char ***names, size_t *n)
+{
+    DIR *d = opendir(dir);
+    if (!d) return true; /* no scenes folder: only the built-in box */
+    size_t cap = *n + 1;
+    for (struct dirent *de; (de = readdir(d));) {
+        if (de->d_name[0] == '.') continue;
+        char path[PATH_MAX];
+        struct stat sb;
+        snprintf(path, sizeof path, "%s/%s", dir, de->d_name);
+        if (stat(path, &sb) != 0 || (!S_ISDIR(sb.st_mode) && !is_scene_file(de->d_name))) continue;
+        if (*n + 2 > cap) {
+            cap = 2 * cap + 8;
+            char **grown = realloc(*names, cap * sizeof *grown);
+            if (!grown) break;
+            *names = grown;
+        }
+        (*names)[(*n)++] = strdup(de->d_name);
+    }
+    closedir(d);
+    return true;
+}
+
+static char **scene_names(const char *dir)
+{
+    size_t n = 0;
+    char **names = malloc(2 * sizeof *names);
+    if (!names) return NULL;
+    names[n++] = strdup("builtin");
+    list_dir(dir, &names, &n);
+    qsort(names + 1, n - 1, sizeof *names, cmp_names);
+    names[n] = NULL;
+    return names;
+}
+
+/* ======================== the cache ======================== */
+
+iird_scene_cache *iird_scene_cache_create(const char *scenes_dir)
+{
+    iird_scene_cache *c = calloc(1, sizeof *c);
+    if (!c) return NULL;
+    c->dir = strdup(scenes_dir ? scenes_dir : ".");
+    c->names = scene_names(c->dir);
+    pthread_mutex_init(&c->lock, NULL);
+    pthread_cond_init(&c->loaded, NULL);
+    if (!c->dir || !c->names) {
+        iird_scene_cache_destroy(c);
+        return NULL;
+    }
+    return c;
+}
+
+static void slot_free(cache_slot *s)
+{
+    iir_rt_destroy(s->rt);
+    iir_scene_destroy(s->scene);
+    free(s);
+}
+
+void iird_scene_cache_destroy(iird_scene_cache *c)
+{
+    if (!c) return;
+    for (cache_slot *s = c->slots, *next; s; s = next) {
+        next = s->next;
+        assert(s->refs == 0 && !s->loading);
+        slot_free(s);
+    }
+    for (char **n = c->names; n && *n; n++) free(*n);
+    free(c->names);
+    free(c->dir);
+    pthread_cond_destroy(&c->loaded);
+    pthread_mutex_destroy(&c->lock);
+    free(c);
+}
+
+const char *const *iird_scene_cache_names(const iird_scene_cache *c)
+{
+    return (const char *const *)c->names;
+}
+
+bool iird_scene_cache_has(const iird_scene_cache *c, const char *name)
+{
+    for (char **n = c->names; *n; n++)
+        if (!strcmp(*n, name)) return true;
+    return false;
+}
+
+static const char *base_name(const char *path)
+{
+    size_t len = strlen(path);
+    while (len > 1 && path[len - 1] == '/') len--;
+    const char *end = path + len, *b = end;
+    while (b > path && b[-1] != '/') b--;
+    return b;
+}
+
+/* The cache key and the display name of what a caller asked for. */
+static iir_status resolve(const iird_scene_cache *c, const char *arg, char *key, char *name,
+                          iir_error *err)
+{
+    if (!arg || !strcmp(arg, "builtin")) {
+        strcpy(key, "builtin");
+        strcpy(name, "builtin");
+        return IIR_OK;
+    }
+    char path[PATH_MAX];
+    if (iird_scene_cache_has(c, arg)) {
+        /* a listed name: always the scenes folder's, never a file of the same name elsewhere */
+        snprintf(path, sizeof path, "%s/%s", c->dir, arg);
+        snprintf(name, 130, "%s", arg);
+    } else {
+        iir_status st = iir_scene_resolve(arg, c->dir, path, sizeof path, err);
+        if (st != IIR_OK) return st;
+        size_t len = strlen(base_name(arg));
+        snprintf(name, 130, "%.*s", (int)(len < 129 ? len : 129), base_name(arg));
+    }
+    if (!realpath(path, key)) snprintf(key, PATH_MAX, "%s", path);
+    return IIR_OK;
+}
+
+static cache_slot *find(iird_scene_cache *c, const char *key)
+{
+    for (cache_slot *s = c->slots; s; s = s->next)
+        if (!strcmp(s->key, key)) return s;
+    return NULL;
+}
+
+static void unlink_slot(iird_scene_cache *c, cache_slot *s)
+{
+    for (cache_slot **p = &c->slots; *p; p = &(*p)->next)
+        if (*p == s) {
+            *p = s->next;
+            return;
+        }
+}
+
+/* Loads the slot's scene with the lock released; publishes the result under it. */
+static iir_status load_slot(iird_scene_cache *c, cache_slot *s, iir_error *err)
+{
+    iir_scene *scene = NULL;
+    iir_rt *rt = NULL;
+    iir_status st;
+    pthread_mutex_unlock(&c->lock);
+    if (!strcmp(s->key, "builtin")) {
+        scene = iir_scene_create_cornell_box();
+        st = scene ? IIR_OK : iir_fail(err, IIR_ERR_NOMEM, "out of memory building the box");
+    } else {
+        st = iir_scene_load(s->key, &scene, err);
+    }
+    if (st == IIR_OK) st = iir_rt_create(scene, &rt, err);
+    pthread_mutex_lock(&c->lock);
+    s->loading = false;
+    s->scene = scene;
+    s->rt = rt;
+    s->entry.scene = scene;
+    s->entry.rt = rt;
+    pthread_cond_broadcast(&c->loaded);
+    return st;
+}
+
+/* The slot for key once no load of it is under way, or NULL (the lock is held). A slot whose load
+ * failed is freed by its last waiter so the caller can try again. */
+static cache_slot *find_loaded_locked(iird_scene_cache *c, const char *key)
+{
+    cache_slot *s = find(c, key);
+    while (s && s->loading) {
+        s->refs++; /* keep it while waiting */
+        pthread_cond_wait(&c->loaded, &c->lock);
+        s->refs--;
+        if (!s->rt && s->refs == 0 && !s->loading) {
+            unlink_slot(c, s);
+            slot_free(s);
+        }
+        s = find(c, key);
+    }
+    return s;
+}
+
+/* A new slot for key, loaded with one reference (the lock is held; dropped while loading). */
+static iir_status add_slot_locked(iird_scene_cache *c, const char *key, const char *name,
+                                  cache_slot **out, iir_error *err)
+{
+    cache_slot *s = calloc(1, sizeof *s);
+    if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory loading scene %s", name);
+    snprintf(s->key, sizeof s->key, "%s", key);
+    snprintf(s->entry.name, sizeof s->entry.name, "%s", name);
+    s->loading = true;
+    s->refs = 1;
+    s->next = c->slots;
+    c->slots = s;
+    iir_status st = load_slot(c, s, err);
+    if (st != IIR_OK && --s->refs == 0) {
+        unlink_slot(c, s);
+        slot_free(s);
+    }
+    *out = st == IIR_OK ? s : NULL;
+    return st;
+}
+
+iir_status iird_scene_cache_acquire(iird_scene_cache *c, const char *name_or_path,
+                                    const iird_scene_entry **out, iir_error *err)
+{
+    char key[PATH_MAX], name[130];
+    *out = NULL;
+    iir_status st = resolve(c, name_or_path, key, name, err);
+    if (st != IIR_OK) return st;
+    pthread_mutex_lock(&c->lock);
+    cache_slot *s = find_loaded_locked(c, key);
+    if (!s)
+        st = add_slot_locked(c, key, name, &s, err);
+    else if (!s->rt)
+        st = iir_fail(err, IIR_ERR_INTERNAL, "scene %s failed to load", name);
+    else
+        s->refs++;
+    pthread_mutex_unlock(&c->lock);
+    if (st == IIR_OK) *out = &s->entry;
+    return st;
+}
+
+void iird_scene_cache_ref(iird_scene_cache *c, const iird_scene_entry *e)
+{
+    pthread_mutex_lock(&c->lock);
+    ((cache_slot *)e)->refs++;
+    pthread_mutex_unlock(&c->lock);
+}
+
+void iird_scene_cache_release(iird_scene_cache *c, const iird_scene_entry *e)
+{
+    if (!e) return;
+    cache_slot *s = (cache_slot *)e, *dead = NULL;
+    pthread_mutex_lock(&c->lock);
+    assert(s->refs > 0);
+    if (--s->refs == 0 && !s->pinned) {
+        unlink_slot(c, s);
+        dead = s;
+    }
+    pthread_mutex_unlock(&c->lock);
+    if (dead) slot_free(dead);
+}
+
+void iird_scene_cache_pin(iird_scene_cache *c, const iird_scene_entry *e)
+{
+    pthread_mutex_lock(&c->lock);
+    ((cache_slot *)e)->pinned = true;
+    pthread_mutex_unlock(&c->lock);
+}
+
+size_t iird_scene_cache_loaded(iird_scene_cache *c)
+{
+    size_t n = 0;
+    pthread_mutex_lock(&c->lock);
+    for (cache_slot *s = c->slots; s; s = s->next) n += s->rt != NULL;
+    pthread_mutex_unlock(&c->lock);
+    return n;
+}

@@ -1,0 +1,58 @@
+/* scene_cache.h -- the scenes the daemon has in memory: each loaded once with its ray tracer,
+ * shared read-only by every session that shows it, reference-counted and freed when the last
+ * session leaves (the startup scene stays pinned). Also the list of scene names a client may ask
+ * for. Not sessions and not how a scene file is parsed (scene.h).
+ *
+ * Threads: acquire and release may be called from any thread (render workers load scenes, the
+ * service thread counts them); one mutex guards the table. Loading happens outside the lock, so
+ * a session loading a large scene does not stall the others; a second session asking for a scene
+ * that is being loaded waits for that load instead of starting its own. */
+#ifndef IIRD_SCENE_CACHE_H
+#define IIRD_SCENE_CACHE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "iir/rt.h"
+#include "iir/scene.h"
+#include "iir/status.h"
+
+/* A loaded scene. Read-only for holders of a reference. */
+typedef struct iird_scene_entry {
+    char name[130]; /* what clients see: "builtin", a name in the scenes directory, or for a
+                       startup scene given as a path its base name */
+    const iir_scene *scene;
+    const iir_rt *rt;
+} iird_scene_entry;
+
+typedef struct iird_scene_cache iird_scene_cache;
+
+/* An empty cache over scenes_dir (copied); lists the names in scenes_dir once, now. NULL on
+ * out-of-memory. */
+iird_scene_cache *iird_scene_cache_create(const char *scenes_dir);
+/* Frees every scene still loaded; all references must have been released (asserted). */
+void iird_scene_cache_destroy(iird_scene_cache *c);
+
+/* The names a client may load, NULL-terminated, sorted: "builtin" then the folders (and scene
+ * files) of the scenes directory. Valid until destroy. */
+const char *const *iird_scene_cache_names(const iird_scene_cache *c);
+/* True when name is one of iird_scene_cache_names. */
+bool iird_scene_cache_has(const iird_scene_cache *c, const char *name);
+
+/* A new reference to scene `name_or_path`, loading it if no session holds it (this can take
+ * seconds for a large scene). "builtin" (or NULL) is the built-in Cornell box; any other text is
+ * resolved as iird_load_scene does. On error returns its status with err filled and *out NULL. */
+iir_status iird_scene_cache_acquire(iird_scene_cache *c, const char *name_or_path,
+                                    const iird_scene_entry **out, iir_error *err);
+/* Another reference to a scene the caller holds (or that is pinned). */
+void iird_scene_cache_ref(iird_scene_cache *c, const iird_scene_entry *e);
+/* Drops a reference from acquire or ref; the scene is freed with its last one unless pinned. NULL
+ * is ignored. */
+void iird_scene_cache_release(iird_scene_cache *c, const iird_scene_entry *e);
+/* Keeps e loaded even with no session on it (the startup scene). Takes no reference. */
+void iird_scene_cache_pin(iird_scene_cache *c, const iird_scene_entry *e);
+
+/* Scenes in memory now. */
+size_t iird_scene_cache_loaded(iird_scene_cache *c);
+
+#endif

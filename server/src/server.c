@@ -1,0 +1,555 @@
+/* server.c -- the libwebsockets daemon of `iird serve`: context, protocols and mounts, the
+ * handshake checks, the WebSocket protocol callback that drives sessions, /healthz and /metrics,
+ * signals and shutdown. Not the per-client logic (session*.c).
+ *
+ * THREADS. The main thread runs lws_service and is the only thread that calls lws (except
+ * lws_cancel_service). Each session has a render worker (session_worker.c) that publishes frames
+ * and wakes the main thread with lws_cancel_service; the protocol callback then, on
+ * LWS_CALLBACK_EVENT_WAIT_CANCELLED, only asks for writable callbacks for the sessions that have
+ * output, and on LWS_CALLBACK_SERVER_WRITEABLE writes one message and asks again if more is
+ * waiting. SIGINT and SIGTERM are blocked in every thread and taken by a small signal thread
+ * (sigwait), which sets the stop flag and wakes the service loop the same way.
+ * A session whose client left is told to stop and parked on the `closing` list; it is freed when
+ * its worker has returned (it wakes the service thread once more on its way out), so a client
+ * that vanishes mid-render never blocks the service thread. */
+#include "server.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <limits.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+#include <libwebsockets.h>
+
+#include "cli.h"
+#include "metrics.h"
+#include "scene_cache.h"
+#include "session.h"
+
+/* Per WebSocket connection (lws allocates and zeroes it). */
+typedef struct conn {
+    struct lws *wsi;
+    iird_session *session; /* NULL for a refused (busy) connection and after close */
+    bool busy, linked;
+    struct conn *next;
+} conn;
+
+/* Per HTTP request to /healthz or /metrics. */
+typedef struct http_req {
+    unsigned char *body; /* LWS_PRE headroom, then len bytes */
+    size_t len;
+} http_req;
+
+typedef struct closing {
+    iird_session *session;
+    struct closing *next;
+} closing;
+
+typedef struct server {
+    const iird_server_config *cfg;
+    struct lws_context *ctx;
+    pthread_mutex_t ctx_lock; /* guards ctx against the signal thread while it is made or freed */
+    iird_metrics metrics;
+    iird_scene_cache *scenes;
+    const iird_scene_entry *startup;
+    iird_session_env env;
+    conn *conns; /* every open WebSocket connection */
+    closing *closing;
+    int active; /* connections with a session */
+    uint32_t next_id;
+    atomic_int stop;
+    bool loopback;
+    char web_dir[PATH_MAX];
+} server;
+
+static server *server_of(struct lws *wsi)
+{
+    return lws_context_user(lws_get_context(wsi));
+}
+
+/* ======================== the handshake ======================== */
+
+static bool same_origin(const char *a, const char *b)
+{
+    size_t la = strlen(a), lb = strlen(b);
+    while (la && a[la - 1] == '/') la--;
+    while (lb && b[lb - 1] == '/') lb--;
+    return la == lb && !strncasecmp(a, b, la);
+}
+
+/* docs/protocol.md, Transport: the --origin list; else any origin on a loopback bind; else only
+ * the server's own. A request without Origin (not a browser) passes unless --origin is given. */
+static bool origin_allowed(server *srv, struct lws *wsi)
+{
+    char origin[512] = "", host[256] = "", own[300];
+    lws_hdr_copy(wsi, origin, sizeof origin, WSI_TOKEN_ORIGIN);
+    const iird_server_config *cfg = srv->cfg;
+    if (cfg->num_origins > 0) {
+        for (int i = 0; i < cfg->num_origins; i++)
+            if (origin[0] && same_origin(origin, cfg->origins[i])) return true;
+        return false;
+    }
+    if (!origin[0] || srv->loopback) return true;
+    lws_hdr_copy(wsi, host, sizeof host, WSI_TOKEN_HOST);
+    snprintf(own, sizeof own, "%s://%s", cfg->tls_cert ? "https" : "http", host);
+    return host[0] && same_origin(origin, own);
+}
+
+/* Answers a refused handshake with a plain HTTP/1.1 status (lws_return_http_status would say
+ * HTTP/1.0 here: the request's version is only parsed for requests that stay HTTP). */
+static int refuse(struct lws *wsi, int status, const char *reason, const char *body)
+{
+    unsigned char buf[LWS_PRE + 512];
+    int n = snprintf((char *)buf + LWS_PRE, sizeof buf - LWS_PRE,
+                     "HTTP/1.1 %d %s\r\ncontent-type: text/plain\r\ncontent-length: %zu\r\n"
+                     "connection: close\r\n\r\n%s",
+                     status, reason, strlen(body), body);
+    if (n > 0 && n < (int)(sizeof buf - LWS_PRE))
+        (void)lws_write(wsi, buf + LWS_PRE, (size_t)n, LWS_WRITE_HTTP);
+    return 1;
+}
+
+/* Refuses a WebSocket handshake: not /ws (404) or a foreign origin (403). Returns nonzero to
+ * refuse. */
+static int filter_handshake(server *srv, struct lws *wsi)
+{
+    char uri[256] = "";
+    lws_hdr_copy(wsi, uri, sizeof uri, WSI_TOKEN_GET_URI);
+    char *q = strchr(uri, '?');
+    if (q) *q = '\0';
+    if (strcmp(uri, "/ws") != 0)
+        return refuse(wsi, 404, "Not Found", "the WebSocket endpoint is /ws\n");
+    if (!origin_allowed(srv, wsi))
+        return refuse(wsi, 403, "Forbidden", "this origin may not open a session\n");
+    return 0;
+}
+
+/* ======================== sessions ======================== */
+
+static void link_conn(server *srv, conn *c, struct lws *wsi)
+{
+    c->wsi = wsi;
+    c->next = srv->conns;
+    c->linked = true;
+    srv->conns = c;
+}
+
+static void unlink_conn(server *srv, conn *c)
+{
+    for (conn **p = &srv->conns; *p; p = &(*p)->next)
+        if (*p == c) {
+            *p = c->next;
+            break;
+        }
+    c->linked = false;
+}
+
+static void on_established(server *srv, conn *c, struct lws *wsi)
+{
+    link_conn(srv, c, wsi);
+    if (srv->active >= srv->cfg->max_sessions) {
+        c->busy = true;
+        lws_callback_on_writable(wsi);
+        return;
+    }
+    iir_error err = {0};
+    c->session = iird_session_create(&srv->env, ++srv->next_id, &err);
+    if (!c->session) {
+        fprintf(stderr, "iird serve: %s\n", err.msg);
+        c->busy = true;
+        lws_callback_on_writable(wsi);
+        return;
+    }
+    srv->active++;
+    atomic_fetch_add(&srv->metrics.sessions, 1);
+    atomic_fetch_add(&srv->metrics.sessions_total, 1);
+}
+
+/* The client left: stop the worker without waiting and free the session once it has returned. */
+static void on_closed(server *srv, conn *c)
+{
+    if (c->linked) unlink_conn(srv, c);
+    if (!c->session) return;
+    closing *z = malloc(sizeof *z);
+    iird_session_request_stop(c->session);
+    if (z) {
+        z->session = c->session;
+        z->next = srv->closing;
+        srv->closing = z;
+    } else {
+        iird_session_destroy(c->session); /* out of memory: wait for the worker here */
+    }
+    c->session = NULL;
+    srv->active--;
+    atomic_fetch_sub(&srv->metrics.sessions, 1);
+}
+
+static void reap_closing(server *srv, bool wait)
+{
+    for (closing **p = &srv->closing; *p;) {
+        closing *z = *p;
+        if (wait || iird_session_worker_done(z->session)) {
+            *p = z->next;
+            iird_session_destroy(z->session);
+            free(z);
+        } else {
+            p = &z->next;
+        }
+    }
+}
+
+/* A worker (or the signal thread) woke the loop: ask for writable callbacks where output waits. */
+static void on_wake(server *srv)
+{
+    for (conn *c = srv->conns; c; c = c->next)
+        if (c->session && iird_session_take_wake(c->session)) lws_callback_on_writable(c->wsi);
+    reap_closing(srv, false);
+}
+
+/* A refused connection gets one busy error, then close 1013 (try again later). */
+static int write_busy(server *srv, struct lws *wsi)
+{
+    iird_proto_error e = {.seq = IIRD_NO_SEQ};
+    iird_proto_fail(&e, IIRD_E_BUSY, NULL, "the server has its maximum of %d sessions open",
+                    srv->cfg->max_sessions);
+    iird_metrics_error(&srv->metrics, IIRD_E_BUSY);
+    char *json = iird_json_error(&e);
+    size_t len = json ? strlen(json) : 0;
+    unsigned char *buf = malloc(LWS_PRE + len);
+    if (buf && json) {
+        memcpy(buf + LWS_PRE, json, len);
+        if (lws_write(wsi, buf + LWS_PRE, len, LWS_WRITE_TEXT) == (int)len)
+            atomic_fetch_add(&srv->metrics.bytes_sent, len);
+    }
+    free(buf);
+    free(json);
+    lws_close_reason(wsi, (enum lws_close_status)1013, NULL, 0); /* try again later */
+    return -1;
+}
+
+static int on_writable(server *srv, conn *c, struct lws *wsi)
+{
+    if (c->busy) return write_busy(srv, wsi);
+    if (!c->session) return 0;
+    switch (iird_session_write(c->session, wsi)) {
+    case IIRD_WRITE_CLOSE:
+        return -1;
+    case IIRD_WRITE_MORE:
+        lws_callback_on_writable(wsi);
+        break;
+    case IIRD_WRITE_IDLE:
+        break;
+    }
+    return 0;
+}
+
+static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
+                       size_t len)
+{
+    server *srv = server_of(wsi);
+    conn *c = user;
+    switch (reason) {
+    case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
+        return filter_handshake(srv, wsi);
+    case LWS_CALLBACK_ESTABLISHED:
+        on_established(srv, c, wsi);
+        break;
+    case LWS_CALLBACK_RECEIVE:
+        if (!c->session) break;
+        iird_session_receive(c->session, in, len, lws_is_final_fragment(wsi),
+                             lws_frame_is_binary(wsi));
+        lws_callback_on_writable(wsi);
+        break;
+    case LWS_CALLBACK_SERVER_WRITEABLE:
+        return on_writable(srv, c, wsi);
+    case LWS_CALLBACK_CLOSED:
+        on_closed(srv, c);
+        break;
+    case LWS_CALLBACK_EVENT_WAIT_CANCELLED:
+        if (srv) on_wake(srv);
+        break;
+    default:
+        break;
+    }
+    return lws_callback_http_dummy(wsi, reason, user, in, len);
+}
+
+/* ======================== /healthz and /metrics ======================== */
+
+static char *metrics_text(server *srv)
+{
+    iird_metrics_session mem[256];
+    size_t n = 0;
+    for (conn *c = srv->conns; c && n < sizeof mem / sizeof *mem; c = c->next)
+        if (c->session)
+            mem[n++] = (iird_metrics_session){iird_session_id(c->session),
+                                              iird_session_memory(c->session)};
+    return iird_metrics_prometheus(&srv->metrics, mem, n, iird_scene_cache_loaded(srv->scenes));
+}
+
+/* Builds the body and sends the headers; the body follows on HTTP_WRITEABLE. */
+static int http_start(server *srv, struct lws *wsi, http_req *r, const char *path)
+{
+    bool metrics = !strncmp(path, "/metrics", 8);
+    char *text = metrics ? metrics_text(srv) : iird_metrics_healthz(&srv->metrics);
+    if (!text) return lws_return_http_status(wsi, HTTP_STATUS_INTERNAL_SERVER_ERROR, NULL), -1;
+    r->len = strlen(text);
+    r->body = malloc(LWS_PRE + r->len);
+    if (r->body) memcpy(r->body + LWS_PRE, text, r->len);
+    free(text);
+    if (!r->body) return -1;
+    unsigned char hdr[LWS_PRE + 512], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr;
+    const char *type = metrics ? "text/plain; version=0.0.4" : "application/json";
+    if (lws_add_http_common_headers(wsi, HTTP_STATUS_OK, type, r->len, &p, end) ||
+        lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_CACHE_CONTROL, (unsigned char *)"no-store",
+                                     8, &p, end) ||
+        lws_finalize_write_http_header(wsi, start, &p, end))
+        return -1;
+    lws_callback_on_writable(wsi);
+    return 0;
+}
+
+static int http_body(struct lws *wsi, http_req *r)
+{
+    if (!r->body) return 0;
+    int n = lws_write(wsi, r->body + LWS_PRE, r->len, LWS_WRITE_HTTP_FINAL);
+    free(r->body);
+    r->body = NULL;
+    if (n < (int)r->len) return -1;
+    return lws_http_transaction_completed(wsi) ? -1 : 0;
+}
+
+static int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in,
+                         size_t len)
+{
+    http_req *r = user;
+    char path[64];
+    switch (reason) {
+    case LWS_CALLBACK_HTTP:
+        /* `in` is the path after the mountpoint; the mountpoint names the endpoint */
+        lws_hdr_copy(wsi, path, sizeof path, WSI_TOKEN_GET_URI);
+        return http_start(server_of(wsi), wsi, r, path);
+    case LWS_CALLBACK_HTTP_WRITEABLE:
+        return http_body(wsi, r);
+    case LWS_CALLBACK_CLOSED_HTTP:
+        free(r->body);
+        r->body = NULL;
+        break;
+    default:
+        break;
+    }
+    return lws_callback_http_dummy(wsi, reason, user, in, len);
+}
+
+/* ======================== context ======================== */
+
+/* The first protocol is the one lws gives WebSocket clients that name no subprotocol. */
+static const struct lws_protocols protocols[] = {
+    {"iird", ws_callback, sizeof(conn), 16384, 0, NULL, 0},
+    {"http", http_callback, sizeof(http_req), 0, 0, NULL, 0},
+    {NULL, NULL, 0, 0, 0, NULL, 0}};
+
+static void make_mounts(const server *srv, struct lws_http_mount m[3])
+{
+    memset(m, 0, 3 * sizeof *m);
+    m[0].mountpoint = "/healthz";
+    m[0].protocol = "http";
+    m[0].origin_protocol = LWSMPRO_CALLBACK;
+    m[0].mount_next = &m[1];
+    m[1] = m[0];
+    m[1].mountpoint = "/metrics";
+    m[1].mount_next = &m[2];
+    m[2].mountpoint = "/";
+    m[2].origin = srv->web_dir;
+    m[2].def = "index.html";
+    m[2].origin_protocol = LWSMPRO_FILE;
+    for (int i = 0; i < 3; i++) m[i].mountpoint_len = (unsigned char)strlen(m[i].mountpoint);
+}
+
+static bool is_loopback(const char *host)
+{
+    struct in_addr a4;
+    if (inet_pton(AF_INET, host, &a4) == 1) return (ntohl(a4.s_addr) >> 24) == 127;
+    return !strcmp(host, "::1");
+}
+
+static struct lws_context *create_context(server *srv, const struct lws_http_mount *mounts)
+{
+    const iird_server_config *cfg = srv->cfg;
+    struct lws_context_creation_info info;
+    memset(&info, 0, sizeof info);
+    info.port = cfg->port;
+    info.iface = cfg->host;
+    info.protocols = protocols;
+    info.mounts = mounts;
+    info.user = srv;
+    info.vhost_name = "default";
+    if (!strchr(cfg->host, ':')) info.options |= LWS_SERVER_OPTION_DISABLE_IPV6;
+    if (cfg->tls_cert) {
+        info.options |= LWS_SERVER_OPTION_DO_SSL_GLOBAL_INIT;
+        info.ssl_cert_filepath = cfg->tls_cert;
+        info.ssl_private_key_filepath = cfg->tls_key;
+        /* HTTP/1.1 only: the handshake refusals (refuse()) and one message per writable callback
+         * assume one connection per client, not h2 streams */
+        info.alpn = "http/1.1";
+    }
+    lws_set_log_level(cfg->verbose ? LLL_ERR | LLL_WARN | LLL_NOTICE : LLL_ERR, NULL);
+    return lws_create_context(&info);
+}
+
+/* ======================== signals ======================== */
+
+typedef struct signal_thread {
+    pthread_t thread;
+    server *srv;
+    atomic_int quit;
+} signal_thread;
+
+static void signal_set(sigset_t *set)
+{
+    sigemptyset(set);
+    sigaddset(set, SIGINT);
+    sigaddset(set, SIGTERM);
+}
+
+static void *signal_main(void *arg)
+{
+    signal_thread *st = arg;
+    sigset_t set;
+    signal_set(&set);
+    for (;;) {
+        int sig = 0;
+        sigwait(&set, &sig);
+        if (atomic_load(&st->quit)) return NULL;
+        atomic_store(&st->srv->stop, 1);
+        pthread_mutex_lock(&st->srv->ctx_lock);
+        if (st->srv->ctx) lws_cancel_service(st->srv->ctx);
+        pthread_mutex_unlock(&st->srv->ctx_lock);
+    }
+}
+
+/* ======================== start and stop ======================== */
+
+static int start(server *srv, iir_error *err)
+{
+    srv->scenes = iird_scene_cache_create(srv->cfg->scenes_dir);
+    if (!srv->scenes) return iir_fail(err, IIR_ERR_NOMEM, "out of memory"), 1;
+    iir_status st = iird_scene_cache_acquire(srv->scenes, srv->cfg->scene, &srv->startup, err);
+    if (st != IIR_OK) return iir_status_exit_code(st);
+    iird_scene_cache_pin(srv->scenes, srv->startup);
+    iird_metrics_init(&srv->metrics);
+    srv->env = (iird_session_env){.scenes = srv->scenes,
+                                  .metrics = &srv->metrics,
+                                  .limits = srv->cfg->limits,
+                                  .defaults = srv->cfg->defaults,
+                                  .startup = srv->startup,
+                                  .token = srv->cfg->token};
+    return 0;
+}
+
+/* Closes every session with 1001 (going away), lets lws send the close frames for a moment, then
+ * joins every worker before the context goes. */
+static void shut_down(server *srv)
+{
+    for (conn *c = srv->conns; c; c = c->next)
+        if (c->session) {
+            iird_session_request_stop(c->session);
+            iird_session_close(c->session, LWS_CLOSE_STATUS_GOINGAWAY);
+            lws_callback_on_writable(c->wsi);
+        }
+    double until = iird_now_ms() + 300.0;
+    while (srv->conns && iird_now_ms() < until) lws_service(srv->ctx, 0);
+    for (conn *c = srv->conns; c; c = c->next) {
+        iird_session_destroy(c->session);
+        if (c->session) srv->active--, atomic_fetch_sub(&srv->metrics.sessions, 1);
+        c->session = NULL;
+    }
+    reap_closing(srv, true);
+}
+
+static void print_url(const server *srv)
+{
+    const iird_server_config *cfg = srv->cfg;
+    struct lws_vhost *vh = lws_get_vhost_by_name(srv->ctx, "default");
+    int port = vh ? lws_get_vhost_listen_port(vh) : cfg->port;
+    bool v6 = strchr(cfg->host, ':') != NULL;
+    const char *name = srv->startup->name;
+    printf("iird: serving %s://%s%s%s:%d/ (%s)\n", cfg->tls_cert ? "https" : "http", v6 ? "[" : "",
+           cfg->host, v6 ? "]" : "", port, strcmp(name, "builtin") ? name : "Cornell box");
+    fflush(stdout);
+}
+
+static int serve(server *srv)
+{
+    struct lws_http_mount mounts[3];
+    make_mounts(srv, mounts);
+    struct lws_context *ctx = create_context(srv, mounts);
+    pthread_mutex_lock(&srv->ctx_lock);
+    srv->ctx = ctx;
+    pthread_mutex_unlock(&srv->ctx_lock);
+    if (!srv->ctx) {
+        fprintf(stderr,
+                "iird serve: cannot listen on %s port %d (in use, or a bad address or TLS "
+                "file?)\n",
+                srv->cfg->host, srv->cfg->port);
+        return 1;
+    }
+    srv->env.lws = srv->ctx;
+    print_url(srv);
+    while (!atomic_load(&srv->stop))
+        if (lws_service(srv->ctx, 0) < 0) break;
+    shut_down(srv);
+    pthread_mutex_lock(&srv->ctx_lock);
+    srv->ctx = NULL;
+    pthread_mutex_unlock(&srv->ctx_lock);
+    lws_context_destroy(ctx);
+    return 0;
+}
+
+static void finish(server *srv)
+{
+    if (srv->scenes) {
+        iird_scene_cache_release(srv->scenes, srv->startup);
+        iird_scene_cache_destroy(srv->scenes);
+    }
+}
+
+int iird_server_run(const iird_server_config *cfg)
+{
+    /* Before any thread exists (Embree, OpenMP, workers): they all inherit the blocked mask. */
+    sigset_t set;
+    signal_set(&set);
+    pthread_sigmask(SIG_BLOCK, &set, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    server *srv = calloc(1, sizeof *srv);
+    if (!srv) return fprintf(stderr, "iird serve: out of memory\n"), 1;
+    srv->cfg = cfg;
+    pthread_mutex_init(&srv->ctx_lock, NULL);
+    srv->loopback = is_loopback(cfg->host);
+    if (!realpath(cfg->web_dir, srv->web_dir)) snprintf(srv->web_dir, PATH_MAX, "%s", cfg->web_dir);
+    signal_thread sig = {.srv = srv};
+    pthread_create(&sig.thread, NULL, signal_main, &sig);
+
+    iir_error err = {0};
+    int rc = start(srv, &err);
+    if (rc != 0)
+        fprintf(stderr, "iird serve: %s\n", err.msg);
+    else if (!atomic_load(&srv->stop))
+        rc = serve(srv);
+    finish(srv);
+
+    atomic_store(&sig.quit, 1);
+    pthread_kill(sig.thread, SIGTERM);
+    pthread_join(sig.thread, NULL);
+    pthread_mutex_destroy(&srv->ctx_lock);
+    free(srv);
+    return rc;
+}

@@ -1,0 +1,298 @@
+/* session.c -- a session's life (create, stop, destroy), its output queue and frame slot, and
+ * writing them to the client one message per writable callback. Client messages are
+ * session_msg.c's, the render worker session_worker.c's. */
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <libwebsockets.h>
+
+#include "cli.h"
+#include "session_internal.h"
+
+/* ======================== buffers ======================== */
+
+bool iird_buf_reserve(byte_buf *b, size_t n)
+{
+    if (b->buf && n <= b->cap) return true;
+    size_t cap = n + n / 4 + 4096;
+    unsigned char *p = realloc(b->buf, LWS_PRE + cap);
+    if (!p) return false;
+    b->buf = p;
+    b->cap = cap;
+    return true;
+}
+
+void iird_buf_free(byte_buf *b)
+{
+    free(b->buf);
+    b->buf = NULL;
+    b->cap = 0;
+}
+
+/* ======================== life ======================== */
+
+static void init_state(iird_session *s, const iird_session_env *env)
+{
+    s->scene = env->startup;
+    iird_scene_cache_ref(env->scenes, s->scene);
+    s->light = iird_session_light_for(s->scene->scene, &s->light_index);
+    s->camera = s->scene->scene->camera;
+    s->settings = env->defaults;
+    s->version = 1;
+    s->seq = IIRD_NO_SEQ;
+    s->input_ms = iird_now_ms();
+    s->tokens = IIRD_RATE_BURST;
+    s->tokens_ms = s->input_ms;
+    s->rate_error_ms = -1e9;
+}
+
+iird_session *iird_session_create(const iird_session_env *env, uint32_t id, iir_error *err)
+{
+    iird_session *s = calloc(1, sizeof *s);
+    if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory for a session"), NULL;
+    s->env = env;
+    s->id = id;
+    pthread_mutex_init(&s->lock, NULL);
+    pthread_condattr_t attr; /* timed waits on the monotonic clock, as iird_now_ms */
+    pthread_condattr_init(&attr);
+    pthread_condattr_setclock(&attr, CLOCK_MONOTONIC);
+    pthread_cond_init(&s->wake, &attr);
+    pthread_condattr_destroy(&attr);
+    init_state(s, env);
+    s->w.enc = iir_jpeg_encoder_create();
+    if (!s->w.enc) {
+        iir_fail(err, IIR_ERR_NOMEM, "out of memory for a JPEG encoder");
+        iird_session_destroy(s);
+        return NULL;
+    }
+    int rc = pthread_create(&s->thread, NULL, iird_session_worker, s);
+    if (rc != 0) {
+        iir_fail(err, IIR_ERR_INTERNAL, "cannot start a render worker: %s", strerror(rc));
+        iird_session_destroy(s);
+        return NULL;
+    }
+    s->thread_started = true;
+    return s;
+}
+
+void iird_session_request_stop(iird_session *s)
+{
+    pthread_mutex_lock(&s->lock);
+    s->stop = true;
+    pthread_cond_broadcast(&s->wake);
+    pthread_mutex_unlock(&s->lock);
+}
+
+bool iird_session_worker_done(iird_session *s)
+{
+    pthread_mutex_lock(&s->lock);
+    bool done = s->worker_done || !s->thread_started;
+    pthread_mutex_unlock(&s->lock);
+    return done;
+}
+
+static void free_output(iird_session *s)
+{
+    for (int i = 0; i < s->q_count; i++) free(s->queue[(s->q_head + i) % IIRD_QUEUE_CAP].buf);
+    s->q_count = 0;
+    iird_buf_free(&s->slot.data);
+    free(s->slot.domain);
+    s->slot.domain = NULL;
+    iird_buf_free(&s->sending);
+}
+
+void iird_session_destroy(iird_session *s)
+{
+    if (!s) return;
+    if (s->thread_started) {
+        iird_session_request_stop(s);
+        pthread_join(s->thread, NULL);
+    }
+    free_output(s);
+    free(s->rx);
+    iird_recording_destroy(s->rec);
+    iird_worker_free(&s->w); /* the method before the scene it renders */
+    iird_scene_cache_release(s->env->scenes, s->scene);
+    pthread_cond_destroy(&s->wake);
+    pthread_mutex_destroy(&s->lock);
+    free(s);
+}
+
+uint32_t iird_session_id(const iird_session *s)
+{
+    return s->id;
+}
+
+uint64_t iird_session_memory(iird_session *s)
+{
+    return atomic_load(&s->memory_bytes);
+}
+
+/* ======================== the output queue ======================== */
+
+void iird_queue_locked(iird_session *s, out_msg msg)
+{
+    if (s->q_count == IIRD_QUEUE_CAP) {
+        int victim = 0; /* the oldest droppable entry, else the oldest */
+        for (int i = 0; i < s->q_count; i++)
+            if (s->queue[(s->q_head + i) % IIRD_QUEUE_CAP].droppable) {
+                victim = i;
+                break;
+            }
+        free(s->queue[(s->q_head + victim) % IIRD_QUEUE_CAP].buf);
+        for (int i = victim; i + 1 < s->q_count; i++)
+            s->queue[(s->q_head + i) % IIRD_QUEUE_CAP] =
+                s->queue[(s->q_head + i + 1) % IIRD_QUEUE_CAP];
+        s->q_count--;
+    }
+    s->queue[(s->q_head + s->q_count) % IIRD_QUEUE_CAP] = msg;
+    s->q_count++;
+}
+
+void iird_queue_text_locked(iird_session *s, const char *text, bool droppable)
+{
+    if (!text) return; /* out of memory building it: nothing to send */
+    size_t len = strlen(text);
+    out_msg m = {malloc(LWS_PRE + len), len, false, droppable};
+    if (!m.buf) return;
+    memcpy(m.buf + LWS_PRE, text, len);
+    iird_queue_locked(s, m);
+}
+
+void iird_queue_error(iird_session *s, const iird_proto_error *e)
+{
+    char *json = iird_json_error(e);
+    iird_metrics_error(s->env->metrics, e->code);
+    pthread_mutex_lock(&s->lock);
+    iird_queue_text_locked(s, json, false);
+    pthread_mutex_unlock(&s->lock);
+    free(json);
+}
+
+iird_state_view iird_state_view_locked(const iird_session *s)
+{
+    iird_state_view v = {s->scene->name, &s->light, &s->camera, &s->settings};
+    return v;
+}
+
+bool iird_session_take_wake(iird_session *s)
+{
+    pthread_mutex_lock(&s->lock);
+    bool wake = s->wake_service;
+    s->wake_service = false;
+    pthread_mutex_unlock(&s->lock);
+    return wake;
+}
+
+void iird_session_close(iird_session *s, int status)
+{
+    pthread_mutex_lock(&s->lock);
+    if (!s->close_status) s->close_status = status;
+    pthread_mutex_unlock(&s->lock);
+}
+
+/* ======================== writing ======================== */
+
+static double fps_after_send(iird_session *s, double now)
+{
+    s->sent_ms[s->sent_count % IIRD_FPS_WINDOW] = now;
+    s->sent_count++;
+    unsigned n = s->sent_count < IIRD_FPS_WINDOW ? s->sent_count : IIRD_FPS_WINDOW, recent = 0;
+    for (unsigned i = 0; i < n; i++) recent += now - s->sent_ms[i] <= 1000.0;
+    return recent;
+}
+
+/* Moves the slot's frame into s->sending and *f (the lock is held). */
+static void take_frame_locked(iird_session *s, frame_slot *f)
+{
+    byte_buf data = s->slot.data;
+    *f = s->slot;
+    s->slot.data = s->sending;
+    s->sending = data;
+    s->slot.domain = NULL;
+    s->slot.full = false;
+    s->sent_id = f->id;
+    pthread_cond_broadcast(&s->wake); /* a worker held back by an unsent frame may go on */
+}
+
+static bool write_bytes(iird_session *s, struct lws *wsi, unsigned char *payload, size_t len,
+                        bool binary)
+{
+    int n = lws_write(wsi, payload, len, binary ? LWS_WRITE_BINARY : LWS_WRITE_TEXT);
+    if (n < (int)len) return false;
+    atomic_fetch_add(&s->env->metrics->bytes_sent, len);
+    return true;
+}
+
+/* Writes the frame, then queues its stats and domain (the lock is not held). */
+static bool write_frame(iird_session *s, struct lws *wsi, frame_slot *f)
+{
+    if (!write_bytes(s, wsi, s->sending.buf + LWS_PRE, f->len, true)) {
+        free(f->domain);
+        return false;
+    }
+    double now = iird_now_ms();
+    iird_metrics_frame_sent(s->env->metrics, f->stats.total_ms);
+    pthread_mutex_lock(&s->lock);
+    uint64_t dropped = s->dropped;
+    pthread_mutex_unlock(&s->lock);
+    iird_stats_view v = {.frame = f->id,
+                         .seq = f->seq,
+                         .method = f->method,
+                         .pass = f->pass,
+                         .converged = f->converged,
+                         .stats = &f->stats,
+                         .encode_ms = f->encode_ms,
+                         .latency_ms = now - f->input_ms,
+                         .fps = fps_after_send(s, now),
+                         .bytes = f->jpeg_bytes,
+                         .dropped = dropped,
+                         .memory_bytes = iird_session_memory(s)};
+    char *stats = iird_json_stats(&v);
+    pthread_mutex_lock(&s->lock);
+    iird_queue_text_locked(s, stats, true);
+    iird_queue_text_locked(s, f->domain, true);
+    pthread_mutex_unlock(&s->lock);
+    free(stats);
+    free(f->domain);
+    return true;
+}
+
+static bool more_locked(const iird_session *s)
+{
+    return s->q_count > 0 || s->slot.full || s->close_status;
+}
+
+iird_write_result iird_session_write(iird_session *s, struct lws *wsi)
+{
+    if (lws_send_pipe_choked(wsi)) return IIRD_WRITE_MORE;
+    bool ok = true;
+    pthread_mutex_lock(&s->lock);
+    if (s->q_count > 0) {
+        out_msg m = s->queue[s->q_head];
+        s->q_head = (s->q_head + 1) % IIRD_QUEUE_CAP;
+        s->q_count--;
+        pthread_mutex_unlock(&s->lock);
+        ok = write_bytes(s, wsi, m.buf + LWS_PRE, m.len, m.binary);
+        free(m.buf);
+    } else if (s->close_status) { /* after the replies, before any further frame */
+        int status = s->close_status;
+        pthread_mutex_unlock(&s->lock);
+        lws_close_reason(wsi, (enum lws_close_status)status, NULL, 0);
+        return IIRD_WRITE_CLOSE;
+    } else if (s->slot.full) {
+        frame_slot f;
+        take_frame_locked(s, &f);
+        pthread_mutex_unlock(&s->lock);
+        ok = write_frame(s, wsi, &f);
+    } else {
+        pthread_mutex_unlock(&s->lock);
+        return IIRD_WRITE_IDLE;
+    }
+    if (!ok) return IIRD_WRITE_CLOSE;
+    pthread_mutex_lock(&s->lock);
+    bool more = more_locked(s);
+    pthread_mutex_unlock(&s->lock);
+    return more ? IIRD_WRITE_MORE : IIRD_WRITE_IDLE;
+}

@@ -1,0 +1,157 @@
+/* session_internal.h -- the session's struct, shared by its files: session.c (life, output
+ * queue, frame slot), session_msg.c (client messages, service thread), session_worker.c (the
+ * render worker). Not part of the session's interface (session.h). */
+#ifndef IIRD_SESSION_INTERNAL_H
+#define IIRD_SESSION_INTERNAL_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+
+#include "iir/image.h"
+#include "iir/method.h"
+#include "session.h"
+
+enum {
+    IIRD_QUEUE_CAP = 64,       /* pending text/binary replies; oldest stats/domain dropped first */
+    IIRD_REFINE_IDLE_MS = 250, /* no input for this long before refinement starts */
+    IIRD_RATE_PER_S = 250,     /* token bucket refill */
+    IIRD_RATE_BURST = 500,     /* token bucket size */
+    IIRD_FPS_WINDOW = 128,     /* send times kept for the fps figure */
+};
+
+/* One queued outgoing message: LWS_PRE bytes of headroom, then len bytes. */
+typedef struct out_msg {
+    unsigned char *buf;
+    size_t len;
+    bool binary;
+    bool droppable; /* stats and domain: dropped first when the queue is full */
+} out_msg;
+
+/* A growable byte buffer with LWS_PRE headroom in front of the data. */
+typedef struct byte_buf {
+    unsigned char *buf;
+    size_t cap; /* bytes after the headroom */
+} byte_buf;
+
+/* The newest published frame and what its stats message needs. */
+typedef struct frame_slot {
+    byte_buf data; /* header + JPEG after the headroom */
+    size_t len;
+    bool full;
+    uint32_t id, pass;
+    bool converged;
+    int64_t seq;     /* of the newest input the frame shows, IIRD_NO_SEQ: none yet */
+    double input_ms; /* when that input was received */
+    double encode_ms;
+    size_t jpeg_bytes;
+    char method[16];
+    iir_frame_stats stats;
+    char *domain; /* JSON, or NULL */
+} frame_slot;
+
+/* A copy of the state the worker renders (taken under the lock). */
+typedef struct render_job {
+    uint64_t version;
+    iir_light light;
+    iir_camera camera;
+    iird_settings settings;
+    int64_t seq;
+    double input_ms;
+} render_job;
+
+/* Worker-only state. */
+typedef struct worker_state {
+    iir_method *method;
+    char method_name[16];
+    iir_params method_params;
+    const iird_scene_entry *method_scene;
+    iir_image *img;
+    iir_jpeg_encoder *enc;
+    byte_buf back; /* the frame being built; swapped with the slot's on publish */
+    iir_light *lights;
+    uint32_t lights_cap;
+    render_job last; /* the last job rendered (version 0: none) */
+    iir_frame_stats last_stats;
+    bool have_frame; /* img holds last's frame */
+    uint32_t pass;   /* refinement passes on it */
+    bool converged;
+    uint32_t next_id, last_id;
+    float (*vpl_px)[2];
+    uint8_t *vpl_flags;
+    uint32_t vpl_cap;
+} worker_state;
+
+struct iird_session {
+    const iird_session_env *env;
+    uint32_t id;
+    pthread_t thread;
+    bool thread_started;
+    pthread_mutex_t lock;
+    pthread_cond_t wake; /* the worker waits on it; signalled on input, stop and sent frames */
+
+    /* ---- guarded by lock ---- */
+    const iird_scene_entry *scene; /* written by the worker (scene loads), read by both */
+    int light_index;               /* the scene light the session moves; -1: a made-up spot */
+    iir_light light;
+    iir_camera camera;
+    iird_settings settings;
+    _Atomic uint64_t version; /* bumped by every applied input; also read without the lock by
+                                 refinement's stop hook */
+    int64_t seq;              /* newest input's seq (IIRD_NO_SEQ: none) */
+    double input_ms;          /* when it was received */
+    bool ready;               /* hello received: the worker may render */
+    atomic_bool stop;         /* read without the lock by refinement's stop hook */
+    bool worker_done;
+    bool scene_pending;
+    char scene_name[130];
+    int64_t scene_seq;
+    bool snapshot_pending, snapshot_exr;
+    int64_t snapshot_seq;
+    out_msg queue[IIRD_QUEUE_CAP];
+    int q_head, q_count;
+    frame_slot slot;
+    uint32_t sent_id;  /* id of the last frame handed to lws */
+    bool wake_service; /* the worker queued output since the service thread last looked */
+    uint64_t dropped;
+    int close_status; /* 0: none; else close with it once the queue is empty */
+
+    _Atomic uint64_t memory_bytes;
+
+    /* ---- service thread only ---- */
+    bool hello_ok;
+    char *rx;
+    size_t rx_len;
+    bool rx_too_large;
+    double tokens, tokens_ms, rate_error_ms;
+    iird_recording *rec;
+    double rec_start_ms;
+    byte_buf sending; /* the frame being written (taken from the slot) */
+    double sent_ms[IIRD_FPS_WINDOW];
+    unsigned sent_count;
+
+    worker_state w;
+};
+
+/* ---- session.c ---- */
+bool iird_buf_reserve(byte_buf *b, size_t n);
+void iird_buf_free(byte_buf *b);
+/* Queues a copy of text (with the lock held). */
+void iird_queue_text_locked(iird_session *s, const char *text, bool droppable);
+/* Queues msg, taking ownership of buf (with the lock held). */
+void iird_queue_locked(iird_session *s, out_msg msg);
+/* Queues an error reply (locks); counts it in the metrics. */
+void iird_queue_error(iird_session *s, const iird_proto_error *e);
+/* The session's state as the protocol's JSON builders read it (lock held). */
+iird_state_view iird_state_view_locked(const iird_session *s);
+
+/* ---- session_msg.c ---- */
+void iird_session_handle(iird_session *s, const char *text, size_t len);
+
+/* ---- session_worker.c ---- */
+void *iird_session_worker(void *arg);
+void iird_worker_free(worker_state *w);
+/* The light a session starts with on scene: the first spot, else the first light, else a spot
+ * under the scene's ceiling; *index is the scene light's index, or -1. */
+iir_light iird_session_light_for(const iir_scene *scene, int *index);
+
+#endif

@@ -1,0 +1,303 @@
+/* session_msg.c -- a session's client messages, on the service thread: assembling WebSocket
+ * pieces, the rate limit, hello and the token, and each message applied all or nothing (parsing
+ * and validation are protocol.h's). Not the worker and not writing. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "session_internal.h"
+
+/* ======================== pieces, size and rate ======================== */
+
+/* False (and one rate_limited error per second) when the client is over its message rate. */
+static bool take_token(iird_session *s)
+{
+    double now = iird_now_ms();
+    s->tokens =
+        fmin((double)IIRD_RATE_BURST, s->tokens + (now - s->tokens_ms) * IIRD_RATE_PER_S / 1000.0);
+    s->tokens_ms = now;
+    if (s->tokens >= 1.0) {
+        s->tokens -= 1.0;
+        return true;
+    }
+    if (now - s->rate_error_ms >= 1000.0) {
+        iird_proto_error e = {.seq = IIRD_NO_SEQ};
+        s->rate_error_ms = now;
+        iird_proto_fail(&e, IIRD_E_RATE_LIMITED, NULL,
+                        "more than %d messages per second (burst %d): messages are dropped",
+                        IIRD_RATE_PER_S, IIRD_RATE_BURST);
+        iird_queue_error(s, &e);
+    }
+    return false;
+}
+
+static void reply_error(iird_session *s, iird_err code, const char *fmt, const char *arg)
+{
+    iird_proto_error e = {.seq = IIRD_NO_SEQ};
+    iird_proto_fail(&e, code, NULL, fmt, arg);
+    iird_queue_error(s, &e);
+}
+
+void iird_session_receive(iird_session *s, const void *data, size_t len, bool final, bool binary)
+{
+    if (!s->rx) s->rx = malloc(IIRD_MAX_MESSAGE_BYTES + 1);
+    if (!s->rx || s->rx_len + len > IIRD_MAX_MESSAGE_BYTES) s->rx_too_large = true;
+    if (!s->rx_too_large) {
+        memcpy(s->rx + s->rx_len, data, len);
+        s->rx_len += len;
+    }
+    if (!final) return;
+    bool too_large = s->rx_too_large;
+    size_t n = s->rx_len;
+    s->rx_len = 0;
+    s->rx_too_large = false;
+    atomic_fetch_add(&s->env->metrics->messages, 1);
+    if (!take_token(s)) return;
+    if (too_large)
+        reply_error(s, IIRD_E_TOO_LARGE, "a message is at most %s bytes", "65536");
+    else if (binary)
+        reply_error(s, IIRD_E_BAD_JSON, "%s", "binary messages are not accepted: send JSON text");
+    else
+        iird_session_handle(s, s->rx, n);
+}
+
+/* ======================== the messages ======================== */
+
+/* An input changed the state (the lock is held): the worker renders the newest. */
+static void input_changed_locked(iird_session *s, int64_t seq)
+{
+    s->version++;
+    if (seq != IIRD_NO_SEQ) s->seq = seq;
+    s->input_ms = iird_now_ms();
+    pthread_cond_broadcast(&s->wake);
+}
+
+static bool token_matches(const char *want, const char *got)
+{
+    size_t a = strlen(want), b = strlen(got);
+    unsigned diff = (unsigned)(a ^ b);
+    for (size_t i = 0; i < a; i++) diff |= (unsigned char)want[i] ^ (unsigned char)got[i % (b + 1)];
+    return diff == 0;
+}
+
+static bool on_hello(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    if (m->u.hello.protocol != IIRD_PROTOCOL_VERSION)
+        return iird_proto_fail(err, IIRD_E_UNSUPPORTED, "hello.protocol",
+                               "protocol %d is not supported; this server speaks %d",
+                               m->u.hello.protocol, IIRD_PROTOCOL_VERSION);
+    const char *token = s->env->token;
+    if (token && (!m->u.hello.has_token || !token_matches(token, m->u.hello.token))) {
+        iird_proto_fail(err, IIRD_E_UNAUTHORIZED, "hello.token",
+                        m->u.hello.has_token ? "wrong token" : "this server needs a token");
+        iird_queue_error(s, err);
+        iird_session_close(s, 1008); /* policy violation */
+        return true;
+    }
+    s->hello_ok = true;
+    pthread_mutex_lock(&s->lock);
+    iird_state_view v = iird_state_view_locked(s);
+    char *json = iird_json_welcome(&v, s->id, iird_scene_cache_names(s->env->scenes),
+                                   &s->env->limits, m->seq);
+    iird_queue_text_locked(s, json, false);
+    s->ready = true;
+    pthread_cond_broadcast(&s->wake);
+    pthread_mutex_unlock(&s->lock);
+    free(json);
+    return true;
+}
+
+static bool on_light(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    pthread_mutex_lock(&s->lock);
+    iir_light light = s->light;
+    bool ok = iird_apply_light(&m->u.light, &light, err);
+    if (ok) {
+        s->light = light;
+        input_changed_locked(s, m->seq);
+    }
+    pthread_mutex_unlock(&s->lock);
+    if (ok && s->rec)
+        ok = iird_recording_add(s->rec, (iird_now_ms() - s->rec_start_ms) / 1e3, &light, err);
+    return ok;
+}
+
+static bool on_camera(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    pthread_mutex_lock(&s->lock);
+    iir_camera camera = s->camera;
+    bool ok = iird_apply_camera(&m->u.camera, &camera, err);
+    if (ok) {
+        s->camera = camera;
+        input_changed_locked(s, m->seq);
+    }
+    pthread_mutex_unlock(&s->lock);
+    return ok;
+}
+
+static bool on_params(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    pthread_mutex_lock(&s->lock);
+    iird_settings settings = s->settings;
+    bool ok = iird_apply_params(&m->u.params, &s->env->limits, &settings, err);
+    if (ok && !strcmp(settings.method, "iir") && s->light.type != IIR_LIGHT_SPOT)
+        ok = iird_proto_fail(err, IIRD_E_UNSUPPORTED, "params.method",
+                             "iir needs a spot light, and scene %s has only a point light",
+                             s->scene->name);
+    char *json = NULL;
+    if (ok) {
+        s->settings = settings;
+        input_changed_locked(s, m->seq);
+        iird_state_view v = iird_state_view_locked(s);
+        json = iird_json_state(&v, m->seq);
+        iird_queue_text_locked(s, json, false);
+    }
+    pthread_mutex_unlock(&s->lock);
+    free(json);
+    return ok;
+}
+
+static bool on_scene(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    const char *name = m->u.scene.name;
+    if (strchr(name, '/') || strchr(name, '\\') || strstr(name, ".."))
+        return iird_proto_fail(err, IIRD_E_BAD_FIELD, "scene.name",
+                               "scene names may not contain '/', '\\' or '..'");
+    if (!iird_scene_cache_has(s->env->scenes, name))
+        return iird_proto_fail(err, IIRD_E_BAD_FIELD, "scene.name",
+                               "no scene named '%s' (welcome.scenes lists them)", name);
+    pthread_mutex_lock(&s->lock);
+    s->scene_pending = true;
+    snprintf(s->scene_name, sizeof s->scene_name, "%s", name);
+    s->scene_seq = m->seq;
+    pthread_cond_broadcast(&s->wake);
+    pthread_mutex_unlock(&s->lock);
+    return true;
+}
+
+/* The ray through the centre of the pixel under (x, y) (the lock is held). */
+static bool pick_locked(const iird_session *s, double x, double y, iir_vec3 *p, iir_vec3 *n,
+                        float *t)
+{
+    iir_camera_frame cf = iir_camera_setup(&s->camera, s->settings.width, s->settings.height);
+    iir_vec3 dir = iir_camera_dir(&cf, floorf((float)x) + 0.5f, floorf((float)y) + 0.5f);
+    iir_ray ray = iir_make_ray(cf.origin, dir, 0.f, INFINITY);
+    iir_hit hit;
+    iir_raystats rs = {{0}};
+    if (!iir_rt_intersect(s->scene->rt, &ray, &hit, &rs, IIR_RAYS_CAMERA)) return false;
+    *t = hit.t;
+    *p = iir_add(cf.origin, iir_scale(dir, hit.t));
+    *n = s->scene->scene->normals[hit.prim];
+    if (iir_dot(*n, dir) > 0.f) *n = iir_scale(*n, -1.f); /* the side the camera sees */
+    return true;
+}
+
+static bool on_pick(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    double x = m->u.pick.x, y = m->u.pick.y;
+    pthread_mutex_lock(&s->lock);
+    int w = s->settings.width, h = s->settings.height;
+    bool ok = true, hit = false;
+    iir_vec3 p = {0}, n = {0};
+    float t = 0.f;
+    if (!(x >= 0 && x < w))
+        ok = iird_proto_fail(err, IIRD_E_OUT_OF_RANGE, "pick.x",
+                             "pick.x must be in [0, %d) (the frame width), got %g", w, x);
+    else if (!(y >= 0 && y < h))
+        ok = iird_proto_fail(err, IIRD_E_OUT_OF_RANGE, "pick.y",
+                             "pick.y must be in [0, %d) (the frame height), got %g", h, y);
+    else
+        hit = pick_locked(s, x, y, &p, &n, &t);
+    pthread_mutex_unlock(&s->lock);
+    if (!ok) return false;
+    char *json = iird_json_pick(m->seq, hit, p, n, t);
+    pthread_mutex_lock(&s->lock);
+    iird_queue_text_locked(s, json, false);
+    pthread_mutex_unlock(&s->lock);
+    free(json);
+    return true;
+}
+
+static bool on_snapshot(iird_session *s, const iird_msg *m)
+{
+    pthread_mutex_lock(&s->lock);
+    s->snapshot_pending = true;
+    s->snapshot_exr = m->u.snapshot.exr;
+    s->snapshot_seq = m->seq;
+    pthread_cond_broadcast(&s->wake);
+    pthread_mutex_unlock(&s->lock);
+    return true;
+}
+
+static bool on_record(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    char *json = NULL;
+    if (m->u.record.start) {
+        iird_recording_destroy(s->rec);
+        s->rec = iird_recording_create(m->u.record.fps);
+        if (!s->rec) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
+        s->rec_start_ms = iird_now_ms();
+        pthread_mutex_lock(&s->lock);
+        iir_light light = s->light;
+        pthread_mutex_unlock(&s->lock);
+        if (!iird_recording_add(s->rec, 0.0, &light, err)) return false;
+        json = iird_json_record_start(m->seq);
+    } else {
+        if (!s->rec)
+            return iird_proto_fail(err, IIRD_E_BAD_FIELD, "record.action",
+                                   "stop without a recording: send action start first");
+        json = iird_json_record_stop(s->rec, m->seq);
+        iird_recording_destroy(s->rec);
+        s->rec = NULL;
+    }
+    pthread_mutex_lock(&s->lock);
+    iird_queue_text_locked(s, json, false);
+    pthread_mutex_unlock(&s->lock);
+    free(json);
+    return true;
+}
+
+static bool dispatch(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    switch (m->type) {
+    case IIRD_MSG_HELLO:
+        return on_hello(s, m, err);
+    case IIRD_MSG_LIGHT:
+        return on_light(s, m, err);
+    case IIRD_MSG_CAMERA:
+        return on_camera(s, m, err);
+    case IIRD_MSG_PARAMS:
+        return on_params(s, m, err);
+    case IIRD_MSG_SCENE:
+        return on_scene(s, m, err);
+    case IIRD_MSG_PICK:
+        return on_pick(s, m, err);
+    case IIRD_MSG_SNAPSHOT:
+        return on_snapshot(s, m);
+    case IIRD_MSG_RECORD:
+        return on_record(s, m, err);
+    }
+    return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "unhandled message type %d", (int)m->type);
+}
+
+void iird_session_handle(iird_session *s, const char *text, size_t len)
+{
+    iird_msg m;
+    iird_proto_error err = {.seq = IIRD_NO_SEQ};
+    if (!iird_parse_message(text, len, &s->env->limits, &m, &err)) {
+        iird_queue_error(s, &err);
+        return;
+    }
+    err.seq = m.seq;
+    if (!s->hello_ok && m.type != IIRD_MSG_HELLO) {
+        if (s->env->token)
+            iird_proto_fail(&err, IIRD_E_UNAUTHORIZED, NULL,
+                            "send hello with the server's token first");
+        else
+            iird_proto_fail(&err, IIRD_E_NOT_READY, NULL, "send hello first");
+        iird_queue_error(s, &err);
+        return;
+    }
+    if (!dispatch(s, &m, &err)) iird_queue_error(s, &err);
+}

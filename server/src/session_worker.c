@@ -1,0 +1,594 @@
+/* session_worker.c -- a session's render worker: renders the newest state, encodes the JPEG,
+ * publishes the frame and wakes the service thread; refines the frame while nothing changes;
+ * loads scenes and writes snapshots. Not messages (session_msg.c) or writing (session.c).
+ *
+ * The loop holds the session's lock only to look at the state and to publish; every step below
+ * that says "_locked" is entered and left with the lock held and drops it for the slow part.
+ * Priorities: stop, scene load, a new state (unless held back by an unsent frame that already
+ * replaced another: at most one frame ahead of what was sent), a snapshot, refinement (after
+ * IIRD_REFINE_IDLE_MS without input, until converged), then sleep on the condition variable. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <libwebsockets.h>
+
+#include "cli.h"
+#include "session_internal.h"
+
+/* ======================== small helpers ======================== */
+
+/* Wakes the service thread to write (the lock is held): the only lws call a worker makes. */
+static void notify_locked(iird_session *s)
+{
+    s->wake_service = true;
+    lws_cancel_service(s->env->lws);
+}
+
+static iird_err err_code(iir_status st)
+{
+    switch (st) {
+    case IIR_ERR_UNSUPPORTED:
+        return IIRD_E_UNSUPPORTED;
+    case IIR_ERR_INVALID:
+        return IIRD_E_BAD_FIELD;
+    default:
+        return IIRD_E_INTERNAL;
+    }
+}
+
+/* Queues an error reply for a failure on the worker (unlocked) and wakes the service thread. */
+static void worker_error(iird_session *s, iird_err code, int64_t seq, const char *what,
+                         const iir_error *err)
+{
+    iird_proto_error e = {.seq = seq};
+    iird_proto_fail(&e, code, NULL, "%s: %s", what, err->msg);
+    iird_queue_error(s, &e);
+    pthread_mutex_lock(&s->lock);
+    notify_locked(s);
+    pthread_mutex_unlock(&s->lock);
+}
+
+static void wait_ms_locked(iird_session *s, double ms)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    double ns = (double)ts.tv_nsec + ms * 1e6;
+    ts.tv_sec += (time_t)(ns / 1e9);
+    ts.tv_nsec = (long)fmod(ns, 1e9);
+    pthread_cond_timedwait(&s->wake, &s->lock, &ts);
+}
+
+iir_light iird_session_light_for(const iir_scene *scene, int *index)
+{
+    for (uint32_t i = 0; i < scene->num_lights; i++)
+        if (scene->lights[i].type == IIR_LIGHT_SPOT) return *index = (int)i, scene->lights[i];
+    if (scene->num_lights > 0) return *index = 0, scene->lights[0];
+    /* no light: a white spot just under the middle of the ceiling, aimed down */
+    iir_vec3 lo = scene->bounds_min, hi = scene->bounds_max, ext = iir_sub(hi, lo);
+    float diag = iir_length(ext);
+    iir_light l = {.type = IIR_LIGHT_SPOT,
+                   .name = "spot",
+                   .position =
+                       iir_v3(lo.x + 0.5f * ext.x, hi.y - 0.02f * diag, lo.z + 0.5f * ext.z),
+                   .direction = iir_v3(0, -1, 0),
+                   .up = iir_v3(0, 0, 1),
+                   .cone_angle = (float)(60.0 * M_PI / 180.0),
+                   .intensity = iir_scale(iir_v3(1, 1, 1), diag * diag)};
+    *index = -1;
+    return l;
+}
+
+void iird_worker_free(worker_state *w)
+{
+    iir_method_destroy(w->method);
+    w->method = NULL;
+    iir_image_destroy(w->img);
+    iir_jpeg_encoder_destroy(w->enc);
+    iird_buf_free(&w->back);
+    free(w->lights);
+    free(w->vpl_px);
+    free(w->vpl_flags);
+}
+
+/* ======================== the method and its inputs ======================== */
+
+static bool params_equal(const iir_params *a, const iir_params *b)
+{
+    return a->spp == b->spp && a->bounces == b->bounces && a->seed == b->seed &&
+           a->jitter == b->jitter && a->refine_passes == b->refine_passes && a->vpls == b->vpls &&
+           a->kmin == b->kmin && a->kmax == b->kmax && a->weights == b->weights &&
+           a->regen_threshold == b->regen_threshold && a->visibility == b->visibility &&
+           a->sm_res == b->sm_res && a->sm_bias == b->sm_bias && a->interleave == b->interleave &&
+           a->clamp == b->clamp && a->ir_fresh == b->ir_fresh;
+}
+
+/* Same picture as the last frame: only the encoding (quality, exposure) or the stream changed. */
+static bool same_view(const worker_state *w, const render_job *j)
+{
+    const render_job *a = &w->last;
+    return w->have_frame && !memcmp(&a->light, &j->light, sizeof a->light) &&
+           !memcmp(&a->camera, &j->camera, sizeof a->camera) &&
+           a->settings.width == j->settings.width && a->settings.height == j->settings.height &&
+           !strcmp(a->settings.method, j->settings.method) &&
+           params_equal(&a->settings.params, &j->settings.params);
+}
+
+/* Refinement's stop hook (called from the renderer's threads without the lock): new input or the
+ * session closing ends the pass under way, so input never waits for a whole pass. */
+static bool refine_should_stop(void *ctx)
+{
+    const iird_session *s = ctx;
+    return atomic_load_explicit(&s->stop, memory_order_relaxed) ||
+           atomic_load_explicit(&s->version, memory_order_relaxed) != s->w.last.version;
+}
+
+static iir_status ensure_method(iird_session *s, const render_job *j, const iird_scene_entry *sc,
+                                iir_error *err)
+{
+    worker_state *w = &s->w;
+    const iird_settings *st = &j->settings;
+    if (w->method && w->method_scene == sc && !strcmp(w->method_name, st->method) &&
+        params_equal(&w->method_params, &st->params))
+        return IIR_OK;
+    iir_method_destroy(w->method);
+    w->method = NULL;
+    w->have_frame = false;
+    iir_status rc = iir_method_create(st->method, sc->scene, sc->rt, &st->params, &w->method, err);
+    if (rc != IIR_OK) return rc;
+    iir_method_set_stop(w->method, refine_should_stop, s);
+    snprintf(w->method_name, sizeof w->method_name, "%s", st->method);
+    w->method_params = st->params;
+    w->method_scene = sc;
+    return IIR_OK;
+}
+
+static iir_status ensure_image(worker_state *w, int width, int height, iir_error *err)
+{
+    if (w->img && w->img->width == width && w->img->height == height) return IIR_OK;
+    iir_image_destroy(w->img);
+    w->img = iir_image_create(width, height);
+    w->have_frame = false;
+    return w->img ? IIR_OK
+                  : iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %dx%d frame", width, height);
+}
+
+/* The view's lights: the session's light first (iir drives the first spot), then the scene's
+ * others. */
+static iir_status build_view(worker_state *w, const render_job *j, const iird_scene_entry *sc,
+                             int light_index, iir_view *view, iir_error *err)
+{
+    const iir_scene *scene = sc->scene;
+    uint32_t n = 1 + scene->num_lights - (light_index >= 0 ? 1 : 0);
+    if (n > w->lights_cap) {
+        iir_light *l = realloc(w->lights, n * sizeof *l);
+        if (!l) return iir_fail(err, IIR_ERR_NOMEM, "out of memory for %u lights", n);
+        w->lights = l;
+        w->lights_cap = n;
+    }
+    uint32_t k = 0;
+    w->lights[k++] = j->light;
+    for (uint32_t i = 0; i < scene->num_lights; i++)
+        if ((int)i != light_index) w->lights[k++] = scene->lights[i];
+    view->lights = w->lights;
+    view->num_lights = k;
+    view->camera = j->camera;
+    return IIR_OK;
+}
+
+/* ======================== the domain message ======================== */
+
+static bool reserve_vpls(worker_state *w, uint32_t n)
+{
+    if (n <= w->vpl_cap) return true;
+    float(*px)[2] = realloc(w->vpl_px, n * sizeof *px);
+    if (px) w->vpl_px = px;
+    uint8_t *fl = realloc(w->vpl_flags, n);
+    if (fl) w->vpl_flags = fl;
+    if (!px || !fl) return false;
+    w->vpl_cap = n;
+    return true;
+}
+
+/* Pixel position of world point p, or (-1, -1) when behind the camera, outside the frame or
+ * hidden from the camera. */
+static void project(const iir_camera_frame *cf, const iir_rt *rt, iir_vec3 p, float out[2])
+{
+    out[0] = out[1] = -1.f;
+    iir_vec3 d = iir_sub(p, cf->origin);
+    float z = iir_dot(d, cf->basis.f), dist = iir_length(d);
+    if (z <= 1e-6f * dist) return;
+    float sx = iir_dot(d, cf->basis.r) / (z * cf->tan_half_y * cf->aspect);
+    float sy = iir_dot(d, cf->basis.u) / (z * cf->tan_half_y);
+    float x = 0.5f * (sx + 1.f) * (float)cf->width, y = 0.5f * (1.f - sy) * (float)cf->height;
+    if (!(x >= 0.f && x < (float)cf->width && y >= 0.f && y < (float)cf->height)) return;
+    float eps = iir_rt_epsilon(rt);
+    iir_ray ray = iir_make_ray(cf->origin, iir_scale(d, 1.f / dist), 0.f, dist - 4.f * eps);
+    iir_raystats rs = {{0}};
+    if (ray.tfar > 0.f && iir_rt_occluded(rt, &ray, &rs, IIR_RAYS_CAMERA)) return;
+    out[0] = x;
+    out[1] = y;
+}
+
+/* The domain JSON of the frame just rendered, or NULL for methods without VPLs. */
+static char *domain_json(worker_state *w, const render_job *j, const iird_scene_entry *sc,
+                         uint32_t frame)
+{
+    uint32_t n = 0;
+    const iir_vpl *v = iir_method_vpls(w->method, &n);
+    if (!v || n == 0 || !reserve_vpls(w, n)) return NULL;
+    iir_domain dom;
+    bool has_dom = iir_method_domain(w->method, &dom);
+    bool by_site = has_dom && dom.num_sites == n;
+    uint32_t newest = 0;
+    for (uint32_t i = 0; i < n; i++) newest = v[i].birth > newest ? v[i].birth : newest;
+    iir_camera_frame cf = iir_camera_setup(&j->camera, j->settings.width, j->settings.height);
+    for (uint32_t i = 0; i < n; i++) {
+        project(&cf, sc->rt, v[i].position, w->vpl_px[i]);
+        bool fresh = by_site ? (dom.sites[i].flags & IIR_SITE_NEW) != 0 : v[i].birth == newest;
+        w->vpl_flags[i] = (uint8_t)((fresh ? 1 : 0) | (v[i].null_sample ? 2 : 0));
+    }
+    return iird_json_domain(frame, (const float(*)[2])w->vpl_px, w->vpl_flags, n,
+                            has_dom ? &dom : NULL);
+}
+
+/* ======================== memory ======================== */
+
+/* Bytes this session holds, estimated (docs/architecture.md, "Memory per session"). */
+static uint64_t estimate_memory(const iird_session *s, const render_job *j)
+{
+    const worker_state *w = &s->w;
+    uint64_t px = (uint64_t)j->settings.width * (uint64_t)j->settings.height;
+    uint64_t bytes = sizeof *s + IIRD_MAX_MESSAGE_BYTES; /* the struct and the receive buffer */
+    bytes += px * sizeof(iir_vec3);                      /* the frame */
+    bytes += px * 3 + (px * 3 + 2048);                   /* encoder: RGB8 + tjBufSize */
+    bytes += 3 * (uint64_t)w->back.cap;                  /* back, slot and sending buffers */
+    uint32_t n = 0;
+    const iir_vpl *v = w->method ? iir_method_vpls(w->method, &n) : NULL;
+    if (v) {
+        bytes += px * (56 + 12 + 16); /* G-buffer, raw indirect, filter rows */
+        bytes += px * (24 + 12);      /* refinement: double sum + pass image */
+        for (uint32_t i = 0; i < n; i++)
+            bytes += sizeof *v + (uint64_t)v[i].smap.res * (uint64_t)v[i].smap.res * 4;
+    } else {
+        bytes += px * sizeof(iir_vec3); /* pt's sum image */
+    }
+    return bytes;
+}
+
+/* ======================== publishing ======================== */
+
+typedef struct frame_info {
+    uint32_t id, pass;
+    bool converged;
+    iir_frame_stats stats;
+    double encode_ms;
+} frame_info;
+
+/* Encodes the worker's image behind a frame header into the back buffer; the JPEG's size in
+ * *size. */
+static iir_status encode_frame(worker_state *w, const render_job *j, frame_info *f, size_t *size,
+                               iir_error *err)
+{
+    const uint8_t *jpeg = NULL;
+    double t0 = iird_now_ms();
+    iir_status st = iir_jpeg_encode(w->enc, w->img, j->settings.exposure, j->settings.quality,
+                                    &jpeg, size, err);
+    if (st != IIR_OK) return st;
+    if (!iird_buf_reserve(&w->back, IIRD_FRAME_HEADER_BYTES + *size))
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory for a frame of %zu bytes", *size);
+    f->encode_ms = iird_now_ms() - t0;
+    iird_frame_header h = {.kind = 1,
+                           .frame_id = f->id,
+                           .seq = j->seq == IIRD_NO_SEQ ? 0xFFFFFFFFu : (uint32_t)j->seq,
+                           .width = (uint16_t)w->img->width,
+                           .height = (uint16_t)w->img->height,
+                           .render_ms = (float)f->stats.total_ms,
+                           .encode_ms = (float)f->encode_ms,
+                           .pass = f->pass,
+                           .flags = (f->converged ? 1u : 0u) | (f->pass > 0 ? 2u : 0u),
+                           .payload_bytes = (uint32_t)*size};
+    unsigned char *out = w->back.buf + LWS_PRE;
+    iird_frame_header_write(&h, out);
+    memcpy(out + IIRD_FRAME_HEADER_BYTES, jpeg, *size);
+    return IIR_OK;
+}
+
+/* Swaps the back buffer into the slot, replacing (and counting as dropped) an unsent frame, and
+ * wakes the service thread (the lock is held). */
+static void fill_slot_locked(iird_session *s, const render_job *j, frame_info *f, size_t size)
+{
+    worker_state *w = &s->w;
+    frame_slot *slot = &s->slot;
+    if (slot->full) {
+        s->dropped++;
+        atomic_fetch_add(&s->env->metrics->frames_dropped, 1);
+        free(slot->domain);
+    }
+    byte_buf mine = w->back;
+    w->back = slot->data;
+    slot->data = mine;
+    slot->len = IIRD_FRAME_HEADER_BYTES + size;
+    slot->full = true;
+    slot->id = f->id;
+    slot->pass = f->pass;
+    slot->converged = f->converged;
+    slot->seq = j->seq;
+    slot->input_ms = j->input_ms;
+    slot->encode_ms = f->encode_ms;
+    slot->jpeg_bytes = size;
+    snprintf(slot->method, sizeof slot->method, "%s", j->settings.method);
+    slot->stats = f->stats;
+    slot->domain = NULL; /* send_domain attaches it */
+    w->last_id = f->id;
+    notify_locked(s);
+}
+
+/* Encodes and publishes the worker's image. Called unlocked. */
+static void publish(iird_session *s, const render_job *j, frame_info *f)
+{
+    size_t size = 0;
+    iir_error err = {0};
+    if (encode_frame(&s->w, j, f, &size, &err) != IIR_OK) {
+        worker_error(s, IIRD_E_INTERNAL, j->seq, "encoding the frame", &err);
+        return;
+    }
+    atomic_store(&s->memory_bytes, estimate_memory(s, j));
+    pthread_mutex_lock(&s->lock);
+    fill_slot_locked(s, j, f, size);
+    pthread_mutex_unlock(&s->lock);
+}
+
+/* ======================== the steps ======================== */
+
+static iir_status render_frame(iird_session *s, const render_job *j, const iird_scene_entry *sc,
+                               int light_index, frame_info *f, iir_error *err)
+{
+    worker_state *w = &s->w;
+    iir_view view;
+    iir_status st = ensure_method(s, j, sc, err);
+    if (st == IIR_OK) st = ensure_image(w, j->settings.width, j->settings.height, err);
+    if (st == IIR_OK) st = build_view(w, j, sc, light_index, &view, err);
+    if (st == IIR_OK) st = iir_method_render(w->method, &view, w->img, &f->stats, err);
+    w->have_frame = st == IIR_OK;
+    w->pass = 0;
+    w->converged = false;
+    if (st != IIR_OK) return st;
+    f->id = ++w->next_id;
+    return IIR_OK;
+}
+
+/* Sends frame id's domain message after the frame: with it while it waits in the slot, else at
+ * once. Built after the frame is published, so it adds nothing to the frame's latency (building
+ * the JSON of a few hundred Voronoi cells takes milliseconds). */
+static void send_domain(iird_session *s, uint32_t id, char *json)
+{
+    if (!json) return;
+    pthread_mutex_lock(&s->lock);
+    if (s->slot.full && s->slot.id == id && !s->slot.domain) {
+        s->slot.domain = json;
+        json = NULL;
+    } else {
+        iird_queue_text_locked(s, json, true);
+    }
+    notify_locked(s);
+    pthread_mutex_unlock(&s->lock);
+    free(json);
+}
+
+/* A new state: render it (or only re-encode when just the encoding changed) and publish. */
+static void render_locked(iird_session *s)
+{
+    worker_state *w = &s->w;
+    render_job j = {s->version, s->light, s->camera, s->settings, s->seq, s->input_ms};
+    const iird_scene_entry *sc = s->scene;
+    int light_index = s->light_index;
+    pthread_mutex_unlock(&s->lock);
+
+    frame_info f = {0};
+    iir_error err = {0};
+    iir_status st = IIR_OK;
+    bool rendered = !same_view(w, &j);
+    if (!rendered) { /* quality, exposure, refine or domain changed */
+        f = (frame_info){.id = ++w->next_id, .pass = w->pass, .converged = w->converged};
+        f.stats = w->last_stats;
+    } else {
+        st = render_frame(s, &j, sc, light_index, &f, &err);
+        w->last_stats = f.stats;
+    }
+    w->last = j;
+    if (st == IIR_OK)
+        publish(s, &j, &f);
+    else
+        worker_error(s, err_code(st), j.seq, "rendering the frame", &err);
+    if (st == IIR_OK && rendered && j.settings.domain)
+        send_domain(s, f.id, domain_json(w, &j, sc, f.id));
+    pthread_mutex_lock(&s->lock);
+}
+
+/* One more refinement pass over the last frame, published as pass k > 0. */
+static void refine_locked(iird_session *s)
+{
+    worker_state *w = &s->w;
+    render_job j = w->last;
+    pthread_mutex_unlock(&s->lock);
+    frame_info f = {0};
+    iir_error err = {0};
+    iir_status st = iir_method_refine(w->method, w->img, &f.stats, &err);
+    if (st == IIR_OK) {
+        f.id = ++w->next_id;
+        f.pass = ++w->pass;
+        f.converged = w->converged =
+            f.stats.converged || w->pass >= (uint32_t)j.settings.params.refine_passes;
+        w->last_stats = f.stats;
+        publish(s, &j, &f);
+    } else if (st == IIR_ERR_INTERRUPTED) {
+        /* New input (or closing) stopped the pass: nothing of it is published, and w->img is
+         * unspecified, so the next job renders afresh (no re-encode, no snapshot of it). */
+        w->have_frame = false;
+    } else {
+        w->converged = true; /* do not try again until the next frame */
+        worker_error(s, err_code(st), j.seq, "refining the frame", &err);
+    }
+    pthread_mutex_lock(&s->lock);
+}
+
+/* Refinement is due (or due in *wait_ms) for the last frame (the lock is held). */
+static bool refine_due_locked(const iird_session *s, double *wait_ms)
+{
+    const worker_state *w = &s->w;
+    if (!w->have_frame || w->converged || !s->settings.refine || !w->method ||
+        !iir_method_can_refine(w->method))
+        return false;
+    *wait_ms = IIRD_REFINE_IDLE_MS - (iird_now_ms() - s->input_ms);
+    return true;
+}
+
+/* The image as a PNG or EXR file's bytes after LWS_PRE + the frame header's room; NULL with err
+ * filled on failure. The file goes through a temporary file (image.h writes files). */
+static unsigned char *snapshot_bytes(const iir_image *img, bool exr, float exposure, size_t *size,
+                                     iir_error *err)
+{
+    const char *tmp = getenv("TMPDIR");
+    char path[4096];
+    snprintf(path, sizeof path, "%s/iird-snapshot-XXXXXX.%s", tmp && *tmp ? tmp : "/tmp",
+             exr ? "exr" : "png");
+    int fd = mkstemps(path, 4);
+    if (fd < 0)
+        return iir_fail(err, IIR_ERR_IO, "cannot create %s: %s", path, strerror(errno)), NULL;
+    close(fd);
+    iir_status st =
+        exr ? iir_image_write_exr(img, path, err) : iir_image_write_png(img, path, exposure, err);
+    unsigned char *buf = NULL;
+    FILE *f = st == IIR_OK ? fopen(path, "rb") : NULL;
+    if (f && fseek(f, 0, SEEK_END) == 0) {
+        long n = ftell(f);
+        rewind(f);
+        buf = n > 0 ? malloc(LWS_PRE + IIRD_FRAME_HEADER_BYTES + (size_t)n) : NULL;
+        if (buf && fread(buf + LWS_PRE + IIRD_FRAME_HEADER_BYTES, 1, (size_t)n, f) != (size_t)n)
+            free(buf), buf = NULL;
+        *size = (size_t)n;
+    }
+    if (f) fclose(f);
+    unlink(path);
+    if (!buf && st == IIR_OK) iir_fail(err, IIR_ERR_IO, "cannot read back %s", path);
+    return buf;
+}
+
+/* The snapshot reply and its binary kind-2 message. */
+static void snapshot_locked(iird_session *s)
+{
+    worker_state *w = &s->w;
+    bool exr = s->snapshot_exr;
+    int64_t seq = s->snapshot_seq;
+    s->snapshot_pending = false;
+    pthread_mutex_unlock(&s->lock);
+    iir_error err = {0};
+    size_t size = 0;
+    double t0 = iird_now_ms();
+    unsigned char *buf = w->have_frame
+                             ? snapshot_bytes(w->img, exr, w->last.settings.exposure, &size, &err)
+                             : (iir_fail(&err, IIR_ERR_INVALID, "no frame yet"), NULL);
+    if (!buf) {
+        worker_error(s, IIRD_E_INTERNAL, seq, "snapshot", &err);
+        pthread_mutex_lock(&s->lock);
+        return;
+    }
+    iird_frame_header h = {.kind = 2,
+                           .frame_id = w->last_id,
+                           .seq = seq == IIRD_NO_SEQ ? 0xFFFFFFFFu : (uint32_t)seq,
+                           .width = (uint16_t)w->img->width,
+                           .height = (uint16_t)w->img->height,
+                           .encode_ms = (float)(iird_now_ms() - t0),
+                           .pass = w->pass,
+                           .flags = (w->converged ? 1u : 0u) | (w->pass > 0 ? 2u : 0u),
+                           .payload_bytes = (uint32_t)size};
+    iird_frame_header_write(&h, buf + LWS_PRE);
+    char *json = iird_json_snapshot(seq, exr ? "exr" : "png", w->last_id, w->pass, size,
+                                    w->img->width, w->img->height);
+    pthread_mutex_lock(&s->lock);
+    iird_queue_text_locked(s, json, false);
+    iird_queue_locked(s, (out_msg){buf, IIRD_FRAME_HEADER_BYTES + size, true, false});
+    notify_locked(s);
+    free(json);
+}
+
+/* Loads the requested scene (seconds for a large one, without the lock), then swaps it in and
+ * resets the light and camera to the scene's own. */
+static void load_scene_locked(iird_session *s)
+{
+    char name[sizeof s->scene_name];
+    memcpy(name, s->scene_name, sizeof name);
+    int64_t seq = s->scene_seq;
+    s->scene_pending = false;
+    pthread_mutex_unlock(&s->lock);
+
+    const iird_scene_entry *e = NULL;
+    iir_error err = {0};
+    if (iird_scene_cache_acquire(s->env->scenes, name, &e, &err) != IIR_OK) {
+        char what[160];
+        snprintf(what, sizeof what, "scene %s", name);
+        worker_error(s, IIRD_E_SCENE_ERROR, seq, what, &err);
+        pthread_mutex_lock(&s->lock);
+        return;
+    }
+    iir_method_destroy(s->w.method); /* it renders the old scene */
+    s->w.method = NULL;
+    s->w.have_frame = false;
+    pthread_mutex_lock(&s->lock);
+    const iird_scene_entry *old = s->scene;
+    s->scene = e;
+    s->light = iird_session_light_for(e->scene, &s->light_index);
+    s->camera = e->scene->camera;
+    s->version++;
+    if (seq != IIRD_NO_SEQ) s->seq = seq;
+    s->input_ms = iird_now_ms();
+    iird_state_view v = iird_state_view_locked(s);
+    char *json = iird_json_state(&v, seq);
+    iird_queue_text_locked(s, json, false);
+    notify_locked(s);
+    pthread_mutex_unlock(&s->lock);
+    free(json);
+    iird_scene_cache_release(s->env->scenes, old);
+    pthread_mutex_lock(&s->lock);
+}
+
+/* A frame is waiting that already replaced another: render no further ahead (lock held). */
+static bool held_back_locked(const iird_session *s)
+{
+    return s->slot.full && s->w.last_id - s->sent_id >= 2;
+}
+
+void *iird_session_worker(void *arg)
+{
+    iird_session *s = arg;
+    pthread_mutex_lock(&s->lock);
+    while (!s->stop) {
+        double wait = 0;
+        bool fresh = s->version != s->w.last.version;
+        if (!s->ready)
+            pthread_cond_wait(&s->wake, &s->lock);
+        else if (s->scene_pending)
+            load_scene_locked(s);
+        else if (fresh && !held_back_locked(s))
+            render_locked(s);
+        else if (s->snapshot_pending && (s->w.have_frame || !fresh))
+            snapshot_locked(s);
+        else if (held_back_locked(s) || fresh)
+            pthread_cond_wait(&s->wake, &s->lock);
+        else if (refine_due_locked(s, &wait) && wait <= 0)
+            refine_locked(s);
+        else if (wait > 0)
+            wait_ms_locked(s, wait);
+        else
+            pthread_cond_wait(&s->wake, &s->lock);
+    }
+    s->worker_done = true;
+    notify_locked(s); /* the service thread reaps finished sessions */
+    pthread_mutex_unlock(&s->lock);
+    return NULL;
+}

@@ -1,0 +1,271 @@
+// controls.js -- mouse, wheel and keyboard on the image turned into light, camera and pick messages.
+// Moves change the page's model of the light and camera at once and mark the changed fields; one
+// light and one camera message with the newest values go out per animation frame (the server is
+// latest-wins anyway), and at most one pick is in flight at a time.
+//
+//   drag             aim the spot at the point under the cursor (pick, then light.target)
+//   shift-drag       move the light in the view plane        wheel        light along its axis
+//   right-drag       orbit the camera around its target      shift-wheel  camera dolly
+//   keys             see KEYS below (and the help overlay, index.html)
+
+import * as v from './vec.js';
+import { pick as pickMsg } from './protocol.js';
+
+const AIM_STEP_DEG = 2; // arrows; shift: x5
+const MOVE_STEP = 0.02; // WASD/QE, in units of the camera's distance to its target; shift: x5
+const ORBIT_DEG_PER_PX = 0.3;
+const ORBIT_STEP_DEG = 5; // IJKL
+const WHEEL_STEP = 0.04; // light along its axis per wheel notch (100 deltaY), camera distances
+const DOLLY = 1.1;
+const PICK_TIMEOUT_MS = 300; // a lost pick reply does not stall aiming
+
+export class Controls {
+    // stage: the element under the pointer; view: View; model: {light, camera} kept current by
+    // main.js; send: {light(fields), camera(fields), pick(msg) -> seq}; actions: keyboard actions.
+    constructor(stage, view, model, send, actions) {
+        this.stage = stage;
+        this.view = view;
+        this.model = model;
+        this.send = send;
+        this.actions = actions;
+        this.enabled = false;
+        this.drag = null; // {mode: 'aim'|'move'|'orbit', x, y, id}
+        this.pendingLight = null;
+        this.pendingCamera = null;
+        this.pendingPick = null; // {x, y} in frame pixels
+        this.pickInFlight = null; // {seq, t}
+        this.raf = 0;
+        this.bind();
+    }
+
+    bind() {
+        const s = this.stage;
+        s.addEventListener('pointerdown', (e) => this.down(e));
+        s.addEventListener('pointermove', (e) => this.move(e));
+        s.addEventListener('pointerup', (e) => this.up(e));
+        s.addEventListener('pointercancel', (e) => this.up(e));
+        s.addEventListener('contextmenu', (e) => e.preventDefault());
+        s.addEventListener('wheel', (e) => this.wheel(e), { passive: false });
+        window.addEventListener('keydown', (e) => this.key(e));
+    }
+
+    // ---- pointer ----
+
+    down(e) {
+        if (!this.enabled || this.drag) return;
+        let mode = null;
+        if (e.button === 0) mode = e.shiftKey ? 'move' : 'aim';
+        else if (e.button === 2) mode = 'orbit';
+        if (!mode) return;
+        e.preventDefault();
+        this.stage.setPointerCapture(e.pointerId);
+        this.drag = { mode, x: e.clientX, y: e.clientY, id: e.pointerId };
+        this.stage.dataset.drag = mode;
+        if (mode === 'aim') this.aimAt(e);
+    }
+
+    move(e) {
+        const d = this.drag;
+        if (!d || e.pointerId !== d.id) return;
+        const dx = e.clientX - d.x;
+        const dy = e.clientY - d.y;
+        d.x = e.clientX;
+        d.y = e.clientY;
+        if (d.mode === 'aim') this.aimAt(e);
+        else if (d.mode === 'move') this.moveLightInView(dx, dy);
+        else this.orbit(-dx * ORBIT_DEG_PER_PX, dy * ORBIT_DEG_PER_PX); // grab the scene
+    }
+
+    up(e) {
+        if (!this.drag || e.pointerId !== this.drag.id) return;
+        if (this.stage.hasPointerCapture(e.pointerId)) this.stage.releasePointerCapture(e.pointerId);
+        this.drag = null;
+        delete this.stage.dataset.drag;
+        this.view.setMarker(null);
+    }
+
+    aimAt(e) {
+        const p = this.view.toFrame(e.clientX, e.clientY);
+        this.pendingPick = { x: p.x, y: p.y };
+        this.view.setMarker({ x: p.x, y: p.y, kind: 'aim' });
+        this.schedule();
+    }
+
+    // The reply to a pick: aim the light at the hit point.
+    onPick(msg) {
+        if (this.pickInFlight && msg.seq >= this.pickInFlight.seq) this.pickInFlight = null;
+        if (!msg.hit) {
+            if (this.drag && this.view.marker) this.view.setMarker({ ...this.view.marker, kind: 'miss' });
+            this.schedule();
+            return;
+        }
+        const L = this.model.light;
+        L.direction = v.normalize(v.sub(msg.position, L.position), L.direction);
+        this.queueLight({ target: msg.position });
+    }
+
+    wheel(e) {
+        if (!this.enabled) return;
+        e.preventDefault();
+        const notches = -(e.deltaY || e.deltaX) / (e.deltaMode === 1 ? 3 : 100);
+        if (e.shiftKey) this.dolly(Math.pow(DOLLY, -notches));
+        else this.moveLightAlongAxis(notches * WHEEL_STEP * this.sceneScale());
+    }
+
+    // ---- light and camera moves (model first, message at the next animation frame) ----
+
+    sceneScale() {
+        const c = this.model.camera;
+        return Math.max(1e-3, v.length(v.sub(c.target, c.position)));
+    }
+
+    // dx, dy in CSS pixels of the image: the light follows the cursor at its own depth.
+    moveLightInView(dx, dy) {
+        const c = this.model.camera;
+        const L = this.model.light;
+        const { f, r, u } = v.cameraBasis(c);
+        let depth = v.dot(v.sub(L.position, c.position), f);
+        if (!(depth > 1e-3)) depth = this.sceneScale();
+        const worldPerPx = (2 * depth * Math.tan((c.fov * v.DEG) / 2)) / Math.max(1, this.view.cssH);
+        this.moveLight(v.add(v.scale(r, dx * worldPerPx), v.scale(u, -dy * worldPerPx)));
+    }
+
+    moveLightAlongAxis(dist) {
+        this.moveLight(v.scale(this.model.light.direction, dist));
+    }
+
+    moveLight(delta) {
+        const L = this.model.light;
+        L.position = v.add(L.position, delta);
+        this.queueLight({ position: L.position });
+    }
+
+    // Rotates the spot's axis: yaw about the camera's up hint, pitch about the light's side (the
+    // camera's right when the spot points straight up or down, so "up" tilts it up the screen).
+    aimBy(yawDeg, pitchDeg) {
+        const L = this.model.light;
+        const up = this.model.camera.up || [0, 1, 0];
+        let d = v.rotate(L.direction, v.normalize(up), yawDeg * v.DEG);
+        const side = v.cross(d, v.normalize(up));
+        const axis = v.length(side) > 0.05 ? v.normalize(side) : v.cameraBasis(this.model.camera).r;
+        d = v.rotate(d, axis, pitchDeg * v.DEG);
+        L.direction = v.normalize(d, L.direction);
+        this.queueLight({ direction: L.direction });
+    }
+
+    // Orbits the eye around the target; the elevation stays 2 degrees away from the poles.
+    orbit(yawDeg, pitchDeg) {
+        const c = this.model.camera;
+        const up = v.normalize(c.up || [0, 1, 0]);
+        let off = v.sub(c.position, c.target);
+        off = v.rotate(off, up, yawDeg * v.DEG);
+        const dist = v.length(off);
+        const elev = Math.asin(Math.max(-1, Math.min(1, v.dot(off, up) / dist))) / v.DEG;
+        const pitch = Math.max(-88 - elev, Math.min(88 - elev, pitchDeg));
+        off = v.rotate(off, v.sideOf(v.scale(off, -1), up), -pitch * v.DEG);
+        c.position = v.add(c.target, off);
+        this.queueCamera({ position: c.position });
+    }
+
+    dolly(factor) {
+        const c = this.model.camera;
+        const off = v.scale(v.sub(c.position, c.target), factor);
+        if (v.length(off) < 1e-3) return;
+        c.position = v.add(c.target, off);
+        this.queueCamera({ position: c.position });
+    }
+
+    queueLight(fields) {
+        const p = (this.pendingLight = { ...this.pendingLight, ...fields });
+        if ('target' in fields) delete p.direction; // direction and target exclude each other
+        if ('direction' in fields) delete p.target;
+        this.schedule();
+    }
+
+    queueCamera(fields) {
+        this.pendingCamera = { ...this.pendingCamera, ...fields };
+        this.schedule();
+    }
+
+    schedule() {
+        if (!this.raf) this.raf = requestAnimationFrame(() => this.flush());
+    }
+
+    // Once per animation frame: one pick (if none is in flight), one light, one camera message.
+    flush() {
+        this.raf = 0;
+        const now = performance.now();
+        if (this.pickInFlight && now - this.pickInFlight.t > PICK_TIMEOUT_MS) this.pickInFlight = null;
+        if (this.pendingPick && !this.pickInFlight) {
+            const { width, height } = this.view.frameSize();
+            const seq = this.send.pick(pickMsg(this.pendingPick.x, this.pendingPick.y, width, height));
+            if (seq >= 0) this.pickInFlight = { seq, t: now };
+            this.pendingPick = null;
+        }
+        if (this.pendingLight) {
+            this.send.light(roundFields(this.pendingLight));
+            this.pendingLight = null;
+        }
+        if (this.pendingCamera) {
+            this.send.camera(roundFields(this.pendingCamera));
+            this.pendingCamera = null;
+        }
+        if (this.pendingPick) this.schedule();
+    }
+
+    // ---- keyboard ----
+
+    key(e) {
+        const t = e.target;
+        if (t && (t.tagName === 'INPUT' || t.tagName === 'SELECT' || t.tagName === 'TEXTAREA')) return;
+        if (e.ctrlKey || e.metaKey || e.altKey) return;
+        const name = e.key.length === 1 ? e.key.toLowerCase() : e.key;
+        const fn = KEYS[name];
+        if (!fn) return;
+        if (!this.enabled && !OFFLINE_KEYS.has(name)) return;
+        e.preventDefault();
+        fn(this, e.shiftKey ? 5 : 1);
+    }
+}
+
+// key -> action(controls, multiplier). Documented in the help overlay and README.
+const KEYS = {
+    ArrowLeft: (c, m) => c.aimBy(AIM_STEP_DEG * m, 0),
+    ArrowRight: (c, m) => c.aimBy(-AIM_STEP_DEG * m, 0),
+    ArrowUp: (c, m) => c.aimBy(0, AIM_STEP_DEG * m),
+    ArrowDown: (c, m) => c.aimBy(0, -AIM_STEP_DEG * m),
+    w: (c, m) => c.moveLight(v.scale(v.cameraBasis(c.model.camera).u, MOVE_STEP * m * c.sceneScale())),
+    s: (c, m) => c.moveLight(v.scale(v.cameraBasis(c.model.camera).u, -MOVE_STEP * m * c.sceneScale())),
+    a: (c, m) => c.moveLight(v.scale(v.cameraBasis(c.model.camera).r, -MOVE_STEP * m * c.sceneScale())),
+    d: (c, m) => c.moveLight(v.scale(v.cameraBasis(c.model.camera).r, MOVE_STEP * m * c.sceneScale())),
+    e: (c, m) => c.moveLightAlongAxis(MOVE_STEP * m * c.sceneScale()),
+    q: (c, m) => c.moveLightAlongAxis(-MOVE_STEP * m * c.sceneScale()),
+    j: (c, m) => c.orbit(ORBIT_STEP_DEG * m, 0),
+    l: (c, m) => c.orbit(-ORBIT_STEP_DEG * m, 0),
+    i: (c, m) => c.orbit(0, ORBIT_STEP_DEG * m),
+    k: (c, m) => c.orbit(0, -ORBIT_STEP_DEG * m),
+    u: (c) => c.dolly(1 / DOLLY),
+    o: (c) => c.dolly(DOLLY),
+    '[': (c, m) => c.actions.cone(-5 * m),
+    ']': (c, m) => c.actions.cone(5 * m),
+    '{': (c) => c.actions.cone(-25),
+    '}': (c) => c.actions.cone(25),
+    '-': (c) => c.actions.exposure(-0.5),
+    '=': (c) => c.actions.exposure(0.5),
+    '+': (c) => c.actions.exposure(0.5),
+    p: (c) => c.actions.snapshot(),
+    r: (c) => c.actions.record(),
+    v: (c) => c.actions.toggleVpls(),
+    '0': (c) => c.actions.resetView(),
+    '?': (c) => c.actions.help(),
+    h: (c) => c.actions.help(),
+    Escape: (c) => c.actions.help(false),
+};
+const OFFLINE_KEYS = new Set(['?', 'h', 'Escape', 'v']); // work while disconnected
+
+// Six decimals are plenty for a light or camera and keep the messages short.
+function roundFields(fields) {
+    const out = {};
+    for (const [k, val] of Object.entries(fields)) out[k] = Array.isArray(val) ? v.round(val, 6) : val;
+    return out;
+}

@@ -1,0 +1,184 @@
+// domain.js -- a live drawing of the spot light's disk domain from `domain` messages: the unit disk,
+// each VPL site's Voronoi cell clipped to it, the Delaunay edges, the sites (new ones and null
+// samples marked) and the sites removed this frame. Drawing only; the data comes from main.js.
+
+const TRAIL = 6; // frames a removed site stays visible, fading
+
+const COLORS = {
+    disk: '#15171a',
+    rim: '#5a5f66',
+    axis: '#2c3036',
+    cell: 'rgba(120,150,190,0.35)',
+    cellNew: 'rgba(80,255,140,0.16)',
+    edge: 'rgba(110,170,255,0.55)',
+    site: '#ffc83c',
+    siteNew: '#50ff8c',
+    siteNull: '#8a8a8a',
+    removed: '#ff5a5a',
+    text: '#9aa0a6',
+};
+
+export class DomainView {
+    constructor(canvas, caption) {
+        this.canvas = canvas;
+        this.caption = caption;
+        this.ctx = canvas.getContext('2d');
+        this.domain = null;
+        this.method = '';
+        this.trail = []; // `removed` of the last TRAIL domain messages, newest first (fading)
+        new ResizeObserver(() => this.resize()).observe(canvas);
+        this.resize();
+    }
+
+    resize() {
+        const dpr = window.devicePixelRatio || 1;
+        const w = Math.max(1, Math.round(this.canvas.clientWidth * dpr));
+        if (this.canvas.width !== w || this.canvas.height !== w) {
+            this.canvas.width = w;
+            this.canvas.height = w;
+        }
+        this.draw();
+    }
+
+    // domain: the `domain` message (or null); method: the current method's name for the caption.
+    update(domain, method) {
+        if (!domain) this.trail = [];
+        else if (domain !== this.domain) {
+            this.trail.unshift(domain.removed || []);
+            this.trail.length = Math.min(this.trail.length, TRAIL);
+        }
+        this.domain = domain;
+        this.method = method || this.method;
+        this.draw();
+    }
+
+    draw() {
+        const c = this.ctx;
+        const S = this.canvas.width;
+        const dpr = window.devicePixelRatio || 1;
+        c.clearRect(0, 0, S, S);
+        const R = S * 0.46; // unit disk radius in canvas pixels
+        const map = ([x, y]) => [S / 2 + x * R, S / 2 - y * R]; // +y up, as on the disk
+        this.drawDisk(c, S, R, dpr);
+        const d = this.domain;
+        if (!d || !d.sites) {
+            const m = this.method || 'this method';
+            this.caption.textContent = d ? `${m} has no disk domain` : `no domain from ${m} yet`;
+            return;
+        }
+        c.save();
+        c.beginPath();
+        c.arc(S / 2, S / 2, R + dpr, 0, 2 * Math.PI);
+        c.clip();
+        this.drawCells(c, d, map, dpr);
+        this.drawEdges(c, d, map, dpr);
+        c.restore();
+        this.drawSites(c, d, map, dpr);
+        this.drawRemoved(c, d, map, dpr);
+        const fresh = d.sites.filter((s) => s[3] & 1).length;
+        const nulls = d.sites.filter((s) => s[3] & 2).length;
+        const removed = d.removed ? d.removed.length : 0;
+        this.caption.textContent = `frame ${d.frame} · ${d.sites.length} sites · ${fresh} new · ${removed} removed · ${nulls} null`;
+    }
+
+    drawDisk(c, S, R, dpr) {
+        c.fillStyle = COLORS.disk;
+        c.beginPath();
+        c.arc(S / 2, S / 2, R, 0, 2 * Math.PI);
+        c.fill();
+        c.strokeStyle = COLORS.axis;
+        c.lineWidth = dpr;
+        c.beginPath();
+        c.moveTo(S / 2 - R, S / 2);
+        c.lineTo(S / 2 + R, S / 2);
+        c.moveTo(S / 2, S / 2 - R);
+        c.lineTo(S / 2, S / 2 + R);
+        c.stroke();
+        c.strokeStyle = COLORS.rim;
+        c.lineWidth = 1.5 * dpr;
+        c.beginPath();
+        c.arc(S / 2, S / 2, R, 0, 2 * Math.PI);
+        c.stroke();
+    }
+
+    drawCells(c, d, map, dpr) {
+        if (!d.cells) return;
+        c.lineWidth = dpr;
+        c.strokeStyle = COLORS.cell;
+        d.cells.forEach((poly, i) => {
+            if (!poly || poly.length < 3) return;
+            c.beginPath();
+            poly.forEach((p, k) => {
+                const [x, y] = map(p);
+                if (k === 0) c.moveTo(x, y);
+                else c.lineTo(x, y);
+            });
+            c.closePath();
+            const site = d.sites[i];
+            if (site && site[3] & 1) {
+                c.fillStyle = COLORS.cellNew;
+                c.fill();
+            }
+            c.stroke();
+        });
+    }
+
+    drawEdges(c, d, map, dpr) {
+        if (!d.edges) return;
+        c.strokeStyle = COLORS.edge;
+        c.lineWidth = 0.8 * dpr;
+        c.beginPath();
+        for (const [i, j] of d.edges) {
+            const a = d.sites[i];
+            const b = d.sites[j];
+            if (!a || !b) continue;
+            const [x0, y0] = map(a);
+            const [x1, y1] = map(b);
+            c.moveTo(x0, y0);
+            c.lineTo(x1, y1);
+        }
+        c.stroke();
+    }
+
+    // Dots shrink with the site count so that 4096 sites stay readable: about a sixth of the mean
+    // spacing of N sites on the disk, between 1 and 2.2 CSS pixels.
+    drawSites(c, d, map, dpr) {
+        const spacing = ((this.canvas.width * 0.46) / dpr) * Math.sqrt(Math.PI / Math.max(1, d.sites.length));
+        const r = Math.min(2.2, Math.max(1, spacing / 6)) * dpr;
+        for (const s of d.sites) {
+            const [x, y] = map(s);
+            const flags = s[3];
+            c.beginPath();
+            if (flags & 2) {
+                c.arc(x, y, r, 0, 2 * Math.PI);
+                c.strokeStyle = COLORS.siteNull;
+                c.lineWidth = dpr;
+                c.stroke();
+                continue;
+            }
+            c.arc(x, y, flags & 1 ? 1.5 * r : r, 0, 2 * Math.PI);
+            c.fillStyle = flags & 1 ? COLORS.siteNew : COLORS.site;
+            c.fill();
+        }
+    }
+
+    // Removed sites of this frame as red crosses, those of the frames before fading out.
+    drawRemoved(c, d, map, dpr) {
+        const r = 4 * dpr;
+        c.strokeStyle = COLORS.removed;
+        c.lineWidth = 1.6 * dpr;
+        for (let age = this.trail.length - 1; age >= 0; age--) {
+            c.globalAlpha = 1 - age / TRAIL;
+            c.beginPath();
+            for (const p of this.trail[age]) {
+                const [x, y] = map(p);
+                c.moveTo(x - r, y - r);
+                c.lineTo(x + r, y + r);
+                c.moveTo(x + r, y - r);
+                c.lineTo(x - r, y + r);
+            }
+            c.stroke();
+        }
+        c.globalAlpha = 1;
+    }
+}

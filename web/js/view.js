@@ -1,0 +1,173 @@
+// view.js -- the image: a canvas that shows the newest frame (JPEG decoded with createImageBitmap),
+// scaled to fill its container at the frame's aspect ratio, and an overlay canvas above it for the
+// VPLs and the aim marker. Maps pointer positions to frame pixels. Not input handling (controls.js).
+//
+// Decoding is latest-wins like the server: while one JPEG decodes, only the newest frame that
+// arrives meanwhile is kept; older ones are dropped, never queued.
+
+export class View {
+    constructor(container) {
+        this.container = container;
+        this.canvas = document.createElement('canvas');
+        this.canvas.id = 'frame';
+        this.canvas.width = 512;
+        this.canvas.height = 384;
+        this.overlay = document.createElement('canvas');
+        this.overlay.id = 'overlay';
+        container.append(this.canvas, this.overlay);
+        this.ctx = this.canvas.getContext('2d', { willReadFrequently: false });
+        this.octx = this.overlay.getContext('2d');
+        this.decoding = false;
+        this.next = null; // the newest frame waiting for the decoder
+        this.drawnId = 0;
+        this.onDrawn = () => {};
+        this.vpls = null; // domain.vpls of the newest domain message: [[sx, sy, flags], ...]
+        this.showVpls = true;
+        this.marker = null; // {x, y, kind} in frame pixels while dragging
+        this.cssW = 0;
+        this.cssH = 0;
+        new ResizeObserver(() => this.fit()).observe(container);
+        this.fit();
+    }
+
+    // header: parseFrame's result (kind 1). Shows it once decoded; calls onDrawn(header).
+    show(header) {
+        // A frame replaced before it was drawn hands on the input time it answered (main.js's sentAt).
+        if (this.next && header.sentAt == null) header.sentAt = this.next.sentAt;
+        this.next = header;
+        if (!this.decoding) this.decodeNext();
+    }
+
+    async decodeNext() {
+        const h = this.next;
+        this.next = null;
+        if (!h) return;
+        this.decoding = true;
+        try {
+            const bitmap = await createImageBitmap(new Blob([h.payload], { type: 'image/jpeg' }));
+            this.draw(h, bitmap); // one decode at a time, frames arrive in order: never older
+            bitmap.close();
+        } catch (e) {
+            console.warn(`iir: frame ${h.frameId} did not decode: ${e.message || e}`);
+        }
+        this.decoding = false;
+        if (this.next) this.decodeNext();
+    }
+
+    draw(h, bitmap) {
+        if (this.canvas.width !== bitmap.width || this.canvas.height !== bitmap.height) {
+            this.canvas.width = bitmap.width;
+            this.canvas.height = bitmap.height;
+            this.fit();
+        }
+        this.ctx.drawImage(bitmap, 0, 0);
+        this.drawnId = h.frameId;
+        this.onDrawn(h);
+    }
+
+    // Largest rectangle of the frame's aspect ratio inside the container, centred.
+    fit() {
+        const box = this.container.getBoundingClientRect();
+        const aspect = this.canvas.width / this.canvas.height;
+        let w = Math.max(1, Math.floor(box.width));
+        let h = Math.floor(w / aspect);
+        if (h > box.height) {
+            h = Math.max(1, Math.floor(box.height));
+            w = Math.floor(h * aspect);
+        }
+        this.cssW = w;
+        this.cssH = h;
+        for (const c of [this.canvas, this.overlay]) {
+            c.style.width = `${w}px`;
+            c.style.height = `${h}px`;
+            c.style.left = `${Math.floor((box.width - w) / 2)}px`;
+            c.style.top = `${Math.floor((box.height - h) / 2)}px`;
+        }
+        const dpr = window.devicePixelRatio || 1;
+        this.overlay.width = Math.round(w * dpr);
+        this.overlay.height = Math.round(h * dpr);
+        this.drawOverlay();
+    }
+
+    // Client (CSS) coordinates to frame pixels; inside reports whether the point is on the image.
+    toFrame(clientX, clientY) {
+        const r = this.canvas.getBoundingClientRect();
+        const x = ((clientX - r.left) / r.width) * this.canvas.width;
+        const y = ((clientY - r.top) / r.height) * this.canvas.height;
+        return { x, y, inside: x >= 0 && y >= 0 && x < this.canvas.width && y < this.canvas.height };
+    }
+
+    // CSS pixels per frame pixel (for world-space drag scaling).
+    cssPerPixel() {
+        return this.cssW / this.canvas.width;
+    }
+
+    frameSize() {
+        return { width: this.canvas.width, height: this.canvas.height };
+    }
+
+    setVpls(vpls) {
+        this.vpls = vpls;
+        this.drawOverlay();
+    }
+
+    setMarker(marker) {
+        this.marker = marker;
+        this.drawOverlay();
+    }
+
+    drawOverlay() {
+        const o = this.octx;
+        const W = this.overlay.width;
+        const H = this.overlay.height;
+        o.clearRect(0, 0, W, H);
+        const sx = W / this.canvas.width;
+        const sy = H / this.canvas.height;
+        const dpr = window.devicePixelRatio || 1;
+        if (this.showVpls && this.vpls) this.drawVpls(o, sx, sy, dpr);
+        if (this.marker) this.drawMarker(o, this.marker.x * sx, this.marker.y * sy, dpr);
+    }
+
+    drawVpls(o, sx, sy, dpr) {
+        const r = 1.9 * dpr;
+        o.lineWidth = dpr;
+        for (const [x, y, flags] of this.vpls) {
+            if (x < 0 || y < 0) continue;
+            const px = x * sx;
+            const py = y * sy;
+            o.beginPath();
+            o.arc(px, py, (flags & 1 ? 1.4 : 1) * r, 0, 2 * Math.PI);
+            if (flags & 2) {
+                o.strokeStyle = 'rgba(150,150,150,0.8)';
+                o.stroke();
+            } else if (flags & 1) {
+                o.fillStyle = 'rgba(80,255,140,0.95)';
+                o.fill();
+                o.strokeStyle = 'rgba(0,0,0,0.7)';
+                o.stroke();
+            } else {
+                o.fillStyle = 'rgba(255,200,60,0.85)';
+                o.fill();
+                o.strokeStyle = 'rgba(0,0,0,0.6)';
+                o.stroke();
+            }
+        }
+    }
+
+    drawMarker(o, x, y, dpr) {
+        const r = 9 * dpr;
+        o.strokeStyle = this.marker.kind === 'miss' ? 'rgba(255,90,90,0.9)' : 'rgba(255,255,255,0.9)';
+        o.lineWidth = 1.5 * dpr;
+        o.beginPath();
+        o.arc(x, y, r, 0, 2 * Math.PI);
+        o.moveTo(x - 1.8 * r, y);
+        o.lineTo(x - 0.5 * r, y);
+        o.moveTo(x + 0.5 * r, y);
+        o.lineTo(x + 1.8 * r, y);
+        o.moveTo(x, y - 1.8 * r);
+        o.lineTo(x, y - 0.5 * r);
+        o.moveTo(x, y + 0.5 * r);
+        o.lineTo(x, y + 1.8 * r);
+        o.stroke();
+    }
+}
