@@ -168,6 +168,8 @@ static void on_established(server *srv, conn *c, struct lws *wsi)
         return;
     }
     srv->active++;
+    /* A client that never says hello must not hold a session slot: lws closes it after this. */
+    lws_set_timeout(wsi, PENDING_TIMEOUT_USER_OK, IIRD_HELLO_TIMEOUT_S);
     atomic_fetch_add(&srv->metrics.sessions, 1);
     atomic_fetch_add(&srv->metrics.sessions_total, 1);
 }
@@ -265,6 +267,7 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
         if (!c->session) break;
         iird_session_receive(c->session, in, len, lws_is_final_fragment(wsi),
                              lws_frame_is_binary(wsi));
+        if (iird_session_greeted(c->session)) lws_set_timeout(wsi, NO_PENDING_TIMEOUT, 0);
         lws_callback_on_writable(wsi);
         break;
     case LWS_CALLBACK_SERVER_WRITEABLE:

@@ -9,7 +9,10 @@
 
 #include "protocol.h"
 
-enum { IIRD_MAX_ORIGINS = 16 };
+enum {
+    IIRD_MAX_ORIGINS = 16,
+    IIRD_HELLO_TIMEOUT_S = 10, /* a WebSocket without an accepted hello by then is closed */
+};
 
 typedef struct iird_server_config {
     const char *host;       /* IP address to bind, "127.0.0.1" unless told otherwise */

@@ -124,6 +124,11 @@ uint32_t iird_session_id(const iird_session *s)
     return s->id;
 }
 
+bool iird_session_greeted(const iird_session *s)
+{
+    return s->hello_ok;
+}
+
 uint64_t iird_session_memory(iird_session *s)
 {
     return atomic_load(&s->memory_bytes);

@@ -55,6 +55,8 @@ bool iird_session_worker_done(iird_session *s);
 void iird_session_destroy(iird_session *s);
 
 uint32_t iird_session_id(const iird_session *s);
+/* True once the client's hello was accepted (service thread only). */
+bool iird_session_greeted(const iird_session *s);
 /* Estimated bytes the session holds (images, method, encoder, frames; docs/architecture.md). */
 uint64_t iird_session_memory(iird_session *s);
 

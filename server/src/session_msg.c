@@ -113,13 +113,14 @@ static bool on_light(iird_session *s, const iird_msg *m, iird_proto_error *err)
     pthread_mutex_lock(&s->lock);
     iir_light light = s->light;
     bool ok = iird_apply_light(&m->u.light, &light, err);
+    /* Recorded before it is applied: a full recording refuses the whole message. */
+    if (ok && s->rec)
+        ok = iird_recording_add(s->rec, (iird_now_ms() - s->rec_start_ms) / 1e3, &light, err);
     if (ok) {
         s->light = light;
         input_changed_locked(s, m->seq);
     }
     pthread_mutex_unlock(&s->lock);
-    if (ok && s->rec)
-        ok = iird_recording_add(s->rec, (iird_now_ms() - s->rec_start_ms) / 1e3, &light, err);
     return ok;
 }
 

@@ -410,7 +410,18 @@ static void render_locked(iird_session *s)
     pthread_mutex_lock(&s->lock);
 }
 
-/* One more refinement pass over the last frame, published as pass k > 0. */
+/* A VPL method's refined frame is worth showing only after whole sweeps of its n x n subsets:
+ * in between, pixels have seen different numbers of subsets and the image shows the n x n
+ * pattern (refine.h). pt's passes are whole samples per pixel: every one is shown. */
+static bool whole_sweep(const worker_state *w, const iir_params *p)
+{
+    uint32_t n = 0;
+    bool has_vpls = iir_method_vpls(w->method, &n) != NULL;
+    uint32_t n2 = (uint32_t)(p->interleave * p->interleave);
+    return !has_vpls || n2 <= 1 || w->pass % n2 == 0;
+}
+
+/* One more refinement pass over the last frame, published as pass k > 0 after whole sweeps. */
 static void refine_locked(iird_session *s)
 {
     worker_state *w = &s->w;
@@ -420,12 +431,14 @@ static void refine_locked(iird_session *s)
     iir_error err = {0};
     iir_status st = iir_method_refine(w->method, w->img, &f.stats, &err);
     if (st == IIR_OK) {
-        f.id = ++w->next_id;
         f.pass = ++w->pass;
         f.converged = w->converged =
             f.stats.converged || w->pass >= (uint32_t)j.settings.params.refine_passes;
         w->last_stats = f.stats;
-        publish(s, &j, &f);
+        if (f.converged || whole_sweep(w, &j.settings.params)) {
+            f.id = ++w->next_id;
+            publish(s, &j, &f);
+        }
     } else if (st == IIR_ERR_INTERRUPTED) {
         /* New input (or closing) stopped the pass: nothing of it is published, and w->img is
          * unspecified, so the next job renders afresh (no re-encode, no snapshot of it). */

@@ -72,6 +72,23 @@ class RobustTest(DaemonTest):
         self.assertLessEqual(opened, 20)
 
 
+    async def test_silent_client_is_closed(self):
+        """A connection that never says hello is closed after 10 s, freeing its session slot;
+        one that said hello is not."""
+        silent = await Client.connect(self.daemon, hello=False)
+        talker = await Client.connect(self.daemon)
+        t0 = time.monotonic()
+        while not silent.closed and time.monotonic() - t0 < 20:
+            await asyncio.sleep(0.2)
+        waited = time.monotonic() - t0
+        self.assertTrue(silent.closed, "a client without hello is still connected after 20 s")
+        self.assertGreater(waited, 8.0, f"closed after {waited:.1f} s, before the 10 s allowed")
+        self.assertFalse(talker.closed, "a client that said hello was closed too")
+        await self.still_streaming(talker, "after the silent client was dropped")
+        await talker.close()
+        await self.wait_sessions_zero()
+
+
 class OriginTest(DaemonTest):
     DAEMON_ARGS = ("--origin", "http://good.example", "--origin", "http://also.example:8080")
 
