@@ -17,6 +17,7 @@ enum {
     IIRD_RATE_PER_S = 250,     /* token bucket refill */
     IIRD_RATE_BURST = 500,     /* token bucket size */
     IIRD_FPS_WINDOW = 128,     /* send times kept for the fps figure */
+    IIRD_DOMAIN_MIN_MS = 100,  /* domain messages at most this often while frames stream */
 };
 
 /* One queued outgoing message: LWS_PRE bytes of headroom, then len bytes. */
@@ -79,6 +80,9 @@ typedef struct worker_state {
     float (*vpl_px)[2];
     uint8_t *vpl_flags;
     uint32_t vpl_cap;
+    double domain_ms;    /* when the last domain message was built */
+    bool domain_stale;   /* the newest interactive frame's domain is not sent yet */
+    uint32_t domain_for; /* that frame's id */
 } worker_state;
 
 struct iird_session {

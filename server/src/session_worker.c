@@ -380,6 +380,17 @@ static void send_domain(iird_session *s, uint32_t id, char *json)
     free(json);
 }
 
+/* Building a domain message costs ~4 ms (cells from CGAL, a few thousand JSON numbers): while
+ * frames stream it goes out at most every IIRD_DOMAIN_MIN_MS, and the newest frame's once they
+ * pause, so the drawing always ends on the frame shown. */
+static void send_stale_domain(iird_session *s, const iird_scene_entry *sc)
+{
+    worker_state *w = &s->w;
+    w->domain_stale = false;
+    w->domain_ms = iird_now_ms();
+    send_domain(s, w->domain_for, domain_json(w, &w->last, sc, w->domain_for));
+}
+
 /* A new state: render it (or only re-encode when just the encoding changed) and publish. */
 static void render_locked(iird_session *s)
 {
@@ -405,8 +416,21 @@ static void render_locked(iird_session *s)
         publish(s, &j, &f);
     else
         worker_error(s, err_code(st), j.seq, "rendering the frame", &err);
-    if (st == IIR_OK && rendered && j.settings.domain)
-        send_domain(s, f.id, domain_json(w, &j, sc, f.id));
+    if (st == IIR_OK && rendered && j.settings.domain) {
+        w->domain_stale = true;
+        w->domain_for = f.id;
+        if (iird_now_ms() - w->domain_ms >= IIRD_DOMAIN_MIN_MS) send_stale_domain(s, sc);
+    }
+    pthread_mutex_lock(&s->lock);
+}
+
+/* The domain of the newest interactive frame that has none yet, once the frames pause (the
+ * method still holds that frame's VPLs: refinement does not touch them). */
+static void domain_locked(iird_session *s)
+{
+    const iird_scene_entry *sc = s->scene;
+    pthread_mutex_unlock(&s->lock);
+    send_stale_domain(s, sc);
     pthread_mutex_lock(&s->lock);
 }
 
@@ -593,6 +617,8 @@ void *iird_session_worker(void *arg)
             snapshot_locked(s);
         else if (held_back_locked(s) || fresh)
             pthread_cond_wait(&s->wake, &s->lock);
+        else if (s->w.domain_stale && s->w.have_frame && s->settings.domain)
+            domain_locked(s);
         else if (refine_due_locked(s, &wait) && wait <= 0)
             refine_locked(s);
         else if (wait > 0)
