@@ -7,11 +7,7 @@
 set -u
 iird=$1
 src=$2
-tmp=${IIR_TEST_TMP:-/tmp}/cli-bench-$$
-mkdir -p "$tmp"
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+. "$(dirname "$0")/lib.sh" bench
 
 # A Python with matplotlib (iird bench looks for the same two).
 py=""

@@ -7,22 +7,7 @@
 set -u
 iird=$1
 src=$2
-tmp=${IIR_TEST_TMP:-/tmp}/cli-render-anim-$$
-mkdir -p "$tmp"
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-
-# expect CODE PATTERN -- CMD...: runs CMD, checks exit code and that stderr+stdout match PATTERN.
-expect() {
-    local code=$1 pattern=$2
-    shift 3
-    local out rc
-    out=$("$@" 2>&1)
-    rc=$?
-    [ "$rc" = "$code" ] || fail "'$*' exited $rc, expected $code: $out"
-    echo "$out" | grep -qiE -- "$pattern" || fail "'$*' output lacks /$pattern/: $out"
-}
+. "$(dirname "$0")/lib.sh" render-anim
 
 orbit=$src/scenes/cornell_box/paths/orbit.json
 small=(--size 64x48 --vpls 32 --sm-res 32)

@@ -19,20 +19,6 @@
 typedef iir_test_cornell fixture;
 enum { W = 32, H = 24 };
 
-static iir_method *make(const fixture *f, const char *name, const iir_params *p)
-{
-    iir_method *m = NULL;
-    iir_error err = {0};
-    if (iir_method_create(name, f->scene, f->rt, p, &m, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return m;
-}
-
-static void render(iir_method *m, const iir_view *v, iir_image *img, iir_frame_stats *fs)
-{
-    iir_error err = {0};
-    if (iir_method_render(m, v, img, fs, &err) != IIR_OK) fail_msg("%s", err.msg);
-}
-
 /* Frame t of a path: small steps sideways, a still stretch (frames 6-8), a jump at frame 9. */
 static iir_light light_at(const iir_light *base, int t)
 {
@@ -127,7 +113,7 @@ static void test_domain_follows_frames(void **state)
     fixture *f = *state;
     iir_params p = iir_params_default();
     p.vpls = 128;
-    iir_method *m = make(f, "iir", &p);
+    iir_method *m = iir_test_method(f, "iir", &p);
     iir_image *img = iir_image_create(W, H);
     iir_frame_stats fs;
     iir_domain d;
@@ -138,7 +124,7 @@ static void test_domain_follows_frames(void **state)
     for (int t = 0; t < 11; t++) {
         iir_light l = light_at(&f->scene->lights[0], t);
         iir_view v = {&l, 1, f->scene->camera};
-        render(m, &v, img, &fs);
+        iir_test_render(m, &v, img, &fs);
         assert_true(iir_method_domain(m, &d));
         check_frame(m, &fs, &d, iir_spot_radius(&l));
         if (t == 7 || t == 8) check_removed_still(&d, prev, nprev);
@@ -165,10 +151,10 @@ static void test_other_methods_have_none(void **state)
     const char *names[] = {"pt", "ir"};
     iir_image *img = iir_image_create(8, 8);
     for (int k = 0; k < 2; k++) {
-        iir_method *m = make(f, names[k], &p);
+        iir_method *m = iir_test_method(f, names[k], &p);
         iir_view v = {f->scene->lights, f->scene->num_lights, f->scene->camera};
         iir_frame_stats fs;
-        render(m, &v, img, &fs);
+        iir_test_render(m, &v, img, &fs);
         iir_domain d;
         memset(&d, 0xff, sizeof d);
         assert_false(iir_method_domain(m, &d));

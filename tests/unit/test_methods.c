@@ -20,20 +20,6 @@
 
 typedef iir_test_cornell fixture;
 
-static iir_method *make(const fixture *f, const char *name, const iir_params *p)
-{
-    iir_method *m = NULL;
-    iir_error err = {0};
-    if (iir_method_create(name, f->scene, f->rt, p, &m, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return m;
-}
-
-static void render(iir_method *m, const iir_view *v, iir_image *img, iir_frame_stats *fs)
-{
-    iir_error err = {0};
-    if (iir_method_render(m, v, img, fs, &err) != IIR_OK) fail_msg("%s", err.msg);
-}
-
 static iir_view still_view(const fixture *f)
 {
     iir_view v = {f->scene->lights, f->scene->num_lights, f->scene->camera};
@@ -79,13 +65,13 @@ static void test_ir_converges_to_pt(void **state)
     p.spp = 2048, p.bounces = 2, p.seed = 5;
     iir_image *ref = iir_image_create(W, H), *img = iir_image_create(W, H);
     iir_frame_stats fs;
-    iir_method *pt = make(f, "pt", &p);
-    render(pt, &v, ref, &fs);
+    iir_method *pt = iir_test_method(f, "pt", &p);
+    iir_test_render(pt, &v, ref, &fs);
     iir_method_destroy(pt);
 
     p.vpls = 16384, p.visibility = IIR_VIS_RAYS, p.clamp = 0.f, p.interleave = 1;
-    iir_method *ir = make(f, "ir", &p);
-    render(ir, &v, img, &fs);
+    iir_method *ir = iir_test_method(f, "ir", &p);
+    iir_test_render(ir, &v, img, &fs);
     assert_true(fs.vpl.count > 10000);
     iir_method_destroy(ir);
 
@@ -134,14 +120,14 @@ static void test_still_light_matches_fresh_maps(void **state)
     fixture *f = *state;
     enum { W = 64, H = 48 };
     iir_params p = iir_params_default();
-    iir_method *m = make(f, "iir", &p);
+    iir_method *m = iir_test_method(f, "iir", &p);
     iir_image *img = iir_image_create(W, H), *again = iir_image_create(W, H);
     iir_frame_stats fs;
     iir_light light = f->scene->lights[0];
     for (int frame = 0; frame < 40; frame++) {
         iir_light l = frame < 20 ? moved(&f->scene->lights[0], frame) : light;
         iir_view v = {&l, 1, f->scene->camera};
-        render(m, &v, img, &fs);
+        iir_test_render(m, &v, img, &fs);
     }
     assert_int_equal(fs.vpl.count, (uint32_t)p.vpls);
     uint32_t n = 0;
@@ -173,12 +159,12 @@ static void run_path(const fixture *f, const char *name, uint64_t seed, iir_imag
 {
     iir_params p = iir_params_default();
     p.seed = seed;
-    iir_method *m = make(f, name, &p);
+    iir_method *m = iir_test_method(f, name, &p);
     iir_frame_stats fs;
     for (int frame = 0; frame < 12; frame++) {
         iir_light l = moved(&f->scene->lights[0], frame);
         iir_view v = {&l, 1, f->scene->camera};
-        render(m, &v, out, &fs);
+        iir_test_render(m, &v, out, &fs);
     }
     iir_method_destroy(m);
 }
@@ -214,7 +200,7 @@ static void test_refusals(void **state)
     p.interleave = 9;
     assert_int_equal(iir_method_create("ir", f->scene, f->rt, &p, &m, &err), IIR_ERR_INVALID);
     p = iir_params_default();
-    m = make(f, "iir", &p);
+    m = iir_test_method(f, "iir", &p);
     iir_light point = {.type = IIR_LIGHT_POINT,
                        .name = "bulb",
                        .position = iir_v3(0, 1.5f, 0),

@@ -24,20 +24,6 @@
 typedef iir_test_cornell fixture;
 enum { W = 64, H = 48 };
 
-static iir_method *make(const fixture *f, const char *name, const iir_params *p)
-{
-    iir_method *m = NULL;
-    iir_error err = {0};
-    if (iir_method_create(name, f->scene, f->rt, p, &m, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return m;
-}
-
-static void render(iir_method *m, const iir_view *v, iir_image *img, iir_frame_stats *fs)
-{
-    iir_error err = {0};
-    if (iir_method_render(m, v, img, fs, &err) != IIR_OK) fail_msg("%s", err.msg);
-}
-
 static void refine(iir_method *m, iir_image *img, iir_frame_stats *fs)
 {
     iir_error err = {0};
@@ -113,11 +99,11 @@ static void test_sweep_is_full_sum(void **state)
         iir_params p = iir_params_default();
         p.jitter = false;
         p.refine_passes = 16, p.sm_res = 32; /* the maps only serve the interactive frame */
-        iir_method *m = make(f, names[k], &p);
+        iir_method *m = iir_test_method(f, names[k], &p);
         iir_image *img = iir_image_create(W, H), *ref = iir_image_create(W, H);
         iir_frame_stats fs;
         iir_view v = still_view(f);
-        render(m, &v, img, &fs);
+        iir_test_render(m, &v, img, &fs);
         assert_true(subsets_uneven(m, 16));
         full_sum_frame(f, m, &p, ref);
         for (int i = 0; i < 15; i++) refine(m, img, &fs);
@@ -146,12 +132,12 @@ static void test_jitter_antialiases(void **state)
     enum { S = 8 };
     iir_params p = iir_params_default();
     p.refine_passes = 16, p.bounces = 1;
-    iir_method *m = make(f, "ir", &p);
+    iir_method *m = iir_test_method(f, "ir", &p);
     iir_image *img = iir_image_create(W, H), *centre = iir_image_create(W, H);
     iir_image *fine = iir_image_create(S * W, S * H), *box = iir_image_create(W, H);
     iir_frame_stats fs;
     iir_view v = still_view(f);
-    render(m, &v, img, &fs);
+    iir_test_render(m, &v, img, &fs);
     full_sum_frame(f, m, &p, centre);
     full_sum_frame(f, m, &p, fine);
     for (int y = 0; y < H; y++)
@@ -189,13 +175,13 @@ static void test_converges_towards_pt(void **state)
     p.spp = 256, p.bounces = 2, p.seed = 3, p.vpls = 128, p.sm_res = 64;
     iir_image *ref = iir_image_create(W, H), *img = iir_image_create(W, H);
     iir_frame_stats fs;
-    iir_method *pt = make(f, "pt", &p);
-    render(pt, &v, ref, &fs);
+    iir_method *pt = iir_test_method(f, "pt", &p);
+    iir_test_render(pt, &v, ref, &fs);
     iir_method_destroy(pt);
     const char *names[] = {"iir", "ir"};
     for (int k = 0; k < 2; k++) {
-        iir_method *m = make(f, names[k], &p);
-        render(m, &v, img, &fs);
+        iir_method *m = iir_test_method(f, names[k], &p);
+        iir_test_render(m, &v, img, &fs);
         double interactive = iir_metric_relmse(img, ref);
         int passes = 0;
         for (; passes < 1000 && !fs.converged; passes++) refine(m, img, &fs);
@@ -233,12 +219,12 @@ static void test_live_set_untouched(void **state)
     for (int k = 0; k < 2; k++) {
         iir_params p = iir_params_default();
         p.vpls = 64, p.sm_res = 32;
-        iir_method *a = make(f, names[k], &p), *b = make(f, names[k], &p);
+        iir_method *a = iir_test_method(f, names[k], &p), *b = iir_test_method(f, names[k], &p);
         iir_image *ia = iir_image_create(W, H), *ib = iir_image_create(W, H);
         iir_frame_stats fs;
         iir_view v = still_view(f);
-        render(a, &v, ia, &fs);
-        render(b, &v, ib, &fs);
+        iir_test_render(a, &v, ia, &fs);
+        iir_test_render(b, &v, ib, &fs);
         for (int i = 0; i < 20; i++) refine(a, ia, &fs);
         assert_int_equal(fs.samples_per_pixel, 20);
         assert_true(fs.phase_ms[IIR_PHASE_VPLS] >= 0.0);
@@ -246,8 +232,8 @@ static void test_live_set_untouched(void **state)
         for (int frame = 0; frame < 3; frame++) {
             iir_light l = moved(&f->scene->lights[0], 0.05f * (float)frame);
             iir_view w = {&l, 1, f->scene->camera};
-            render(a, &w, ia, &fs);
-            render(b, &w, ib, &fs);
+            iir_test_render(a, &w, ia, &fs);
+            iir_test_render(b, &w, ib, &fs);
             assert_memory_equal(ia->pixels, ib->pixels, sizeof(iir_vec3) * W * H);
             assert_same_vpls(a, b);
         }
@@ -265,7 +251,7 @@ static void test_counting_and_convergence(void **state)
     fixture *f = *state;
     iir_params p = iir_params_default();
     p.refine_passes = 5, p.vpls = 64, p.sm_res = 32;
-    iir_method *m = make(f, "iir", &p);
+    iir_method *m = iir_test_method(f, "iir", &p);
     iir_image *img = iir_image_create(W, H), *kept = iir_image_create(W, H);
     iir_image *small = iir_image_create(W / 2, H);
     iir_frame_stats fs;
@@ -274,7 +260,7 @@ static void test_counting_and_convergence(void **state)
     assert_true(iir_method_can_refine(m));
     assert_int_equal(iir_method_refine(m, img, &fs, &err), IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "before any frame"));
-    render(m, &v, img, &fs);
+    iir_test_render(m, &v, img, &fs);
     assert_int_equal(fs.samples_per_pixel, 0);
     assert_false(fs.converged);
     assert_int_equal(iir_method_refine(m, small, &fs, &err), IIR_ERR_INVALID);
@@ -295,7 +281,7 @@ static void test_counting_and_convergence(void **state)
     assert_int_equal(iir_raystats_total(&fs.rays), 0);
     assert_memory_equal(img->pixels, kept->pixels, sizeof(iir_vec3) * W * H);
     print_message("a converged refine call took %.3f ms\n", idle_ms);
-    render(m, &v, img, &fs); /* a new view starts over */
+    iir_test_render(m, &v, img, &fs); /* a new view starts over */
     refine(m, img, &fs);
     assert_int_equal(fs.samples_per_pixel, 1);
 
@@ -309,8 +295,8 @@ static void test_counting_and_convergence(void **state)
     /* pt: converged at refine_passes x spp samples, and still adds samples when asked */
     p = iir_params_default();
     p.spp = 2, p.refine_passes = 3;
-    iir_method *pt = make(f, "pt", &p);
-    render(pt, &v, img, &fs);
+    iir_method *pt = iir_test_method(f, "pt", &p);
+    iir_test_render(pt, &v, img, &fs);
     assert_false(fs.converged);
     refine(pt, img, &fs);
     assert_false(fs.converged);
@@ -333,10 +319,10 @@ static void run_refined(const fixture *f, const char *name, int threads, iir_ima
     omp_set_num_threads(threads);
     iir_params p = iir_params_default();
     p.seed = 11, p.vpls = 64, p.sm_res = 32;
-    iir_method *m = make(f, name, &p);
+    iir_method *m = iir_test_method(f, name, &p);
     iir_frame_stats fs;
     iir_view v = still_view(f);
-    render(m, &v, out, &fs);
+    iir_test_render(m, &v, out, &fs);
     for (int i = 0; i < 20; i++) refine(m, out, &fs);
     iir_method_destroy(m);
 }
@@ -381,12 +367,12 @@ static void test_stop_early(void **state)
     for (int k = 0; k < 2; k++) {
         iir_params p = iir_params_default();
         p.seed = 5, p.vpls = 64, p.sm_res = 32;
-        iir_method *a = make(f, names[k], &p), *b = make(f, names[k], &p);
+        iir_method *a = iir_test_method(f, names[k], &p), *b = iir_test_method(f, names[k], &p);
         iir_image *ia = iir_image_create(W, H), *ib = iir_image_create(W, H);
         iir_frame_stats fa, fb;
         iir_view v = still_view(f);
-        render(a, &v, ia, &fa);
-        render(b, &v, ib, &fb);
+        iir_test_render(a, &v, ia, &fa);
+        iir_test_render(b, &v, ib, &fb);
         for (int i = 0; i < 3; i++) refine(a, ia, &fa), refine(b, ib, &fb);
         for (int after = 0; after < 2; after++) { /* before the direct light, at the first tile */
             stop_after s = {0, after};

@@ -1,11 +1,16 @@
-/* testutil.c -- scratch directories and file writers for the unit tests. */
+/* testutil.c -- scratch directories, file writers and method shortcuts for the unit tests. */
 #include "testutil.h"
 
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include <cmocka.h>
 
 const char *iir_test_tmpdir(const char *test_name)
 {
@@ -69,4 +74,18 @@ int iir_test_cornell_teardown(void **state)
     iir_rt_destroy(f->rt);
     iir_scene_destroy(f->scene);
     return 0;
+}
+
+iir_method *iir_test_method(const iir_test_cornell *f, const char *name, const iir_params *p)
+{
+    iir_method *m = NULL;
+    iir_error err = {0};
+    if (iir_method_create(name, f->scene, f->rt, p, &m, &err) != IIR_OK) fail_msg("%s", err.msg);
+    return m;
+}
+
+void iir_test_render(iir_method *m, const iir_view *v, iir_image *img, iir_frame_stats *fs)
+{
+    iir_error err = {0};
+    if (iir_method_render(m, v, img, fs, &err) != IIR_OK) fail_msg("%s", err.msg);
 }

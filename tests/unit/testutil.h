@@ -6,6 +6,7 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "iir/method.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
 #include "iir/vecmath.h"
@@ -32,5 +33,11 @@ typedef struct iir_test_cornell {
 } iir_test_cornell;
 int iir_test_cornell_setup(void **state);
 int iir_test_cornell_teardown(void **state);
+
+/* Creates method `name` over the fixture's scene; fails the running cmocka test with the method's
+ * error when it cannot. */
+iir_method *iir_test_method(const iir_test_cornell *f, const char *name, const iir_params *p);
+/* iir_method_render that fails the running cmocka test with the method's error. */
+void iir_test_render(iir_method *m, const iir_view *v, iir_image *img, iir_frame_stats *fs);
 
 #endif
