@@ -12,7 +12,7 @@ PACKAGES := build-essential cmake pkg-config git clang-format \
             libembree-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev \
             libwebsockets-dev libssl-dev libcap-dev zlib1g-dev \
             libassimp-dev libcjson-dev libturbojpeg0-dev libopenexr-dev libpng-dev \
-            libcmocka-dev ffmpeg python3 python3-matplotlib python3-websockets python3-pil chromium
+            libcmocka-dev ffmpeg openssl python3 python3-matplotlib python3-websockets python3-pil chromium
 # Node.js and npm only where no node/npm is on the PATH: a machine may have its own, and Debian's npm
 # installed over another npm can break it.
 NODE_PACKAGES := $(shell command -v node >/dev/null || echo nodejs) \

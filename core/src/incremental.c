@@ -558,9 +558,14 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
     st.valid = inc->count;
     lap(&st, IIR_INCR_VALIDATE, &t);
 
-    /* fallback: regenerate when too many died at once, nothing is left, or ids run out */
-    bool regen = inc->count == 0 || ids_exhausted(inc) ||
-                 (double)st.invalidated > (double)p->regen_threshold * count_prev;
+    /* fallback: regenerate when too many died at once, when VPLs are still dying and deaths spread
+     * over frames (faster than k_max insertions refill) have left less than 1 - regen_threshold of
+     * the target (a raised target alone fills gradually), when nothing is left, or when the ids
+     * run out */
+    double thr = (double)p->regen_threshold;
+    bool dwindled = st.invalidated > 0 && (double)inc->count < (1.0 - thr) * (double)p->target;
+    bool regen = inc->count == 0 || ids_exhausted(inc) || dwindled ||
+                 (double)st.invalidated > thr * count_prev;
     if (regen) {
         st.initial = inc->frame == 0;
         st.regenerated = !st.initial;

@@ -7,6 +7,10 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include <openssl/err.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
+
 #include "cli.h"
 #include "commands.h"
 #include "server.h"
@@ -158,6 +162,39 @@ static bool known_method(const char *name)
     return false;
 }
 
+/* An encrypted key would make OpenSSL prompt on the terminal: refuse it instead. */
+static int no_passphrase(char *buf, int size, int rwflag, void *user)
+{
+    (void)buf, (void)size, (void)rwflag, (void)user;
+    return 0;
+}
+
+/* The first certificate of --tls-cert and the key of --tls-key parse as PEM and belong together,
+ * as libwebsockets will load them: IIR_ERR_INVALID naming the option otherwise, before any
+ * listening (lws would only fail to create its vhost). The files are known to be readable. */
+static iir_status check_tls_pair(const char *cert_path, const char *key_path, iir_error *err)
+{
+    iir_status st = IIR_OK;
+    FILE *f = fopen(cert_path, "rb");
+    X509 *cert = f ? PEM_read_X509(f, NULL, no_passphrase, NULL) : NULL;
+    if (f) fclose(f);
+    f = fopen(key_path, "rb");
+    EVP_PKEY *key = f ? PEM_read_PrivateKey(f, NULL, no_passphrase, NULL) : NULL;
+    if (f) fclose(f);
+    if (!cert)
+        st = iir_fail(err, IIR_ERR_INVALID, "--tls-cert %s holds no PEM certificate", cert_path);
+    else if (!key)
+        st = iir_fail(err, IIR_ERR_INVALID,
+                      "--tls-key %s holds no PEM private key (or one with a passphrase)", key_path);
+    else if (X509_check_private_key(cert, key) != 1)
+        st = iir_fail(err, IIR_ERR_INVALID, "--tls-key %s is not the key of --tls-cert %s",
+                      key_path, cert_path);
+    X509_free(cert);
+    EVP_PKEY_free(key);
+    ERR_clear_error();
+    return st;
+}
+
 static iir_status check_files(const iird_server_config *cfg, iir_error *err)
 {
     if (!is_dir(cfg->web_dir))
@@ -165,8 +202,6 @@ static iir_status check_files(const iird_server_config *cfg, iir_error *err)
                         "the web client's folder %s does not exist (give --web DIR or set "
                         "IIR_WEB)",
                         cfg->web_dir);
-    if (!cfg->tls_cert != !cfg->tls_key)
-        return iir_fail(err, IIR_ERR_INVALID, "--tls-cert and --tls-key go together");
     const char *files[2] = {cfg->tls_cert, cfg->tls_key};
     for (int i = 0; i < 2; i++) {
         FILE *f = files[i] ? fopen(files[i], "rb") : NULL;
@@ -175,7 +210,7 @@ static iir_status check_files(const iird_server_config *cfg, iir_error *err)
                             files[i]);
         if (f) fclose(f);
     }
-    return IIR_OK;
+    return cfg->tls_cert ? check_tls_pair(cfg->tls_cert, cfg->tls_key, err) : IIR_OK;
 }
 
 /* Cross-option checks once everything is parsed. */
@@ -233,6 +268,12 @@ int iird_cmd_serve(int argc, char **argv)
     if (rc >= 0) return rc;
     if (positional && o.scene_arg) {
         fprintf(stderr, "iird serve: give the scene once (SCENE or --scene)\n");
+        return IIRD_EXIT_USAGE;
+    }
+    if (!o.cfg.tls_cert != !o.cfg.tls_key) {
+        fprintf(stderr, "iird serve: %s needs %s too (give both or neither)\n",
+                o.cfg.tls_cert ? "--tls-cert" : "--tls-key",
+                o.cfg.tls_cert ? "--tls-key" : "--tls-cert");
         return IIRD_EXIT_USAGE;
     }
     o.cfg.scene = o.scene_arg ? o.scene_arg : positional;

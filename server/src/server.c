@@ -17,6 +17,7 @@
 #include <arpa/inet.h>
 #include <errno.h>
 #include <limits.h>
+#include <netdb.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -24,7 +25,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <libwebsockets.h>
 
@@ -489,8 +492,35 @@ static void print_url(const server *srv)
     fflush(stdout);
 }
 
+/* Binds host:port once and lets go, before libwebsockets tries: a port in use or an address this
+ * machine does not have gets the system's own reason (and lws is never half-started). 0 when it
+ * can bind; otherwise the errno (EAI_* failures of the name give EADDRNOTAVAIL). */
+static int probe_listen(const char *host, int port)
+{
+    char service[16];
+    snprintf(service, sizeof service, "%d", port);
+    struct addrinfo hints = {.ai_family = AF_UNSPEC,
+                             .ai_socktype = SOCK_STREAM,
+                             .ai_flags = AI_PASSIVE | AI_NUMERICSERV},
+                    *ai = NULL;
+    if (getaddrinfo(host, service, &hints, &ai) != 0 || !ai) return EADDRNOTAVAIL;
+    int fd = socket(ai->ai_family, ai->ai_socktype, ai->ai_protocol), one = 1, rc = 0;
+    if (fd < 0) rc = errno;
+    if (!rc) setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+    if (!rc && bind(fd, ai->ai_addr, ai->ai_addrlen) != 0) rc = errno;
+    if (fd >= 0) close(fd);
+    freeaddrinfo(ai);
+    return rc;
+}
+
 static int serve(server *srv)
 {
+    int bind_err = probe_listen(srv->cfg->host, srv->cfg->port);
+    if (bind_err) {
+        fprintf(stderr, "iird serve: cannot listen on %s port %d: %s\n", srv->cfg->host,
+                srv->cfg->port, strerror(bind_err));
+        return 1;
+    }
     struct lws_http_mount mounts[3];
     make_mounts(srv, mounts);
     struct lws_context *ctx = create_context(srv, mounts);

@@ -89,6 +89,23 @@ class RobustTest(DaemonTest):
         await self.wait_sessions_zero()
 
 
+    async def test_port_in_use(self):
+        """A second daemon on a port in use (or an address this machine lacks) stops at once with
+        exit 1 and the system's reason, and no sanitizer report; the first keeps serving."""
+        import subprocess
+        for host, port, reason in (("127.0.0.1", self.daemon.port, "in use"),
+                                   ("192.0.2.1", 8080, "assign requested address")):
+            r = await asyncio.to_thread(subprocess.run, [iirserve.IIRD, "serve", "--host", host, "--port", str(port)],
+                                        stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60)
+            self.assertEqual(r.returncode, 1, r.stderr)
+            self.assertIn(f"cannot listen on {host} port {port}", r.stderr)
+            self.assertIn(reason, r.stderr)
+            self.assertNotIn("Sanitizer", r.stderr)
+            self.assertNotIn("iird: serving", r.stdout)
+        h = await asyncio.to_thread(healthz, self.daemon.port)
+        self.assertEqual(h.get("status"), "ok")
+
+
 class OriginTest(DaemonTest):
     DAEMON_ARGS = ("--origin", "http://good.example", "--origin", "http://also.example:8080")
 

@@ -727,6 +727,38 @@ static void test_determinism(void **state)
     iir_incr_destroy(c);
 }
 
+/* ---- deaths spread over frames ------------------------------------------------------------------
+ */
+
+/* A cone that narrows a little every frame kills the VPLs near the disk's rim: each frame fewer
+ * than regen_threshold of the set, but more than k_max insertions can refill. The set must not
+ * dwindle below (1 - regen_threshold) N: it is regenerated instead (once a frame's deaths leave
+ * fewer), and a narrowed cone that then holds still keeps a full set. */
+static void test_gradual_deaths_regenerate(void **state)
+{
+    const env *e = *state;
+    iir_incr *inc = make_incr(e, 256, IIR_WEIGHTS_VORONOI, 3);
+    iir_incr_params p = iir_incr_get_params(inc);
+    iir_light l = cornell_spot(e);
+    update(inc, &l);
+    uint32_t prev = 256, regens = 0, min_count = 256;
+    for (int f = 1; f <= 30; f++) {
+        l.cone_angle *= 0.96f; /* the disk's area shrinks ~8% a frame */
+        if (l.smooth > l.cone_angle) l.smooth = l.cone_angle;
+        iir_incr_stats st = update(inc, &l);
+        assert_true((double)st.invalidated <= p.regen_threshold * prev || st.regenerated);
+        regens += st.regenerated;
+        min_count = st.count < min_count ? st.count : min_count;
+        assert_true((double)st.count >= (1.0 - p.regen_threshold) * p.target);
+        prev = st.count;
+    }
+    assert_true(regens >= 1);
+    for (int f = 0; f < 5; f++) assert_int_equal(update(inc, &l).regenerated, 0);
+    print_message("narrowing cone: %u regenerations in 30 frames, smallest set %u\n", regens,
+                  min_count);
+    iir_incr_destroy(inc);
+}
+
 /* ---- parameter changes ----------------------------------------------------------------------- */
 
 static void test_param_changes(void **state)
@@ -913,6 +945,7 @@ int main(void)
         cmocka_unit_test(test_regeneration_on_teleport),
         cmocka_unit_test(test_facing_light_through_wall),
         cmocka_unit_test(test_determinism),
+        cmocka_unit_test(test_gradual_deaths_regenerate),
         cmocka_unit_test(test_param_changes),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_memory_steady),

@@ -17,8 +17,11 @@
  *               is dropped when that ray now finds a reflecting surface (the light moved), so the
  *               hole is refilled by a real VPL. Dropped VPLs' maps are released.
  *   REGENERATE  When more than regen_threshold of the previous set died in VALIDATE (invalidated >
- *               regen_threshold * count_prev), when the set is empty (always so on the first
- *               update), or when the ids run out (see THE SET), the survivors are discarded too
+ *               regen_threshold * count_prev), when VPLs died this frame and the survivors are
+ *               fewer than (1 - regen_threshold) * N (deaths spread over frames that k_max
+ *               insertions a frame could not refill; a raised N alone fills gradually), when the
+ *               set is empty (always so on the first update), or
+ *               when the ids run out (see THE SET), the survivors are discarded too
  *               (counted as `deleted`) and N new VPLs are made from the Hammersley set
  *               ((i / N + o1) mod 1, (phi_2(i) + o2) mod 1), i < N, Cranley-Patterson rotated by
  *               offsets o drawn from (seed, number of regenerations so far), mapped to the disk by
