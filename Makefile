@@ -64,7 +64,7 @@ test: deps web-deps format-check
 # standard set -- the Cornell box orbit with a VPL sweep for iir and ir and pt at 1/4/16 spp (the
 # time-against-error chart), its stress paths, and the conference room's orbit -- each with
 # references (cached in $(REFCACHE): a second run skips them), frames.csv, summary.json and charts
-# in out/bench/<scene>-<path>/. Measured: 6 min 38 s on 2 nearly idle cores with an empty cache.
+# in out/bench/<scene>-<path>/. Measured: 8 min 18 s on 2 quiet cores with an empty cache.
 REFCACHE ?= out/refcache
 BENCH     = $(BUILD)/iird bench --ref-cache $(REFCACHE)
 STRESS    = sweep-fast corner grazing void

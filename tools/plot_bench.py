@@ -203,6 +203,13 @@ def chart_churn(runs, title, out_dir):
                 ax.axvline(f, color="black", ls=":", lw=1)
         ax.set_yscale("symlog", linthresh=10)
         ax.set_ylim(bottom=0)
+        # k_min, k_max and N read off directly: plain numbers, not powers of ten
+        top = max([10] + [int(r[c]) for r in rows for c in ("vpls_inserted", "vpls_deleted",
+                                                              "vpls_invalidated")])
+        ax.set_yticks([t for t in (0, 2, 4, 6, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096)
+                       if t <= top])
+        ax.yaxis.set_major_formatter(ticker.ScalarFormatter())
+        ax.yaxis.set_minor_locator(ticker.NullLocator())
         ax.set_ylabel("VPLs / frame")
         ax.set_title(f"iir {setting}: VPL churn (dotted: regenerated)", fontsize=9)
         ax.legend(loc="upper right", fontsize=7)
