@@ -13,7 +13,7 @@ static void usage(FILE *f)
                "\n"
                "commands:\n"
                "  serve      serve the web client and live frames over WebSockets\n"
-               "  render     render a still of a scene to PNG, EXR or PFM\n"
+               "  render     render a still, or an animation script's frames (PNG, EXR, PFM; MP4)\n"
                "  bench      time methods over a moving light against path-traced references\n"
                "  raybench   measure the machine's raw Embree ray rate and the path tracer's\n"
                "\n"
