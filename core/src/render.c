@@ -143,6 +143,25 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
     return IIR_OK;
 }
 
+/* The shading phases on the current G-buffer, timed: direct light, indirect light from the VPL
+ * subsets (shifted by `shift`), then the filter into out. With `stoppable` the indirect phase
+ * polls r->stop; returns true when it stopped early (out is then incomplete). */
+static bool shade(iir_renderer *r, const iir_light *lights, uint32_t num_lights,
+                  const iir_indirect_params *p, uint32_t shift, bool stoppable, uint64_t seed,
+                  iir_image *out, iir_render_timing *tm, iir_raystats *rays)
+{
+    double t0 = iir_now_ms();
+    iir_render_direct(r, lights, num_lights, seed, out, rays);
+    double t1 = iir_now_ms();
+    bool stopped = iir_render_indirect(r, p, shift, stoppable, rays);
+    double t2 = iir_now_ms();
+    if (!stopped) iir_render_filter(r, p, out);
+    tm->direct_ms = t1 - t0;
+    tm->indirect_ms = t2 - t1;
+    tm->filter_ms = iir_now_ms() - t2;
+    return stopped;
+}
+
 iir_status iir_renderer_frame(iir_renderer *r, const iir_camera *cam, const iir_light *lights,
                               uint32_t num_lights, const iir_vpl *vpls, uint32_t num_vpls,
                               const iir_indirect_params *p, uint64_t seed, iir_image *out,
@@ -153,17 +172,7 @@ iir_status iir_renderer_frame(iir_renderer *r, const iir_camera *cam, const iir_
     iir_status s = check_inputs(cam, lights, num_lights, p, out, err);
     if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, p, false, err);
     if (s == IIR_OK) s = gbuffer_phase(r, cam, out->width, out->height, &tm, &rays, err);
-    if (s == IIR_OK) {
-        double t0 = iir_now_ms();
-        iir_render_direct(r, lights, num_lights, seed, out, &rays);
-        double t1 = iir_now_ms();
-        iir_render_indirect(r, p, 0, false, &rays);
-        double t2 = iir_now_ms();
-        iir_render_filter(r, p, out);
-        tm.direct_ms = t1 - t0;
-        tm.indirect_ms = t2 - t1;
-        tm.filter_ms = iir_now_ms() - t2;
-    }
+    if (s == IIR_OK) shade(r, lights, num_lights, p, 0, false, seed, out, &tm, &rays);
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);
     return s;
@@ -229,17 +238,8 @@ iir_status iir_renderer_pass(iir_renderer *r, const iir_camera *cam, const iir_l
     if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, &ind, true, err);
     if (s == IIR_OK) s = pass_gbuffer(r, cam, p->jitter, out->width, out->height, &tm, &rays, err);
     bool stopped = s == IIR_OK && stop_requested(r);
-    if (s == IIR_OK && !stopped) {
-        double t0 = iir_now_ms();
-        iir_render_direct(r, lights, num_lights, seed, out, &rays);
-        double t1 = iir_now_ms();
-        stopped = iir_render_indirect(r, &ind, p->shift, true, &rays);
-        double t2 = iir_now_ms();
-        if (!stopped) iir_render_filter(r, &ind, out);
-        tm.direct_ms = t1 - t0;
-        tm.indirect_ms = t2 - t1;
-        tm.filter_ms = iir_now_ms() - t2;
-    }
+    if (s == IIR_OK && !stopped)
+        stopped = shade(r, lights, num_lights, &ind, p->shift, true, seed, out, &tm, &rays);
     if (stopped) s = iir_fail(err, IIR_ERR_INTERRUPTED, "refinement pass stopped early");
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);

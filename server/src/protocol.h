@@ -12,6 +12,7 @@
 #include "iir/light.h"
 #include "iir/method.h"
 
+struct cJSON;
 struct iir_domain; /* method.h: the light's disk domain (sites, Delaunay edges, Voronoi cells) */
 
 enum {
@@ -214,6 +215,13 @@ typedef struct iird_stats_view {
     uint64_t dropped, memory_bytes;
 } iird_stats_view;
 char *iird_json_stats(const iird_stats_view *v);
+
+/* The parts of a frame's stats as JSON objects, keyed as in the `stats` message (phase names,
+ * VPL counts, rays by kind); render.json writes its frames with them too. Phase times are rounded
+ * to 1/scale ms. NULL only on out-of-memory. */
+struct cJSON *iird_json_phases(const iir_frame_stats *st, double scale);
+struct cJSON *iird_json_vpl_counts(const iir_vpl_counts *c);
+struct cJSON *iird_json_rays(const iir_raystats *r);
 
 /* vpl_px: per VPL its pixel position (x, y; -1, -1 when not visible) and flags; dom may be NULL
  * for methods without a disk domain. */

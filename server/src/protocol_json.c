@@ -243,16 +243,16 @@ char *iird_json_welcome(const iird_state_view *s, uint32_t session, const char *
 
 /* ======================== stats ======================== */
 
-static cJSON *phases_json(const iir_frame_stats *st)
+cJSON *iird_json_phases(const iir_frame_stats *st, double scale)
 {
     cJSON *o = cJSON_CreateObject();
     bool ok = o != NULL;
     for (int i = 0; ok && i < IIR_PHASE_COUNT; i++)
-        ok = iird_json_add_num(o, iir_phase_name((iir_phase)i), rounded(st->phase_ms[i], 1e3));
+        ok = iird_json_add_num(o, iir_phase_name((iir_phase)i), rounded(st->phase_ms[i], scale));
     return keep_if(o, ok);
 }
 
-static cJSON *vpl_json(const iir_vpl_counts *v)
+cJSON *iird_json_vpl_counts(const iir_vpl_counts *v)
 {
     cJSON *o = cJSON_CreateObject();
     bool ok = o && iird_json_add_num(o, "count", v->count) &&
@@ -266,7 +266,7 @@ static cJSON *vpl_json(const iir_vpl_counts *v)
     return keep_if(o, ok);
 }
 
-static cJSON *rays_json(const iir_raystats *r)
+cJSON *iird_json_rays(const iir_raystats *r)
 {
     cJSON *o = cJSON_CreateObject();
     bool ok = o != NULL;
@@ -288,8 +288,10 @@ char *iird_json_stats(const iird_stats_view *v)
               iird_json_add_num(o, "encode_ms", rounded(v->encode_ms, 1e3)) &&
               iird_json_add_num(o, "latency_ms", rounded(v->latency_ms, 1e3)) &&
               iird_json_add_num(o, "fps", rounded(v->fps, 1e2)) &&
-              iird_json_add_u64(o, "bytes", v->bytes) && add_item(o, "phases", phases_json(st)) &&
-              add_item(o, "vpl", vpl_json(&st->vpl)) && add_item(o, "rays", rays_json(&st->rays)) &&
+              iird_json_add_u64(o, "bytes", v->bytes) &&
+              add_item(o, "phases", iird_json_phases(st, 1e3)) &&
+              add_item(o, "vpl", iird_json_vpl_counts(&st->vpl)) &&
+              add_item(o, "rays", iird_json_rays(&st->rays)) &&
               iird_json_add_u64(o, "dropped", v->dropped) &&
               iird_json_add_u64(o, "memory_bytes", v->memory_bytes);
     return iird_json_finish(keep_if(o, ok));

@@ -11,6 +11,8 @@
 
 #include <cjson/cJSON.h>
 
+#include "protocol.h"
+
 struct iird_render_log {
     char path[4096], tmp[4200];
     cJSON *settings;  /* this run's, owned */
@@ -240,20 +242,6 @@ int iird_render_log_count(const iird_render_log *l)
 
 /* ---- entries ---- */
 
-static cJSON *vpl_json(const iir_vpl_counts *c)
-{
-    cJSON *o = cJSON_CreateObject();
-    cJSON_AddNumberToObject(o, "count", c->count);
-    cJSON_AddNumberToObject(o, "valid", c->valid);
-    cJSON_AddNumberToObject(o, "invalidated", c->invalidated);
-    cJSON_AddNumberToObject(o, "deleted", c->deleted);
-    cJSON_AddNumberToObject(o, "inserted", c->inserted);
-    cJSON_AddNumberToObject(o, "null", c->null_samples);
-    cJSON_AddNumberToObject(o, "regenerated", c->regenerated);
-    cJSON_AddNumberToObject(o, "shadowmaps", c->shadowmaps);
-    return o;
-}
-
 void iird_render_log_frame(iird_render_log *l, int f, double time_s, const char *file,
                            const iir_frame_stats *fs, double write_ms)
 {
@@ -263,13 +251,9 @@ void iird_render_log_frame(iird_render_log *l, int f, double time_s, const char 
     cJSON_AddStringToObject(e, "file", file);
     cJSON_AddNumberToObject(e, "total_ms", r4(fs->total_ms));
     cJSON_AddNumberToObject(e, "write_ms", r4(write_ms));
-    cJSON *ph = cJSON_AddObjectToObject(e, "phase_ms");
-    for (int p = 0; p < IIR_PHASE_COUNT; p++)
-        cJSON_AddNumberToObject(ph, iir_phase_name((iir_phase)p), r4(fs->phase_ms[p]));
-    cJSON *rays = cJSON_AddObjectToObject(e, "rays");
-    for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
-        cJSON_AddNumberToObject(rays, iir_ray_kind_name((iir_ray_kind)k), (double)fs->rays.n[k]);
-    cJSON_AddItemToObject(e, "vpls", vpl_json(&fs->vpl));
+    cJSON_AddItemToObject(e, "phase_ms", iird_json_phases(fs, 1e4));
+    cJSON_AddItemToObject(e, "rays", iird_json_rays(&fs->rays));
+    cJSON_AddItemToObject(e, "vpls", iird_json_vpl_counts(&fs->vpl));
     cJSON_AddNumberToObject(e, "spp", (double)fs->samples_per_pixel);
     cJSON_Delete(l->by_frame[f]);
     l->by_frame[f] = e;

@@ -159,7 +159,7 @@ if command -v ffmpeg >/dev/null && command -v ffprobe >/dev/null; then
         stream=nb_read_frames,codec_name,width,height -of csv=p=0 "$tmp/v/anim.mp4")
     [ "$n" = "h264,64,48,7" ] || fail "ffprobe says '$n', expected h264,64,48,7"
 else
-    echo "SKIP: --video checks (no ffmpeg/ffprobe; make deps installs them)"
+    fail "--video checks need ffmpeg and ffprobe: run make deps (it installs ffmpeg)"
 fi
 
 if [ $failures -gt 0 ]; then

@@ -268,6 +268,19 @@ def finite(x):
 # ---------------------------------------------------------------- client ----
 
 
+def stop_class_daemon(d):
+    """Stops a test class's daemon with SIGINT and closes it; raises AssertionError on a non-zero exit
+    or a sanitizer report (unittest has no failing hook in tearDownClass: raising makes the run fail)."""
+    try:
+        rc, secs = d.stop()
+        rep = d.sanitizer_report()
+        if rc != 0 or rep:
+            raise AssertionError(f"iird serve {' '.join(d.cmd[2:])}: exit {rc} after SIGINT ({secs:.1f} s), "
+                                 f"sanitizer: {rep}\nstderr tail:\n{d.stderr()[-6000:]}")
+    finally:
+        d.close()
+
+
 class Client:
     """A WebSocket client that logs every message it receives (Frame or dict) in `log`, in order.
     Waits scan the log from a given index, so a test can mark a point and wait for what follows."""
@@ -434,16 +447,7 @@ class DaemonTest(unittest.IsolatedAsyncioTestCase):
 
     @classmethod
     def tearDownClass(cls):
-        d = cls.daemon
-        try:
-            rc, secs = d.stop()
-            rep = d.sanitizer_report()
-            if rc != 0 or rep:
-                # unittest has no failing hook in tearDownClass: raising here makes the run fail.
-                raise AssertionError(f"iird serve {' '.join(d.cmd[2:])}: exit {rc} after SIGINT ({secs:.1f} s), "
-                                     f"sanitizer: {rep}\nstderr tail:\n{d.stderr()[-6000:]}")
-        finally:
-            d.close()
+        stop_class_daemon(cls.daemon)
 
     def setUp(self):
         self._t0 = time.monotonic()

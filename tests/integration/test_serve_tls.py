@@ -81,15 +81,9 @@ class TlsTest(unittest.IsolatedAsyncioTestCase):
 
     @classmethod
     def tearDownClass(cls):
-        d = cls.daemon
         try:
-            rc, secs = d.stop()
-            rep = d.sanitizer_report()
-            if rc != 0 or rep:
-                raise AssertionError(f"iird serve --tls-cert: exit {rc} after SIGINT ({secs:.1f} s), sanitizer: {rep}\n"
-                                     f"stderr tail:\n{d.stderr()[-6000:]}")
+            iirserve.stop_class_daemon(cls.daemon)
         finally:
-            d.close()
             cls.tmp.cleanup()
 
     async def connect_wss(self):
