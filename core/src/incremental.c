@@ -23,7 +23,7 @@
 #include "iir/tri.h"
 #include "sampling.h"
 #include "surface.h"
-#include "timer.h"
+#include "iir/timer.h"
 
 struct iir_incr {
     const iir_scene *scene;

@@ -7,7 +7,7 @@
 
 #include "iir/rng.h"
 #include "sampling.h"
-#include "timer.h"
+#include "iir/timer.h"
 
 static float *area_cdf(const iir_scene *s)
 {

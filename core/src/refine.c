@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "iir/rng.h"
-#include "timer.h"
+#include "iir/timer.h"
 
 struct iir_refine {
     bool active; /* a frame was begun and not ended */

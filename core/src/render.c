@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "render_internal.h"
-#include "timer.h"
+#include "iir/timer.h"
 
 /* ---- parameters ---- */
 

@@ -24,7 +24,7 @@ BIG = {"width": 1920, "height": 1080, "quality": 100, "method": "pt", "spp": 1, 
 RCVBUF = 4096  # the client's socket receive buffer (Linux doubles it)
 FILL_TIMEOUT = 20.0  # seconds to fill the pipe until the server holds frames back
 STALL_S = 3.0  # the measured stall
-QUEUE_CAP = 64  # server/src/session_internal.h, IIRD_QUEUE_CAP: pending replies per session
+QUEUE_CAP = 64  # server/serve/session_internal.h, IIRD_QUEUE_CAP: pending replies per session
 PROMPT_S = FRAME_TIMEOUT / 4  # another client's frame answers each move within this (5 s by default)
 # RSS the daemon may gain over the stall beyond one frame's bytes: allocator noise. Measured under ASan
 # over the 3 s stall (~150 messages): +0.9 MB, growing ~0.3 MB/s with the messages (ASan's quarantine

@@ -1,4 +1,4 @@
-/* test_protocol.c -- the live protocol's messages (docs/protocol.md, server/src/protocol.h):
+/* test_protocol.c -- the live protocol's messages (docs/protocol.md, server/protocol/protocol.h):
  * every error code parsing and applying can give, with the field's path; envelopes (size, JSON,
  * UTF-8, nesting, trailing text, duplicate keys); every params field at and past its bounds;
  * all-or-nothing application; light, camera and intensity rules; the recording's round trip

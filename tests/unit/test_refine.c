@@ -19,7 +19,7 @@
 #include "iir/refine.h"
 #include "iir/render.h"
 #include "iir/scene.h"
-#include "timer.h"
+#include "iir/timer.h"
 
 typedef iir_test_cornell fixture;
 enum { W = 64, H = 48 };

@@ -20,7 +20,7 @@
 #include "iir/shadowmap.h"
 #include "iir/tri.h"
 #include "method_internal.h"
-#include "timer.h"
+#include "iir/timer.h"
 
 /* The domain drawing's buffers (grown, never shrunk) and whether they hold the last frame's. */
 typedef struct domain_bufs {

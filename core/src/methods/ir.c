@@ -24,7 +24,7 @@
 #include "method_internal.h"
 #include "sampling.h"
 #include "surface.h"
-#include "timer.h"
+#include "iir/timer.h"
 
 /* A list of VPLs from N light paths; grows, never shrinks. */
 typedef struct vpl_list {

@@ -18,7 +18,7 @@
 #include "method_internal.h"
 #include "sampling.h"
 #include "surface.h"
-#include "timer.h"
+#include "iir/timer.h"
 
 enum { TILE = 16, RR_START = 3 };
 

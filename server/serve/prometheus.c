@@ -1,11 +1,12 @@
-/* metrics.c -- the daemon's counters and the /metrics and /healthz texts; not the stats message. */
-#include "metrics.h"
+/* prometheus.c -- the daemon's counters and the /metrics and /healthz texts; not the stats message.
+ */
+#include "prometheus.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli.h"
+#include "iir/timer.h"
 
 static const double frame_bucket_s[IIRD_FRAME_BUCKETS] = {0.005, 0.01, 0.025, 0.05, 0.1,
                                                           0.25,  0.5,  1.0,   2.5};
@@ -13,7 +14,7 @@ static const double frame_bucket_s[IIRD_FRAME_BUCKETS] = {0.005, 0.01, 0.025, 0.
 void iird_metrics_init(iird_metrics *m)
 {
     memset(m, 0, sizeof *m);
-    m->start_ms = iird_now_ms();
+    m->start_ms = iir_now_ms();
     atomic_init(&m->sessions, 0);
 }
 
@@ -99,7 +100,7 @@ char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session 
     metric_head(f, "iird_scenes_loaded", "gauge", "Scenes in memory.");
     fprintf(f, "iird_scenes_loaded %zu\n", scenes_loaded);
     metric_head(f, "iird_uptime_seconds", "gauge", "Seconds since start.");
-    fprintf(f, "iird_uptime_seconds %.3f\n", (iird_now_ms() - m->start_ms) / 1e3);
+    fprintf(f, "iird_uptime_seconds %.3f\n", (iir_now_ms() - m->start_ms) / 1e3);
     if (fclose(f) != 0) {
         free(text);
         return NULL;
@@ -114,7 +115,7 @@ char *iird_metrics_healthz(const iird_metrics *m)
     FILE *f = open_memstream(&text, &size);
     if (!f) return NULL;
     fprintf(f, "{\"status\":\"ok\",\"sessions\":%d,\"uptime_s\":%.3f}\n", atomic_load(&m->sessions),
-            (iird_now_ms() - m->start_ms) / 1e3);
+            (iir_now_ms() - m->start_ms) / 1e3);
     if (fclose(f) != 0) {
         free(text);
         return NULL;

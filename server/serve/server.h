@@ -7,7 +7,7 @@
 
 #include <stdbool.h>
 
-#include "protocol.h"
+#include "protocol/protocol.h"
 
 enum {
     IIRD_MAX_ORIGINS = 16,

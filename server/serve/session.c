@@ -7,7 +7,7 @@
 
 #include <libwebsockets.h>
 
-#include "cli.h"
+#include "iir/timer.h"
 #include "session_internal.h"
 
 /* ======================== buffers ======================== */
@@ -41,7 +41,7 @@ static void init_state(iird_session *s, const iird_session_env *env)
     s->settings = env->defaults;
     s->version = 1;
     s->seq = IIRD_NO_SEQ;
-    s->input_ms = iird_now_ms();
+    s->input_ms = iir_now_ms();
     s->tokens = IIRD_RATE_BURST;
     s->tokens_ms = s->input_ms;
     s->rate_error_ms = -1e9;
@@ -54,7 +54,7 @@ iird_session *iird_session_create(const iird_session_env *env, uint32_t id, iir_
     s->env = env;
     s->id = id;
     pthread_mutex_init(&s->lock, NULL);
-    pthread_condattr_t attr; /* timed waits on the monotonic clock, as iird_now_ms */
+    pthread_condattr_t attr; /* timed waits on the monotonic clock, as iir_now_ms */
     pthread_condattr_init(&attr);
     pthread_condattr_setclock(&attr, CLOCK_MONOTONIC);
     pthread_cond_init(&s->wake, &attr);
@@ -237,7 +237,7 @@ static bool write_frame(iird_session *s, struct lws *wsi, frame_slot *f)
         free(f->domain);
         return false;
     }
-    double now = iird_now_ms();
+    double now = iir_now_ms();
     iird_metrics_frame_sent(s->env->metrics, f->stats.total_ms);
     pthread_mutex_lock(&s->lock);
     uint64_t dropped = s->dropped;

@@ -395,10 +395,3 @@ bool iird_interrupted(void)
 {
     return interrupted != 0;
 }
-
-double iird_now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
-}

@@ -7,11 +7,12 @@
 #include <limits.h>
 #include <pthread.h>
 #include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
 
-#include "cli.h"
+#include "iir/timer.h"
 
 typedef struct cache_slot {
     iird_scene_entry entry; /* first: a slot's address is its entry's */

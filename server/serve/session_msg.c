@@ -3,9 +3,10 @@
  * and validation are protocol.h's). Not the worker and not writing. */
 #include <math.h>
 #include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
 
-#include "cli.h"
+#include "iir/timer.h"
 #include "session_internal.h"
 
 /* ======================== pieces, size and rate ======================== */
@@ -13,7 +14,7 @@
 /* False (and one rate_limited error per second) when the client is over its message rate. */
 static bool take_token(iird_session *s)
 {
-    double now = iird_now_ms();
+    double now = iir_now_ms();
     s->tokens =
         fmin((double)IIRD_RATE_BURST, s->tokens + (now - s->tokens_ms) * IIRD_RATE_PER_S / 1000.0);
     s->tokens_ms = now;
@@ -69,7 +70,7 @@ static void input_changed_locked(iird_session *s, int64_t seq)
 {
     s->version++;
     if (seq != IIRD_NO_SEQ) s->seq = seq;
-    s->input_ms = iird_now_ms();
+    s->input_ms = iir_now_ms();
     pthread_cond_broadcast(&s->wake);
 }
 
@@ -115,7 +116,7 @@ static bool on_light(iird_session *s, const iird_msg *m, iird_proto_error *err)
     bool ok = iird_apply_light(&m->u.light, &light, err);
     /* Recorded before it is applied: a full recording refuses the whole message. */
     if (ok && s->rec)
-        ok = iird_recording_add(s->rec, (iird_now_ms() - s->rec_start_ms) / 1e3, &light, err);
+        ok = iird_recording_add(s->rec, (iir_now_ms() - s->rec_start_ms) / 1e3, &light, err);
     if (ok) {
         s->light = light;
         input_changed_locked(s, m->seq);
@@ -238,7 +239,7 @@ static bool on_record(iird_session *s, const iird_msg *m, iird_proto_error *err)
         iird_recording_destroy(s->rec);
         s->rec = iird_recording_create(m->u.record.fps);
         if (!s->rec) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
-        s->rec_start_ms = iird_now_ms();
+        s->rec_start_ms = iir_now_ms();
         pthread_mutex_lock(&s->lock);
         iir_light light = s->light;
         pthread_mutex_unlock(&s->lock);

@@ -24,6 +24,7 @@
 
 #include "animview.h"
 #include "cli.h"
+#include "iir/timer.h"
 #include "iir/anim.h"
 #include "iir/image.h"
 #include "render_anim.h"
@@ -236,7 +237,7 @@ static iir_status prepare(anim_job *j, iir_error *err)
 static iir_status warm_up(anim_job *j, iir_error *err)
 {
     if (j->first == 0) return IIR_OK;
-    double t0 = iird_now_ms();
+    double t0 = iir_now_ms();
     iir_image *small = iir_image_create(WARMUP_DIM, WARMUP_DIM);
     if (!small) return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
     iird_progress bar;
@@ -254,7 +255,7 @@ static iir_status warm_up(anim_job *j, iir_error *err)
     iir_image_destroy(small);
     j->run.warmup_frames = j->first;
     j->run.warmup_width = j->run.warmup_height = WARMUP_DIM;
-    j->run.warmup_ms = iird_now_ms() - t0;
+    j->run.warmup_ms = iir_now_ms() - t0;
     return st;
 }
 
@@ -280,7 +281,7 @@ static iir_status write_frame(anim_job *j, int f, const iir_frame_stats *fs, iir
     snprintf(name, sizeof name, "frame_%05d.%s", f, iird_format_ext(o->format));
     snprintf(path, sizeof path, "%s/%s", o->out, name);
     snprintf(part, sizeof part, "%s.part", path);
-    double t0 = iird_now_ms();
+    double t0 = iir_now_ms();
     iir_status st = write_image(j->img, o->format, part, o->exposure, err);
     if (st == IIR_OK && rename(part, path) != 0)
         st = iir_fail(err, IIR_ERR_IO, "cannot rename %s to %s: %s", part, name, strerror(errno));
@@ -288,7 +289,7 @@ static iir_status write_frame(anim_job *j, int f, const iir_frame_stats *fs, iir
         remove(part);
         return st;
     }
-    double write_ms = iird_now_ms() - t0;
+    double write_ms = iir_now_ms() - t0;
     iird_render_log_frame(j->log, f, iir_anim_frame_time(j->anim, f), name, fs, write_ms);
     j->run.done++;
     j->render_ms += fs->total_ms;
@@ -298,7 +299,7 @@ static iir_status write_frame(anim_job *j, int f, const iir_frame_stats *fs, iir
 /* Keeps render.json current during long runs, so even a killed run leaves a useful log. */
 static iir_status checkpoint(anim_job *j, iir_error *err)
 {
-    double now = iird_now_ms();
+    double now = iir_now_ms();
     if (now - j->last_log_ms < CHECKPOINT_MS) return IIR_OK;
     j->last_log_ms = now;
     j->run.wall_ms = now - j->start_ms;
@@ -311,7 +312,7 @@ static iir_status render_frames(anim_job *j, iir_error *err)
     iird_progress bar;
     iird_progress_start(&bar, "render", j->end - j->first);
     iir_status st = IIR_OK;
-    j->frames_start_ms = j->last_log_ms = iird_now_ms();
+    j->frames_start_ms = j->last_log_ms = iir_now_ms();
     for (int f = j->first; st == IIR_OK && f < j->end; f++) {
         iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, f);
         iir_frame_stats fs = {0};
@@ -419,7 +420,7 @@ static void print_summary(const anim_job *j, int video_frames)
     const iird_render_opts *o = j->o;
     int n = j->run.done;
     double mean = n ? j->render_ms / n : 0;
-    double wall = n ? (iird_now_ms() - j->frames_start_ms) / n : 0;
+    double wall = n ? (iir_now_ms() - j->frames_start_ms) / n : 0;
     printf("wrote %d frames (%d..%d of %d) to %s: %s, %dx%d %s, method %s; %.2f ms/frame "
            "rendering (%.1f fps), %.2f ms/frame with writing (%.1f fps), %.1f s",
            n, j->first, j->end - 1, j->count, o->out, j->scene->name, o->width, o->height,
@@ -438,7 +439,7 @@ static void print_summary(const anim_job *j, int video_frames)
 static iir_status finish(anim_job *j, iir_status st, iir_error *err)
 {
     iir_error verr = {0}, lerr = {0};
-    j->run.wall_ms = iird_now_ms() - j->start_ms;
+    j->run.wall_ms = iir_now_ms() - j->start_ms;
     j->run.status = st == IIR_OK                ? "complete"
                     : st == IIR_ERR_INTERRUPTED ? "interrupted"
                                                 : "failed";
@@ -473,7 +474,7 @@ static void free_job(anim_job *j)
 
 int iird_render_anim(const iird_render_opts *o)
 {
-    anim_job j = {.o = o, .start_ms = iird_now_ms()};
+    anim_job j = {.o = o, .start_ms = iir_now_ms()};
     iir_error err = {0};
     iird_catch_interrupts();
     iir_status st = load(&j, &err);

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "iir/timer.h"
 
 enum { BAR_WIDTH = 32 };
 
@@ -12,7 +13,7 @@ void iird_progress_start(iird_progress *p, const char *label, double total)
     p->enabled = isatty(STDERR_FILENO) != 0;
     p->label = label;
     p->total = total > 0 ? total : 1;
-    p->start_ms = iird_now_ms();
+    p->start_ms = iir_now_ms();
     p->last_draw_ms = 0;
     iird_progress_update(p, 0);
 }
@@ -30,7 +31,7 @@ static void format_seconds(double s, char *buf, size_t n)
 void iird_progress_update(iird_progress *p, double done)
 {
     if (!p->enabled) return;
-    double now = iird_now_ms();
+    double now = iir_now_ms();
     if (done < p->total && now - p->last_draw_ms < 100) return;
     p->last_draw_ms = now;
     double frac = done / p->total;

@@ -1,4 +1,4 @@
-/* metrics.h -- the daemon's counters and the frame-time histogram, and the two texts built from
+/* prometheus.h -- the daemon's counters and the frame-time histogram, and the two texts built from
  * them: GET /metrics (Prometheus text format 0.0.4, names in docs/protocol.md) and GET /healthz
  * (JSON). Not the per-frame `stats` message (protocol.h) and not who calls what (server.c).
  *
@@ -12,13 +12,13 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "protocol.h"
+#include "protocol/protocol.h"
 
 /* Upper bounds of the frame-time histogram buckets in seconds, +Inf implied after the last. */
 #define IIRD_FRAME_BUCKETS 9
 
 typedef struct iird_metrics {
-    double start_ms; /* iird_now_ms() at start, for the uptime */
+    double start_ms; /* iir_now_ms() at start, for the uptime */
     atomic_int sessions;
     atomic_uint_fast64_t sessions_total;
     atomic_uint_fast64_t frames_sent, frames_dropped, bytes_sent, messages;

@@ -9,6 +9,7 @@
 
 #include "bench.h"
 #include "cli.h"
+#include "iir/timer.h"
 
 /* Bump when pt or the reference settings change what a cached file would hold. */
 static const char CACHE_TAG[] = "iir-bench-ref-v1";
@@ -184,7 +185,7 @@ static iir_status refset_render(iird_bench *b, iird_bench_refset *rs, iird_progr
 iir_status iird_bench_references(iird_bench *b, iir_error *err)
 {
     if (b->o->ref_spp == 0) return IIR_OK;
-    double t0 = iird_now_ms();
+    double t0 = iir_now_ms();
     choose_cache_dir(b);
     for (int i = 0; i < b->frames; i++) b->refs_total += iird_bench_is_ref_frame(b, i);
     b->refs_total *= b->num_refsets;
@@ -195,6 +196,6 @@ iir_status iird_bench_references(iird_bench *b, iir_error *err)
     for (int s = 0; st == IIR_OK && s < b->num_refsets; s++)
         st = refset_render(b, &b->refsets[s], &bar, &done, err);
     iird_progress_finish(&bar);
-    b->refs_s = (iird_now_ms() - t0) / 1e3;
+    b->refs_s = (iir_now_ms() - t0) / 1e3;
     return st;
 }

@@ -17,7 +17,7 @@
 
 #include <libwebsockets.h>
 
-#include "cli.h"
+#include "iir/timer.h"
 #include "session_internal.h"
 
 /* ======================== small helpers ======================== */
@@ -275,13 +275,13 @@ static iir_status encode_frame(worker_state *w, const render_job *j, frame_info 
                                iir_error *err)
 {
     const uint8_t *jpeg = NULL;
-    double t0 = iird_now_ms();
+    double t0 = iir_now_ms();
     iir_status st = iir_jpeg_encode(w->enc, w->img, j->settings.exposure, j->settings.quality,
                                     &jpeg, size, err);
     if (st != IIR_OK) return st;
     if (!iird_buf_reserve(&w->back, IIRD_FRAME_HEADER_BYTES + *size))
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory for a frame of %zu bytes", *size);
-    f->encode_ms = iird_now_ms() - t0;
+    f->encode_ms = iir_now_ms() - t0;
     iird_frame_header h = {.kind = 1,
                            .frame_id = f->id,
                            .seq = j->seq == IIRD_NO_SEQ ? 0xFFFFFFFFu : (uint32_t)j->seq,
@@ -387,7 +387,7 @@ static void send_stale_domain(iird_session *s, const iird_scene_entry *sc)
 {
     worker_state *w = &s->w;
     w->domain_stale = false;
-    w->domain_ms = iird_now_ms();
+    w->domain_ms = iir_now_ms();
     send_domain(s, w->domain_for, domain_json(w, &w->last, sc, w->domain_for));
 }
 
@@ -419,7 +419,7 @@ static void render_locked(iird_session *s)
     if (st == IIR_OK && rendered && j.settings.domain) {
         w->domain_stale = true;
         w->domain_for = f.id;
-        if (iird_now_ms() - w->domain_ms >= IIRD_DOMAIN_MIN_MS) send_stale_domain(s, sc);
+        if (iir_now_ms() - w->domain_ms >= IIRD_DOMAIN_MIN_MS) send_stale_domain(s, sc);
     }
     pthread_mutex_lock(&s->lock);
 }
@@ -481,7 +481,7 @@ static bool refine_due_locked(const iird_session *s, double *wait_ms)
     if (!w->have_frame || w->converged || !s->settings.refine || !w->method ||
         !iir_method_can_refine(w->method))
         return false;
-    *wait_ms = IIRD_REFINE_IDLE_MS - (iird_now_ms() - s->input_ms);
+    *wait_ms = IIRD_REFINE_IDLE_MS - (iir_now_ms() - s->input_ms);
     return true;
 }
 
@@ -526,7 +526,7 @@ static void snapshot_locked(iird_session *s)
     pthread_mutex_unlock(&s->lock);
     iir_error err = {0};
     size_t size = 0;
-    double t0 = iird_now_ms();
+    double t0 = iir_now_ms();
     unsigned char *buf = w->have_frame
                              ? snapshot_bytes(w->img, exr, w->last.settings.exposure, &size, &err)
                              : (iir_fail(&err, IIR_ERR_INVALID, "no frame yet"), NULL);
@@ -540,7 +540,7 @@ static void snapshot_locked(iird_session *s)
                            .seq = seq == IIRD_NO_SEQ ? 0xFFFFFFFFu : (uint32_t)seq,
                            .width = (uint16_t)w->img->width,
                            .height = (uint16_t)w->img->height,
-                           .encode_ms = (float)(iird_now_ms() - t0),
+                           .encode_ms = (float)(iir_now_ms() - t0),
                            .pass = w->pass,
                            .flags = (w->converged ? 1u : 0u) | (w->pass > 0 ? 2u : 0u),
                            .payload_bytes = (uint32_t)size};
@@ -583,7 +583,7 @@ static void load_scene_locked(iird_session *s)
     s->camera = e->scene->camera;
     s->version++;
     if (seq != IIRD_NO_SEQ) s->seq = seq;
-    s->input_ms = iird_now_ms();
+    s->input_ms = iir_now_ms();
     iird_state_view v = iird_state_view_locked(s);
     char *json = iird_json_state(&v, seq);
     iird_queue_text_locked(s, json, false);

@@ -11,7 +11,7 @@
 
 #include <cjson/cJSON.h>
 
-#include "protocol.h"
+#include "protocol/protocol.h"
 
 struct iird_render_log {
     char path[4096], tmp[4200];

@@ -22,8 +22,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "metrics.h"
-#include "protocol.h"
+#include "prometheus.h"
+#include "protocol/protocol.h"
 #include "scene_cache.h"
 
 struct lws;

@@ -133,6 +133,4 @@ void iird_progress_finish(iird_progress *p);
 void iird_catch_interrupts(void);
 bool iird_interrupted(void);
 
-double iird_now_ms(void);
-
 #endif

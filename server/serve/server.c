@@ -31,8 +31,8 @@
 
 #include <libwebsockets.h>
 
-#include "cli.h"
-#include "metrics.h"
+#include "iir/timer.h"
+#include "prometheus.h"
 #include "scene_cache.h"
 #include "session.h"
 
@@ -470,8 +470,8 @@ static void shut_down(server *srv)
             iird_session_close(c->session, LWS_CLOSE_STATUS_GOINGAWAY);
             lws_callback_on_writable(c->wsi);
         }
-    double until = iird_now_ms() + 300.0;
-    while (srv->conns && iird_now_ms() < until) lws_service(srv->ctx, 0);
+    double until = iir_now_ms() + 300.0;
+    while (srv->conns && iir_now_ms() < until) lws_service(srv->ctx, 0);
     for (conn *c = srv->conns; c; c = c->next) {
         iird_session_destroy(c->session);
         if (c->session) srv->active--, atomic_fetch_sub(&srv->metrics.sessions, 1);

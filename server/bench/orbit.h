@@ -1,5 +1,5 @@
-/* orbit.h -- the built-in smooth light path used until animation scripts exist: the scene's first
- * spot circles about the vertical through its position while its aim point circles the other
+/* orbit.h -- the built-in smooth light path of `iird bench` when no --anim is given: the scene's
+ * first spot circles about the vertical through its position while its aim point circles the other
  * way, one full turn over the run. */
 #ifndef IIRD_ORBIT_H
 #define IIRD_ORBIT_H

@@ -1,4 +1,5 @@
-/* timer.h -- monotonic wall-clock time in milliseconds. Internal; inline. */
+/* timer.h -- monotonic wall-clock time in milliseconds (iir_now_ms), for phase timings in core and
+ * the daemon's clocks. Inline; no state. */
 #ifndef IIR_TIMER_H
 #define IIR_TIMER_H
 

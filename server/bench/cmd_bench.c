@@ -12,6 +12,7 @@
 
 #include "bench.h"
 #include "cli.h"
+#include "iir/timer.h"
 #include "commands.h"
 
 static void bench_usage(FILE *f)
@@ -236,12 +237,12 @@ int iird_cmd_bench(int argc, char **argv)
     if (rc >= 0) return rc;
     iir_error err = {0};
     iird_bench run = {0};
-    double t0 = iird_now_ms();
+    double t0 = iir_now_ms();
     iird_catch_interrupts();
     iir_status st = iird_bench_setup(&run, &o, &err);
     if (st == IIR_OK) st = iird_bench_references(&run, &err);
     for (int r = 0; st == IIR_OK && r < run.num_runs; r++) st = iird_bench_run_one(&run, r, &err);
-    run.wall_s = (iird_now_ms() - t0) / 1e3;
+    run.wall_s = (iir_now_ms() - t0) / 1e3;
     if (st == IIR_OK) st = iird_bench_write_csv(&run, &err);
     if (st == IIR_OK) st = iird_bench_write_json(&run, &err);
     if (st == IIR_OK) iird_bench_summary(&run, stdout);
