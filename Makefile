@@ -1,6 +1,6 @@
 # Makefile -- thin wrapper over CMake. `make run` and `make test` do all set-up on a fresh Debian 12:
 # they install missing packages (apt-get; sudo only when not root), configure, build, then run.
-.PHONY: all deps web-deps build run still test bench format format-check clean
+.PHONY: all deps web-deps build run still test bench docs format format-check clean
 
 BUILD      ?= build
 TEST_BUILD ?= build-asan
@@ -83,6 +83,10 @@ bench: build
 	$(BENCH) conference --anim orbit --size 320x240 --methods iir,ir --ref-spp 256 \
 	    --ref-every 100 --out out/bench/conference-orbit
 	/usr/bin/python3 tools/live_bench.py --iird $(BUILD)/iird --out out/bench/live.json
+
+# docs/cli.md's parameter tables, regenerated from the methods' own tables (a test compares them).
+docs: build
+	/usr/bin/python3 tools/gen_params_doc.py $(BUILD)/iird docs/cli.md
 
 FORMAT_FILES = $(shell git ls-files '*.c' '*.h' '*.cpp' '*.hpp' 2>/dev/null)
 format:

@@ -1,8 +1,7 @@
-/* cli.c -- argument parsing helpers, scene lookup and loading, animation scripts named by a
- * scene, error reporting and interrupt handling shared by the iird subcommands. */
+/* cli.c -- argument parsing helpers, the scenes folder, animation scripts named by a scene, error
+ * reporting and interrupt handling shared by the iird subcommands; not loading scenes
+ * (iir_scene_open). */
 #include "cli.h"
-
-#include "iir/refine.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -16,6 +15,7 @@
 #include <strings.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <cjson/cJSON.h>
 
@@ -80,134 +80,256 @@ iir_status iird_parse_float(const char *text, const char *what, float lo, float 
     return IIR_OK;
 }
 
-const char IIRD_METHOD_HELP[] =
-    "method parameters (each method reads the ones it uses; see docs/cli.md):\n"
-    "  --spp N              pt: samples per pixel (default 16)\n"
-    "  --bounces B          pt, ir: 1 = direct only, 2 = one diffuse bounce (default 2)\n"
-    "  --seed S             random seed (default 1); same seed, same image\n"
-    "  --vpls N             ir: light paths; iir: VPL set size (default 256)\n"
-    "  --kmin K, --kmax K   iir: VPLs replaced per frame (default 4, 8)\n"
-    "  --weights W          iir: uniform | voronoi (default voronoi)\n"
-    "  --regen-threshold F  iir: regenerate all when more than F of the VPLs die (default 0.5)\n"
-    "  --visibility V       ir, iir: shadowmap | rays (default shadowmap)\n"
-    "  --sm-res R           shadow-map resolution (default 128)\n"
-    "  --sm-bias B          shadow-map bias (see docs/cli.md)\n"
-    "  --interleave N       N x N interleaved VPL subsets + filter; 1 = full (default 4)\n"
-    "  --clamp C            bound G at C / D^2, D the scene diagonal; 0 = no clamp\n"
-    "  --ir-same-random     ir: the same random numbers every frame (default: fresh)\n"
-    "  --refine-passes P    refinement converges after P passes (ir, iir: one VPL subset per\n"
-    "                       pixel each; pt: P x spp samples) (default 64)\n"
-    "  --threads N          OpenMP threads (default: all cores)\n";
+/* ======================== method parameters ======================== */
 
-static iir_status parse_int_into(const char *arg, const char *what, long lo, long hi, int *out,
-                                 iir_error *err)
+enum { OPT_PARAM_BASE = 2000, OPT_THREADS = 1999, MAX_OPTIONS = 128 };
+
+/* Every distinct parameter name of every method's tables, in table order; NULL-terminated. */
+static const iir_param *const *all_params(void)
 {
-    long v;
-    iir_status st = iird_parse_int(arg, what, lo, hi, &v, err);
-    if (st == IIR_OK) *out = (int)v;
-    return st;
+    static const iir_param *rows[MAX_OPTIONS];
+    if (rows[0]) return rows;
+    int n = 0;
+    for (const iir_param_table *const *t = iir_method_all_tables(); *t; t++)
+        for (int i = 0; i < (*t)->count && n < MAX_OPTIONS - 1; i++) {
+            bool seen = false;
+            for (int k = 0; k < n; k++) seen = seen || !strcmp(rows[k]->name, (*t)->rows[i].name);
+            if (!seen) rows[n++] = &(*t)->rows[i];
+        }
+    return rows;
 }
 
-static iir_status parse_choice(const char *arg, const char *what, const char *a, const char *b,
-                               int *out, iir_error *err)
+/* The command's options, then one per parameter, then --threads. */
+static const struct option *build_longopts(const iird_command *cmd)
 {
-    if (!strcmp(arg, a))
-        *out = 0;
-    else if (!strcmp(arg, b))
-        *out = 1;
-    else
-        return iir_fail(err, IIR_ERR_INVALID, "%s '%s' must be %s or %s", what, arg, a, b);
-    return IIR_OK;
+    static struct option opts[MAX_OPTIONS * 2];
+    static char names[MAX_OPTIONS][40];
+    int n = 0;
+    for (const struct option *o = cmd->options; o->name && n < MAX_OPTIONS; o++) opts[n++] = *o;
+    const iir_param *const *rows = all_params();
+    for (int i = 0; rows[i]; i++) {
+        iir_param_option_name(rows[i], names[i], sizeof names[i]);
+        bool flag = rows[i]->type == IIR_PARAM_BOOL;
+        opts[n++] = (struct option){names[i], flag ? optional_argument : required_argument, 0,
+                                    OPT_PARAM_BASE + i};
+    }
+    opts[n++] = (struct option){"threads", required_argument, 0, OPT_THREADS};
+    opts[n] = (struct option){0, 0, 0, 0};
+    return opts;
+}
+
+iir_status iird_parse_param(const char *name, const char *text, iir_params *p, iir_error *err)
+{
+    char key[40], opt[48];
+    snprintf(key, sizeof key, "%s", name);
+    for (char *c = key; *c; c++)
+        if (*c == '-') *c = '_';
+    const iir_param *row = iir_method_any_param(key);
+    if (!row) return iir_fail(err, IIR_ERR_INVALID, "--%s is not a parameter of any method", name);
+    double v = 0.0;
+    const iir_param *bad = row;
+    iir_status st = iir_param_parse(row, text, &v, err);
+    if (st == IIR_OK) {
+        iir_params one = iir_params_default();
+        st = iir_params_set(&one, row, v, err);
+        if (st == IIR_OK) st = iir_method_params_check(&one, false, &bad, err);
+    }
+    if (st == IIR_OK) st = iir_params_set(p, row, v, err);
+    iir_param_option_name(row, key, sizeof key);
+    snprintf(opt, sizeof opt, "--%s", key);
+    if (st != IIR_OK) iir_param_reword(err, bad ? bad : row, opt);
+    return st;
 }
 
 static iir_status parse_threads(const char *arg, iir_error *err)
 {
-    int n = 0;
-    iir_status st = parse_int_into(arg, "--threads", 1, 1024, &n, err);
-    if (st == IIR_OK) omp_set_num_threads(n);
+    long n = 0;
+    iir_status st = iird_parse_int(arg, "--threads", 1, 1024, &n, err);
+    if (st == IIR_OK) omp_set_num_threads((int)n);
     return st;
 }
 
-bool iird_method_option(int c, const char *arg, iir_params *p, iir_status *st, iir_error *err)
+/* The next method of a comma-separated list into buf; NULL at the end. */
+static const char *next_method(const char *list, char *buf, size_t n)
 {
-    int choice = 0;
-    switch (c) {
-    case IIRD_OPT_SPP:
-        *st = parse_int_into(arg, "--spp", 1, 1 << 20, &p->spp, err);
+    if (!list || !*list) return NULL;
+    const char *comma = strchr(list, ',');
+    size_t len = comma ? (size_t)(comma - list) : strlen(list);
+    snprintf(buf, n, "%.*s", (int)len, list);
+    return comma ? comma + 1 : list + len;
+}
+
+/* Whether some method of the list declares name; its names into have (for the message). */
+static bool declared_by(const char *methods, const char *name, char *have, size_t n)
+{
+    char m[32];
+    bool found = false;
+    have[0] = '\0';
+    for (const char *rest = methods; (rest = next_method(rest, m, sizeof m));) {
+        found = found || iir_method_find_param(m, name);
+        size_t used = strlen(have);
+        snprintf(have + used, n - used, "%s%s", used ? ", " : "", m);
+    }
+    return found;
+}
+
+iir_status iird_check_params_for(const char *methods, const iir_params *p, iir_error *err)
+{
+    char have[128], opt[40];
+    for (uint32_t k = 0; methods && k < p->count; k++) {
+        if (declared_by(methods, p->v[k].name, have, sizeof have)) continue;
+        iir_param_option_name(iir_method_any_param(p->v[k].name), opt, sizeof opt);
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "--%s is not a parameter of %s (--help lists the parameters)", opt, have);
+    }
+    return IIR_OK;
+}
+
+/* ---- help ---- */
+
+/* "N", "F", "shadowmap|rays", "[=BOOL]": what an option takes. */
+static void metavar(const iir_param *row, char *buf, size_t n)
+{
+    switch (row->type) {
+    case IIR_PARAM_ENUM:
+        buf[0] = '\0';
+        for (int i = 0; row->choices[i]; i++) {
+            size_t used = strlen(buf);
+            snprintf(buf + used, n - used, "%s%s", i ? "|" : "", row->choices[i]);
+        }
         break;
-    case IIRD_OPT_BOUNCES:
-        *st = parse_int_into(arg, "--bounces", 1, 1000, &p->bounces, err);
+    case IIR_PARAM_BOOL:
+        snprintf(buf, n, "[=BOOL]");
         break;
-    case IIRD_OPT_SEED:
-        *st = iird_parse_u64(arg, "--seed", &p->seed, err);
-        break;
-    case IIRD_OPT_VPLS:
-        *st = parse_int_into(arg, "--vpls", 1, 16384, &p->vpls, err);
-        break;
-    case IIRD_OPT_KMIN:
-        *st = parse_int_into(arg, "--kmin", 0, 16384, &p->kmin, err);
-        break;
-    case IIRD_OPT_KMAX:
-        *st = parse_int_into(arg, "--kmax", 0, 16384, &p->kmax, err);
-        break;
-    case IIRD_OPT_REGEN:
-        *st = iird_parse_float(arg, "--regen-threshold", 1e-6f, 1.f, &p->regen_threshold, err);
-        break;
-    case IIRD_OPT_WEIGHTS:
-        *st = parse_choice(arg, "--weights", "uniform", "voronoi", &choice, err);
-        p->weights = choice ? IIR_WEIGHTS_VORONOI : IIR_WEIGHTS_UNIFORM;
-        break;
-    case IIRD_OPT_VISIBILITY:
-        *st = parse_choice(arg, "--visibility", "shadowmap", "rays", &choice, err);
-        p->visibility = choice ? IIR_VIS_RAYS : IIR_VIS_SHADOWMAP;
-        break;
-    case IIRD_OPT_SM_RES:
-        *st = parse_int_into(arg, "--sm-res", 8, 2048, &p->sm_res, err);
-        break;
-    case IIRD_OPT_SM_BIAS:
-        *st = iird_parse_float(arg, "--sm-bias", 0.f, 1.f, &p->sm_bias, err);
-        break;
-    case IIRD_OPT_INTERLEAVE:
-        *st = parse_int_into(arg, "--interleave", 1, 8, &p->interleave, err);
-        break;
-    case IIRD_OPT_CLAMP:
-        *st = iird_parse_float(arg, "--clamp", 0.f, 1e12f, &p->clamp, err);
-        break;
-    case IIRD_OPT_IR_SAME:
-        p->ir_fresh = false, *st = IIR_OK;
-        break;
-    case IIRD_OPT_THREADS:
-        *st = parse_threads(arg, err);
-        break;
-    case IIRD_OPT_REFINE_PASSES:
-        *st = parse_int_into(arg, "--refine-passes", 1, IIR_REFINE_MAX_PASSES, &p->refine_passes,
-                             err);
+    case IIR_PARAM_FLOAT:
+        snprintf(buf, n, "F");
         break;
     default:
-        return false;
+        snprintf(buf, n, "N");
     }
-    return true;
 }
+
+static void print_row(FILE *f, const iir_param *row)
+{
+    char opt[40], var[64], def[32], lo[32], hi[32], left[128];
+    iir_param_option_name(row, opt, sizeof opt);
+    metavar(row, var, sizeof var);
+    iir_param_format(row, row->def, def, sizeof def);
+    snprintf(left, sizeof left, "--%s%s%s", opt, row->type == IIR_PARAM_BOOL ? "" : " ", var);
+    fprintf(f, "  %-26s %s\n", left, row->help);
+    if (row->type == IIR_PARAM_INT || row->type == IIR_PARAM_U64 || row->type == IIR_PARAM_FLOAT) {
+        iir_param_format(row, row->lo, lo, sizeof lo);
+        iir_param_format(row, row->hi, hi, sizeof hi);
+        fprintf(f, "  %-26s (default %s%s%s, [%s, %s])\n", "", def, row->unit[0] ? " " : "",
+                row->unit, lo, hi);
+    } else {
+        fprintf(f, "  %-26s (default %s)\n", "", def);
+    }
+}
+
+/* Whether table t belongs to one of the methods (NULL = any). */
+static bool table_of(const iir_param_table *t, const char *methods)
+{
+    char m[32];
+    if (!methods) return true;
+    for (const char *rest = methods; (rest = next_method(rest, m, sizeof m));) {
+        const iir_param_table *const *ts = iir_method_tables(m);
+        for (int i = 0; ts && ts[i]; i++)
+            if (ts[i] == t) return true;
+    }
+    return false;
+}
+
+void iird_print_params(FILE *f, const char *methods)
+{
+    fprintf(f, "\nparameters%s%s (docs/cli.md; booleans as --name or --name=false):\n",
+            methods ? " of " : " of every method", methods ? methods : "");
+    for (const iir_param_table *const *t = iir_method_all_tables(); *t; t++) {
+        if (!table_of(*t, methods)) continue;
+        fprintf(f, " %s:\n", (*t)->title);
+        for (int i = 0; i < (*t)->count; i++) print_row(f, &(*t)->rows[i]);
+    }
+    fprintf(f, "  --threads N                OpenMP threads (default: all cores)\n");
+}
+
+/* The "live session" cell: its maximum and its default where they differ from a command's. */
+static void live_cell(const iir_param *r, char *buf, size_t n)
+{
+    char v[32];
+    buf[0] = '\0';
+    if (r->live.hi > 0.0) {
+        iir_param_format(r, r->live.hi, v, sizeof v);
+        snprintf(buf, n, "at most %s", v);
+    }
+    if (r->live.def != 0.0) {
+        iir_param_format(r, r->live.def, v, sizeof v);
+        snprintf(buf + strlen(buf), n - strlen(buf), "%sdefault %s", buf[0] ? ", " : "", v);
+    }
+}
+
+void iird_print_params_markdown(FILE *f)
+{
+    for (const iir_param_table *const *t = iir_method_all_tables(); *t; t++) {
+        fprintf(f, "\n#### %s\n\n", (*t)->title);
+        fprintf(f, "| option | values | default | live session | on change | meaning |\n");
+        fprintf(f, "|---|---|---|---|---|---|\n");
+        for (int i = 0; i < (*t)->count; i++) {
+            const iir_param *r = &(*t)->rows[i];
+            char opt[40], values[96], def[32], lo[32], hi[32], live[80];
+            iir_param_option_name(r, opt, sizeof opt);
+            iir_param_format(r, r->def, def, sizeof def);
+            iir_param_format(r, r->lo, lo, sizeof lo);
+            iir_param_format(r, r->hi, hi, sizeof hi);
+            live_cell(r, live, sizeof live);
+            if (r->type == IIR_PARAM_ENUM) {
+                values[0] = '\0';
+                for (int k = 0; r->choices[k]; k++)
+                    snprintf(values + strlen(values), sizeof values - strlen(values), "%s%s",
+                             k ? ", " : "", r->choices[k]);
+            } else if (r->type == IIR_PARAM_BOOL) {
+                snprintf(values, sizeof values, "true, false");
+            } else {
+                snprintf(values, sizeof values, "%s %s..%s%s%s", iir_param_type_name(r->type), lo,
+                         hi, r->unit[0] ? " " : "", r->unit);
+            }
+            fprintf(f, "| `--%s` | %s | %s | %s | %s | %s |\n", opt, values, def, live,
+                    r->effect == IIR_PARAM_LIVE ? "kept" : "restart", r->help);
+        }
+    }
+}
+
+/* ---- parsing ---- */
 
 int iird_parse_command(const iird_command *cmd, int argc, char **argv, void *ctx,
                        iir_params *params, const char **scene)
 {
+    const struct option *longopts = build_longopts(cmd);
+    const iir_param *const *rows = all_params();
     int c;
+    bool help = false;
     iir_error err = {0};
     optind = 1;
-    while ((c = getopt_long(argc, argv, "h", cmd->options, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
         iir_status st = IIR_OK;
-        if (c == 'h') return cmd->usage(stdout), 0;
+        if (c == 'h') help = true;
         if (c == '?') return cmd->usage(stderr), IIRD_EXIT_USAGE;
-        if (!iird_method_option(c, optarg, params, &st, &err))
+        if (c >= OPT_PARAM_BASE)
+            st = iird_parse_param(rows[c - OPT_PARAM_BASE]->name, optarg ? optarg : "true", params,
+                                  &err);
+        else if (c == OPT_THREADS)
+            st = parse_threads(optarg, &err);
+        else if (c != 'h')
             st = cmd->option(ctx, c, optarg, &err);
         if (st != IIR_OK) return iird_report(cmd->name, &err);
     }
+    const char *methods = cmd->methods ? cmd->methods(ctx) : NULL;
+    if (help) return cmd->usage(stdout), iird_print_params(stdout, methods), 0;
     if (optind < argc) *scene = argv[optind++];
     if (optind < argc) {
         fprintf(stderr, "iird %s: unexpected argument '%s'\n", cmd->name, argv[optind]);
         return IIRD_EXIT_USAGE;
     }
+    if (iird_check_params_for(methods, params, &err) != IIR_OK) return iird_report(cmd->name, &err);
     return -1;
 }
 
@@ -224,12 +346,7 @@ iir_status iird_check_output(const char *path, iir_error *err)
         (strcasecmp(dot, ".png") && strcasecmp(dot, ".exr") && strcasecmp(dot, ".pfm")))
         return iir_fail(err, IIR_ERR_INVALID, "--out %s: the name must end in .png, .exr or .pfm",
                         path);
-    char dir[4096];
-    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) : 1, slash ? path : ".");
-    if (slash == path) snprintf(dir, sizeof dir, "/");
-    if (!is_dir(dir))
-        return iir_fail(err, IIR_ERR_IO, "--out %s: directory '%s' does not exist", path, dir);
-    return IIR_OK;
+    return iird_prepare_parent(path, "--out", err);
 }
 
 const char *iird_scenes_dir(const char *option)
@@ -239,28 +356,6 @@ const char *iird_scenes_dir(const char *option)
     if (env && *env) return env;
     if (is_dir("scenes")) return "scenes";
     return IIR_SOURCE_DIR "/scenes";
-}
-
-iir_status iird_load_scene(const char *arg, const char *scenes_dir, iir_scene **scene, iir_rt **rt,
-                           iir_error *err)
-{
-    *scene = NULL;
-    *rt = NULL;
-    if (!arg || strcmp(arg, "builtin") == 0) {
-        *scene = iir_scene_create_cornell_box();
-        if (!*scene) return iir_fail(err, IIR_ERR_NOMEM, "out of memory building the Cornell box");
-    } else {
-        char path[4096];
-        iir_status st = iir_scene_resolve(arg, scenes_dir, path, sizeof path, err);
-        if (st == IIR_OK) st = iir_scene_load(path, scene, err);
-        if (st != IIR_OK) return st;
-    }
-    iir_status st = iir_rt_create(*scene, rt, err);
-    if (st != IIR_OK) {
-        iir_scene_destroy(*scene);
-        *scene = NULL;
-    }
-    return st;
 }
 
 /* ---- animation scripts named by a scene ---- */
@@ -394,4 +489,58 @@ void iird_catch_interrupts(void)
 bool iird_interrupted(void)
 {
     return interrupted != 0;
+}
+
+/* ---- output folders ---- */
+
+/* mkdir -p dir, then a probe file created and removed in it; `value` is what the user gave. */
+static iir_status prepare_dir(const char *dir, const char *option, const char *value,
+                              iir_error *err)
+{
+    char buf[4096];
+    if (!*dir) return iir_fail(err, IIR_ERR_IO, "%s '%s': an empty folder name", option, value);
+    if (snprintf(buf, sizeof buf, "%s", dir) >= (int)sizeof buf)
+        return iir_fail(err, IIR_ERR_IO, "%s %s: the name is too long", option, value);
+    for (char *p = buf + 1; *p; p++) {
+        if (*p != '/' || p[-1] == '/') continue;
+        *p = '\0';
+        int e = mkdir(buf, 0777) == 0 ? 0 : errno;
+        *p = '/';
+        if (e && e != EEXIST)
+            return iir_fail(err, IIR_ERR_IO, "%s %s: cannot create %.*s: %s", option, value,
+                            (int)(p - buf), buf, strerror(e));
+    }
+    if (mkdir(buf, 0777) != 0 && errno != EEXIST)
+        return iir_fail(err, IIR_ERR_IO, "%s %s: cannot create %s: %s", option, value, dir,
+                        strerror(errno));
+    if (!is_dir(dir))
+        return iir_fail(err, IIR_ERR_IO, "%s %s: %s exists and is not a folder", option, value,
+                        dir);
+    char probe[4200];
+    snprintf(probe, sizeof probe, "%s/.iird-probe-XXXXXX", dir);
+    int fd = mkstemp(probe);
+    if (fd < 0)
+        return iir_fail(err, IIR_ERR_IO, "%s %s: cannot write into %s: %s", option, value, dir,
+                        strerror(errno));
+    close(fd);
+    unlink(probe);
+    return IIR_OK;
+}
+
+iir_status iird_prepare_dir(const char *dir, const char *option, iir_error *err)
+{
+    return prepare_dir(dir, option, dir, err);
+}
+
+iir_status iird_prepare_parent(const char *path, const char *option, iir_error *err)
+{
+    const char *slash = strrchr(path, '/');
+    char dir[4096];
+    if (!slash)
+        snprintf(dir, sizeof dir, ".");
+    else if (slash == path)
+        snprintf(dir, sizeof dir, "/");
+    else
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    return prepare_dir(dir, option, path, err);
 }

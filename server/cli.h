@@ -1,5 +1,6 @@
-/* cli.h -- what the iird subcommands share: argument parsing helpers, finding and loading a
- * scene, and the progress bar. Not any subcommand's logic. */
+/* cli.h -- what the iird subcommands share: argument parsing helpers, the scenes folder and the
+ * animation scripts a scene names, and the progress bar. Not any subcommand's logic, and not
+ * loading scenes (iir_scene_open in iir/scene.h). */
 #ifndef IIRD_CLI_H
 #define IIRD_CLI_H
 
@@ -19,68 +20,47 @@
  * 130 interrupted. */
 enum { IIRD_EXIT_USAGE = 64 };
 
-/* ---- method parameters, shared by every command that renders ---- */
+/* ---- method parameters: options derived from the methods' tables (method.h, params.h) ----
+ *
+ * Every row of every method's tables is an option --name (with '-' for '_'): integers, numbers and
+ * enums take a value (--sm-res 64, --weights uniform), booleans take none or an attached one
+ * (--jitter, --jitter=false). --threads N sets the OpenMP threads. */
 
-enum iird_method_opt {
-    IIRD_OPT_SPP = 1000,
-    IIRD_OPT_BOUNCES,
-    IIRD_OPT_SEED,
-    IIRD_OPT_VPLS,
-    IIRD_OPT_KMIN,
-    IIRD_OPT_KMAX,
-    IIRD_OPT_WEIGHTS,
-    IIRD_OPT_REGEN,
-    IIRD_OPT_VISIBILITY,
-    IIRD_OPT_SM_RES,
-    IIRD_OPT_SM_BIAS,
-    IIRD_OPT_INTERLEAVE,
-    IIRD_OPT_CLAMP,
-    IIRD_OPT_IR_SAME,
-    IIRD_OPT_THREADS,
-    IIRD_OPT_REFINE_PASSES,
-};
-
-/* getopt_long entries for the method parameters; put inside a command's option table. */
-#define IIRD_METHOD_LONGOPTS                                                                       \
-    {"spp", required_argument, 0, IIRD_OPT_SPP},                                                   \
-        {"bounces", required_argument, 0, IIRD_OPT_BOUNCES},                                       \
-        {"seed", required_argument, 0, IIRD_OPT_SEED},                                             \
-        {"vpls", required_argument, 0, IIRD_OPT_VPLS},                                             \
-        {"kmin", required_argument, 0, IIRD_OPT_KMIN},                                             \
-        {"kmax", required_argument, 0, IIRD_OPT_KMAX},                                             \
-        {"weights", required_argument, 0, IIRD_OPT_WEIGHTS},                                       \
-        {"regen-threshold", required_argument, 0, IIRD_OPT_REGEN},                                 \
-        {"visibility", required_argument, 0, IIRD_OPT_VISIBILITY},                                 \
-        {"sm-res", required_argument, 0, IIRD_OPT_SM_RES},                                         \
-        {"sm-bias", required_argument, 0, IIRD_OPT_SM_BIAS},                                       \
-        {"interleave", required_argument, 0, IIRD_OPT_INTERLEAVE},                                 \
-        {"clamp", required_argument, 0, IIRD_OPT_CLAMP},                                           \
-        {"ir-same-random", no_argument, 0, IIRD_OPT_IR_SAME},                                      \
-        {"refine-passes", required_argument, 0, IIRD_OPT_REFINE_PASSES},                           \
-    {                                                                                              \
-        "threads", required_argument, 0, IIRD_OPT_THREADS                                          \
-    }
-
-/* The --help text for those options. */
-extern const char IIRD_METHOD_HELP[];
-
-/* True when c is one of IIRD_METHOD_LONGOPTS; then *st says whether arg was valid. */
-bool iird_method_option(int c, const char *arg, iir_params *p, iir_status *st, iir_error *err);
-
-/* A subcommand's command line: its options, its --help text, and a handler for its own options. */
+/* A subcommand's command line: its options, its --help text, a handler for its own options, and
+ * the methods whose parameters it takes. */
 typedef struct iird_command {
-    const char *name; /* "render", for messages */
-    const struct option *options;
+    const char *name;             /* "render", for messages */
+    const struct option *options; /* the command's own, ending with a zero entry */
     void (*usage)(FILE *f);
-    /* Applies one of the command's own options to ctx (method options never reach it). */
+    /* Applies one of the command's own options to ctx (parameter options never reach it). */
     iir_status (*option)(void *ctx, int c, const char *arg, iir_error *err);
+    /* Comma-separated methods whose parameters the command takes, read after parsing; NULL (or
+     * a NULL function) = any method's. A parameter that none of them declares is refused, and
+     * --help lists only theirs. */
+    const char *(*methods)(const void *ctx);
 } iird_command;
 
-/* Parses argv: method options into *params, the command's own through cmd->option, then at most
- * one positional SCENE into *scene. Returns -1 to go on, else the exit code (0 after --help, 2 for
- * a bad value, 64 for a usage error) with the reason printed. */
+/* Parses argv: parameter options into *params, the command's own through cmd->option, then at
+ * most one positional SCENE into *scene. --help prints cmd->usage and the parameters of the
+ * command's methods (so `--method iir --help` lists iir's). Returns -1 to go on, else the exit
+ * code (0 after --help, 2 for a bad value, 64 for a usage error) with the reason printed. */
 int iird_parse_command(const iird_command *cmd, int argc, char **argv, void *ctx,
                        iir_params *params, const char **scene);
+
+/* Prints the parameters of `methods` (comma-separated; NULL = every method), a section per
+ * table, as --help shows them. */
+void iird_print_params(FILE *f, const char *methods);
+
+/* Prints every table as the Markdown of docs/cli.md's parameter section (`iird params
+ * --markdown`; a test compares the two). */
+void iird_print_params_markdown(FILE *f);
+
+/* Refuses (IIR_ERR_INVALID naming the option) a value of p that no method of `methods` declares. */
+iir_status iird_check_params_for(const char *methods, const iir_params *p, iir_error *err);
+
+/* Parses a parameter value as on the command line (NAME without "--", '-' or '_') into p;
+ * IIR_ERR_INVALID naming --NAME. For --sweep values. */
+iir_status iird_parse_param(const char *name, const char *text, iir_params *p, iir_error *err);
 
 /* Parses "WxH" with 1 <= W, H <= max_dim. */
 iir_status iird_parse_size(const char *text, int max_dim, int *w, int *h, iir_error *err);
@@ -91,18 +71,13 @@ iir_status iird_parse_u64(const char *text, const char *what, uint64_t *out, iir
 iir_status iird_parse_float(const char *text, const char *what, float lo, float hi, float *out,
                             iir_error *err);
 
-/* Checks before any work that an image can be written to path: a .png/.exr/.pfm extension and an
- * existing directory. */
+/* Checks before any work that an image can be written to path: a .png/.exr/.pfm extension
+ * (IIR_ERR_INVALID), and its folder, made if missing, takes a new file (iird_prepare_parent). */
 iir_status iird_check_output(const char *path, iir_error *err);
 
 /* The scenes directory: --scenes if given, else $IIR_SCENES, else ./scenes, else the source tree's.
  */
 const char *iird_scenes_dir(const char *option);
-
-/* Loads SCENE (NULL or "builtin" = the built-in Cornell box; else a name, folder or file) and
- * builds its ray tracer. On error both outputs stay NULL. */
-iir_status iird_load_scene(const char *arg, const char *scenes_dir, iir_scene **scene, iir_rt **rt,
-                           iir_error *err);
 
 /* Finds and loads the animation script that --anim ARG names for scene (both iird render and
  * iird bench use it; docs/scene-format.md section 5): an existing file, or any ARG with a '/' or
@@ -132,5 +107,16 @@ void iird_progress_finish(iird_progress *p);
 /* Ctrl-C / SIGTERM: installs a handler that sets a flag long-running commands poll. */
 void iird_catch_interrupts(void);
 bool iird_interrupted(void);
+
+/* ---- output folders, made and checked before any work ---- */
+
+/* Makes folder dir with its missing parents (mkdir -p), then checks that a file can be created in
+ * it by creating and removing a probe file. `option` names the option that gave it ("--out") for
+ * messages. Returns IIR_ERR_IO with a message naming the option, the folder and the system's
+ * reason when it cannot; folders made before the failure are left. */
+iir_status iird_prepare_dir(const char *dir, const char *option, iir_error *err);
+
+/* iird_prepare_dir on the folder of file path ("." when it has no '/'); messages name the file. */
+iir_status iird_prepare_parent(const char *path, const char *option, iir_error *err);
 
 #endif

@@ -16,6 +16,7 @@ static void usage(FILE *f)
                "  render     render a still, or an animation script's frames (PNG, EXR, PFM; MP4)\n"
                "  bench      time methods over a moving light against path-traced references\n"
                "  raybench   measure the machine's raw Embree ray rate and the path tracer's\n"
+               "  params     list the methods' parameters (options and params fields)\n"
                "\n"
                "  --version  print the version and the libraries built in\n");
 }
@@ -33,6 +34,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "render")) return iird_cmd_render(argc - 1, argv + 1);
     if (!strcmp(cmd, "raybench")) return iird_cmd_raybench(argc - 1, argv + 1);
     if (!strcmp(cmd, "bench")) return iird_cmd_bench(argc - 1, argv + 1);
+    if (!strcmp(cmd, "params")) return iird_cmd_params(argc - 1, argv + 1);
     fprintf(stderr, "iird: unknown command '%s'\n", cmd);
     usage(stderr);
     return IIRD_EXIT_USAGE;

@@ -1,12 +1,18 @@
-/* image.c -- image lifetime, sRGB tone mapping, dispatch by extension; not the file formats. */
+/* image.c -- image lifetime, sRGB tone mapping, dispatch by extension, saving encoded bytes to a
+ * file; not the file formats. */
 #include "iir/image.h"
+#include "image_internal.h"
 
 #include <assert.h>
+#include <errno.h>
 #include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
 
 /* ---- lifetime ---------------------------------------------------------------------------- */
 
@@ -139,6 +145,22 @@ void iir_image_to_srgb8(const iir_image *img, float exposure, uint8_t *rgb)
         rgb[3 * i + 1] = srgb8_encode(&L, c.y * scale);
         rgb[3 * i + 2] = srgb8_encode(&L, c.z * scale);
     }
+}
+
+/* ---- saving encoded bytes ------------------------------------------------------------------ */
+
+iir_status iir_image_save_bytes(const char *path, const char *format, const uint8_t *data,
+                                size_t size, iir_error *err)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        return iir_fail(err, IIR_ERR_IO, "cannot create %s %s: %s", format, path, strerror(errno));
+    bool ok = fwrite(data, 1, size, f) == size;
+    int e = errno;
+    if (fclose(f) != 0 && ok) ok = false, e = errno;
+    if (ok) return IIR_OK;
+    unlink(path);
+    return iir_fail(err, IIR_ERR_IO, "cannot write %s %s: %s", format, path, strerror(e));
 }
 
 /* ---- dispatch by extension ----------------------------------------------------------------- */

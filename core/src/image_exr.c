@@ -1,16 +1,21 @@
-/* image_exr.c -- EXR files through the OpenEXR 3 C API (OpenEXRCore); not other formats. */
+/* image_exr.c -- EXR through the OpenEXR 3 C API (OpenEXRCore): encoding into memory (an EXR
+ * file holds the same bytes) and reading files; not other formats. */
 
 /* Writing: one scanline part, channels R, G, B as 32-bit FLOAT, ZIP compression, data window at
- * (0, 0). Reading: part 0 of a flat scanline or tiled file (level 0 only), channels R, G and B of
- * any pixel type (HALF, FLOAT, UINT) converted to float by the library's decoder; the data window
- * may start anywhere. We give the library our own file stream so that its error messages land in
- * a per-call buffer (its default stream keeps its file handle in the user data pointer). */
+ * (0, 0), into a growing memory buffer. Reading: part 0 of a flat scanline or tiled file (level 0
+ * only), channels R, G and B of any pixel type (HALF, FLOAT, UINT) converted to float by the
+ * library's decoder; the data window may start anywhere. We give the library our own stream so
+ * that its error messages land in a per-call buffer (its default stream keeps its file handle in
+ * the user data pointer). */
 #include "iir/image.h"
+#include "image_internal.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <openexr.h>
+#include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -18,8 +23,10 @@
 /* ---- the stream and its error capture ------------------------------------------------------- */
 
 typedef struct exr_stream {
-    int fd;
-    char msg[256]; /* the library's first error message for this call, "" if none */
+    int fd;           /* reading: the file */
+    uint8_t *data;    /* writing: the bytes so far (malloc'ed), ... */
+    size_t size, cap; /* ... how many, and the room allocated */
+    char msg[256];    /* the library's first error message for this call, "" if none */
 } exr_stream;
 
 static void on_exr_error(exr_const_context_t ctx, exr_result_t code, const char *msg)
@@ -57,24 +64,35 @@ static int64_t stream_size(exr_const_context_t ctx, void *ud)
     return fstat(s->fd, &st) == 0 ? (int64_t)st.st_size : -1;
 }
 
+/* Room for at least `need` bytes in the memory being written. */
+static bool stream_reserve(exr_stream *s, uint64_t need)
+{
+    if (need <= s->cap) return true;
+    if (need > SIZE_MAX / 2) return false;
+    size_t cap = s->cap ? 2 * s->cap : 64 * 1024;
+    while (cap < need) cap *= 2;
+    uint8_t *grown = realloc(s->data, cap);
+    if (!grown) return false;
+    s->data = grown;
+    s->cap = cap;
+    return true;
+}
+
+/* pwrite into memory: a gap before offset reads as zeros, as in a file. */
 static int64_t stream_write(exr_const_context_t ctx, void *ud, const void *buf, uint64_t sz,
                             uint64_t offset, exr_stream_error_func_ptr_t error_cb)
 {
     exr_stream *s = ud;
-    uint64_t done = 0;
-    while (done < sz) {
-        ssize_t n =
-            pwrite(s->fd, (const char *)buf + done, (size_t)(sz - done), (off_t)(offset + done));
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) {
-            if (error_cb)
-                error_cb(ctx, EXR_ERR_WRITE_IO, "write failed: %s",
-                         n < 0 ? strerror(errno) : "no progress");
-            return -1;
-        }
-        done += (uint64_t)n;
+    if (offset > UINT64_MAX - sz || !stream_reserve(s, offset + sz)) {
+        if (error_cb)
+            error_cb(ctx, EXR_ERR_OUT_OF_MEMORY, "out of memory for %llu bytes",
+                     (unsigned long long)(offset + sz));
+        return -1;
     }
-    return (int64_t)done;
+    if (offset > s->size) memset(s->data + s->size, 0, (size_t)offset - s->size);
+    memcpy(s->data + offset, buf, (size_t)sz);
+    if (offset + sz > s->size) s->size = (size_t)(offset + sz);
+    return (int64_t)sz;
 }
 
 static exr_context_initializer_t stream_initializer(exr_stream *s)
@@ -90,18 +108,19 @@ static exr_context_initializer_t stream_initializer(exr_stream *s)
     return init;
 }
 
-/* Turns a library result into a status and a message naming the file. Reading a file we could
- * open, a short read means the file is cut short, so it counts as a format error. */
+/* Turns a library result into a status and a message naming the file (path NULL: encoding into
+ * memory, where a failed write can only mean out of memory). Reading a file we could open, a
+ * short read means the file is cut short, so it counts as a format error. */
 static iir_status exr_failure(iir_error *err, const char *what, const char *path,
                               const exr_stream *s, exr_result_t rc, int writing)
 {
     iir_status st = writing ? IIR_ERR_INTERNAL : IIR_ERR_FORMAT;
-    if (rc == EXR_ERR_OUT_OF_MEMORY) st = IIR_ERR_NOMEM;
-    if (rc == EXR_ERR_FILE_ACCESS || (writing && rc == EXR_ERR_WRITE_IO)) st = IIR_ERR_IO;
+    if (rc == EXR_ERR_OUT_OF_MEMORY || (writing && rc == EXR_ERR_WRITE_IO)) st = IIR_ERR_NOMEM;
+    if (rc == EXR_ERR_FILE_ACCESS) st = IIR_ERR_IO;
     if (rc == EXR_ERR_FEATURE_NOT_IMPLEMENTED) st = IIR_ERR_UNSUPPORTED;
     const char *why = s->msg[0] ? s->msg : exr_get_default_error_message(rc);
     const char *hint = !writing && rc == EXR_ERR_READ_IO ? " (is the file truncated?)" : "";
-    return iir_fail(err, st, "%s %s: %s%s", what, path, why, hint);
+    return iir_fail(err, st, "%s%s%s: %s%s", what, path ? " " : "", path ? path : "", why, hint);
 }
 
 /* ---- reading -------------------------------------------------------------------------------- */
@@ -333,26 +352,42 @@ static exr_result_t write_pixels(exr_context_t ctx, const iir_image *img)
     return rc;
 }
 
-iir_status iir_image_write_exr(const iir_image *img, const char *path, iir_error *err)
+/* The EXR's bytes; path (NULL: none) only names the file in messages. */
+static iir_status encode_exr(const iir_image *img, const char *path, uint8_t **data, size_t *size,
+                             iir_error *err)
 {
-    exr_stream s = {.fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)};
-    if (s.fd < 0)
-        return iir_fail(err, IIR_ERR_IO, "cannot create EXR %s: %s", path, strerror(errno));
+    *data = NULL;
+    *size = 0;
+    exr_stream s = {.fd = -1};
     exr_context_initializer_t init = stream_initializer(&s);
     exr_context_t ctx = NULL;
-    exr_result_t rc = exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init);
+    exr_result_t rc =
+        exr_start_write(&ctx, path ? path : "(memory)", EXR_WRITE_FILE_DIRECTLY, &init);
     if (rc == EXR_ERR_SUCCESS) rc = define_header(ctx, img);
     if (rc == EXR_ERR_SUCCESS) rc = write_pixels(ctx, img);
     exr_result_t finish_rc = exr_finish(&ctx); /* writes the chunk offset table */
     if (rc == EXR_ERR_SUCCESS) rc = finish_rc;
-    if (close(s.fd) != 0 && rc == EXR_ERR_SUCCESS) {
-        int e = errno;
-        unlink(path);
-        return iir_fail(err, IIR_ERR_IO, "cannot write EXR %s: %s", path, strerror(e));
-    }
     if (rc != EXR_ERR_SUCCESS) {
-        unlink(path);
-        return exr_failure(err, "cannot write EXR", path, &s, rc, 1);
+        free(s.data);
+        return exr_failure(err, path ? "cannot write EXR" : "cannot encode EXR", path, &s, rc, 1);
     }
+    uint8_t *fit = s.size ? realloc(s.data, s.size) : NULL; /* gives back the growth's slack */
+    *data = fit ? fit : s.data;
+    *size = s.size;
     return IIR_OK;
+}
+
+iir_status iir_image_encode_exr(const iir_image *img, uint8_t **data, size_t *size, iir_error *err)
+{
+    return encode_exr(img, NULL, data, size, err);
+}
+
+iir_status iir_image_write_exr(const iir_image *img, const char *path, iir_error *err)
+{
+    uint8_t *data = NULL;
+    size_t size = 0;
+    iir_status st = encode_exr(img, path, &data, &size, err);
+    if (st == IIR_OK) st = iir_image_save_bytes(path, "EXR", data, size, err);
+    free(data);
+    return st;
 }

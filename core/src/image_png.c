@@ -1,33 +1,74 @@
-/* image_png.c -- writes 8-bit sRGB PNG through libpng; not tone mapping, not reading PNG. */
+/* image_png.c -- 8-bit sRGB PNG through libpng's simplified API, into memory; a PNG file holds the
+ * same bytes. Not tone mapping (image.c), not reading PNG. */
 #include "iir/image.h"
+#include "image_internal.h"
 
 #include <png.h>
+#include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
+
+/* The error of encoding for path (NULL: into memory). */
+static iir_status png_failure(iir_error *err, iir_status st, const char *path, const char *why)
+{
+    if (path) return iir_fail(err, st, "cannot write PNG %s: %s", path, why);
+    return iir_fail(err, st, "cannot encode PNG: %s", why);
+}
+
+/* Compresses rgb (width*height*3 bytes) into a buffer of libpng's worst-case size, then gives the
+ * unused tail back. */
+static iir_status compress_rgb(const iir_image *img, const uint8_t *rgb, const char *path,
+                               uint8_t **data, size_t *size, iir_error *err)
+{
+    png_image png = {.version = PNG_IMAGE_VERSION,
+                     .width = (png_uint_32)img->width,
+                     .height = (png_uint_32)img->height,
+                     .format = PNG_FORMAT_RGB};
+    png_alloc_size_t n = PNG_IMAGE_PNG_SIZE_MAX(png);
+    uint8_t *buf = malloc(n);
+    if (!buf) return png_failure(err, IIR_ERR_NOMEM, path, "out of memory for the compressed data");
+    if (!png_image_write_to_memory(&png, buf, &n, 0, rgb, 0, NULL)) {
+        iir_status st = png_failure(err, IIR_ERR_INTERNAL, path, png.message);
+        png_image_free(&png);
+        free(buf);
+        return st;
+    }
+    uint8_t *fit = realloc(buf, n);
+    *data = fit ? fit : buf;
+    *size = n;
+    return IIR_OK;
+}
+
+/* The PNG's bytes; path (NULL: none) only names the file in messages. */
+static iir_status encode_png(const iir_image *img, float exposure, const char *path, uint8_t **data,
+                             size_t *size, iir_error *err)
+{
+    *data = NULL;
+    *size = 0;
+    uint8_t *rgb = malloc((size_t)img->width * (size_t)img->height * 3);
+    if (!rgb) {
+        char why[96];
+        snprintf(why, sizeof why, "out of memory for %dx%d pixels", img->width, img->height);
+        return png_failure(err, IIR_ERR_NOMEM, path, why);
+    }
+    iir_image_to_srgb8(img, exposure, rgb);
+    iir_status st = compress_rgb(img, rgb, path, data, size, err);
+    free(rgb);
+    return st;
+}
+
+iir_status iir_image_encode_png(const iir_image *img, float exposure, uint8_t **data, size_t *size,
+                                iir_error *err)
+{
+    return encode_png(img, exposure, NULL, data, size, err);
+}
 
 iir_status iir_image_write_png(const iir_image *img, const char *path, float exposure,
                                iir_error *err)
 {
-    size_t row_bytes = (size_t)img->width * 3;
-    uint8_t *rgb = malloc(row_bytes * (size_t)img->height);
-    if (!rgb)
-        return iir_fail(err, IIR_ERR_NOMEM, "cannot write PNG %s: out of memory for %dx%d pixels",
-                        path, img->width, img->height);
-    iir_image_to_srgb8(img, exposure, rgb);
-
-    png_image png;
-    memset(&png, 0, sizeof png);
-    png.version = PNG_IMAGE_VERSION;
-    png.width = (png_uint_32)img->width;
-    png.height = (png_uint_32)img->height;
-    png.format = PNG_FORMAT_RGB;
-    /* On failure libpng closes and removes the partly written file and fills png.message. */
-    int ok = png_image_write_to_file(&png, path, 0, rgb, (png_int_32)row_bytes, NULL);
-    free(rgb);
-    if (!ok) {
-        iir_status st = iir_fail(err, IIR_ERR_IO, "cannot write PNG %s: %s", path, png.message);
-        png_image_free(&png);
-        return st;
-    }
-    return IIR_OK;
+    uint8_t *data = NULL;
+    size_t size = 0;
+    iir_status st = encode_png(img, exposure, path, &data, &size, err);
+    if (st == IIR_OK) st = iir_image_save_bytes(path, "PNG", data, size, err);
+    free(data);
+    return st;
 }

@@ -543,6 +543,7 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
     if (status != IIR_OK) return status;
     iir_incr_stats st;
     memset(&st, 0, sizeof st);
+    iir_vpl_counts *c = &st.vpl;
     pose ps = {spot, spot->position, iir_spot_frame(spot), (double)iir_spot_radius(spot)};
     const iir_incr_params *p = &inc->params;
     uint32_t count_prev = inc->count, dropped = 0, limit = p->k_max;
@@ -554,8 +555,8 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
     lap(&st, IIR_INCR_REPROJECT, &t);
 
     /* 2. validate */
-    st.invalidated = phase_validate(inc, &ps, &st.rays);
-    st.valid = inc->count;
+    c->invalidated = phase_validate(inc, &ps, &st.rays);
+    c->valid = inc->count;
     lap(&st, IIR_INCR_VALIDATE, &t);
 
     /* fallback: regenerate when too many died at once, when VPLs are still dying and deaths spread
@@ -563,43 +564,43 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
      * the target (a raised target alone fills gradually), when nothing is left, or when the ids
      * run out */
     double thr = (double)p->regen_threshold;
-    bool dwindled = st.invalidated > 0 && (double)inc->count < (1.0 - thr) * (double)p->target;
+    bool dwindled = c->invalidated > 0 && (double)inc->count < (1.0 - thr) * (double)p->target;
     bool regen = inc->count == 0 || ids_exhausted(inc) || dwindled ||
-                 (double)st.invalidated > thr * count_prev;
+                 (double)c->invalidated > thr * count_prev;
     if (regen) {
         st.initial = inc->frame == 0;
-        st.regenerated = !st.initial;
-        st.deleted = inc->count;
-        st.inserted = regenerate(inc, &ps, &st.rays);
+        c->regenerated = !st.initial;
+        c->deleted = inc->count;
+        c->inserted = regenerate(inc, &ps, &st.rays);
         limit = p->target;
         lap(&st, IIR_INCR_INSERT, &t);
     }
 
     /* 3. triangulate */
     status = phase_triangulate(inc, &ps, !regen, &dropped, err);
-    st.invalidated += regen ? 0 : dropped;
-    st.valid -= regen ? 0 : dropped;
-    st.inserted -= regen ? dropped : 0;
+    c->invalidated += regen ? 0 : dropped;
+    c->valid -= regen ? 0 : dropped;
+    c->inserted -= regen ? dropped : 0;
     lap(&st, IIR_INCR_TRIANGULATE, &t);
 
     /* 4. delete */
-    if (status == IIR_OK && !regen) status = phase_delete(inc, st.invalidated, &st.deleted, err);
+    if (status == IIR_OK && !regen) status = phase_delete(inc, c->invalidated, &c->deleted, err);
     lap(&st, IIR_INCR_DELETE, &t);
 
     /* 5. insert */
     uint32_t added = 0;
     if (status == IIR_OK) status = phase_insert(inc, &ps, limit, &added, &st.rays, err);
-    st.inserted += added;
+    c->inserted += added;
     lap(&st, IIR_INCR_INSERT, &t);
 
     /* 6. weigh */
     if (status == IIR_OK) status = phase_weigh(inc, &ps, err);
     lap(&st, IIR_INCR_WEIGH, &t);
 
-    st.count = inc->count;
-    st.null_samples = count_null_samples(inc);
+    c->count = inc->count;
+    c->null_samples = count_null_samples(inc);
     st.total_ms = iir_now_ms() - t0;
-    assert(count_prev - st.invalidated - st.deleted + st.inserted == st.count);
+    assert(count_prev - c->invalidated - c->deleted + c->inserted == c->count);
     inc->frame++;
     if (out) *out = st;
     return status;

@@ -1,5 +1,7 @@
-/* method.c -- the registry of methods and the dispatch of the method interface; parameters and
- * their ranges. Not any method's algorithm. */
+/* method.c -- the registry of methods and the dispatch of the method interface; the options every
+ * method has; finding, checking and binding the methods' parameters (params.h); giving a live
+ * method new parameters. Not any method's algorithm or parameters. */
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -13,81 +15,56 @@ enum { NUM_METHODS = sizeof registry / sizeof registry[0] };
 struct iir_method {
     const iir_method_ops *ops;
     void *state;
+    void *opts; /* the method's options struct, bound from params */
+    iir_params params;
+    const iir_scene *scene;
+    const iir_rt *rt;
+    iir_stop_fn stop_fn; /* kept for a state created anew by iir_method_set_params */
+    void *stop_ctx;
 };
 
-iir_params iir_params_default(void)
-{
-    iir_indirect_params ind = iir_indirect_params_default();
-    iir_incr_params inc = iir_incr_params_default();
-    iir_params p = {
-        .spp = 16,
-        .bounces = 2,
-        .seed = 1,
-        .jitter = true,
-        /* 4 sweeps of the default 4x4 interleave: every pixel sees 4 independent VPL sets (the
-           VPL noise halves against one set) through 64 jittered points (edges within ~1/64 of
-           their contrast); ~5 s at 512x384 on two cores, after which more passes barely show */
-        .refine_passes = 64,
-        .vpls = (int)inc.target,
-        .kmin = (int)inc.k_min,
-        .kmax = (int)inc.k_max,
-        .weights = inc.weights,
-        .regen_threshold = inc.regen_threshold,
-        .visibility = ind.visibility,
-        .sm_res = 128,
-        .sm_bias = ind.sm_bias,
-        .interleave = ind.interleave,
-        .clamp = ind.clamp,
-        .ir_fresh = true,
-    };
-    return p;
-}
+/* ======================== the options every method has ======================== */
 
-static iir_status check_int(int v, int lo, int hi, const char *name, iir_error *err)
-{
-    if (v < lo || v > hi)
-        return iir_fail(err, IIR_ERR_INVALID, "%s %d is outside [%d, %d]", name, v, lo, hi);
-    return IIR_OK;
-}
-
-static iir_status check_float(float v, float lo, float hi, const char *name, iir_error *err)
-{
-    if (!(v >= lo && v <= hi))
-        return iir_fail(err, IIR_ERR_INVALID, "%s %g is outside [%g, %g]", name, (double)v,
-                        (double)lo, (double)hi);
-    return IIR_OK;
-}
-
-iir_status iir_params_validate(const iir_params *p, iir_error *err)
-{
-    iir_status st = check_int(p->spp, 1, 1 << 20, "spp", err);
-    if (st == IIR_OK) st = check_int(p->bounces, 1, 1000, "bounces", err);
-    if (st == IIR_OK)
-        st = check_int(p->refine_passes, 1, IIR_REFINE_MAX_PASSES, "refine_passes", err);
-    if (st == IIR_OK) st = check_int(p->vpls, 1, 16384, "vpls", err);
-    if (st == IIR_OK) st = check_int(p->kmax, 0, p->vpls, "kmax", err);
-    if (st == IIR_OK) st = check_int(p->kmin, 0, p->kmax, "kmin", err);
-    if (st == IIR_OK) st = check_int(p->sm_res, 8, 2048, "sm_res", err);
-    if (st == IIR_OK) st = check_int(p->interleave, 1, 8, "interleave", err);
-    if (st == IIR_OK) st = check_float(p->regen_threshold, 1e-6f, 1.f, "regen_threshold", err);
-    if (st == IIR_OK) st = check_float(p->clamp, 0.f, 1e12f, "clamp", err);
-    if (st == IIR_OK) st = check_float(p->sm_bias, 0.f, 1.f, "sm_bias", err);
-    if (st == IIR_OK && p->weights != IIR_WEIGHTS_UNIFORM && p->weights != IIR_WEIGHTS_VORONOI)
-        st = iir_fail(err, IIR_ERR_INVALID, "weights must be uniform or voronoi");
-    if (st == IIR_OK && p->visibility != IIR_VIS_SHADOWMAP && p->visibility != IIR_VIS_RAYS)
-        st = iir_fail(err, IIR_ERR_INVALID, "visibility must be shadowmap or rays");
-    return st;
-}
-
-iir_indirect_params iir_params_indirect(const iir_params *p)
-{
-    iir_indirect_params ind = iir_indirect_params_default();
-    ind.visibility = p->visibility;
-    ind.interleave = p->interleave;
-    ind.clamp = p->clamp;
-    ind.sm_bias = p->sm_bias;
-    return ind;
-}
+static const iir_param COMMON_ROWS[] = {
+    {"seed",
+     IIR_PARAM_U64,
+     offsetof(iir_method_common, seed),
+     1,
+     0,
+     9007199254740992.0,
+     {0, 0},
+     NULL,
+     "",
+     "random seed: the same seed gives the same images",
+     IIR_PARAM_RESTART},
+    /* 4 sweeps of the default 4x4 interleave: every pixel sees 4 independent VPL sets (the VPL
+       noise halves against one set) through 64 jittered points (edges within ~1/64 of their
+       contrast); ~5 s at 512x384 on two cores, after which more passes barely show */
+    {"refine_passes",
+     IIR_PARAM_INT,
+     offsetof(iir_method_common, refine_passes),
+     64,
+     1,
+     IIR_REFINE_MAX_PASSES,
+     {0, 0},
+     NULL,
+     "passes",
+     "refinement has converged after this many passes (pt: of spp samples each)",
+     IIR_PARAM_LIVE},
+    {"jitter",
+     IIR_PARAM_BOOL,
+     offsetof(iir_method_common, jitter),
+     1,
+     0,
+     1,
+     {0, 0},
+     NULL,
+     "",
+     "pt and refinement: box-filter each pixel (true) or trace its centre (false)",
+     IIR_PARAM_LIVE},
+};
+const iir_param_table iir_common_table = {"every method", COMMON_ROWS,
+                                          sizeof COMMON_ROWS / sizeof COMMON_ROWS[0], NULL};
 
 void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *stats)
 {
@@ -97,14 +74,14 @@ void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *sta
     stats->phase_ms[IIR_PHASE_FILTER] = t->filter_ms;
 }
 
-iir_refine_params iir_params_refine(const iir_params *p)
+iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl_options *v)
 {
     iir_refine_params r = {
-        .interleave = p->interleave,
-        .max_passes = p->refine_passes,
-        .jitter = p->jitter,
-        .clamp = p->clamp,
-        .seed = iir_hash3(p->seed, 0x4ef1, 0),
+        .interleave = v->interleave,
+        .max_passes = c->refine_passes,
+        .jitter = c->jitter,
+        .clamp = v->clamp,
+        .seed = iir_hash3(c->seed, 0x4ef1, 0),
     };
     return r;
 }
@@ -117,6 +94,7 @@ void iir_refine_to_stats(const iir_refine_stats *rs, iir_frame_stats *stats)
     stats->rays = rs->rays;
     stats->samples_per_pixel = rs->passes;
     stats->converged = rs->converged;
+    stats->whole_sweeps = rs->whole_sweeps;
     stats->vpl.count = rs->num_vpls;
 }
 
@@ -150,6 +128,12 @@ static const iir_method_ops *find_ops(const char *name)
     return NULL;
 }
 
+const char *iir_method_summary(const char *name)
+{
+    const iir_method_ops *ops = find_ops(name);
+    return ops ? ops->summary : "";
+}
+
 static iir_status unknown_method(const char *name, iir_error *err)
 {
     char list[256] = "";
@@ -160,19 +144,150 @@ static iir_status unknown_method(const char *name, iir_error *err)
     return iir_fail(err, IIR_ERR_INVALID, "unknown method '%s' (known: %s)", name, list);
 }
 
+/* ======================== parameters ======================== */
+
+const iir_param_table *const *iir_method_tables(const char *name)
+{
+    static const iir_param_table *lists[NUM_METHODS][IIR_METHOD_MAX_TABLES + 1];
+    for (int m = 0; m < NUM_METHODS; m++) {
+        if (strcmp(registry[m]->name, name) != 0) continue;
+        for (int t = 0; t < IIR_METHOD_MAX_TABLES; t++) lists[m][t] = registry[m]->tables[t].table;
+        return lists[m];
+    }
+    return NULL;
+}
+
+const iir_param_table *const *iir_method_all_tables(void)
+{
+    static const iir_param_table *all[NUM_METHODS * IIR_METHOD_MAX_TABLES + 1];
+    int n = 0;
+    for (int m = 0; m < NUM_METHODS; m++)
+        for (int t = 0; t < IIR_METHOD_MAX_TABLES && registry[m]->tables[t].table; t++) {
+            const iir_param_table *tab = registry[m]->tables[t].table;
+            bool seen = false;
+            for (int k = 0; k < n; k++) seen = seen || all[k] == tab;
+            if (!seen) all[n++] = tab;
+        }
+    all[n] = NULL;
+    return all;
+}
+
+static const iir_param *ops_find_param(const iir_method_ops *ops, const char *name)
+{
+    for (int t = 0; t < IIR_METHOD_MAX_TABLES && ops->tables[t].table; t++) {
+        const iir_param *row = iir_param_table_find(ops->tables[t].table, name);
+        if (row) return row;
+    }
+    return NULL;
+}
+
+const iir_param *iir_method_find_param(const char *method, const char *name)
+{
+    const iir_method_ops *ops = find_ops(method);
+    return ops ? ops_find_param(ops, name) : NULL;
+}
+
+const iir_param *iir_method_any_param(const char *name)
+{
+    for (int m = 0; m < NUM_METHODS; m++) {
+        const iir_param *row = ops_find_param(registry[m], name);
+        if (row) return row;
+    }
+    return NULL;
+}
+
+static iir_status unknown_param(const char *name, iir_error *err)
+{
+    return iir_fail(err, IIR_ERR_INVALID, "%s is not a parameter of any method", name);
+}
+
+iir_status iir_method_param_set(iir_params *p, const char *name, double value, iir_error *err)
+{
+    const iir_param *row = iir_method_any_param(name);
+    if (!row) return unknown_param(name, err);
+    iir_params one = iir_params_default();
+    one.count = 1;
+    one.v[0].name = row->name;
+    one.v[0].value = value;
+    iir_status st = iir_method_params_check(&one, false, NULL, err);
+    return st == IIR_OK ? iir_params_set(p, row, value, err) : st;
+}
+
+iir_status iir_method_params_check(const iir_params *p, bool live, const iir_param **bad,
+                                   iir_error *err)
+{
+    for (uint32_t k = 0; k < p->count; k++) {
+        const char *name = p->v[k].name;
+        if (!iir_method_any_param(name)) return unknown_param(name, err);
+        for (int m = 0; m < NUM_METHODS; m++) {
+            const iir_param *row = ops_find_param(registry[m], name);
+            iir_status st = row ? iir_param_check(row, p->v[k].value, live, err) : IIR_OK;
+            if (st != IIR_OK) return bad ? (*bad = row, st) : st;
+        }
+    }
+    return IIR_OK;
+}
+
+double iir_method_param_value(const iir_param *row, const iir_params *p)
+{
+    double v = row->def;
+    iir_params_get(p, row->name, &v);
+    return v;
+}
+
+/* Binds p into a new options struct of ops (malloc'ed); NULL with err on bad values. */
+static void *bind_opts(const iir_method_ops *ops, const iir_params *p, const iir_params *given,
+                       const iir_param **bad, iir_error *err)
+{
+    void *opts = calloc(1, ops->opts_size);
+    if (!opts) return iir_fail(err, IIR_ERR_NOMEM, "out of memory"), NULL;
+    iir_status st = IIR_OK;
+    for (int t = 0; st == IIR_OK && t < IIR_METHOD_MAX_TABLES && ops->tables[t].table; t++)
+        st = iir_params_bind(ops->tables[t].table, p, given, (char *)opts + ops->tables[t].offset,
+                             bad, err);
+    if (st != IIR_OK) free(opts), opts = NULL;
+    return opts;
+}
+
+iir_status iir_method_params_validate(const char *name, const iir_params *p,
+                                      const iir_params *given, const iir_param **bad,
+                                      iir_error *err)
+{
+    const iir_method_ops *ops = find_ops(name);
+    if (!ops) return unknown_method(name, err);
+    void *opts = bind_opts(ops, p, given, bad, err);
+    free(opts);
+    return opts ? IIR_OK : err->status;
+}
+
+uint64_t iir_method_memory(const char *name, const iir_params *p, int width, int height)
+{
+    const iir_method_ops *ops = find_ops(name);
+    iir_error err;
+    void *opts = ops ? bind_opts(ops, p, NULL, NULL, &err) : NULL;
+    uint64_t bytes = opts && ops->memory ? ops->memory(opts, width, height) : 0;
+    free(opts);
+    return bytes;
+}
+
+/* ======================== the interface ======================== */
+
 iir_status iir_method_create(const char *name, const iir_scene *scene, const iir_rt *rt,
                              const iir_params *params, iir_method **out, iir_error *err)
 {
     *out = NULL;
     const iir_method_ops *ops = find_ops(name);
     if (!ops) return unknown_method(name, err);
-    iir_status st = iir_params_validate(params, err);
-    if (st != IIR_OK) return st;
     iir_method *m = calloc(1, sizeof *m);
     if (!m) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating method '%s'", name);
     m->ops = ops;
-    st = ops->create(scene, rt, params, &m->state, err);
+    m->params = *params;
+    m->scene = scene;
+    m->rt = rt;
+    m->opts = bind_opts(ops, params, NULL, NULL, err);
+    iir_status st = m->opts ? ops->create(scene, rt, m->opts, &m->state, err) : err->status;
     if (st != IIR_OK) {
+        free(m->opts);
         free(m);
         return st;
     }
@@ -180,10 +295,57 @@ iir_status iir_method_create(const char *name, const iir_scene *scene, const iir
     return IIR_OK;
 }
 
+const iir_params *iir_method_params(const iir_method *m)
+{
+    return &m->params;
+}
+
+/* Whether opts a and b of m differ only in IIR_PARAM_LIVE rows. */
+static bool only_live_changes(const iir_method_ops *ops, const void *a, const void *b)
+{
+    for (int t = 0; t < IIR_METHOD_MAX_TABLES && ops->tables[t].table; t++) {
+        const iir_param_table *tab = ops->tables[t].table;
+        size_t off = ops->tables[t].offset;
+        for (int i = 0; i < tab->count; i++) {
+            const iir_param *row = &tab->rows[i];
+            if (row->effect != IIR_PARAM_LIVE && iir_param_read(row, (const char *)a + off) !=
+                                                     iir_param_read(row, (const char *)b + off))
+                return false;
+        }
+    }
+    return true;
+}
+
+iir_status iir_method_set_params(iir_method *m, const iir_params *p, bool *restarted,
+                                 iir_error *err)
+{
+    bool dummy;
+    if (!restarted) restarted = &dummy;
+    *restarted = false;
+    void *opts = bind_opts(m->ops, p, NULL, NULL, err);
+    if (!opts) return err->status;
+    if (m->ops->update && only_live_changes(m->ops, m->opts, opts)) {
+        m->ops->update(m->state, opts);
+    } else {
+        void *state = NULL;
+        iir_status st = m->ops->create(m->scene, m->rt, opts, &state, err);
+        if (st != IIR_OK) return free(opts), st;
+        m->ops->destroy(m->state);
+        m->state = state;
+        if (m->ops->set_stop) m->ops->set_stop(m->state, m->stop_fn, m->stop_ctx);
+        *restarted = true;
+    }
+    free(m->opts);
+    m->opts = opts;
+    m->params = *p;
+    return IIR_OK;
+}
+
 void iir_method_destroy(iir_method *m)
 {
     if (!m) return;
     m->ops->destroy(m->state);
+    free(m->opts);
     free(m);
 }
 
@@ -196,6 +358,7 @@ iir_status iir_method_render(iir_method *m, const iir_view *view, iir_image *out
                              iir_frame_stats *stats, iir_error *err)
 {
     memset(stats, 0, sizeof *stats);
+    stats->whole_sweeps = true;
     return m->ops->render(m->state, view, out, stats, err);
 }
 
@@ -207,7 +370,10 @@ const iir_vpl *iir_method_vpls(const iir_method *m, uint32_t *n)
 
 void iir_method_set_stop(iir_method *m, iir_stop_fn fn, void *ctx)
 {
-    if (m && m->ops->set_stop) m->ops->set_stop(m->state, fn, ctx);
+    if (!m) return;
+    m->stop_fn = fn;
+    m->stop_ctx = ctx;
+    if (m->ops->set_stop) m->ops->set_stop(m->state, fn, ctx);
 }
 
 bool iir_method_can_refine(const iir_method *m)
@@ -221,6 +387,7 @@ iir_status iir_method_refine(iir_method *m, iir_image *out, iir_frame_stats *sta
         return iir_fail(err, IIR_ERR_UNSUPPORTED, "method '%s' cannot refine a frame",
                         m->ops->name);
     memset(stats, 0, sizeof *stats);
+    stats->whole_sweeps = true; /* the VPL methods' refine_to_stats says otherwise */
     return m->ops->refine(m->state, out, stats, err);
 }
 

@@ -1,14 +1,47 @@
-/* method_internal.h -- the table of operations a method file provides to method.c. Internal. */
+/* method_internal.h -- what a method file provides to method.c (its operations and parameter
+ * tables) and the option structs and tables that several methods share. Internal. */
 #ifndef IIR_METHOD_INTERNAL_H
 #define IIR_METHOD_INTERNAL_H
+
+#include <stddef.h>
 
 #include "iir/method.h"
 #include "iir/refine.h"
 
+/* ---- options every method has (table iir_common_table, method.c) ---- */
+typedef struct iir_method_common {
+    uint64_t seed;     /* all randomness derives from it */
+    int refine_passes; /* progressive refinement is converged after this many passes */
+    bool jitter;       /* pt and refinement: box-filter each pixel (true) or shoot through its
+                          centre, as interactive frames do (false) */
+} iir_method_common;
+extern const iir_param_table iir_common_table;
+
+/* ---- the VPL shading of ir and iir (table iir_vpl_table, render.c) ---- */
+typedef struct iir_vpl_options {
+    iir_visibility visibility;
+    int sm_res; /* shadow-map resolution */
+    float sm_bias;
+    int interleave;
+    float clamp;
+} iir_vpl_options;
+extern const iir_param_table iir_vpl_table;
+
+/* One of a method's tables and where its options struct sits in the method's own. */
+typedef struct iir_method_table {
+    const iir_param_table *table;
+    size_t offset;
+} iir_method_table;
+
+enum { IIR_METHOD_MAX_TABLES = 4 };
+
 typedef struct iir_method_ops {
     const char *name;
     const char *summary;
-    iir_status (*create)(const struct iir_scene *scene, const iir_rt *rt, const iir_params *params,
+    iir_method_table tables[IIR_METHOD_MAX_TABLES]; /* up to the first NULL table */
+    size_t opts_size;                               /* the method's options struct */
+    /* opts: the method's options struct, bound from its tables; copy what you keep. */
+    iir_status (*create)(const struct iir_scene *scene, const iir_rt *rt, const void *opts,
                          void **state, iir_error *err);
     void (*destroy)(void *state);
     iir_status (*render)(void *state, const iir_view *view, iir_image *out, iir_frame_stats *stats,
@@ -21,6 +54,11 @@ typedef struct iir_method_ops {
     bool (*domain)(void *state, iir_domain *out);
     /* NULL when the method's refinement cannot stop early. */
     void (*set_stop)(void *state, iir_stop_fn fn, void *ctx);
+    /* Takes new options that differ only in IIR_PARAM_LIVE parameters; the next frame uses
+     * them. NULL: every change re-creates the method. */
+    void (*update)(void *state, const void *opts);
+    /* Bytes the method holds with opts for a width x height frame, beyond the output image. */
+    uint64_t (*memory)(const void *opts, int width, int height);
 } iir_method_ops;
 
 extern const iir_method_ops iir_method_pt;
@@ -30,16 +68,20 @@ extern const iir_method_ops iir_method_iir;
 /* Shared by the VPL methods: validates the view (camera and lights), IIR_ERR_INVALID otherwise. */
 iir_status iir_view_validate(const iir_view *view, iir_error *err);
 
-/* The render.h settings a method's parameters ask for. */
-iir_indirect_params iir_params_indirect(const iir_params *p);
+/* The render.h settings the VPL options ask for. */
+iir_indirect_params iir_vpl_indirect(const iir_vpl_options *o);
 
 /* Copies the renderer's phase times into the frame stats. */
 void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *stats);
 
-/* The refine.h settings a method's parameters ask for. */
-iir_refine_params iir_params_refine(const iir_params *p);
+/* The refine.h settings the options ask for. */
+iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl_options *v);
 
 /* A refinement pass's stats as frame stats (samples_per_pixel = passes, converged, phases). */
 void iir_refine_to_stats(const iir_refine_stats *rs, iir_frame_stats *stats);
+
+/* Bytes of the VPL renderer (G-buffer, scratch, refinement buffers) for a frame, and of n VPLs
+ * with their shadow maps under these options: the VPL methods' memory estimates share them. */
+uint64_t iir_vpl_memory(const iir_vpl_options *o, uint32_t n, int width, int height);
 
 #endif

@@ -199,6 +199,7 @@ iir_status iir_refine_pass(iir_refine *rf, iir_renderer *r, iir_refine_vpls_fn v
     st.converged = rf->active && rf->passes >= (uint32_t)p->max_passes;
     st.worked = work && s == IIR_OK;
     st.sweep = i / (n2 ? n2 : 1);
+    st.whole_sweeps = n2 <= 1 || rf->passes % n2 == 0;
     st.num_vpls = rf->set_sweep == UINT32_MAX ? 0 : rf->num_vpls;
     st.total_ms = iir_now_ms() - t0;
     if (stats) *stats = st;

@@ -4,19 +4,23 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "method_internal.h"
 #include "render_internal.h"
 #include "iir/timer.h"
 
 /* ---- parameters ---- */
 
+/* The VPL shading table's defaults (methods/vpl_options.c), and the filter's own. */
 iir_indirect_params iir_indirect_params_default(void)
 {
+    iir_vpl_options o;
+    iir_params_defaults(&iir_vpl_table, &o);
     iir_indirect_params p = {
-        .visibility = IIR_VIS_SHADOWMAP,
-        .interleave = 4,
+        .visibility = o.visibility,
+        .interleave = o.interleave,
         .filter = true,
-        .clamp = 100.f,
-        .sm_bias = 0.005f,
+        .clamp = o.clamp,
+        .sm_bias = o.sm_bias,
         .filter_normal = 0.9f,
         .filter_depth = 0.05f,
     };
@@ -143,19 +147,29 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
     return IIR_OK;
 }
 
-/* The shading phases on the current G-buffer, timed: direct light, indirect light from the VPL
- * subsets (shifted by `shift`), then the filter into out. With `stoppable` the indirect phase
- * polls r->stop; returns true when it stopped early (out is then incomplete). */
-static bool shade(iir_renderer *r, const iir_light *lights, uint32_t num_lights,
-                  const iir_indirect_params *p, uint32_t shift, bool stoppable, uint64_t seed,
-                  iir_image *out, iir_render_timing *tm, iir_raystats *rays)
+/* What the shading phases of a frame or a pass work on, besides the renderer's G-buffer and VPL
+ * subsets. */
+typedef struct shade_job {
+    const iir_light *lights;
+    uint32_t num_lights;
+    const iir_indirect_params *p;
+    uint32_t shift; /* added to every pixel's VPL subset (mod n^2) */
+    bool stoppable; /* the indirect phase polls r->stop */
+    uint64_t seed;  /* of the direct light's samples */
+    iir_image *out;
+} shade_job;
+
+/* The shading phases on the current G-buffer, timed into tm, rays added to rays: direct light,
+ * indirect light from the VPL subsets, then the filter into job->out. Returns true when a
+ * stoppable job stopped early (out is then incomplete). */
+static bool shade(iir_renderer *r, const shade_job *job, iir_render_timing *tm, iir_raystats *rays)
 {
     double t0 = iir_now_ms();
-    iir_render_direct(r, lights, num_lights, seed, out, rays);
+    iir_render_direct(r, job->lights, job->num_lights, job->seed, job->out, rays);
     double t1 = iir_now_ms();
-    bool stopped = iir_render_indirect(r, p, shift, stoppable, rays);
+    bool stopped = iir_render_indirect(r, job->p, job->shift, job->stoppable, rays);
     double t2 = iir_now_ms();
-    if (!stopped) iir_render_filter(r, p, out);
+    if (!stopped) iir_render_filter(r, job->p, job->out);
     tm->direct_ms = t1 - t0;
     tm->indirect_ms = t2 - t1;
     tm->filter_ms = iir_now_ms() - t2;
@@ -172,7 +186,8 @@ iir_status iir_renderer_frame(iir_renderer *r, const iir_camera *cam, const iir_
     iir_status s = check_inputs(cam, lights, num_lights, p, out, err);
     if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, p, false, err);
     if (s == IIR_OK) s = gbuffer_phase(r, cam, out->width, out->height, &tm, &rays, err);
-    if (s == IIR_OK) shade(r, lights, num_lights, p, 0, false, seed, out, &tm, &rays);
+    shade_job job = {.lights = lights, .num_lights = num_lights, .p = p, .seed = seed, .out = out};
+    if (s == IIR_OK) shade(r, &job, &tm, &rays);
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);
     return s;
@@ -237,9 +252,15 @@ iir_status iir_renderer_pass(iir_renderer *r, const iir_camera *cam, const iir_l
     if (s == IIR_OK) s = check_inputs(cam, lights, num_lights, &ind, out, err);
     if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, &ind, true, err);
     if (s == IIR_OK) s = pass_gbuffer(r, cam, p->jitter, out->width, out->height, &tm, &rays, err);
+    shade_job job = {.lights = lights,
+                     .num_lights = num_lights,
+                     .p = &ind,
+                     .shift = p->shift,
+                     .stoppable = true,
+                     .seed = seed,
+                     .out = out};
     bool stopped = s == IIR_OK && stop_requested(r);
-    if (s == IIR_OK && !stopped)
-        stopped = shade(r, lights, num_lights, &ind, p->shift, true, seed, out, &tm, &rays);
+    if (s == IIR_OK && !stopped) stopped = shade(r, &job, &tm, &rays);
     if (stopped) s = iir_fail(err, IIR_ERR_INTERRUPTED, "refinement pass stopped early");
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);

@@ -138,18 +138,26 @@ static inline void batch_add(pixel_batch *b, int j, iir_vec3 L)
     b->Ex[j] += L.x, b->Ey[j] += L.y, b->Ez[j] += L.z;
 }
 
-/* G and the cosines (times d) for VPL v at x (normal n); false when G = 0. */
-static inline bool geometry(const iir_shade_vpl *v, iir_vec3 x, iir_vec3 n, float g_max,
-                            iir_vec3 *w, float *d2, float *ci, float *cx, float *G)
+/* The geometry between a VPL and a pixel: w = x - p, its squared length, the cosines times d at
+ * the VPL (ci) and at the pixel (cx), and the clamped geometry term. */
+typedef struct vpl_geometry {
+    bool lit; /* both sides face each other at a distance; otherwise G is 0 */
+    iir_vec3 w;
+    float d2, ci, cx, G;
+} vpl_geometry;
+
+/* The geometry for VPL v at x (normal n), G clamped to g_max. */
+static inline vpl_geometry geometry(const iir_shade_vpl *v, iir_vec3 x, iir_vec3 n, float g_max)
 {
-    *w = iir_sub(x, v->p);
-    *d2 = iir_length_sq(*w);
-    *ci = iir_dot(v->n, *w);
-    *cx = -iir_dot(n, *w);
-    if (!(*ci > 0.f && *cx > 0.f && *d2 > 0.f)) return false;
-    float inv_d2 = 1.f / *d2;
-    *G = min_f(*ci * *cx * inv_d2 * inv_d2, g_max);
-    return true;
+    vpl_geometry g = {.w = iir_sub(x, v->p)};
+    g.d2 = iir_length_sq(g.w);
+    g.ci = iir_dot(v->n, g.w);
+    g.cx = -iir_dot(n, g.w);
+    g.lit = g.ci > 0.f && g.cx > 0.f && g.d2 > 0.f;
+    if (!g.lit) return g;
+    float inv_d2 = 1.f / g.d2;
+    g.G = min_f(g.ci * g.cx * inv_d2 * inv_d2, g_max);
+    return g;
 }
 
 /* Lane k of a packet: the occlusion ray from x lifted along n to the VPL's lifted position. False
@@ -182,13 +190,12 @@ static void apply_vpl_rays(const indirect_ctx *c, const iir_shade_vpl *v, pixel_
         bool any = false, occluded[8];
         for (int k = 0; k < 8; k++) {
             int j = j0 + k;
-            iir_vec3 w;
-            float d2, ci, cx;
             G[k] = 0.f;
             rays.valid[k] = 0;
-            if (j >= b->m ||
-                !geometry(v, batch_x(b, j), batch_n(b, j), c->g_max, &w, &d2, &ci, &cx, &G[k]))
-                continue;
+            if (j >= b->m) continue;
+            vpl_geometry g = geometry(v, batch_x(b, j), batch_n(b, j), c->g_max);
+            if (!g.lit) continue;
+            G[k] = g.G;
             any |= visibility_ray(c, v, batch_x(b, j), batch_n(b, j), &rays, k);
         }
         if (any) iir_rt_occluded8(c->r->rt, &rays, occluded, st, IIR_RAYS_VISIBILITY);
@@ -296,12 +303,11 @@ static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_
 {
     iir_smap_probe probe = iir_smap_probe_make(v->smap, c->rel_bias, c->r->eps);
     for (int j = 0; j < b->m; j++) {
-        iir_vec3 w;
-        float d2, ci, cx, G;
-        if (!geometry(v, batch_x(b, j), batch_n(b, j), c->g_max, &w, &d2, &ci, &cx, &G)) continue;
-        float V = iir_smap_probe_visibility(&probe, iir_dot(w, v->r), iir_dot(w, v->u), ci,
-                                            sqrtf(d2), cx);
-        batch_add(b, j, iir_scale(v->power, G * V));
+        vpl_geometry g = geometry(v, batch_x(b, j), batch_n(b, j), c->g_max);
+        if (!g.lit) continue;
+        float V = iir_smap_probe_visibility(&probe, iir_dot(g.w, v->r), iir_dot(g.w, v->u), g.ci,
+                                            sqrtf(g.d2), g.cx);
+        batch_add(b, j, iir_scale(v->power, g.G * V));
     }
 }
 

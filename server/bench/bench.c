@@ -14,31 +14,12 @@
 #include "iir/vpl.h"
 #include "orbit.h"
 
-/* ---- which method reads which parameter (docs/cli.md, "used by") ---- */
-
-static const struct {
-    const char *method, *params; /* option names, space-separated with spaces around */
-} USES[] = {
-    {"pt", " spp bounces seed "},
-    {"ir", " bounces seed vpls visibility sm-res sm-bias interleave clamp "},
-    {"iir", " seed vpls kmin kmax weights regen-threshold visibility sm-res sm-bias interleave "
-            "clamp "},
-};
-
-/* True when `method` reads option `param`; a method this table does not know reads them all. */
-static bool method_uses(const char *method, const char *param)
-{
-    char key[32];
-    snprintf(key, sizeof key, " %s ", param);
-    for (size_t i = 0; i < sizeof USES / sizeof USES[0]; i++)
-        if (!strcmp(USES[i].method, method)) return strstr(USES[i].params, key) != NULL;
-    return true;
-}
-
-/* The bounce count of a method's references: iir is one bounce (2) by construction. */
+/* The bounce count of a method's references: its bounces parameter, or one bounce (2) for a
+ * method without one (iir is one bounce by construction). */
 static int ref_bounces(const iird_bench_run *r)
 {
-    return strcmp(r->method, "iir") == 0 ? 2 : r->params.bounces;
+    const iir_param *row = iir_method_find_param(r->method, "bounces");
+    return row ? (int)iir_method_param_value(row, &r->params) : 2;
 }
 
 static iir_status refset_for(iird_bench *b, int bounces, int *out, iir_error *err)
@@ -66,15 +47,14 @@ static iir_status apply_setting(iird_bench_run *r, const iird_bench_opts *o, con
     snprintf(r->setting, sizeof r->setting, "default");
     for (int i = 0; i < nu; i++) {
         const iird_bench_sweep *s = &o->sweeps[used[i]];
-        iir_status st = IIR_OK;
-        iird_method_option(s->code, s->values[idx[i]], &r->params, &st, err);
+        iir_status st = iird_parse_param(s->name, s->values[idx[i]], &r->params, err);
         if (st != IIR_OK) return st; /* values were checked when parsed */
         len += (size_t)snprintf(r->setting + len, sizeof r->setting - len, "%s%s=%s", i ? ";" : "",
                                 s->name, s->values[idx[i]]);
         if (len >= sizeof r->setting) len = sizeof r->setting - 1;
     }
     iir_error perr = {0};
-    if (iir_params_validate(&r->params, &perr) != IIR_OK)
+    if (iir_method_params_validate(r->method, &r->params, NULL, NULL, &perr) != IIR_OK)
         return iir_fail(err, IIR_ERR_INVALID, "--sweep: %s with %s: %s", r->method, r->setting,
                         perr.msg);
     return IIR_OK;
@@ -86,7 +66,7 @@ static iir_status add_runs(iird_bench *b, const char *method, iir_error *err)
     const iird_bench_opts *o = b->o;
     int used[IIRD_BENCH_MAX_SWEEPS], nu = 0, total = 1;
     for (int s = 0; s < o->num_sweeps; s++)
-        if (method_uses(method, o->sweeps[s].name))
+        if (iir_method_find_param(method, o->sweeps[s].row->name))
             used[nu++] = s, total *= o->sweeps[s].num_values;
     for (int k = 0; k < total; k++) {
         if (b->num_runs == IIRD_BENCH_MAX_RUNS)
@@ -100,8 +80,9 @@ static iir_status add_runs(iird_bench *b, const char *method, iir_error *err)
         }
         snprintf(r->method, sizeof r->method, "%s", method);
         r->params = o->params;
-        r->params.jitter = o->ref_aa; /* pt runs shade like their references */
-        iir_status st = apply_setting(r, o, used, idx, nu, err);
+        /* pt runs shade like their references */
+        iir_status st = iir_params_set(&r->params, iir_method_any_param("jitter"), o->ref_aa, err);
+        if (st == IIR_OK) st = apply_setting(r, o, used, idx, nu, err);
         if (st == IIR_OK) st = refset_for(b, ref_bounces(r), &r->refset, err);
         if (st != IIR_OK) return st;
     }
@@ -150,9 +131,9 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
 {
     b->o = o;
     snprintf(b->path_label, sizeof b->path_label, "built-in orbit");
-    iir_status st = iir_params_validate(&o->params, err);
+    iir_status st = IIR_OK;
     const char *scenes = iird_scenes_dir(o->scenes_dir);
-    if (st == IIR_OK) st = iird_load_scene(o->scene, scenes, &b->scene, &b->rt, err);
+    if (st == IIR_OK) st = iir_scene_open(o->scene, scenes, &b->scene, &b->rt, err);
     if (st == IIR_OK) st = iird_find_spot(b->scene, &b->spot, err);
     if (st == IIR_OK && o->anim)
         st = iird_resolve_anim(b->scene, scenes, o->anim, &b->anim, b->path_label,

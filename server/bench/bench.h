@@ -23,10 +23,10 @@ enum {
     IIRD_BENCH_MAX_REFSETS = 4, /* distinct reference bounce counts */
 };
 
-/* One --sweep NAME=V1,V2,...: NAME is a method option (without "--"), code its IIRD_OPT_*. */
+/* One --sweep NAME=V1,V2,...: NAME is a method parameter (its option without "--"). */
 typedef struct iird_bench_sweep {
-    char name[24];
-    int code;
+    char name[24]; /* the option's spelling: "sm-res" */
+    const iir_param *row;
     int num_values;
     char values[IIRD_BENCH_MAX_VALUES][24];
 } iird_bench_sweep;

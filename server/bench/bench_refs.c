@@ -12,7 +12,7 @@
 #include "iir/timer.h"
 
 /* Bump when pt or the reference settings change what a cached file would hold. */
-static const char CACHE_TAG[] = "iir-bench-ref-v1";
+static const char CACHE_TAG[] = "iir-bench-ref-v2";
 
 /* ---- hashing ---- */
 
@@ -61,29 +61,18 @@ static uint64_t ref_key(const iird_bench *b, const iir_view *v, const iir_params
     h = HASH(h, v->camera.target);
     h = HASH(h, v->camera.up);
     h = HASH(h, v->camera.fov_y);
-    int32_t ints[4] = {b->o->width, b->o->height, p->spp, p->bounces};
-    uint8_t jitter = p->jitter;
-    h = HASH(h, ints);
-    h = HASH(h, p->seed);
-    return HASH(h, jitter);
+    int32_t size[2] = {b->o->width, b->o->height};
+    h = HASH(h, size);
+    const iir_param_table *const *t = iir_method_tables("pt"); /* every value pt renders with */
+    for (int k = 0; t[k]; k++)
+        for (int i = 0; i < t[k]->count; i++) {
+            double v = iir_method_param_value(&t[k]->rows[i], p);
+            h = HASH(h, v);
+        }
+    return h;
 }
 
 /* ---- the cache folder ---- */
-
-/* mkdir -p; true when the folder exists afterwards. */
-static bool make_dirs(const char *path)
-{
-    char buf[4096];
-    snprintf(buf, sizeof buf, "%s", path);
-    for (char *p = buf + 1; *p; p++)
-        if (*p == '/') {
-            *p = '\0';
-            if (mkdir(buf, 0777) != 0 && errno != EEXIST) return false;
-            *p = '/';
-        }
-    struct stat sb;
-    return (mkdir(buf, 0777) == 0 || errno == EEXIST) && stat(buf, &sb) == 0 && S_ISDIR(sb.st_mode);
-}
 
 /* --ref-cache DIR, else $XDG_CACHE_HOME/iir/refs, else out/refcache; "" turns the cache off. */
 static void choose_cache_dir(iird_bench *b)
@@ -95,9 +84,10 @@ static void choose_cache_dir(iird_bench *b)
         snprintf(b->cache_dir, sizeof b->cache_dir, "%s/iir/refs", xdg);
     else
         snprintf(b->cache_dir, sizeof b->cache_dir, "out/refcache");
-    if (b->cache_dir[0] && !make_dirs(b->cache_dir)) {
-        fprintf(stderr, "iird bench: warning: cannot create the reference cache %s: %s\n",
-                b->cache_dir, strerror(errno));
+    iir_error err = {0};
+    const char *what = opt ? "--ref-cache" : "the default cache";
+    if (b->cache_dir[0] && iird_prepare_dir(b->cache_dir, what, &err) != IIR_OK) {
+        fprintf(stderr, "iird bench: warning: no reference cache: %s\n", err.msg);
         b->cache_dir[0] = '\0';
     }
 }
@@ -166,11 +156,11 @@ static iir_status refset_render(iird_bench *b, iird_bench_refset *rs, iird_progr
                                 iir_error *err)
 {
     iir_params p = b->o->params;
-    p.spp = b->o->ref_spp;
-    p.bounces = rs->bounces;
-    p.jitter = b->o->ref_aa;
+    iir_status st = iir_params_set(&p, iir_method_find_param("pt", "spp"), b->o->ref_spp, err);
+    if (st == IIR_OK)
+        st = iir_params_set(&p, iir_method_find_param("pt", "bounces"), rs->bounces, err);
+    if (st == IIR_OK) st = iir_params_set(&p, iir_method_any_param("jitter"), b->o->ref_aa, err);
     iir_method *pt = NULL;
-    iir_status st = IIR_OK;
     for (int i = 0; st == IIR_OK && i < b->frames; i++) {
         if (!iird_bench_is_ref_frame(b, i)) continue;
         if (iird_interrupted()) st = iir_fail(err, IIR_ERR_INTERRUPTED, "interrupted");

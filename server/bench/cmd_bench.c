@@ -27,7 +27,7 @@ static void bench_usage(FILE *f)
             "  --anim PATH|NAME     animation script (docs/animation-format.md), or the name of a\n"
             "                       path the scene's sidecar lists (e.g. orbit, teleport)\n"
             "  --methods LIST       comma-separated methods (default iir,ir)\n"
-            "  --sweep NAME=V1,...  run every method that reads method option NAME once per value\n"
+            "  --sweep NAME=V1,...  run every method that has parameter NAME once per value\n"
             "                       (e.g. vpls=64,256,1024 or spp=1,4,16); several --sweep flags\n"
             "                       multiply; the CSV's setting column says which\n"
             "  --frames N | A:B     N frames from 0, or the half-open range A:B of the path\n"
@@ -40,13 +40,12 @@ static void bench_usage(FILE *f)
             "  --ref-cache DIR      reference cache (default $XDG_CACHE_HOME/iir/refs, else\n"
             "                       out/refcache); --no-ref-cache to always render\n"
             "  --out DIR            write DIR/frames.csv, DIR/summary.json and charts (the\n"
-            "                       directory must exist)\n"
+            "                       directory is created if missing)\n"
             "  --no-charts          do not run tools/plot_bench.py\n"
             "  --save-images        also write DIR/ref_NNNNN.pfm and DIR/<method>[_<setting>]_\n"
             "                       NNNNN.pfm at the reference frames\n"
             "  --scenes DIR         where scene names are looked up\n"
-            "\n%s",
-            IIRD_METHOD_HELP);
+            "  -h, --help           this text (with --methods: their parameters only)\n");
 }
 
 enum {
@@ -89,17 +88,7 @@ static iir_status parse_frames(iird_bench_opts *o, const char *arg, iir_error *e
     return IIR_OK;
 }
 
-/* The method option called `name` that takes a value (not --threads): its code, or 0. */
-static int sweepable(const char *name)
-{
-    static const struct option opts[] = {IIRD_METHOD_LONGOPTS, {0, 0, 0, 0}};
-    for (const struct option *p = opts; p->name; p++)
-        if (!strcmp(p->name, name))
-            return p->has_arg == required_argument && p->val != IIRD_OPT_THREADS ? p->val : 0;
-    return 0;
-}
-
-/* Checks each value with the option's own parser, on a scratch copy of the parameters. */
+/* Checks each value as the parameter's option would, on a scratch set. */
 static iir_status add_sweep_values(iird_bench_sweep *s, const char *list, iir_error *err)
 {
     char buf[1024];
@@ -110,9 +99,8 @@ static iir_status add_sweep_values(iird_bench_sweep *s, const char *list, iir_er
             return iir_fail(err, IIR_ERR_INVALID, "--sweep %s: at most %d values of %zu characters",
                             s->name, IIRD_BENCH_MAX_VALUES, sizeof s->values[0] - 1);
         iir_params scratch = iir_params_default();
-        iir_status st = IIR_OK;
         iir_error verr = {0};
-        iird_method_option(s->code, tok, &scratch, &st, &verr);
+        iir_status st = iird_parse_param(s->name, tok, &scratch, &verr);
         if (st != IIR_OK) return iir_fail(err, st, "--sweep %s: %s", s->name, verr.msg);
         snprintf(s->values[s->num_values++], sizeof s->values[0], "%s", tok);
     }
@@ -131,13 +119,16 @@ static iir_status parse_sweep(iird_bench_opts *o, const char *arg, iir_error *er
         return iir_fail(err, IIR_ERR_INVALID, "--sweep: at most %d of them", IIRD_BENCH_MAX_SWEEPS);
     iird_bench_sweep *s = &o->sweeps[o->num_sweeps];
     memset(s, 0, sizeof *s);
-    snprintf(s->name, sizeof s->name, "%.*s", (int)len, arg);
-    if (!(s->code = sweepable(s->name)))
+    char key[sizeof s->name];
+    snprintf(key, sizeof key, "%.*s", (int)len, arg);
+    for (char *c = key; *c; c++)
+        if (*c == '-') *c = '_';
+    if (!(s->row = iir_method_any_param(key)))
         return iir_fail(err, IIR_ERR_INVALID,
-                        "--sweep %s: not a method option with a value (spp, bounces, seed, vpls, "
-                        "kmin, kmax, weights, regen-threshold, visibility, sm-res, sm-bias, "
-                        "interleave, clamp)",
-                        s->name);
+                        "--sweep %.*s: not a parameter of any method (iird bench --help lists "
+                        "them)",
+                        (int)len, arg);
+    iir_param_option_name(s->row, s->name, sizeof s->name);
     for (int i = 0; i < o->num_sweeps; i++)
         if (!strcmp(o->sweeps[i].name, s->name))
             return iir_fail(err, IIR_ERR_INVALID, "--sweep %s: given twice", s->name);
@@ -200,6 +191,27 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
     return st;
 }
 
+static const char *bench_methods(const void *ctx)
+{
+    return ((const iird_bench_opts *)ctx)->methods;
+}
+
+/* Every --sweep names a parameter of one of the methods at least. */
+static iir_status check_sweeps(const iird_bench_opts *o, iir_error *err)
+{
+    for (int i = 0; i < o->num_sweeps; i++) {
+        iir_params one = iir_params_default();
+        iir_status st = iir_params_set(&one, o->sweeps[i].row, o->sweeps[i].row->def, err);
+        if (st == IIR_OK) st = iird_check_params_for(o->methods, &one, err);
+        if (st != IIR_OK) {
+            char msg[sizeof err->msg];
+            snprintf(msg, sizeof msg, "%s", err->msg);
+            return iir_fail(err, st, "--sweep %s", msg + 2); /* "--sm-res is not ..." */
+        }
+    }
+    return IIR_OK;
+}
+
 static int parse_args(int argc, char **argv, iird_bench_opts *o)
 {
     static const struct option longopts[] = {{"methods", required_argument, 0, OPT_METHODS},
@@ -217,9 +229,8 @@ static int parse_args(int argc, char **argv, iird_bench_opts *o)
                                              {"anim", required_argument, 0, OPT_ANIM},
                                              {"sweep", required_argument, 0, OPT_SWEEP},
                                              {"help", no_argument, 0, 'h'},
-                                             IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
-    static const iird_command cmd = {"bench", longopts, bench_usage, parse_option};
+    static const iird_command cmd = {"bench", longopts, bench_usage, parse_option, bench_methods};
     o->argc = argc, o->argv = argv;
     return iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
 }
@@ -239,7 +250,9 @@ int iird_cmd_bench(int argc, char **argv)
     iird_bench run = {0};
     double t0 = iir_now_ms();
     iird_catch_interrupts();
-    iir_status st = iird_bench_setup(&run, &o, &err);
+    iir_status st = check_sweeps(&o, &err);
+    if (st == IIR_OK) st = iird_bench_setup(&run, &o, &err);
+    if (st == IIR_OK && o.out_dir) st = iird_prepare_dir(o.out_dir, "--out", &err);
     if (st == IIR_OK) st = iird_bench_references(&run, &err);
     for (int r = 0; st == IIR_OK && r < run.num_runs; r++) st = iird_bench_run_one(&run, r, &err);
     run.wall_s = (iir_now_ms() - t0) / 1e3;

@@ -26,7 +26,7 @@ static void raybench_usage(FILE *f)
                "  --rays N       raw rays per kind (default 4000000)\n"
                "  --size WxH     path tracer image (default 320x240)\n"
                "  --scenes DIR   where scene names are looked up\n"
-               "  --spp, --bounces, --seed, --threads  as for iird render (default spp 32)\n");
+               "  -h, --help     this text; pt's parameters follow (here spp defaults to 32)\n");
 }
 
 enum { OPT_RAYS = 1, OPT_SIZE, OPT_SCENES };
@@ -46,15 +46,20 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
     return iir_fail(err, IIR_ERR_INTERNAL, "unhandled option %d", c);
 }
 
+static const char *pt_only(const void *ctx)
+{
+    (void)ctx;
+    return "pt";
+}
+
 static int parse_args(int argc, char **argv, bench_opts *o)
 {
     static const struct option longopts[] = {{"rays", required_argument, 0, OPT_RAYS},
                                              {"size", required_argument, 0, OPT_SIZE},
                                              {"scenes", required_argument, 0, OPT_SCENES},
                                              {"help", no_argument, 0, 'h'},
-                                             IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
-    static const iird_command cmd = {"raybench", longopts, raybench_usage, parse_option};
+    static const iird_command cmd = {"raybench", longopts, raybench_usage, parse_option, pt_only};
     return iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
 }
 
@@ -93,16 +98,20 @@ static void print_report(const iir_scene *scene, const iir_raybench_result *r,
 int iird_cmd_raybench(int argc, char **argv)
 {
     bench_opts o = {.rays = 4000000, .width = 320, .height = 240, .params = iir_params_default()};
-    o.params.spp = 32;
+    iir_error err = {0};
+    if (iir_params_set(&o.params, iir_method_find_param("pt", "spp"), 32, &err) != IIR_OK)
+        return iird_report("raybench", &err);
     int rc = parse_args(argc, argv, &o);
     if (rc >= 0) return rc;
-    iir_error err = {0};
     iir_scene *scene = NULL;
     iir_rt *rt = NULL;
     iir_raybench_result r = {0};
     iir_frame_stats fs = {0};
-    iir_status st = iird_load_scene(o.scene, iird_scenes_dir(o.scenes_dir), &scene, &rt, &err);
-    if (st == IIR_OK) st = iir_raybench_run(scene, rt, (uint64_t)o.rays, o.params.seed, &r, &err);
+    iir_status st = iir_scene_open(o.scene, iird_scenes_dir(o.scenes_dir), &scene, &rt, &err);
+    if (st == IIR_OK)
+        st = iir_raybench_run(
+            scene, rt, (uint64_t)o.rays,
+            (uint64_t)iir_method_param_value(iir_method_any_param("seed"), &o.params), &r, &err);
     if (st == IIR_OK) st = run_pt(&o, scene, rt, &fs, &err);
     if (st == IIR_OK) print_report(scene, &r, &fs);
     rc = st == IIR_OK ? 0 : iird_report("raybench", &err);

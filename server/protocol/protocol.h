@@ -11,6 +11,7 @@
 #include "iir/camera.h"
 #include "iir/light.h"
 #include "iir/method.h"
+#include "iir/params.h"
 
 struct cJSON;
 struct iir_domain; /* method.h: the light's disk domain (sites, Delaunay edges, Voronoi cells) */
@@ -69,24 +70,30 @@ typedef struct iird_proto_error {
 bool iird_proto_fail(iird_proto_error *e, iird_err code, const char *field, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
-/* Server limits that bound client values (from the serve command line). */
+/* Server limits that bound client values (from the serve command line). Method parameters are
+ * bound by their tables' live maxima (params.h). */
 typedef struct iird_limits {
-    int max_width, max_height, max_vpls;
+    int max_width, max_height;
 } iird_limits;
 
-/* The defaults of `iird serve`: 1920 x 1080, 4096 VPLs. */
+/* The defaults of `iird serve`: 1920 x 1080. */
 iird_limits iird_limits_default(void);
 
-/* Everything a `params` message can set: the method, its parameters, the frame and the stream. */
+/* Everything a `params` message can set: the method, method parameters (any method's, by name),
+ * and the session's own frame and stream settings, whose table is iird_stream_table. */
 typedef struct iird_settings {
     char method[16];
-    iir_params params;
+    iir_params params; /* the method parameters given so far; the rest are their defaults */
     int width, height;
-    int quality; /* JPEG, [1, 100] */
+    int quality; /* JPEG */
     float exposure;
     bool refine; /* progressive refinement when idle */
     bool domain; /* send domain messages */
 } iird_settings;
+
+/* The frame and stream settings of iird_settings (width ... domain) as a parameter table, so that
+ * they are parsed, checked, sent in `welcome` and drawn in the web form like a method's. */
+extern const iir_param_table iird_stream_table;
 
 iird_settings iird_settings_default(void);
 
@@ -108,34 +115,12 @@ typedef struct iird_msg_camera {
     float fov;
 } iird_msg_camera;
 
-/* Bits of iird_msg_params.has, in the order of docs/protocol.md's params table. */
-enum {
-    IIRD_P_METHOD,
-    IIRD_P_VPLS,
-    IIRD_P_KMIN,
-    IIRD_P_KMAX,
-    IIRD_P_WEIGHTS,
-    IIRD_P_VISIBILITY,
-    IIRD_P_INTERLEAVE,
-    IIRD_P_CLAMP,
-    IIRD_P_SM_RES,
-    IIRD_P_BOUNCES,
-    IIRD_P_SPP,
-    IIRD_P_WIDTH,
-    IIRD_P_HEIGHT,
-    IIRD_P_QUALITY,
-    IIRD_P_EXPOSURE,
-    IIRD_P_REFINE,
-    IIRD_P_REFINE_PASSES,
-    IIRD_P_DOMAIN,
-    IIRD_P_SEED,
-    IIRD_P_COUNT
-};
-
-/* A params message: the fields it had, applied onto a copy of the current settings. */
+/* A params message: the method if given, and every other field by name (stream settings and
+ * method parameters alike), applied onto a copy of the current settings. */
 typedef struct iird_msg_params {
-    unsigned long long has; /* bit per field, in the order of docs/protocol.md's params table */
-    iird_settings values;   /* only fields with their bit set are meaningful */
+    bool has_method;
+    char method[16];
+    iir_params values;
 } iird_msg_params;
 
 typedef struct iird_msg {
@@ -176,8 +161,9 @@ bool iird_parse_message(const char *text, size_t len, const iird_limits *limits,
 /* Apply a message to the session's state, all or nothing: on false *err is filled (but for
  * err->seq, which is left as iird_parse_message set it) and the state is unchanged. Light:
  * target/direction/position combined, intensity scalar scaling, then iir_light_validate. Camera:
- * iir_camera_validate. Params: merged, then cross-field checks (kmin <= kmax <= vpls, limits) and
- * iir_params_validate. */
+ * iir_camera_validate. Params: merged, the stream settings against the limits, every method
+ * parameter against each method's row of its name (live maxima), then the session's method's
+ * tables with their checks (kmin <= kmax <= vpls), blaming a field the message carried. */
 bool iird_apply_light(const iird_msg_light *m, iir_light *light, iird_proto_error *err);
 bool iird_apply_camera(const iird_msg_camera *m, iir_camera *camera, iird_proto_error *err);
 bool iird_apply_params(const iird_msg_params *m, const iird_limits *limits, iird_settings *settings,
@@ -198,6 +184,12 @@ typedef struct iird_state_view {
 } iird_state_view;
 
 char *iird_json_error(const iird_proto_error *e);
+/* A parameter table as the JSON array of `welcome` (docs/protocol.md): per row name, type,
+ * default, min, max, live_max, choices, unit, help, effect. */
+struct cJSON *iird_json_param_table(const iir_param_table *t);
+/* Every parameter of `method` with the value it uses under p (p's, else the default), keyed by
+ * name: enums as their names, booleans as booleans, numbers as numbers. render.json and `state`. */
+struct cJSON *iird_json_method_params(const char *method, const iir_params *p);
 char *iird_json_state(const iird_state_view *s, int64_t seq);
 /* scenes: NULL-terminated names; methods: iir_method_names(). */
 char *iird_json_welcome(const iird_state_view *s, uint32_t session, const char *const *scenes,

@@ -1,7 +1,7 @@
 /* protocol_apply.c -- applying parsed `light`, `camera` and `params` messages to a session's
  * state, all or nothing: each works on a copy, checks the combined result (iir_light_validate,
- * iir_camera_validate, iir_params_validate and the cross-field rules of docs/protocol.md) and
- * writes it back only when it is acceptable. The settings' defaults. Not parsing
+ * iir_camera_validate, the stream table and the server limits, the methods' parameter tables with
+ * their checks) and writes it back only when it is acceptable. The settings' defaults. Not parsing
  * (protocol_parse.c). */
 #include "protocol_internal.h"
 
@@ -11,7 +11,7 @@
 
 iird_limits iird_limits_default(void)
 {
-    iird_limits l = {.max_width = 1920, .max_height = 1080, .max_vpls = 4096};
+    iird_limits l = {.max_width = 1920, .max_height = 1080};
     return l;
 }
 
@@ -21,14 +21,13 @@ iird_settings iird_settings_default(void)
     memset(&s, 0, sizeof s);
     snprintf(s.method, sizeof s.method, "%s", "iir");
     s.params = iir_params_default();
-    s.params.bounces = 2;
-    s.params.spp = 1;
-    s.width = 512;
-    s.height = 384;
-    s.quality = 80;
-    s.exposure = 0.f;
-    s.refine = true;
-    s.domain = true;
+    iir_params_defaults(&iird_stream_table, &s);
+    for (const iir_param_table *const *t = iir_method_all_tables(); *t; t++)
+        for (int i = 0; i < (*t)->count; i++) {
+            const iir_param *row = &(*t)->rows[i];
+            iir_error e;
+            if (row->live.def != 0.0) iir_params_set(&s.params, row, row->live.def, &e);
+        }
     return s;
 }
 
@@ -150,74 +149,6 @@ bool iird_apply_camera(const iird_msg_camera *m, iir_camera *camera, iird_proto_
 
 /* ======================== params ======================== */
 
-/* Copies params field i from v into s. */
-static void merge_field(iird_settings *s, const iird_settings *v, int i)
-{
-    iir_params *p = &s->params;
-    const iir_params *q = &v->params;
-    switch (i) {
-    case IIRD_P_METHOD:
-        memcpy(s->method, v->method, sizeof s->method);
-        break;
-    case IIRD_P_VPLS:
-        p->vpls = q->vpls;
-        break;
-    case IIRD_P_KMIN:
-        p->kmin = q->kmin;
-        break;
-    case IIRD_P_KMAX:
-        p->kmax = q->kmax;
-        break;
-    case IIRD_P_WEIGHTS:
-        p->weights = q->weights;
-        break;
-    case IIRD_P_VISIBILITY:
-        p->visibility = q->visibility;
-        break;
-    case IIRD_P_INTERLEAVE:
-        p->interleave = q->interleave;
-        break;
-    case IIRD_P_CLAMP:
-        p->clamp = q->clamp;
-        break;
-    case IIRD_P_SM_RES:
-        p->sm_res = q->sm_res;
-        break;
-    case IIRD_P_BOUNCES:
-        p->bounces = q->bounces;
-        break;
-    case IIRD_P_SPP:
-        p->spp = q->spp;
-        break;
-    case IIRD_P_WIDTH:
-        s->width = v->width;
-        break;
-    case IIRD_P_HEIGHT:
-        s->height = v->height;
-        break;
-    case IIRD_P_QUALITY:
-        s->quality = v->quality;
-        break;
-    case IIRD_P_EXPOSURE:
-        s->exposure = v->exposure;
-        break;
-    case IIRD_P_REFINE:
-        s->refine = v->refine;
-        break;
-    case IIRD_P_REFINE_PASSES:
-        p->refine_passes = q->refine_passes;
-        break;
-    case IIRD_P_DOMAIN:
-        s->domain = v->domain;
-        break;
-    case IIRD_P_SEED:
-        p->seed = q->seed;
-        break;
-    default:
-        break;
-    }
-}
-
 static bool known_method(const char *name)
 {
     for (const char *const *n = iir_method_names(); *n; n++)
@@ -232,51 +163,42 @@ static bool int_in(int v, int lo, int hi, const char *field, iird_proto_error *e
                            lo, hi, v);
 }
 
-/* The frame and stream settings against the server's limits. */
-static bool check_frame(const iird_settings *s, const iird_limits *lim, iird_proto_error *err)
+/* The value set split: the stream table's rows into *stream, the rest into *method. */
+static void split(const iir_params *v, iir_params *stream, iir_params *method)
 {
-    if (!known_method(s->method))
-        return iird_proto_fail(err, IIRD_E_OUT_OF_RANGE, "params.method",
-                               "params.method '%s' is not a method of this server", s->method);
-    if (!(s->exposure >= -20.f && s->exposure <= 20.f))
-        return iird_proto_fail(err, IIRD_E_OUT_OF_RANGE, "params.exposure",
-                               "params.exposure must be in [-20, 20], got %g", (double)s->exposure);
-    return int_in(s->width, 16, lim->max_width, "params.width", err) &&
-           int_in(s->height, 16, lim->max_height, "params.height", err) &&
-           int_in(s->quality, 1, 100, "params.quality", err) &&
-           int_in(s->params.vpls, 1, lim->max_vpls, "params.vpls", err);
+    for (uint32_t k = 0; k < v->count; k++) {
+        bool own = iir_param_table_find(&iird_stream_table, v->v[k].name) != NULL;
+        iir_params *to = own ? stream : method;
+        to->v[to->count++] = v->v[k];
+    }
 }
 
-/* kmin <= kmax <= vpls, blaming the field the message changed. */
-static bool check_budgets(const iir_params *p, unsigned long long has, iird_proto_error *err)
+/* err from a failed check of row as "params.<name> ..." (kind: out_of_range or bad_field). */
+static bool param_problem(iir_error *e, const iir_param *row, iird_err kind, iird_proto_error *err)
 {
-    if (p->kmin > p->kmax) {
-        const char *f = (has & (1ull << IIRD_P_KMIN)) || !(has & (1ull << IIRD_P_KMAX))
-                            ? "params.kmin"
-                            : "params.kmax";
-        return iird_proto_fail(err, IIRD_E_BAD_FIELD, f, "%s: kmin %d must not exceed kmax %d", f,
-                               p->kmin, p->kmax);
-    }
-    if (p->kmax > p->vpls) {
-        const char *f = (has & (1ull << IIRD_P_KMAX)) || !(has & (1ull << IIRD_P_VPLS))
-                            ? "params.kmax"
-                            : "params.vpls";
-        return iird_proto_fail(err, IIRD_E_BAD_FIELD, f, "%s: kmax %d must not exceed vpls %d", f,
-                               p->kmax, p->vpls);
-    }
-    return true;
+    char field[IIRD_PATH_BYTES];
+    if (!row) return iird_proto_fail(err, kind, "params", "params: %s", e->msg);
+    iird_path(field, "params", row->name);
+    iir_param_reword(e, row, field);
+    return iird_proto_fail(err, kind, field, "%s", e->msg);
 }
 
-/* params.<first word of the validator's message> when that is a protocol field, else "params". */
-static void params_problem(const char *msg, char field[IIRD_PATH_BYTES])
+/* The stream settings (from S's current ones plus the message's) into S, against the limits. */
+static bool apply_stream(const iir_params *given, const iird_limits *lim, iird_settings *S,
+                         iird_proto_error *err)
 {
-    snprintf(field, IIRD_PATH_BYTES, "params");
-    for (int i = 0; i < IIRD_P_COUNT; i++) {
-        const char *n = iird_params_field_name(i);
-        size_t len = strlen(n);
-        if (strncmp(msg, n, len) == 0 && (msg[len] == ' ' || msg[len] == '\0'))
-            snprintf(field, IIRD_PATH_BYTES, "params.%s", n);
+    iir_params all = iir_params_default();
+    const iir_param *bad = NULL;
+    iir_error e;
+    for (int i = 0; i < iird_stream_table.count; i++) {
+        const iir_param *row = &iird_stream_table.rows[i];
+        iir_params_set(&all, row, iir_param_read(row, S), &e);
     }
+    iir_params_merge(&all, given);
+    if (iir_params_bind(&iird_stream_table, &all, given, S, &bad, &e) != IIR_OK)
+        return param_problem(&e, bad, IIRD_E_OUT_OF_RANGE, err);
+    return int_in(S->width, 16, lim->max_width, "params.width", err) &&
+           int_in(S->height, 16, lim->max_height, "params.height", err);
 }
 
 bool iird_apply_params(const iird_msg_params *m, const iird_limits *limits, iird_settings *settings,
@@ -284,15 +206,21 @@ bool iird_apply_params(const iird_msg_params *m, const iird_limits *limits, iird
 {
     iird_limits lim = limits ? *limits : iird_limits_default();
     iird_settings S = *settings;
-    char field[IIRD_PATH_BYTES];
+    iir_params stream = iir_params_default(), method = iir_params_default();
+    const iir_param *bad = NULL;
     iir_error e;
-    for (int i = 0; i < IIRD_P_COUNT; i++)
-        if (m->has & (1ull << i)) merge_field(&S, &m->values, i);
-    if (!check_frame(&S, &lim, err) || !check_budgets(&S.params, m->has, err)) return false;
-    if (iir_params_validate(&S.params, &e) != IIR_OK) {
-        params_problem(e.msg, field);
-        return iird_proto_fail(err, IIRD_E_OUT_OF_RANGE, field, "%s: %s", field, e.msg);
-    }
+    split(&m->values, &stream, &method);
+    if (m->has_method) memcpy(S.method, m->method, sizeof S.method);
+    if (!known_method(S.method))
+        return iird_proto_fail(err, IIRD_E_OUT_OF_RANGE, "params.method",
+                               "params.method '%s' is not a method of this server", S.method);
+    if (!apply_stream(&stream, &lim, &S, err)) return false;
+    if (!iir_params_merge(&S.params, &method))
+        return iird_proto_fail(err, IIRD_E_OUT_OF_RANGE, "params", "params: too many parameters");
+    if (iir_method_params_check(&method, true, &bad, &e) != IIR_OK)
+        return param_problem(&e, bad, IIRD_E_OUT_OF_RANGE, err);
+    if (iir_method_params_validate(S.method, &S.params, &method, &bad, &e) != IIR_OK)
+        return param_problem(&e, bad, IIRD_E_BAD_FIELD, err);
     *settings = S;
     return true;
 }

@@ -72,8 +72,12 @@ bool iird_get_enum(const iird_pctx *c, const cJSON *v, const char *name, const c
 
 /* ---- shared tables ---- */
 
-/* Name of params field IIRD_P_* ("vpls", ...). */
-const char *iird_params_field_name(int field);
+/* Reads a params field's JSON value as its row says (type, range up to the live maximum, enum
+ * names), naming "params.<name>" in errors. */
+bool iird_get_param(const iird_pctx *c, const cJSON *v, const iir_param *row, double *out);
+
+/* The row of a params field: the stream table's, else any method's; NULL for an unknown name. */
+const iir_param *iird_params_row(const char *name);
 
 /* Prints obj unformatted and deletes it; NULL when obj is NULL or printing fails. */
 char *iird_json_finish(cJSON *obj);

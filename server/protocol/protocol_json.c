@@ -149,23 +149,18 @@ static cJSON *camera_json(const iir_camera *C)
     return keep_if(o, ok);
 }
 
+/* method, the stream settings, then the method's parameters as it uses them. */
 static cJSON *params_json(const iird_settings *s)
 {
-    const iir_params *p = &s->params;
-    cJSON *o = cJSON_CreateObject();
-    bool ok =
-        o && add_str(o, "method", s->method) && iird_json_add_num(o, "vpls", p->vpls) &&
-        iird_json_add_num(o, "kmin", p->kmin) && iird_json_add_num(o, "kmax", p->kmax) &&
-        add_str(o, "weights", p->weights == IIR_WEIGHTS_UNIFORM ? "uniform" : "voronoi") &&
-        add_str(o, "visibility", p->visibility == IIR_VIS_RAYS ? "rays" : "shadowmap") &&
-        iird_json_add_num(o, "interleave", p->interleave) &&
-        iird_json_add_float(o, "clamp", p->clamp) && iird_json_add_num(o, "sm_res", p->sm_res) &&
-        iird_json_add_num(o, "bounces", p->bounces) && iird_json_add_num(o, "spp", p->spp) &&
-        iird_json_add_num(o, "width", s->width) && iird_json_add_num(o, "height", s->height) &&
-        iird_json_add_num(o, "quality", s->quality) &&
-        iird_json_add_float(o, "exposure", s->exposure) && add_bool(o, "refine", s->refine) &&
-        iird_json_add_num(o, "refine_passes", p->refine_passes) &&
-        add_bool(o, "domain", s->domain) && iird_json_add_u64(o, "seed", p->seed);
+    cJSON *o = iird_json_method_params(s->method, &s->params);
+    bool ok = o && cJSON_AddItemToObject(o, "method", cJSON_CreateString(s->method));
+    for (int i = 0; ok && i < iird_stream_table.count; i++) {
+        const iir_param *row = &iird_stream_table.rows[i];
+        double v = iir_param_read(row, s);
+        ok = row->type == IIR_PARAM_BOOL    ? add_bool(o, row->name, v != 0.0)
+             : row->type == IIR_PARAM_FLOAT ? iird_json_add_float(o, row->name, (float)v)
+                                            : iird_json_add_num(o, row->name, v);
+    }
     return keep_if(o, ok);
 }
 
@@ -183,32 +178,23 @@ char *iird_json_state(const iird_state_view *s, int64_t seq)
     return iird_json_finish(keep_if(o, o && add_state(o, s)));
 }
 
-/* One line per method, as `iird --help` would say it. */
-static const char *method_summary(const char *name)
-{
-    static const char *const table[][2] = {
-        {"pt", "path tracer: the reference (next-event estimation, Russian roulette)"},
-        {"ir", "instant radiosity: VPLs from light paths, regenerated every frame"},
-        {"iir", "incremental instant radiosity: VPLs kept across frames, few replaced per frame"},
-        {"rsm", "reflective shadow maps: VPLs from the light's view, no indirect visibility"},
-        {"ism", "imperfect shadow maps: point-sampled scene, low-resolution VPL visibility"},
-        {"hier", "multiresolution indirect light in image space"},
-        {"radiosity", "patch radiosity with cached form factors"},
-        {"whitted", "Whitted ray tracing: mirrors and refraction"},
-    };
-    for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
-        if (strcmp(table[i][0], name) == 0) return table[i][1];
-    return "";
-}
-
+/* Per method its name, summary and parameters (each of its tables' rows, in order). */
 static cJSON *methods_json(void)
 {
     cJSON *a = cJSON_CreateArray();
     bool ok = a != NULL;
     for (const char *const *n = iir_method_names(); ok && *n; n++) {
-        cJSON *m = cJSON_CreateObject();
+        cJSON *m = cJSON_CreateObject(), *params = NULL;
         ok = add_item(a, NULL, m) && add_str(m, "name", *n) &&
-             add_str(m, "summary", method_summary(*n));
+             add_str(m, "summary", iir_method_summary(*n)) &&
+             add_item(m, "params", (params = cJSON_CreateArray()));
+        for (const iir_param_table *const *t = iir_method_tables(*n); ok && *t; t++) {
+            cJSON *rows = iird_json_param_table(*t), *row;
+            ok = rows != NULL;
+            while (ok && (row = cJSON_DetachItemFromArray(rows, 0)))
+                ok = add_item(params, NULL, row);
+            cJSON_Delete(rows);
+        }
     }
     return keep_if(a, ok);
 }
@@ -218,7 +204,6 @@ static cJSON *limits_json(const iird_limits *lim)
     cJSON *o = cJSON_CreateObject();
     bool ok = o && iird_json_add_num(o, "max_width", lim->max_width) &&
               iird_json_add_num(o, "max_height", lim->max_height) &&
-              iird_json_add_num(o, "max_vpls", lim->max_vpls) &&
               iird_json_add_num(o, "max_message_bytes", IIRD_MAX_MESSAGE_BYTES) &&
               iird_json_add_num(o, "max_rate", 250);
     return keep_if(o, ok);
@@ -236,7 +221,9 @@ char *iird_json_welcome(const iird_state_view *s, uint32_t session, const char *
               add_item(o, "scenes", (names = cJSON_CreateArray()));
     for (const char *const *n = scenes; ok && n && *n; n++)
         ok = add_item(names, NULL, cJSON_CreateString(*n));
-    ok = ok && add_item(o, "methods", methods_json()) && add_item(o, "limits", limits_json(&lim)) &&
+    ok = ok && add_item(o, "methods", methods_json()) &&
+         add_item(o, "settings", iird_json_param_table(&iird_stream_table)) &&
+         add_item(o, "limits", limits_json(&lim)) &&
          add_item(o, "state", (state = cJSON_CreateObject())) && add_state(state, s);
     return iird_json_finish(keep_if(o, ok));
 }

@@ -9,38 +9,48 @@
  * ambiguous), then the fields in the order of the type's table. */
 #include "protocol_internal.h"
 
+#include <assert.h>
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <string.h>
 
-enum { MAX_FIELDS = 24 };
-_Static_assert((int)IIRD_P_COUNT <= (int)MAX_FIELDS, "MAX_FIELDS holds every params field");
+enum { MAX_FIELDS = 64 };
 
 static const char *const HELLO_FIELDS[] = {"protocol", "token", "client", NULL};
 /* same order as IIRD_L_* and IIRD_C_* */
 static const char *const LIGHT_FIELDS[] = {"position",   "direction", "target",
                                            "cone_angle", "intensity", NULL};
 static const char *const CAMERA_FIELDS[] = {"position", "target", "up", "fov", NULL};
-/* same order as IIRD_P_* */
-static const char *const PARAMS_FIELDS[IIRD_P_COUNT + 1] = {
-    "method",   "vpls",   "kmin",          "kmax",   "weights", "visibility", "interleave",
-    "clamp",    "sm_res", "bounces",       "spp",    "width",   "height",     "quality",
-    "exposure", "refine", "refine_passes", "domain", "seed",    NULL};
+/* "method", the stream settings, then every method parameter (each name once); built once. */
+static const char *PARAMS_FIELDS[MAX_FIELDS + 1];
+static pthread_once_t params_fields_once = PTHREAD_ONCE_INIT;
+
+static void add_field(int *n, const char *name)
+{
+    for (int i = 0; i < *n; i++)
+        if (!strcmp(PARAMS_FIELDS[i], name)) return;
+    assert(*n < MAX_FIELDS && "MAX_FIELDS holds every params field");
+    PARAMS_FIELDS[(*n)++] = name;
+}
+
+static void build_params_fields(void)
+{
+    int n = 0;
+    add_field(&n, "method");
+    for (int i = 0; i < iird_stream_table.count; i++) add_field(&n, iird_stream_table.rows[i].name);
+    for (const iir_param_table *const *t = iir_method_all_tables(); *t; t++)
+        for (int i = 0; i < (*t)->count; i++) add_field(&n, (*t)->rows[i].name);
+    PARAMS_FIELDS[n] = NULL;
+}
 static const char *const SCENE_FIELDS[] = {"name", NULL};
 static const char *const PICK_FIELDS[] = {"x", "y", NULL};
 static const char *const SNAPSHOT_FIELDS[] = {"format", NULL};
 static const char *const RECORD_FIELDS[] = {"action", "fps", NULL};
 
-static const char *const WEIGHTS_NAMES[] = {"uniform", "voronoi", NULL};
-static const char *const VISIBILITY_NAMES[] = {"shadowmap", "rays", NULL};
 static const char *const FORMAT_NAMES[] = {"png", "exr", NULL};
 static const char *const ACTION_NAMES[] = {"start", "stop", NULL};
-
-const char *iird_params_field_name(int field)
-{
-    return field >= 0 && field < IIRD_P_COUNT ? PARAMS_FIELDS[field] : "?";
-}
 
 /* Joins names as "a, b, c" into out. */
 static void join(char *out, size_t size, const char *const *names)
@@ -164,81 +174,24 @@ static bool parse_camera(const iird_pctx *c, const cJSON *const *f, const iird_l
     return true;
 }
 
-/* One params field into s; the ranges are docs/protocol.md's. */
-static bool params_field(const iird_pctx *c, int i, const cJSON *v, const iird_limits *lim,
-                         iird_settings *s)
-{
-    const char *n = PARAMS_FIELDS[i];
-    iir_params *p = &s->params;
-    iird_range clamp = {0.0, 1e6, false, false, NULL}, exposure = {-20.0, 20.0, false, false, NULL};
-    double d = 0.0;
-    int k = 0;
-    int64_t seed = 0;
-    bool ok = true;
-    switch (i) {
-    case IIRD_P_METHOD:
-        ok = iird_get_enum(c, v, n, iir_method_names(), &k);
-        if (ok) snprintf(s->method, sizeof s->method, "%s", iir_method_names()[k]);
-        return ok;
-    case IIRD_P_VPLS:
-        return iird_get_int32(c, v, n, 1, lim->max_vpls, &p->vpls);
-    case IIRD_P_KMIN:
-        return iird_get_int32(c, v, n, 0, lim->max_vpls, &p->kmin);
-    case IIRD_P_KMAX:
-        return iird_get_int32(c, v, n, 0, lim->max_vpls, &p->kmax);
-    case IIRD_P_WEIGHTS:
-        ok = iird_get_enum(c, v, n, WEIGHTS_NAMES, &k);
-        p->weights = k == 0 ? IIR_WEIGHTS_UNIFORM : IIR_WEIGHTS_VORONOI;
-        return ok;
-    case IIRD_P_VISIBILITY:
-        ok = iird_get_enum(c, v, n, VISIBILITY_NAMES, &k);
-        p->visibility = k == 0 ? IIR_VIS_SHADOWMAP : IIR_VIS_RAYS;
-        return ok;
-    case IIRD_P_INTERLEAVE:
-        return iird_get_int32(c, v, n, 1, 8, &p->interleave);
-    case IIRD_P_CLAMP:
-        ok = iird_get_number(c, v, n, clamp, &d);
-        p->clamp = (float)d;
-        return ok;
-    case IIRD_P_SM_RES:
-        return iird_get_int32(c, v, n, 8, 2048, &p->sm_res);
-    case IIRD_P_BOUNCES:
-        return iird_get_int32(c, v, n, 1, 8, &p->bounces);
-    case IIRD_P_SPP:
-        return iird_get_int32(c, v, n, 1, 64, &p->spp);
-    case IIRD_P_WIDTH:
-        return iird_get_int32(c, v, n, 16, lim->max_width, &s->width);
-    case IIRD_P_HEIGHT:
-        return iird_get_int32(c, v, n, 16, lim->max_height, &s->height);
-    case IIRD_P_QUALITY:
-        return iird_get_int32(c, v, n, 1, 100, &s->quality);
-    case IIRD_P_EXPOSURE:
-        ok = iird_get_number(c, v, n, exposure, &d);
-        s->exposure = (float)d;
-        return ok;
-    case IIRD_P_REFINE:
-        return iird_get_bool(c, v, n, &s->refine);
-    case IIRD_P_REFINE_PASSES:
-        return iird_get_int32(c, v, n, 1, 4096, &p->refine_passes);
-    case IIRD_P_DOMAIN:
-        return iird_get_bool(c, v, n, &s->domain);
-    case IIRD_P_SEED:
-        ok = iird_get_int(c, v, n, 0.0, 9007199254740992.0, &seed);
-        p->seed = (uint64_t)seed;
-        return ok;
-    default:
-        return iird_proto_fail(c->err, IIRD_E_INTERNAL, NULL, "params field %d", i);
-    }
-}
-
+/* "method" names a method; every other field is read by its row (protocol_params.c). */
 static bool parse_params(const iird_pctx *c, const cJSON *const *f, const iird_limits *lim,
                          iird_msg *out)
 {
+    (void)lim;
     iird_msg_params *m = &out->u.params;
-    for (int i = 0; i < IIRD_P_COUNT; i++) {
-        if (!f[i]) continue;
-        if (!params_field(c, i, f[i], lim, &m->values)) return false;
-        m->has |= 1ull << i;
+    int k = 0;
+    if (f[0] && !iird_get_enum(c, f[0], "method", iir_method_names(), &k)) return false;
+    if (f[0]) m->has_method = true;
+    if (f[0]) snprintf(m->method, sizeof m->method, "%s", iir_method_names()[k]);
+    for (int i = 1; PARAMS_FIELDS[i]; i++) {
+        const iir_param *row = f[i] ? iird_params_row(PARAMS_FIELDS[i]) : NULL;
+        double v = 0.0;
+        iir_error e;
+        if (!row) continue;
+        if (!iird_get_param(c, f[i], row, &v)) return false;
+        if (iir_params_set(&m->values, row, v, &e) != IIR_OK)
+            return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, "params", "params: %s", e.msg);
     }
     return true;
 }
@@ -416,6 +369,7 @@ bool iird_parse_message(const char *text, size_t len, const iird_limits *limits,
     iird_proto_error scratch;
     iird_limits lim = limits ? *limits : iird_limits_default();
     if (!err) err = &scratch;
+    pthread_once(&params_fields_once, build_params_fields);
     memset(out, 0, sizeof *out);
     out->seq = err->seq = IIRD_NO_SEQ;
     if (len > IIRD_MAX_MESSAGE_BYTES)

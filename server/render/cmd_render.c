@@ -39,10 +39,9 @@ static void render_usage(FILE *f)
         "  --format F           with --anim: png | exr | pfm (default png)\n"
         "  --video FILE.mp4     with --anim: also an H.264 video of the frames (needs ffmpeg)\n"
         "  --scenes DIR         where scene names are looked up (default ./scenes)\n"
-        "  -h, --help           this text\n"
-        "\n%s\n"
-        "Exit codes: 0 ok, 2 bad input, 3 file error, 4 unsupported, 64 usage, 130 interrupted.\n",
-        IIRD_METHOD_HELP);
+        "  -h, --help           this text (with --method M: M's parameters only)\n"
+        "\n"
+        "Exit codes: 0 ok, 2 bad input, 3 file error, 4 unsupported, 64 usage, 130 interrupted.\n");
 }
 
 enum {
@@ -96,6 +95,13 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
     return st;
 }
 
+/* The method: --method, else pt for a still and iir for an animation. */
+static const char *render_method(const void *ctx)
+{
+    const render_opts *o = ctx;
+    return o->method ? o->method : o->anim ? "iir" : "pt";
+}
+
 /* Returns -1 when parsing succeeded, else the exit code. */
 static int parse_args(int argc, char **argv, render_opts *o)
 {
@@ -109,9 +115,8 @@ static int parse_args(int argc, char **argv, render_opts *o)
                                              {"format", required_argument, 0, OPT_FORMAT},
                                              {"video", required_argument, 0, OPT_VIDEO},
                                              {"help", no_argument, 0, 'h'},
-                                             IIRD_METHOD_LONGOPTS,
                                              {0, 0, 0, 0}};
-    static const iird_command cmd = {"render", longopts, render_usage, parse_option};
+    static const iird_command cmd = {"render", longopts, render_usage, parse_option, render_method};
     int rc = iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
     if (rc >= 0) return rc;
     if (!o->out) {
@@ -124,12 +129,19 @@ static int parse_args(int argc, char **argv, render_opts *o)
         fprintf(stderr, "iird render: %s needs --anim (see iird render --help)\n", anim_only);
         return IIRD_EXIT_USAGE;
     }
-    if (!o->method) o->method = o->anim ? "iir" : "pt";
+    o->method = render_method(o);
     if (!o->size_given && o->anim) o->width = 1280, o->height = 720;
     if (o->anim) return -1;
     iir_error err = {0};
     if (iird_check_output(o->out, &err) != IIR_OK) return iird_report("render", &err);
     return -1;
+}
+
+/* A still's samples per pixel: the spp parameter as pt reads it (ir and iir refine at most that
+ * many passes, fewer when they converge first). */
+static int still_spp(const iir_params *p)
+{
+    return (int)iir_method_param_value(iir_method_find_param("pt", "spp"), p);
 }
 
 /* Largest divisor of spp that is at most spp/20, so ~20 progress steps add up to exactly spp. */
@@ -147,16 +159,17 @@ static iir_status render_still(const render_opts *o, iir_method *m, const iir_sc
     iir_view view = {scene->lights, scene->num_lights, scene->camera};
     iir_frame_stats fs;
     iird_progress bar;
-    iird_progress_start(&bar, "render", o->params.spp);
+    int spp = still_spp(&o->params);
+    iird_progress_start(&bar, "render", spp);
     iir_status st = iir_method_render(m, &view, img, &fs, err);
     *sum = fs;
     while (st == IIR_OK && iir_method_can_refine(m) && !fs.converged &&
-           fs.samples_per_pixel < (uint64_t)o->params.spp) {
+           fs.samples_per_pixel < (uint64_t)spp) {
         iird_progress_update(&bar, (double)fs.samples_per_pixel);
         if (iird_interrupted())
             return iir_fail(err, IIR_ERR_INTERRUPTED,
                             "interrupted after %llu of %d samples per pixel",
-                            (unsigned long long)fs.samples_per_pixel, o->params.spp);
+                            (unsigned long long)fs.samples_per_pixel, spp);
         st = iir_method_refine(m, img, &fs, err);
         sum->total_ms += fs.total_ms;
         iir_raystats_add(&sum->rays, &fs.rays);
@@ -171,15 +184,16 @@ static void print_summary(const render_opts *o, const iir_scene *scene, const ii
     double rays = (double)iir_raystats_total(&fs->rays);
     char work[64];
     if (fs->samples_per_pixel > 0)
-        snprintf(work, sizeof work, "%llu spp, %d bounces",
-                 (unsigned long long)fs->samples_per_pixel, o->params.bounces);
+        snprintf(work, sizeof work, "%llu spp, %.0f bounces",
+                 (unsigned long long)fs->samples_per_pixel,
+                 iir_method_param_value(iir_method_find_param("pt", "bounces"), &o->params));
     else
         snprintf(work, sizeof work, "%u VPLs (%u null), %u shadow maps", fs->vpl.count,
                  fs->vpl.null_samples, fs->vpl.shadowmaps);
     printf("wrote %s: %s, %dx%d, method %s, %s, seed %llu, %.2f s, %.1f Mrays (%.2f Mrays/s)\n",
            o->out, scene->name, o->width, o->height, o->method, work,
-           (unsigned long long)o->params.seed, fs->total_ms / 1e3, rays / 1e6,
-           fs->total_ms > 0 ? rays / (fs->total_ms * 1e3) : 0.0);
+           (unsigned long long)iir_method_param_value(iir_method_any_param("seed"), &o->params),
+           fs->total_ms / 1e3, rays / 1e6, fs->total_ms > 0 ? rays / (fs->total_ms * 1e3) : 0.0);
 }
 
 int iird_cmd_render(int argc, char **argv)
@@ -200,8 +214,10 @@ int iird_cmd_render(int argc, char **argv)
     iir_method *m = NULL;
     iir_image *img = iir_image_create(o.width, o.height);
     iir_params chunked = o.params;
-    chunked.spp = chunk_for(o.params.spp);
-    iir_status st = iird_load_scene(o.scene, iird_scenes_dir(o.scenes_dir), &scene, &rt, &err);
+    iir_status st = iir_params_set(&chunked, iir_method_find_param("pt", "spp"),
+                                   chunk_for(still_spp(&o.params)), &err);
+    if (st == IIR_OK)
+        st = iir_scene_open(o.scene, iird_scenes_dir(o.scenes_dir), &scene, &rt, &err);
     if (st == IIR_OK) st = iir_method_create(o.method, scene, rt, &chunked, &m, &err);
     iir_frame_stats fs = {0};
     iird_catch_interrupts();

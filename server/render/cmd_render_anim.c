@@ -114,20 +114,6 @@ typedef struct anim_job {
     double start_ms, frames_start_ms, render_ms, last_log_ms;
 } anim_job;
 
-/* Creates dir unless it exists; its parent must. */
-static iir_status make_dir(const char *dir, iir_error *err)
-{
-    struct stat sb;
-    if (mkdir(dir, 0777) == 0) return IIR_OK;
-    if (errno == EEXIST && stat(dir, &sb) == 0 && S_ISDIR(sb.st_mode)) return IIR_OK;
-    if (errno == EEXIST)
-        return iir_fail(err, IIR_ERR_IO, "--out %s: exists and is not a directory", dir);
-    if (errno == ENOENT)
-        return iir_fail(err, IIR_ERR_IO, "--out %s: cannot create it: its parent does not exist",
-                        dir);
-    return iir_fail(err, IIR_ERR_IO, "--out %s: cannot create it: %s", dir, strerror(errno));
-}
-
 /* FNV-1a 64 over bytes. */
 static uint64_t fnv(uint64_t h, const void *data, size_t n)
 {
@@ -183,25 +169,28 @@ static iir_status set_spot(anim_job *j, iir_error *err)
     return st;
 }
 
-/* Scene, script, range: everything that can be refused before any work. */
+/* Scene, script, range, then the output folders (made only once the rest is accepted):
+ * everything that can be refused before any work. */
 static iir_status load(anim_job *j, iir_error *err)
 {
     const iird_render_opts *o = j->o;
     const char *scenes = iird_scenes_dir(o->scenes_dir);
-    iir_status st = iir_params_validate(&o->params, err);
+    iir_status st = iir_method_params_validate(o->method, &o->params, NULL, NULL, err);
     if (st == IIR_OK && o->video) st = iird_video_check(o->video, o->width, o->height, err);
-    if (st == IIR_OK) st = iird_load_scene(o->scene, scenes, &j->scene, &j->rt, err);
+    if (st == IIR_OK) st = iir_scene_open(o->scene, scenes, &j->scene, &j->rt, err);
     if (st == IIR_OK)
         st = iird_resolve_anim(j->scene, scenes, o->anim, &j->anim, j->script, sizeof j->script,
                                err);
     if (st == IIR_OK) st = set_range(j, err);
     if (st == IIR_OK) st = set_spot(j, err);
+    if (st == IIR_OK) st = iird_prepare_dir(o->out, "--out", err);
+    if (st == IIR_OK && o->video) st = iird_prepare_parent(o->video, "--video", err);
     if (st == IIR_OK && !(j->lights = malloc(sizeof(iir_light) * (j->scene->num_lights + 1))))
         st = iir_fail(err, IIR_ERR_NOMEM, "out of memory");
     return st;
 }
 
-/* Method, output directory, render.json (which may refuse a resume), image, video. */
+/* Method, render.json (which may refuse a resume), image, video. */
 static iir_status prepare(anim_job *j, iir_error *err)
 {
     const iird_render_opts *o = j->o;
@@ -223,7 +212,6 @@ static iir_status prepare(anim_job *j, iir_error *err)
                                .video = o->video,
                                .threads = omp_get_max_threads()};
     iir_status st = iir_method_create(o->method, j->scene, j->rt, &o->params, &j->m, err);
-    if (st == IIR_OK) st = make_dir(o->out, err);
     if (st == IIR_OK) st = iird_render_log_open(o->out, &setup, &j->run, &j->log, err);
     if (st == IIR_OK && !(j->img = iir_image_create(o->width, o->height)))
         st = iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %dx%d frame", o->width, o->height);

@@ -42,35 +42,6 @@ static double float_value(float v)
     return v;
 }
 
-/* Keys are the option names without "--", so a mismatch names the option. */
-static cJSON *params_json(const iir_params *p)
-{
-    cJSON *o = cJSON_CreateObject();
-    cJSON_AddNumberToObject(o, "spp", p->spp);
-    cJSON_AddNumberToObject(o, "bounces", p->bounces);
-    if (p->seed <= (1ull << 53)) {
-        cJSON_AddNumberToObject(o, "seed", (double)p->seed);
-    } else {
-        char s[32];
-        snprintf(s, sizeof s, "%llu", (unsigned long long)p->seed);
-        cJSON_AddStringToObject(o, "seed", s);
-    }
-    cJSON_AddBoolToObject(o, "jitter", p->jitter);
-    cJSON_AddNumberToObject(o, "vpls", p->vpls);
-    cJSON_AddNumberToObject(o, "kmin", p->kmin);
-    cJSON_AddNumberToObject(o, "kmax", p->kmax);
-    cJSON_AddStringToObject(o, "weights",
-                            p->weights == IIR_WEIGHTS_VORONOI ? "voronoi" : "uniform");
-    cJSON_AddNumberToObject(o, "regen-threshold", float_value(p->regen_threshold));
-    cJSON_AddStringToObject(o, "visibility", p->visibility == IIR_VIS_RAYS ? "rays" : "shadowmap");
-    cJSON_AddNumberToObject(o, "sm-res", p->sm_res);
-    cJSON_AddNumberToObject(o, "sm-bias", float_value(p->sm_bias));
-    cJSON_AddNumberToObject(o, "interleave", p->interleave);
-    cJSON_AddNumberToObject(o, "clamp", float_value(p->clamp));
-    cJSON_AddBoolToObject(o, "ir-same-random", !p->ir_fresh);
-    return o;
-}
-
 static cJSON *settings_json(const iird_render_setup *s)
 {
     cJSON *o = cJSON_CreateObject();
@@ -87,7 +58,7 @@ static cJSON *settings_json(const iird_render_setup *s)
     cJSON_AddItemToArray(size, cJSON_CreateNumber(s->height));
     cJSON_AddStringToObject(o, "format", s->format);
     cJSON_AddNumberToObject(o, "exposure", float_value(s->exposure));
-    cJSON_AddItemToObject(o, "params", params_json(s->params));
+    cJSON_AddItemToObject(o, "params", iird_json_method_params(s->method, s->params));
     return o;
 }
 
@@ -97,6 +68,8 @@ static const char *option_name(const char *key, char *buf, size_t n)
     if (!strcmp(key, "scene")) return "SCENE";
     if (!strcmp(key, "script")) return "--anim (the script's frames)";
     snprintf(buf, n, "--%s", key);
+    for (char *c = buf; *c; c++)
+        if (*c == '_') *c = '-';
     return buf;
 }
 

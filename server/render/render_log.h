@@ -4,9 +4,10 @@
  * rendering (cmd_render_anim.c).
  *
  * Layout (docs/cli.md): {"generator", "settings": {scene, script: {frames, fps, hash}, method,
- * size, format, exposure, params: {spp, bounces, seed, ...}}, "scene_source", "script",
- * "runs": [...], "frames": [{frame, time_s, file, total_ms, write_ms, phase_ms, rays, vpls,
- * spp}], "totals"}. The file is replaced atomically (written to render.json.part, renamed). */
+ * size, format, exposure, params: {every parameter of the method by name}}, "scene_source",
+ * "script", "runs": [...], "frames": [{frame, time_s, file, total_ms, write_ms, phase_ms, rays,
+ * vpls, spp}], "totals"}. The file is replaced atomically (written to render.json.part, renamed).
+ */
 #ifndef IIRD_RENDER_LOG_H
 #define IIRD_RENDER_LOG_H
 

@@ -16,8 +16,8 @@ typedef struct iird_video iird_video;
 
 /* Checks before any rendering that a video can be made: path ends in .mp4, width and height are
  * even (IIR_ERR_INVALID naming --video or --size; 4:2:0 chroma needs even sizes), and an ffmpeg
- * program is on PATH (IIR_ERR_UNSUPPORTED). Its folder is checked by iird_video_open, as it may
- * be the --out directory that is made later. */
+ * program is on PATH (IIR_ERR_UNSUPPORTED). Not its folder: the caller makes that
+ * (iird_prepare_parent), and iird_video_open checks it exists. */
 iir_status iird_video_check(const char *path, int width, int height, iir_error *err);
 
 /* Starts ffmpeg writing path (overwriting it) from width x height frames at fps. IIR_ERR_IO when

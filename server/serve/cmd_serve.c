@@ -39,7 +39,6 @@ static void serve_usage(FILE *f)
         "  --web DIR            the web client's folder (default $IIR_WEB, ./web, the source's)\n"
         "  --max-sessions N     open WebSocket sessions at most (default 8)\n"
         "  --max-size WxH       largest frame a client may ask for (default 1920x1080)\n"
-        "  --max-vpls N         most VPLs a client may ask for (default 4096)\n"
         "  --origin URL         allowed browser origin, repeatable (default: any origin on a\n"
         "                       loopback address, else only the server's own)\n"
         "  --token T            clients must send this token in hello\n"
@@ -48,13 +47,13 @@ static void serve_usage(FILE *f)
         "  --size WxH           a new session's frame size (default 512x384)\n"
         "  --verbose            libwebsockets notices on stderr\n"
         "  -h, --help           this text\n"
-        "\n%s"
-        "  (here they set a new session's defaults, which are otherwise those of the state\n"
-        "  message in docs/protocol.md, e.g. spp 1; clients change them with params)\n"
         "\n"
         "Exit codes: 0 stopped by a signal, 1 cannot listen, 2 bad input, 3 file error,\n"
-        "64 usage.\n",
-        IIRD_METHOD_HELP);
+        "64 usage.\n"
+        "\n"
+        "The parameters below set a new session's defaults, which are otherwise each\n"
+        "parameter's live-session default (welcome in docs/protocol.md; pt's spp is 1);\n"
+        "clients change them with params.\n");
 }
 
 enum {
@@ -65,7 +64,6 @@ enum {
     OPT_WEB,
     OPT_MAX_SESSIONS,
     OPT_MAX_SIZE,
-    OPT_MAX_VPLS,
     OPT_ORIGIN,
     OPT_TOKEN,
     OPT_TLS_CERT,
@@ -114,8 +112,6 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
         return parse_int_opt(arg, "--max-sessions", 1, 1024, &cfg->max_sessions, err);
     case OPT_MAX_SIZE:
         return iird_parse_size(arg, 4096, &cfg->limits.max_width, &cfg->limits.max_height, err);
-    case OPT_MAX_VPLS:
-        return parse_int_opt(arg, "--max-vpls", 1, 16384, &cfg->limits.max_vpls, err);
     case OPT_ORIGIN:
         if (cfg->num_origins == IIRD_MAX_ORIGINS)
             return iir_fail(err, IIR_ERR_INVALID, "--origin: at most %d origins", IIRD_MAX_ORIGINS);
@@ -229,10 +225,7 @@ static iir_status check(serve_opts *o, iir_error *err)
                         d->width, d->height, cfg->limits.max_width, cfg->limits.max_height);
     if (d->width < 16 || d->height < 16)
         return iir_fail(err, IIR_ERR_INVALID, "--size: each side must be at least 16");
-    if (d->params.vpls > cfg->limits.max_vpls)
-        return iir_fail(err, IIR_ERR_INVALID, "--vpls %d is more than --max-vpls %d",
-                        d->params.vpls, cfg->limits.max_vpls);
-    iir_status st = iir_params_validate(&d->params, err);
+    iir_status st = iir_method_params_validate(d->method, &d->params, NULL, NULL, err);
     return st == IIR_OK ? check_files(cfg, err) : st;
 }
 
@@ -246,7 +239,6 @@ int iird_cmd_serve(int argc, char **argv)
         {"web", required_argument, 0, OPT_WEB},
         {"max-sessions", required_argument, 0, OPT_MAX_SESSIONS},
         {"max-size", required_argument, 0, OPT_MAX_SIZE},
-        {"max-vpls", required_argument, 0, OPT_MAX_VPLS},
         {"origin", required_argument, 0, OPT_ORIGIN},
         {"token", required_argument, 0, OPT_TOKEN},
         {"tls-cert", required_argument, 0, OPT_TLS_CERT},
@@ -255,9 +247,8 @@ int iird_cmd_serve(int argc, char **argv)
         {"size", required_argument, 0, OPT_SIZE},
         {"verbose", no_argument, 0, OPT_VERBOSE},
         {"help", no_argument, 0, 'h'},
-        IIRD_METHOD_LONGOPTS,
         {0, 0, 0, 0}};
-    static const iird_command cmd = {"serve", longopts, serve_usage, parse_option};
+    static const iird_command cmd = {"serve", longopts, serve_usage, parse_option, NULL};
     serve_opts o = {.cfg = {.host = "127.0.0.1",
                             .port = 8080,
                             .max_sessions = 8,

@@ -183,20 +183,14 @@ static void unlink_slot(iird_scene_cache *c, cache_slot *s)
         }
 }
 
-/* Loads the slot's scene with the lock released; publishes the result under it. */
+/* Loads the slot's scene with the lock released (its key is "builtin" or an existing path, so
+ * nothing is looked up in a scenes folder); publishes the result under it. */
 static iir_status load_slot(iird_scene_cache *c, cache_slot *s, iir_error *err)
 {
     iir_scene *scene = NULL;
     iir_rt *rt = NULL;
-    iir_status st;
     pthread_mutex_unlock(&c->lock);
-    if (!strcmp(s->key, "builtin")) {
-        scene = iir_scene_create_cornell_box();
-        st = scene ? IIR_OK : iir_fail(err, IIR_ERR_NOMEM, "out of memory building the box");
-    } else {
-        st = iir_scene_load(s->key, &scene, err);
-    }
-    if (st == IIR_OK) st = iir_rt_create(scene, &rt, err);
+    iir_status st = iir_scene_open(s->key, NULL, &scene, &rt, err);
     pthread_mutex_lock(&c->lock);
     s->loading = false;
     s->scene = scene;

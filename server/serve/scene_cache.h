@@ -41,7 +41,7 @@ bool iird_scene_cache_has(const iird_scene_cache *c, const char *name);
 
 /* A new reference to scene `name_or_path`, loading it if no session holds it (this can take
  * seconds for a large scene). "builtin" (or NULL) is the built-in Cornell box; any other text is
- * resolved as iird_load_scene does. On error returns its status with err filled and *out NULL. */
+ * resolved as iir_scene_open does. On error returns its status with err filled and *out NULL. */
 iir_status iird_scene_cache_acquire(iird_scene_cache *c, const char *name_or_path,
                                     const iird_scene_entry **out, iir_error *err);
 /* Another reference to a scene the caller holds (or that is pinned). */

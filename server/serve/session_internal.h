@@ -64,7 +64,6 @@ typedef struct render_job {
 typedef struct worker_state {
     iir_method *method;
     char method_name[16];
-    iir_params method_params;
     const iird_scene_entry *method_scene;
     iir_image *img;
     iir_jpeg_encoder *enc;

@@ -1,19 +1,17 @@
 /* session_worker.c -- a session's render worker: renders the newest state, encodes the JPEG,
  * publishes the frame and wakes the service thread; refines the frame while nothing changes;
- * loads scenes and writes snapshots. Not messages (session_msg.c) or writing (session.c).
+ * loads scenes and encodes snapshots. Not messages (session_msg.c) or writing (session.c).
  *
  * The loop holds the session's lock only to look at the state and to publish; every step below
  * that says "_locked" is entered and left with the lock held and drops it for the slow part.
  * Priorities: stop, scene load, a new state (unless held back by an unsent frame that already
  * replaced another: at most one frame ahead of what was sent), a snapshot, refinement (after
  * IIRD_REFINE_IDLE_MS without input, until converged), then sleep on the condition variable. */
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <unistd.h>
 
 #include <libwebsockets.h>
 
@@ -97,16 +95,6 @@ void iird_worker_free(worker_state *w)
 
 /* ======================== the method and its inputs ======================== */
 
-static bool params_equal(const iir_params *a, const iir_params *b)
-{
-    return a->spp == b->spp && a->bounces == b->bounces && a->seed == b->seed &&
-           a->jitter == b->jitter && a->refine_passes == b->refine_passes && a->vpls == b->vpls &&
-           a->kmin == b->kmin && a->kmax == b->kmax && a->weights == b->weights &&
-           a->regen_threshold == b->regen_threshold && a->visibility == b->visibility &&
-           a->sm_res == b->sm_res && a->sm_bias == b->sm_bias && a->interleave == b->interleave &&
-           a->clamp == b->clamp && a->ir_fresh == b->ir_fresh;
-}
-
 /* Same picture as the last frame: only the encoding (quality, exposure) or the stream changed. */
 static bool same_view(const worker_state *w, const render_job *j)
 {
@@ -115,7 +103,7 @@ static bool same_view(const worker_state *w, const render_job *j)
            !memcmp(&a->camera, &j->camera, sizeof a->camera) &&
            a->settings.width == j->settings.width && a->settings.height == j->settings.height &&
            !strcmp(a->settings.method, j->settings.method) &&
-           params_equal(&a->settings.params, &j->settings.params);
+           iir_params_equal(&a->settings.params, &j->settings.params);
 }
 
 /* Refinement's stop hook (called from the renderer's threads without the lock): new input or the
@@ -127,14 +115,19 @@ static bool refine_should_stop(void *ctx)
            atomic_load_explicit(&s->version, memory_order_relaxed) != s->w.last.version;
 }
 
+/* The session's method for the job: kept when only parameters changed (its VPLs too, when every
+ * change is IIR_PARAM_LIVE), created anew for another method or scene. */
 static iir_status ensure_method(iird_session *s, const render_job *j, const iird_scene_entry *sc,
                                 iir_error *err)
 {
     worker_state *w = &s->w;
     const iird_settings *st = &j->settings;
-    if (w->method && w->method_scene == sc && !strcmp(w->method_name, st->method) &&
-        params_equal(&w->method_params, &st->params))
-        return IIR_OK;
+    bool same = w->method && w->method_scene == sc && !strcmp(w->method_name, st->method);
+    if (same && iir_params_equal(iir_method_params(w->method), &st->params)) return IIR_OK;
+    if (same) {
+        w->have_frame = false;
+        return iir_method_set_params(w->method, &st->params, NULL, err);
+    }
     iir_method_destroy(w->method);
     w->method = NULL;
     w->have_frame = false;
@@ -142,7 +135,6 @@ static iir_status ensure_method(iird_session *s, const render_job *j, const iird
     if (rc != IIR_OK) return rc;
     iir_method_set_stop(w->method, refine_should_stop, s);
     snprintf(w->method_name, sizeof w->method_name, "%s", st->method);
-    w->method_params = st->params;
     w->method_scene = sc;
     return IIR_OK;
 }
@@ -242,22 +234,13 @@ static char *domain_json(worker_state *w, const render_job *j, const iird_scene_
 static uint64_t estimate_memory(const iird_session *s, const render_job *j)
 {
     const worker_state *w = &s->w;
-    uint64_t px = (uint64_t)j->settings.width * (uint64_t)j->settings.height;
+    const iird_settings *st = &j->settings;
+    uint64_t px = (uint64_t)st->width * (uint64_t)st->height;
     uint64_t bytes = sizeof *s + IIRD_MAX_MESSAGE_BYTES; /* the struct and the receive buffer */
     bytes += px * sizeof(iir_vec3);                      /* the frame */
     bytes += px * 3 + (px * 3 + 2048);                   /* encoder: RGB8 + tjBufSize */
     bytes += 3 * (uint64_t)w->back.cap;                  /* back, slot and sending buffers */
-    uint32_t n = 0;
-    const iir_vpl *v = w->method ? iir_method_vpls(w->method, &n) : NULL;
-    if (v) {
-        bytes += px * (56 + 12 + 16); /* G-buffer, raw indirect, filter rows */
-        bytes += px * (24 + 12);      /* refinement: double sum + pass image */
-        for (uint32_t i = 0; i < n; i++)
-            bytes += sizeof *v + (uint64_t)v[i].smap.res * (uint64_t)v[i].smap.res * 4;
-    } else {
-        bytes += px * sizeof(iir_vec3); /* pt's sum image */
-    }
-    return bytes;
+    return bytes + iir_method_memory(st->method, &st->params, st->width, st->height);
 }
 
 /* ======================== publishing ======================== */
@@ -437,14 +420,6 @@ static void domain_locked(iird_session *s)
 /* A VPL method's refined frame is worth showing only after whole sweeps of its n x n subsets:
  * in between, pixels have seen different numbers of subsets and the image shows the n x n
  * pattern (refine.h). pt's passes are whole samples per pixel: every one is shown. */
-static bool whole_sweep(const worker_state *w, const iir_params *p)
-{
-    uint32_t n = 0;
-    bool has_vpls = iir_method_vpls(w->method, &n) != NULL;
-    uint32_t n2 = (uint32_t)(p->interleave * p->interleave);
-    return !has_vpls || n2 <= 1 || w->pass % n2 == 0;
-}
-
 /* One more refinement pass over the last frame, published as pass k > 0 after whole sweeps. */
 static void refine_locked(iird_session *s)
 {
@@ -456,10 +431,9 @@ static void refine_locked(iird_session *s)
     iir_status st = iir_method_refine(w->method, w->img, &f.stats, &err);
     if (st == IIR_OK) {
         f.pass = ++w->pass;
-        f.converged = w->converged =
-            f.stats.converged || w->pass >= (uint32_t)j.settings.params.refine_passes;
+        f.converged = w->converged = f.stats.converged;
         w->last_stats = f.stats;
-        if (f.converged || whole_sweep(w, &j.settings.params)) {
+        if (f.converged || f.stats.whole_sweeps) {
             f.id = ++w->next_id;
             publish(s, &j, &f);
         }
@@ -485,34 +459,21 @@ static bool refine_due_locked(const iird_session *s, double *wait_ms)
     return true;
 }
 
-/* The image as a PNG or EXR file's bytes after LWS_PRE + the frame header's room; NULL with err
- * filled on failure. The file goes through a temporary file (image.h writes files). */
+/* The image as a PNG or EXR file's bytes after LWS_PRE + the frame header's room, encoded in
+ * memory; NULL with err filled on failure. */
 static unsigned char *snapshot_bytes(const iir_image *img, bool exr, float exposure, size_t *size,
                                      iir_error *err)
 {
-    const char *tmp = getenv("TMPDIR");
-    char path[4096];
-    snprintf(path, sizeof path, "%s/iird-snapshot-XXXXXX.%s", tmp && *tmp ? tmp : "/tmp",
-             exr ? "exr" : "png");
-    int fd = mkstemps(path, 4);
-    if (fd < 0)
-        return iir_fail(err, IIR_ERR_IO, "cannot create %s: %s", path, strerror(errno)), NULL;
-    close(fd);
-    iir_status st =
-        exr ? iir_image_write_exr(img, path, err) : iir_image_write_png(img, path, exposure, err);
-    unsigned char *buf = NULL;
-    FILE *f = st == IIR_OK ? fopen(path, "rb") : NULL;
-    if (f && fseek(f, 0, SEEK_END) == 0) {
-        long n = ftell(f);
-        rewind(f);
-        buf = n > 0 ? malloc(LWS_PRE + IIRD_FRAME_HEADER_BYTES + (size_t)n) : NULL;
-        if (buf && fread(buf + LWS_PRE + IIRD_FRAME_HEADER_BYTES, 1, (size_t)n, f) != (size_t)n)
-            free(buf), buf = NULL;
-        *size = (size_t)n;
-    }
-    if (f) fclose(f);
-    unlink(path);
-    if (!buf && st == IIR_OK) iir_fail(err, IIR_ERR_IO, "cannot read back %s", path);
+    uint8_t *file = NULL;
+    iir_status st = exr ? iir_image_encode_exr(img, &file, size, err)
+                        : iir_image_encode_png(img, exposure, &file, size, err);
+    if (st != IIR_OK) return NULL;
+    unsigned char *buf = malloc(LWS_PRE + IIRD_FRAME_HEADER_BYTES + *size);
+    if (buf)
+        memcpy(buf + LWS_PRE + IIRD_FRAME_HEADER_BYTES, file, *size);
+    else
+        iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %zu-byte snapshot", *size);
+    free(file);
     return buf;
 }
 

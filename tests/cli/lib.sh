@@ -19,3 +19,13 @@ expect() {
     [ "$rc" = "$code" ] || fail "'$*' exited $rc, expected $code: $out"
     echo "$out" | grep -qiE -- "$pattern" || fail "'$*' output lacks /$pattern/: $out"
 }
+
+# quick LIMIT_MS CODE PATTERN -- CMD...: expect, and CMD must also end within LIMIT_MS (for refusals
+# that must come before any work: give CMD work that would take far longer).
+quick() {
+    local limit=$1 t0=${EPOCHREALTIME/./}
+    shift
+    expect "$@"
+    local ms=$(((${EPOCHREALTIME/./} - t0) / 1000))
+    [ "$ms" -lt "$limit" ] || fail "'${*:4}' took $ms ms, expected under $limit ms: work before the check?"
+}

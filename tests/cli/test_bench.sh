@@ -18,7 +18,7 @@ pyany=$(command -v python3 || echo /usr/bin/python3)
 
 # Stills with the VPL methods.
 for m in ir iir; do
-    out=$("$iird" render --method $m --size 32x24 --vpls 64 --spp 1 --out "$tmp/$m.png" 2>&1) ||
+    out=$("$iird" render --method $m --size 32x24 --vpls 64 --refine-passes 1 --out "$tmp/$m.png" 2>&1) ||
         fail "render --method $m: $out"
     echo "$out" | grep -q "method $m, " || fail "render --method $m summary: $out"
 done
@@ -153,6 +153,24 @@ out=$("$iird" bench --sweep vpls=8 --sweep vpls=16 --ref-spp 0 --size 8x8 2>&1)
 [ $? = 2 ] && echo "$out" | grep -q "given twice" || fail "--sweep twice: $out"
 out=$("$iird" bench --methods iir --sweep kmax=2 --frames 2 --ref-spp 0 --size 8x8 2>&1)
 [ $? = 2 ] && echo "$out" | grep -q -- "--sweep: iir with kmax=2" || fail "kmax < kmin: $out"
+
+# Output folders: --out and --ref-cache are made with their parents before any work; an --out
+# that cannot be written is refused at once (exit 3, --out named) before references are rendered
+# (none reach the cache) however long the bench would have taken; a --ref-cache that cannot be
+# made is a warning and the bench goes on without it.
+quickargs=(--methods iir --frames 2 --ref-spp 2 --size 16x12 --vpls 16 --sm-res 32 --no-charts)
+out=$("$iird" bench "${quickargs[@]}" --out "$tmp/new/deep/out" --ref-cache "$tmp/new/cache/refs" 2>&1) ||
+    fail "bench into new nested folders: $out"
+[ -s "$tmp/new/deep/out/frames.csv" ] || fail "no frames.csv in a new nested --out"
+[ "$(ls "$tmp/new/cache/refs" | grep -c '\.pfm$')" = 2 ] || fail "no references in a new nested --ref-cache"
+touch "$tmp/file"
+quick 2000 3 "--out .*file/out.*not a directory" -- "$iird" bench --methods iir,ir,pt --frames 400 \
+    --ref-spp 4096 --size 512x384 --ref-cache "$tmp/unused" --out "$tmp/file/out"
+[ -e "$tmp/unused" ] && fail "a refused --out still prepared the reference cache"
+out=$("$iird" bench "${quickargs[@]}" --ref-cache "$tmp/file/cache" 2>&1) ||
+    fail "bench with an unusable --ref-cache failed: $out"
+echo "$out" | grep -qi "warning: no reference cache: --ref-cache .*file/cache.*not a directory" ||
+    fail "no warning for an unusable --ref-cache: $out"
 
 if [ $failures -gt 0 ]; then
     echo "$failures failure(s)"

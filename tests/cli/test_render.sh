@@ -24,7 +24,6 @@ expect 2 "seed" -- "$iird" render --seed abc --out "$tmp/x.png"
 expect 2 "exposure" -- "$iird" render --exposure nan --out "$tmp/x.png"
 expect 2 "method 'nope'.*pt" -- "$iird" render --method nope --size 8x8 --out "$tmp/x.png"
 expect 2 "\.png, \.exr or \.pfm" -- "$iird" render --out "$tmp/x.txt"
-expect 3 "does not exist" -- "$iird" render --out "$tmp/no/such/dir/x.png"
 [ -e "$tmp/x.txt" ] && fail "an image with a bad extension was written"
 
 # Scenes: unknown names, paths outside the scenes directory, broken files.
@@ -55,6 +54,27 @@ cmp -s "$tmp/a.pfm" "$tmp/c.pfm" && fail "seeds 7 and 8 gave the same image"
 # A shipped scene by name, and the raw-rate benchmark.
 expect 0 "wrote .*cornell_box" -- "$iird" render cornell_box --scenes "$src/scenes" --spp 1 --size 16x16 --out "$tmp/s.png"
 expect 0 "raw closest-hit.*Mrays/s" -- "$iird" raybench --rays 20000 --size 16x16 --spp 1
+
+# Output folders are made with their parents and checked for writing before any work: a folder
+# under a regular file is refused at once (exit 3, the option named), however long the work would
+# have taken, and nothing is written.
+expect 0 "wrote .*new/deep/x.png" -- "$iird" render --spp 1 --size 8x8 --out "$tmp/new/deep/x.png"
+[ -s "$tmp/new/deep/x.png" ] || fail "no image in a new nested folder"
+touch "$tmp/file"
+quick 2000 3 "--out .*file/sub/x.png.*not a directory" -- \
+    "$iird" render --spp 100000 --size 512x512 --out "$tmp/file/sub/x.png"
+quick 2000 3 "--out .*file.*not a folder" -- "$iird" render --spp 100000 --out "$tmp/file/x.png"
+orbit=$src/scenes/cornell_box/paths/orbit.json
+small=(--size 16x12 --vpls 16 --sm-res 32)
+expect 0 "wrote 2 frames \(0\.\.1 " -- "$iird" render --anim "$orbit" --frames 0:2 "${small[@]}" \
+    --out "$tmp/new/anim" --video "$tmp/new/video/v.mp4"
+[ -s "$tmp/new/anim/frame_00001.png" ] || fail "no frames in a new nested --anim folder"
+[ -s "$tmp/new/video/v.mp4" ] || fail "no video in a new nested folder"
+quick 2000 3 "--out .*file/anim.*not a directory" -- \
+    "$iird" render --anim "$orbit" --size 1280x720 --out "$tmp/file/anim"
+quick 2000 3 "--video .*file/v.mp4.*not a folder" -- \
+    "$iird" render --anim "$orbit" --size 1280x720 --out "$tmp/anim2" --video "$tmp/file/v.mp4"
+[ -e "$tmp/anim2/render.json" ] && fail "a refused --video still started the render"
 
 # Ctrl-C keeps what is done: the partial image is written and the exit code is 130.
 "$iird" render --spp 100000 --size 64x64 --out "$tmp/partial.png" >/dev/null 2>"$tmp/int.log" &

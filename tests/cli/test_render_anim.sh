@@ -114,7 +114,9 @@ expect 2 "--frames 201:.*201 frames" -- "$iird" render --anim "$orbit" --out "$t
 expect 2 "--format 'bmp'" -- "$iird" render --anim "$orbit" --out "$tmp/x" --format bmp
 expect 64 "--frames needs --anim" -- "$iird" render --out "$tmp/x.png" --frames 0:2
 expect 64 "--out DIR is required" -- "$iird" render --anim "$orbit"
-expect 3 "parent does not exist" -- "$iird" render --anim "$orbit" --out "$tmp/no/such" --frames 0:1 "${small[@]}"
+touch "$tmp/plain"
+expect 3 "--out .*plain/such.*not a directory" -- \
+    "$iird" render --anim "$orbit" --out "$tmp/plain/such" --frames 0:1 "${small[@]}"
 [ -e "$tmp/x" ] && fail "a refused run created its --out directory"
 expect 2 "--size 65x48: --video needs an even" -- \
     "$iird" render --anim "$orbit" --out "$tmp/x" --size 65x48 --video "$tmp/x.mp4"

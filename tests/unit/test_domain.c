@@ -112,7 +112,7 @@ static void test_domain_follows_frames(void **state)
 {
     fixture *f = *state;
     iir_params p = iir_params_default();
-    p.vpls = 128;
+    iir_test_set(&p, "vpls", 128);
     iir_method *m = iir_test_method(f, "iir", &p);
     iir_image *img = iir_image_create(W, H);
     iir_frame_stats fs;

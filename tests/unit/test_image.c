@@ -230,7 +230,93 @@ static void test_png_values(void **state)
     iir_image_destroy(img);
 }
 
+/* The whole file at path, malloc'ed; *n its length. */
+static uint8_t *read_bytes(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    assert_int_equal(fseek(f, 0, SEEK_END), 0);
+    long len = ftell(f);
+    assert_true(len > 0);
+    rewind(f);
+    uint8_t *data = malloc((size_t)len);
+    assert_non_null(data);
+    assert_int_equal(fread(data, 1, (size_t)len, f), (size_t)len);
+    fclose(f);
+    *n = (size_t)len;
+    return data;
+}
+
+/* The encoder's bytes must be the file writer's, byte for byte (one encoder per format). */
+static void assert_file_holds(const char *path, const uint8_t *data, size_t size)
+{
+    size_t n = 0;
+    uint8_t *file = read_bytes(path, &n);
+    assert_int_equal(n, size);
+    assert_memory_equal(file, data, size);
+    free(file);
+}
+
+static void test_png_encode_in_memory(void **state)
+{
+    (void)state;
+    iir_image *img = make_hdr_image(7, 5);
+    for (size_t i = 0; i < 35; i++) img->pixels[i] = iir_scale(img->pixels[i], 0.01f);
+    uint8_t *data = NULL;
+    size_t size = 0;
+    iir_error err = {0};
+    assert_int_equal(iir_image_encode_png(img, 0.5f, &data, &size, &err), IIR_OK);
+    assert_non_null(data);
+    assert_true(size > 8);
+    assert_memory_equal(data, "\x89PNG\r\n\x1a\n", 8);
+
+    /* libpng decodes it to exactly the tone-mapped pixels */
+    png_image png = {.version = PNG_IMAGE_VERSION};
+    assert_true(png_image_begin_read_from_memory(&png, data, size));
+    assert_int_equal(png.width, 7);
+    assert_int_equal(png.height, 5);
+    png.format = PNG_FORMAT_RGB;
+    uint8_t got[7 * 5 * 3], want[7 * 5 * 3];
+    assert_true(png_image_finish_read(&png, NULL, got, 0, NULL));
+    iir_image_to_srgb8(img, 0.5f, want);
+    assert_memory_equal(got, want, sizeof want);
+
+    char path[1024];
+    scratch_path(path, sizeof path, "encoded.png");
+    assert_int_equal(iir_image_write_png(img, path, 0.5f, &err), IIR_OK);
+    assert_file_holds(path, data, size);
+    free(data);
+    iir_image_destroy(img);
+}
+
 /* ---- EXR ------------------------------------------------------------------------------------ */
+
+static void test_exr_encode_in_memory(void **state)
+{
+    (void)state;
+    const int sizes[2][2] = {{7, 5}, {3, 40}}; /* 40 rows: several ZIP chunks, a partial last */
+    for (int k = 0; k < 2; k++) {
+        iir_image *img = make_hdr_image(sizes[k][0], sizes[k][1]), *back = NULL;
+        uint8_t *data = NULL;
+        size_t size = 0;
+        iir_error err = {0};
+        assert_int_equal(iir_image_encode_exr(img, &data, &size, &err), IIR_OK);
+        assert_non_null(data);
+        assert_memory_equal(data, "\x76\x2f\x31\x01", 4); /* the EXR magic number */
+
+        /* the same bytes as the file writer's, and the reader gets the pixels back bit for bit */
+        char path[1024];
+        scratch_path(path, sizeof path, "encoded.exr");
+        assert_int_equal(iir_image_write_exr(img, path, &err), IIR_OK);
+        assert_file_holds(path, data, size);
+        write_bytes(scratch_path(path, sizeof path, "from_memory.exr"), data, size);
+        assert_int_equal(iir_image_read_exr(path, &back, &err), IIR_OK);
+        assert_same_bits(img, back);
+        iir_image_destroy(back);
+        free(data);
+        iir_image_destroy(img);
+    }
+}
 
 static void test_exr_roundtrip_bit_exact(void **state)
 {
@@ -746,6 +832,8 @@ int main(void)
         cmocka_unit_test(test_srgb8_known_values),
         cmocka_unit_test(test_srgb8_matches_formula),
         cmocka_unit_test(test_png_values),
+        cmocka_unit_test(test_png_encode_in_memory),
+        cmocka_unit_test(test_exr_encode_in_memory),
         cmocka_unit_test(test_exr_roundtrip_bit_exact),
         cmocka_unit_test(test_exr_reads_half),
         cmocka_unit_test(test_exr_reads_uint_tiled),

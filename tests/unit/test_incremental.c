@@ -1,8 +1,9 @@
 /* test_incremental.c -- the incremental instant radiosity step (incremental.h) against independent
  * answers in the built-in Cornell box: flux conservation against a dense quadrature of the disk
  * with the test's own rays, every VPL re-validated with the test's own ray, cone and facing test
- * over a random light path, the still-light budget, regeneration, determinism, bad input; and a
- * printed (not asserted) timing of the step. Nothing here shares code with incremental.c. */
+ * over a random light path, the still-light budget, the budget along a smooth path, regeneration,
+ * determinism, bad input. Timing is not a test: `iird bench` reports the step's phases per frame.
+ * Nothing here shares code with incremental.c. */
 #include <malloc.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -19,32 +20,12 @@
 #include "iir/rt.h"
 #include "iir/scene.h"
 #include "iir/tri.h"
+#include "testutil.h"
 
 /* ---- fixtures and small helpers ------------------------------------------------------------- */
 
-typedef struct env {
-    iir_scene *scene;
-    iir_rt *rt;
-} env;
-
-static int setup(void **state)
-{
-    env *e = calloc(1, sizeof *e);
-    iir_error err = {0};
-    e->scene = iir_scene_create_cornell_box();
-    if (!e->scene || iir_rt_create(e->scene, &e->rt, &err) != IIR_OK) return -1;
-    *state = e;
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    env *e = *state;
-    iir_rt_destroy(e->rt);
-    iir_scene_destroy(e->scene);
-    free(e);
-    return 0;
-}
+/* The built-in Cornell box and its rays: the shared group fixture (testutil.h). */
+typedef iir_test_cornell env;
 
 /* splitmix64 over a counter: iir_mix64 adds the increment itself. */
 static uint64_t next_u64(uint64_t *s)
@@ -410,8 +391,8 @@ static void test_flux_conservation_escaping(void **state)
         iir_weights w = k ? IIR_WEIGHTS_UNIFORM : IIR_WEIGHTS_VORONOI;
         iir_incr *inc = make_incr(e, 256, w, 3);
         iir_incr_stats st = update(inc, &l);
-        assert_true(st.null_samples > 20);
-        assert_true(st.null_samples < st.count);
+        assert_true(st.vpl.null_samples > 20);
+        assert_true(st.vpl.null_samples < st.vpl.count);
         check_conservation(e, inc, &l, k ? "escaping uniform" : "escaping voronoi");
         iir_incr_destroy(inc);
     }
@@ -458,31 +439,34 @@ static uint32_t track_ids(tracker *tr, const iir_vpl *v, uint32_t n, uint32_t fr
 static void check_budgets(const iir_incr_params *p, const iir_incr_stats *st, uint32_t count_prev,
                           int frame)
 {
-    if (count_prev - st->invalidated - st->deleted + st->inserted != st->count)
-        fail_msg("frame %d: %u - %u - %u + %u != %u", frame, count_prev, st->invalidated,
-                 st->deleted, st->inserted, st->count);
-    if (st->count > p->target) fail_msg("frame %d: count %u > N %u", frame, st->count, p->target);
-    if (st->regenerated || st->initial) {
-        assert_true(st->count > 0);
+    if (count_prev - st->vpl.invalidated - st->vpl.deleted + st->vpl.inserted != st->vpl.count)
+        fail_msg("frame %d: %u - %u - %u + %u != %u", frame, count_prev, st->vpl.invalidated,
+                 st->vpl.deleted, st->vpl.inserted, st->vpl.count);
+    if (st->vpl.count > p->target)
+        fail_msg("frame %d: count %u > N %u", frame, st->vpl.count, p->target);
+    if (st->vpl.regenerated || st->initial) {
+        assert_true(st->vpl.count > 0);
         return;
     }
-    int64_t v = st->valid, want = (int64_t)p->k_min - st->invalidated;
+    int64_t v = st->vpl.valid, want = (int64_t)p->k_min - st->vpl.invalidated;
     if (v - (int64_t)p->target > want) want = v - (int64_t)p->target;
     if (want < 0) want = 0;
     if (want > (v > 0 ? v - 1 : 0)) want = v > 0 ? v - 1 : 0;
-    if ((int64_t)st->deleted != want)
+    if ((int64_t)st->vpl.deleted != want)
         fail_msg("frame %d: deleted %u, expected %lld (valid %u, invalidated %u)", frame,
-                 st->deleted, (long long)want, st->valid, st->invalidated);
+                 st->vpl.deleted, (long long)want, st->vpl.valid, st->vpl.invalidated);
     /* "big enough": with at least k_min - invalidated + 1 sites left after validation, the frame
      * replaced at least k_min */
-    if (v >= (int64_t)p->k_min - st->invalidated + 1 && st->deleted + st->invalidated < p->k_min)
-        fail_msg("frame %d: only %u replaced, k_min %u", frame, st->deleted + st->invalidated,
-                 p->k_min);
-    if (st->inserted > p->k_max) fail_msg("frame %d: inserted %u > k_max", frame, st->inserted);
-    uint32_t after_delete = st->valid - st->deleted;
+    if (v >= (int64_t)p->k_min - st->vpl.invalidated + 1 &&
+        st->vpl.deleted + st->vpl.invalidated < p->k_min)
+        fail_msg("frame %d: only %u replaced, k_min %u", frame,
+                 st->vpl.deleted + st->vpl.invalidated, p->k_min);
+    if (st->vpl.inserted > p->k_max)
+        fail_msg("frame %d: inserted %u > k_max", frame, st->vpl.inserted);
+    uint32_t after_delete = st->vpl.valid - st->vpl.deleted;
     uint32_t fill = p->target - after_delete < p->k_max ? p->target - after_delete : p->k_max;
-    if (st->inserted != fill)
-        fail_msg("frame %d: inserted %u, expected %u", frame, st->inserted, fill);
+    if (st->vpl.inserted != fill)
+        fail_msg("frame %d: inserted %u, expected %u", frame, st->vpl.inserted, fill);
 }
 
 /* A random step of the light: kind 0 small (1 cm, ~2 degrees), 1 large (15 cm, ~25 degrees), 2 a
@@ -536,7 +520,7 @@ static void test_property_random_path(void **state)
         give_maps(inc);
         uint32_t n;
         const iir_vpl *v = iir_incr_vpls(inc, &n);
-        assert_int_equal(n, st.count);
+        assert_int_equal(n, st.vpl.count);
         check_set_shape(&l, v, n, f);
         uint32_t nulls = 0;
         for (uint32_t i = 0; i < n; i++) {
@@ -545,17 +529,17 @@ static void test_property_random_path(void **state)
             else
                 check_vpl_valid(e, &l, &v[i], f);
         }
-        assert_int_equal(nulls, st.null_samples);
+        assert_int_equal(nulls, st.vpl.null_samples);
         check_budgets(&p, &st, count_prev, f);
-        assert_int_equal(track_ids(&tr, v, n, (uint32_t)f), st.inserted);
+        assert_int_equal(track_ids(&tr, v, n, (uint32_t)f), st.vpl.inserted);
         /* after a jump the set refills by k_max - k_min per frame: at most N / 2 / 4 + 1 frames */
-        if (still > p.target / 2 / (p.k_max - p.k_min) + 1 && st.count != p.target)
-            fail_msg("frame %d: light still for %u frames, count %u != N", f, still, st.count);
+        if (still > p.target / 2 / (p.k_max - p.k_min) + 1 && st.vpl.count != p.target)
+            fail_msg("frame %d: light still for %u frames, count %u != N", f, still, st.vpl.count);
         for (int ph = 0; ph < IIR_INCR_PHASE_COUNT; ph++) assert_true(st.phase_ms[ph] >= 0);
         assert_true(st.rays.n[IIR_RAYS_VPL] == iir_raystats_total(&st.rays));
-        regens += st.regenerated;
-        nulls_seen += st.null_samples > 0;
-        count_prev = st.count;
+        regens += st.vpl.regenerated;
+        nulls_seen += st.vpl.null_samples > 0;
+        count_prev = st.vpl.count;
     }
     print_message("random path: %d frames, %u regenerations, %u frames with null samples\n", FRAMES,
                   regens, nulls_seen);
@@ -584,19 +568,19 @@ static void test_still_light(void **state)
         check_budgets(&p, &st, count_prev, f);
         if (f == 0) {
             assert_int_equal(st.initial, 1);
-            assert_int_equal(st.regenerated, 0);
-            assert_int_equal(st.inserted, p.target);
+            assert_int_equal(st.vpl.regenerated, 0);
+            assert_int_equal(st.vpl.inserted, p.target);
         } else {
             /* nothing dies on its own; exactly k_min are replaced, by k_min new ones */
-            assert_int_equal(st.invalidated, 0);
-            assert_int_equal(st.deleted, p.k_min);
-            assert_int_equal(st.inserted, p.k_min);
+            assert_int_equal(st.vpl.invalidated, 0);
+            assert_int_equal(st.vpl.deleted, p.k_min);
+            assert_int_equal(st.vpl.inserted, p.k_min);
             assert_int_equal(fresh, p.k_min);
-            assert_int_equal(st.regenerated, 0);
+            assert_int_equal(st.vpl.regenerated, 0);
         }
-        assert_int_equal(st.count, p.target);
-        assert_int_equal(st.valid, f == 0 ? 0 : p.target);
-        count_prev = st.count;
+        assert_int_equal(st.vpl.count, p.target);
+        assert_int_equal(st.vpl.valid, f == 0 ? 0 : p.target);
+        count_prev = st.vpl.count;
     }
     free(tr.prev_ids);
     iir_incr_destroy(inc);
@@ -626,26 +610,27 @@ static void test_regeneration_on_teleport(void **state)
         iir_incr_stats st = update(inc, &l);
         give_maps(inc);
         v = iir_incr_vpls(inc, &n);
-        assert_int_equal(st.valid, 0);
-        assert_int_equal(st.invalidated, p.target);
-        assert_int_equal(st.regenerated, 1); /* an empty set is always regenerated */
-        assert_int_equal(st.count, p.target);
+        assert_int_equal(st.vpl.valid, 0);
+        assert_int_equal(st.vpl.invalidated, p.target);
+        assert_int_equal(st.vpl.regenerated, 1); /* an empty set is always regenerated */
+        assert_int_equal(st.vpl.count, p.target);
         check_set_shape(&l, v, n, 5);
         for (uint32_t i = 0; i < n; i++) {
             assert_true(v[i].id >= first_new); /* fresh ids */
             if (!v[i].null_sample) check_vpl_valid(e, &l, &v[i], 5);
         }
-        assert_true(st.null_samples < n / 2); /* the open front lets only part of the cone out */
+        assert_true(st.vpl.null_samples <
+                    n / 2); /* the open front lets only part of the cone out */
         /* half the cone turns away: 50% threshold regenerates, threshold 1 refills slowly */
         l.direction = iir_normalize(iir_v3(1.f, 0.6f, 0.f));
         st = update(inc, &l);
         give_maps(inc);
         v = iir_incr_vpls(inc, &n);
         print_message("threshold %.1f: turned 60 degrees: invalidated %u of %u, regenerated %u\n",
-                      (double)p.regen_threshold, st.invalidated, p.target, st.regenerated);
-        assert_true(st.invalidated > p.target / 2 && st.invalidated < p.target);
-        assert_int_equal(st.regenerated, k == 0);
-        assert_int_equal(st.count, k == 0 ? p.target : p.target - st.invalidated + p.k_max);
+                      (double)p.regen_threshold, st.vpl.invalidated, p.target, st.vpl.regenerated);
+        assert_true(st.vpl.invalidated > p.target / 2 && st.vpl.invalidated < p.target);
+        assert_int_equal(st.vpl.regenerated, k == 0);
+        assert_int_equal(st.vpl.count, k == 0 ? p.target : p.target - st.vpl.invalidated + p.k_max);
         check_set_shape(&l, v, n, 6);
         for (uint32_t i = 0; i < n; i++)
             if (!v[i].null_sample) check_vpl_valid(e, &l, &v[i], 6);
@@ -676,9 +661,9 @@ static void test_facing_light_through_wall(void **state)
     iir_incr_stats st = update(inc, &l);
     /* the wall's VPLs face away, every other one is behind the wall: nothing survives, and the
      * empty set is regenerated (whatever the threshold) on the wall's outer face */
-    assert_int_equal(st.valid, 0);
-    assert_int_equal(st.invalidated, n);
-    assert_int_equal(st.regenerated, 1);
+    assert_int_equal(st.vpl.valid, 0);
+    assert_int_equal(st.vpl.invalidated, n);
+    assert_int_equal(st.vpl.regenerated, 1);
     v = iir_incr_vpls(inc, &n);
     check_set_shape(&l, v, n, 1);
     for (uint32_t i = 0; i < n; i++)
@@ -746,14 +731,14 @@ static void test_gradual_deaths_regenerate(void **state)
         l.cone_angle *= 0.96f; /* the disk's area shrinks ~8% a frame */
         if (l.smooth > l.cone_angle) l.smooth = l.cone_angle;
         iir_incr_stats st = update(inc, &l);
-        assert_true((double)st.invalidated <= p.regen_threshold * prev || st.regenerated);
-        regens += st.regenerated;
-        min_count = st.count < min_count ? st.count : min_count;
-        assert_true((double)st.count >= (1.0 - p.regen_threshold) * p.target);
-        prev = st.count;
+        assert_true((double)st.vpl.invalidated <= p.regen_threshold * prev || st.vpl.regenerated);
+        regens += st.vpl.regenerated;
+        min_count = st.vpl.count < min_count ? st.vpl.count : min_count;
+        assert_true((double)st.vpl.count >= (1.0 - p.regen_threshold) * p.target);
+        prev = st.vpl.count;
     }
     assert_true(regens >= 1);
-    for (int f = 0; f < 5; f++) assert_int_equal(update(inc, &l).regenerated, 0);
+    for (int f = 0; f < 5; f++) assert_int_equal(update(inc, &l).vpl.regenerated, 0);
     print_message("narrowing cone: %u regenerations in 30 frames, smallest set %u\n", regens,
                   min_count);
     iir_incr_destroy(inc);
@@ -771,23 +756,23 @@ static void test_param_changes(void **state)
     p.target = 100;
     assert_int_equal(iir_incr_set_params(inc, &p, NULL), IIR_OK);
     iir_incr_stats st = update(inc, &l);
-    assert_int_equal(st.count, 100);
-    assert_int_equal(st.deleted, 156);
-    assert_int_equal(st.inserted, 0);
+    assert_int_equal(st.vpl.count, 100);
+    assert_int_equal(st.vpl.deleted, 156);
+    assert_int_equal(st.vpl.inserted, 0);
     p.target = 300;
     p.weights = IIR_WEIGHTS_UNIFORM;
     assert_int_equal(iir_incr_set_params(inc, &p, NULL), IIR_OK);
     uint32_t frames = 0;
     do {
         st = update(inc, &l);
-        assert_true(st.inserted <= p.k_max);
+        assert_true(st.vpl.inserted <= p.k_max);
         frames++;
         if (frames == 10) { /* uniform weights while the set is below N: pi R^2 / count */
-            assert_int_equal(st.count, 140);
+            assert_int_equal(st.vpl.count, 140);
             check_conservation(e, inc, &l, "filling from 100 to 300, uniform");
         }
-    } while (st.count < 300 && frames < 200);
-    assert_int_equal(st.count, 300);
+    } while (st.vpl.count < 300 && frames < 200);
+    assert_int_equal(st.vpl.count, 300);
     assert_int_equal(frames, (300 - 100 + 3) / 4); /* net k_max - k_min = 4 per frame */
     check_conservation(e, inc, &l, "after N 256 -> 100 -> 300, uniform");
     iir_incr_destroy(inc);
@@ -858,7 +843,7 @@ static void test_bad_input(void **state)
     iir_incr_destroy(NULL);
 }
 
-/* ---- timing (printed, not asserted) ---------------------------------------------------------- */
+/* ---- a smooth path: a full set and bounded churn ------------------------------------------- */
 
 /* A smooth orbit under the ceiling with the aim swinging (the light moves about 1 cm a frame). */
 static iir_light orbit(iir_light l, int f)
@@ -869,38 +854,56 @@ static iir_light orbit(iir_light l, int f)
     return l;
 }
 
-static void bench(const env *e, uint32_t N, iir_weights w, int frames)
-{
-    iir_incr *inc = make_incr(e, N, w, 1);
-    iir_light l = cornell_spot(e);
-    double phase[IIR_INCR_PHASE_COUNT] = {0}, total = 0, worst = 0, inserted = 0;
-    uint64_t rays = 0;
-    for (int f = 0; f <= frames; f++) {
-        l = orbit(l, f);
-        iir_incr_stats st = update(inc, &l);
-        if (f == 0) continue; /* the initial set is not a frame of the step */
-        for (int ph = 0; ph < IIR_INCR_PHASE_COUNT; ph++) phase[ph] += st.phase_ms[ph];
-        total += st.total_ms;
-        worst = fmax(worst, st.total_ms);
-        rays += st.rays.n[IIR_RAYS_VPL];
-        inserted += st.inserted;
-    }
-    print_message("step N=%u %s: %.3f ms/frame mean, %.3f worst; %.1f rays, %.2f inserted per "
-                  "frame; ms:",
-                  N, w == IIR_WEIGHTS_VORONOI ? "voronoi" : "uniform", total / frames, worst,
-                  (double)rays / frames, inserted / frames);
-    for (int ph = 0; ph < IIR_INCR_PHASE_COUNT; ph++)
-        print_message(" %s %.3f", iir_incr_phase_name((iir_incr_phase)ph), phase[ph] / frames);
-    print_message("\n");
-    iir_incr_destroy(inc);
-}
-
-static void test_bench(void **state)
+/* Along the orbit nothing jumps, so after the first update no frame regenerates; each frame
+ * replaces between k_min and k_max + invalidated VPLs (invalidated + deleted) and inserts at most
+ * k_max; the set is back at N whenever the frame's budget allows (count = min(N, valid - deleted +
+ * k_max)), which on this path is nearly every frame (a few frames lose more than k_max VPLs at
+ * once); and its rays are one per VPL validated plus one per insertion: at least valid + inserted,
+ * at most count_prev + inserted. Both weightings. (Speed is `iird bench`'s.) */
+static void test_smooth_path_steady(void **state)
 {
     const env *e = *state;
-    bench(e, 256, IIR_WEIGHTS_VORONOI, 300);
-    bench(e, 256, IIR_WEIGHTS_UNIFORM, 300);
-    bench(e, 1024, IIR_WEIGHTS_VORONOI, 60);
+    enum { FRAMES = 80 };
+    for (int k = 0; k < 2; k++) {
+        iir_weights w = k ? IIR_WEIGHTS_UNIFORM : IIR_WEIGHTS_VORONOI;
+        iir_incr *inc = make_incr(e, 256, w, 1);
+        iir_incr_params p = iir_incr_get_params(inc);
+        iir_light l = cornell_spot(e);
+        uint32_t count_prev = 0, invalidated = 0, most = 0, full = 0;
+        for (int f = 0; f <= FRAMES; f++) {
+            l = orbit(l, f);
+            iir_incr_stats st = update(inc, &l);
+            const iir_vpl_counts *c = &st.vpl;
+            uint64_t rays = st.rays.n[IIR_RAYS_VPL];
+            if (f > 0) {
+                uint32_t replaced = c->invalidated + c->deleted;
+                uint32_t budget = c->valid - c->deleted + p.k_max;
+                if (c->regenerated) fail_msg("frame %d: regenerated on a smooth path", f);
+                if (replaced < p.k_min || replaced > p.k_max + c->invalidated)
+                    fail_msg("frame %d: replaced %u (invalidated %u), not in [%u, %u + %u]", f,
+                             replaced, c->invalidated, p.k_min, p.k_max, c->invalidated);
+                if (c->inserted > p.k_max)
+                    fail_msg("frame %d: inserted %u > k_max %u", f, c->inserted, p.k_max);
+                if (c->count != (budget < p.target ? budget : p.target))
+                    fail_msg("frame %d: %u VPLs, N %u, valid %u, deleted %u, k_max %u", f, c->count,
+                             p.target, c->valid, c->deleted, p.k_max);
+                if (rays < (uint64_t)c->valid + c->inserted ||
+                    rays > (uint64_t)count_prev + c->inserted)
+                    fail_msg("frame %d: %llu rays for %u VPLs validated (%u valid), %u inserted", f,
+                             (unsigned long long)rays, count_prev, c->valid, c->inserted);
+                invalidated += c->invalidated;
+                most = replaced > most ? replaced : most;
+                full += c->count == p.target;
+            }
+            count_prev = c->count;
+        }
+        print_message("smooth orbit, %s: %d frames, %u with N VPLs, %u invalidated, at most %u "
+                      "replaced a frame\n",
+                      k ? "uniform" : "voronoi", FRAMES, full, invalidated, most);
+        assert_true(invalidated > 0); /* the path does move the cone over VPLs */
+        if (full < FRAMES * 9 / 10) fail_msg("the set was full on %u of %d frames", full, FRAMES);
+        iir_incr_destroy(inc);
+    }
 }
 
 /* ---- memory: buffers are reused, nothing grows with the number of frames --------------------- */
@@ -949,7 +952,7 @@ int main(void)
         cmocka_unit_test(test_param_changes),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_memory_steady),
-        cmocka_unit_test(test_bench),
+        cmocka_unit_test(test_smooth_path_steady),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

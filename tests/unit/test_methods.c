@@ -62,14 +62,19 @@ static void test_ir_converges_to_pt(void **state)
     enum { W = 40, H = 40 };
     iir_view v = still_view(f);
     iir_params p = iir_params_default();
-    p.spp = 2048, p.bounces = 2, p.seed = 5;
+    iir_test_set(&p, "spp", 2048);
+    iir_test_set(&p, "bounces", 2);
+    iir_test_set(&p, "seed", 5);
     iir_image *ref = iir_image_create(W, H), *img = iir_image_create(W, H);
     iir_frame_stats fs;
     iir_method *pt = iir_test_method(f, "pt", &p);
     iir_test_render(pt, &v, ref, &fs);
     iir_method_destroy(pt);
 
-    p.vpls = 16384, p.visibility = IIR_VIS_RAYS, p.clamp = 0.f, p.interleave = 1;
+    iir_test_set(&p, "vpls", 16384);
+    iir_test_set(&p, "visibility", 1);
+    iir_test_set(&p, "clamp", 0.f);
+    iir_test_set(&p, "interleave", 1);
     iir_method *ir = iir_test_method(f, "ir", &p);
     iir_test_render(ir, &v, img, &fs);
     assert_true(fs.vpl.count > 10000);
@@ -129,15 +134,15 @@ static void test_still_light_matches_fresh_maps(void **state)
         iir_view v = {&l, 1, f->scene->camera};
         iir_test_render(m, &v, img, &fs);
     }
-    assert_int_equal(fs.vpl.count, (uint32_t)p.vpls);
+    assert_int_equal(fs.vpl.count, (uint32_t)iir_test_get(&p, "vpls"));
     uint32_t n = 0;
     const iir_vpl *vpls = iir_method_vpls(m, &n);
     iir_vpl *copy = malloc(sizeof(iir_vpl) * n);
     memcpy(copy, vpls, sizeof(iir_vpl) * n);
     for (uint32_t i = 0; i < n; i++) copy[i].smap = (iir_smap){0};
-    iir_smaps_build(copy, n, f->rt, p.sm_res, NULL);
+    iir_smaps_build(copy, n, f->rt, iir_test_get(&p, "sm_res"), NULL);
     iir_renderer *r = iir_renderer_create(f->scene, f->rt);
-    iir_indirect_params ind = iir_params_indirect(&p);
+    iir_indirect_params ind = iir_indirect_params_default(); /* p holds only defaults */
     iir_render_timing t;
     iir_error err = {0};
     /* the method's last frame was its 40th (index 39): same seed derivation for the direct part */
@@ -158,7 +163,7 @@ static void test_still_light_matches_fresh_maps(void **state)
 static void run_path(const fixture *f, const char *name, uint64_t seed, iir_image *out)
 {
     iir_params p = iir_params_default();
-    p.seed = seed;
+    iir_test_set(&p, "seed", seed);
     iir_method *m = iir_test_method(f, name, &p);
     iir_frame_stats fs;
     for (int frame = 0; frame < 12; frame++) {
@@ -193,12 +198,13 @@ static void test_refusals(void **state)
     iir_params p = iir_params_default();
     iir_error err = {0};
     iir_method *m = NULL;
-    p.kmin = 9, p.kmax = 8;
+    iir_test_set(&p, "kmin", 9);
+    iir_test_set(&p, "kmax", 8);
     assert_int_equal(iir_method_create("iir", f->scene, f->rt, &p, &m, &err), IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "kmin"));
     p = iir_params_default();
-    p.interleave = 9;
-    assert_int_equal(iir_method_create("ir", f->scene, f->rt, &p, &m, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_method_param_set(&p, "interleave", 9, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "interleave must be in [1, 8]"));
     p = iir_params_default();
     m = iir_test_method(f, "iir", &p);
     iir_light point = {.type = IIR_LIGHT_POINT,

@@ -22,7 +22,7 @@
 
 /* ======================== helpers ======================== */
 
-static iird_limits LIM = {1920, 1080, 4096};
+static iird_limits LIM = {1920, 1080};
 
 static iird_msg parse_ok(const char *json)
 {
@@ -539,92 +539,96 @@ static void test_camera(void **state)
 
 /* ======================== params ======================== */
 
-typedef struct param_case {
-    const char *name;
-    const char *lo, *hi;       /* valid bounds */
-    const char *below, *above; /* out of range (NULL: none) */
-    const char *wrong;         /* wrong JSON type */
-} param_case;
+/* Every params field, from the tables: the stream settings' and every method's rows. */
+static void each_param_row(void (*fn)(const iir_param *row))
+{
+    for (int i = 0; i < iird_stream_table.count; i++) fn(&iird_stream_table.rows[i]);
+    for (const iir_param_table *const *t = iir_method_all_tables(); *t; t++)
+        for (int i = 0; i < (*t)->count; i++) fn(&(*t)->rows[i]);
+}
 
-static const param_case PARAMS[] = {
-    {"method", "\"pt\"", "\"iir\"", "\"foo\"", "\"IIR\"", "3"},
-    {"vpls", "1", "4096", "0", "4097", "\"8\""},
-    {"kmin", "0", "4", "-1", "4097", "2.5"},
-    {"kmax", "4", "8", "-1", "4097", "true"},
-    {"weights", "\"uniform\"", "\"voronoi\"", "\"area\"", NULL, "1"},
-    {"visibility", "\"shadowmap\"", "\"rays\"", "\"none\"", NULL, "[]"},
-    {"interleave", "1", "8", "0", "9", "1.5"},
-    {"clamp", "0", "1e6", "-0.001", "1000001", "\"10\""},
-    {"sm_res", "8", "2048", "7", "2049", "null"},
-    {"bounces", "1", "8", "0", "9", "{}"},
-    {"spp", "1", "64", "0", "65", "1.000001"},
-    {"width", "16", "1920", "15", "1921", "\"512\""},
-    {"height", "16", "1080", "15", "1081", "false"},
-    {"quality", "1", "100", "0", "101", "50.5"},
-    {"exposure", "-20", "20", "-20.5", "21", "\"0\""},
-    {"refine", "false", "true", NULL, NULL, "1"},
-    {"refine_passes", "1", "4096", "0", "4097", "8.5"},
-    {"domain", "false", "true", NULL, NULL, "\"true\""},
-    {"seed", "0", "9007199254740992", "-1", "9007199254740994", "0.5"},
-};
+/* A row's accepted bounds and out-of-range and wrongly typed values, parsed as the protocol says:
+ * numbers up to the live maximum (width/height: up to LIM), enum names, booleans. */
+static void check_param_row(const iir_param *row)
+{
+    char json[256], field[64], lo[40], hi[40];
+    snprintf(field, sizeof field, "params.%s", row->name);
+    double top = iir_param_max(row, true); /* width, height: the limits apply later */
+    if (row->type == IIR_PARAM_ENUM) {
+        snprintf(lo, sizeof lo, "\"%s\"", row->choices[0]);
+        snprintf(hi, sizeof hi, "\"%s\"", row->choices[(int)row->hi]);
+    } else if (row->type == IIR_PARAM_BOOL) {
+        snprintf(lo, sizeof lo, "false"), snprintf(hi, sizeof hi, "true");
+    } else {
+        snprintf(lo, sizeof lo, "%.17g", row->lo), snprintf(hi, sizeof hi, "%.17g", top);
+    }
+    const char *ok[] = {lo, hi};
+    for (int k = 0; k < 2; k++) {
+        snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":%s}", row->name, ok[k]);
+        iird_msg m = parse_ok(json);
+        assert_true(iir_params_has(&m.u.params.values, row->name));
+        assert_int_equal(m.u.params.values.count, 1);
+    }
+    if (row->type == IIR_PARAM_ENUM) {
+        snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":\"nope\"}", row->name);
+        iird_proto_error e = expect(json, IIRD_E_OUT_OF_RANGE, field);
+        for (int i = 0; row->choices[i]; i++) assert_non_null(strstr(e.message, row->choices[i]));
+    } else if (row->type != IIR_PARAM_BOOL) {
+        snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":%.17g}", row->name,
+                 row->lo - (row->type == IIR_PARAM_FLOAT ? 0.5 : 1.0));
+        expect(json, IIRD_E_OUT_OF_RANGE, field);
+        snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":%.17g}", row->name,
+                 top + (row->type == IIR_PARAM_FLOAT ? 0.5 : 2.0));
+        expect(json, IIRD_E_OUT_OF_RANGE, field);
+    }
+    snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":%s}", row->name,
+             row->type == IIR_PARAM_BOOL   ? "1"
+             : row->type == IIR_PARAM_ENUM ? "1"
+                                           : "\"1\"");
+    expect(json, IIRD_E_BAD_TYPE, field);
+    if (row->type == IIR_PARAM_INT || row->type == IIR_PARAM_U64) {
+        snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":%.17g}", row->name, row->lo + 0.5);
+        expect(json, IIRD_E_BAD_TYPE, field);
+    }
+    snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":1e400}", row->name);
+    iird_msg m;
+    iird_proto_error e;
+    assert_false(iird_parse_message(json, strlen(json), &LIM, &m, &e));
+    assert_string_equal(e.field, field);
+}
 
 static void test_params_parse(void **state)
 {
     (void)state;
-    assert_int_equal(sizeof PARAMS / sizeof PARAMS[0], IIRD_P_COUNT);
-    char json[200], field[64];
-    for (int i = 0; i < IIRD_P_COUNT; i++) {
-        const param_case *c = &PARAMS[i];
-        assert_string_equal(c->name, iird_params_field_name(i));
-        snprintf(field, sizeof field, "params.%s", c->name);
-        const char *ok[] = {c->lo, c->hi};
-        for (int k = 0; k < 2; k++) {
-            snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":%s}", c->name, ok[k]);
-            iird_msg m = parse_ok(json);
-            assert_int_equal(m.u.params.has, 1ull << i);
-        }
-        const char *out[] = {c->below, c->above};
-        for (int k = 0; k < 2; k++) {
-            if (!out[k]) continue;
-            snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":%s}", c->name, out[k]);
-            expect(json, IIRD_E_OUT_OF_RANGE, field);
-        }
-        snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":%s}", c->name, c->wrong);
-        expect(json, IIRD_E_BAD_TYPE, field);
-        snprintf(json, sizeof json, "{\"type\":\"params\",\"%s\":1e400}", c->name);
-        iird_msg m;
-        iird_proto_error e;
-        assert_false(iird_parse_message(json, strlen(json), &LIM, &m, &e));
-        assert_string_equal(e.field, field);
-    }
-    /* enums list their allowed values */
+    each_param_row(check_param_row);
+    iird_msg m = parse_ok("{\"type\":\"params\",\"method\":\"pt\"}");
+    assert_true(m.u.params.has_method);
+    assert_string_equal(m.u.params.method, "pt");
     iird_proto_error e =
         expect("{\"type\":\"params\",\"method\":\"foo\"}", IIRD_E_OUT_OF_RANGE, "params.method");
     for (const char *const *n = iir_method_names(); *n; n++) assert_non_null(strstr(e.message, *n));
-    e = expect("{\"type\":\"params\",\"weights\":\"area\"}", IIRD_E_OUT_OF_RANGE, "params.weights");
-    assert_non_null(strstr(e.message, "\"uniform\", \"voronoi\""));
-    /* values land in the right places */
-    iird_msg m = parse_ok(
-        "{\"type\":\"params\",\"method\":\"pt\",\"vpls\":100,\"kmin\":1,\"kmax\":2,"
-        "\"weights\":\"voronoi\",\"visibility\":\"rays\",\"interleave\":2,\"clamp\":0.5,"
-        "\"sm_res\":64,\"bounces\":3,\"spp\":4,\"width\":640,\"height\":480,\"quality\":90,"
-        "\"exposure\":-1.5,\"refine\":false,\"refine_passes\":16,\"domain\":false,"
-        "\"seed\":9007199254740992}");
-    const iird_settings *v = &m.u.params.values;
-    assert_int_equal(m.u.params.has, (1ull << IIRD_P_COUNT) - 1);
-    assert_string_equal(v->method, "pt");
-    assert_true(v->params.vpls == 100 && v->params.kmin == 1 && v->params.kmax == 2);
-    assert_true(v->params.weights == IIR_WEIGHTS_VORONOI && v->params.visibility == IIR_VIS_RAYS);
-    assert_true(v->params.interleave == 2 && v->params.clamp == 0.5f && v->params.sm_res == 64);
-    assert_true(v->params.bounces == 3 && v->params.spp == 4 && v->params.refine_passes == 16);
-    assert_true(v->width == 640 && v->height == 480 && v->quality == 90 && v->exposure == -1.5f);
-    assert_true(!v->refine && !v->domain && v->params.seed == 9007199254740992ull);
-    /* server limits bound vpls, width and height */
-    iird_limits small = {640, 480, 256};
-    const char *js = "{\"type\":\"params\",\"vpls\":300}";
-    assert_false(iird_parse_message(js, strlen(js), &small, &m, &e));
-    assert_int_equal(e.code, IIRD_E_OUT_OF_RANGE);
-    assert_non_null(strstr(e.message, "256"));
+    expect("{\"type\":\"params\",\"method\":3}", IIRD_E_BAD_TYPE, "params.method");
+    /* values land under their names */
+    m = parse_ok("{\"type\":\"params\",\"method\":\"pt\",\"vpls\":100,\"weights\":\"uniform\","
+                 "\"clamp\":0.5,\"width\":640,\"refine\":false,\"seed\":9007199254740992}");
+    const iir_params *v = &m.u.params.values;
+    double x = 0;
+    assert_true(iir_params_get(v, "vpls", &x) && x == 100);
+    assert_true(iir_params_get(v, "weights", &x) && x == 0);
+    assert_true(iir_params_get(v, "clamp", &x) && x == 0.5);
+    assert_true(iir_params_get(v, "width", &x) && x == 640);
+    assert_true(iir_params_get(v, "refine", &x) && x == 0);
+    assert_true(iir_params_get(v, "seed", &x) && x == 9007199254740992.0);
+    assert_int_equal(v->count, 6);
+    /* live maxima bound what a client may ask for: more VPLs than a frame stays interactive */
+    e = expect("{\"type\":\"params\",\"vpls\":4097}", IIRD_E_OUT_OF_RANGE, "params.vpls");
+    assert_non_null(strstr(e.message, "4096"));
+    expect("{\"type\":\"params\",\"spp\":65}", IIRD_E_OUT_OF_RANGE, "params.spp");
+}
+
+static double val(const iird_settings *s, const char *name)
+{
+    return iir_method_param_value(iir_method_any_param(name), &s->params);
 }
 
 static void test_params_apply(void **state)
@@ -633,15 +637,16 @@ static void test_params_apply(void **state)
     iird_settings s = iird_settings_default(), before;
     iird_proto_error e;
     assert_string_equal(s.method, "iir");
-    assert_true(s.params.bounces == 2 && s.params.spp == 1 && s.width == 512 && s.height == 384);
+    /* a live session starts at each row's live default: pt at 1 sample per pixel */
+    assert_true(val(&s, "bounces") == 2 && val(&s, "spp") == 1 && s.width == 512 &&
+                s.height == 384);
     assert_true(s.quality == 80 && s.exposure == 0.f && s.refine && s.domain);
-    assert_int_equal(s.params.refine_passes, iir_params_default().refine_passes);
     iir_error ie;
-    assert_int_equal(iir_params_validate(&s.params, &ie), IIR_OK);
+    assert_int_equal(iir_method_params_validate("iir", &s.params, NULL, NULL, &ie), IIR_OK);
 
     iird_msg m = parse_ok("{\"type\":\"params\",\"vpls\":64,\"kmax\":6,\"exposure\":1}");
     assert_true(iird_apply_params(&m.u.params, &LIM, &s, &e));
-    assert_true(s.params.vpls == 64 && s.params.kmax == 6 && s.params.kmin == 4);
+    assert_true(val(&s, "vpls") == 64 && val(&s, "kmax") == 6 && val(&s, "kmin") == 4);
     assert_true(s.exposure == 1.f && s.width == 512);
 
     struct {
@@ -660,9 +665,8 @@ static void test_params_apply(void **state)
         {"{\"type\":\"params\",\"width\":1000,\"method\":\"pt\"}", IIRD_E_OUT_OF_RANGE,
          "params.width"},
         {"{\"type\":\"params\",\"height\":600}", IIRD_E_OUT_OF_RANGE, "params.height"},
-        {"{\"type\":\"params\",\"vpls\":300,\"kmax\":8}", IIRD_E_OUT_OF_RANGE, "params.vpls"},
     };
-    iird_limits small = {640, 480, 256};
+    iird_limits small = {640, 480};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         m = parse_ok(bad[i].json);
         before = s;
@@ -671,25 +675,19 @@ static void test_params_apply(void **state)
             fail_msg("%s: %s at '%s' (%s)", bad[i].json, iird_err_name(e.code), e.field, e.message);
         assert_memory_equal(&before, &s, sizeof s);
     }
-    /* a broken current state is reported through iir_params_validate, naming the field */
-    s.params.spp = 0;
-    m = parse_ok("{\"type\":\"params\",\"quality\":50}");
-    before = s;
-    assert_false(iird_apply_params(&m.u.params, &LIM, &s, &e));
-    assert_int_equal(e.code, IIRD_E_OUT_OF_RANGE);
-    assert_string_equal(e.field, "params.spp");
-    assert_memory_equal(&before, &s, sizeof s);
-    s.params.spp = 1;
-    s.params.regen_threshold = 2.f;
-    assert_false(iird_apply_params(&m.u.params, &LIM, &s, &e));
-    assert_string_equal(e.field, "params");
+    /* a parameter set earlier for another method is checked when its method is chosen */
+    m = parse_ok("{\"type\":\"params\",\"spp\":64}");
+    assert_true(iird_apply_params(&m.u.params, &LIM, &s, &e));
+    m = parse_ok("{\"type\":\"params\",\"method\":\"pt\"}");
+    assert_true(iird_apply_params(&m.u.params, &LIM, &s, &e));
+    assert_true(val(&s, "spp") == 64 && !strcmp(s.method, "pt"));
     /* every field at once */
     s = iird_settings_default();
     m = parse_ok("{\"type\":\"params\",\"method\":\"pt\",\"vpls\":10,\"kmin\":0,\"kmax\":10,"
                  "\"seed\":42,\"refine_passes\":4096,\"width\":1920,\"height\":1080}");
     assert_true(iird_apply_params(&m.u.params, &LIM, &s, &e));
     assert_string_equal(s.method, "pt");
-    assert_true(s.params.seed == 42 && s.params.refine_passes == 4096 && s.width == 1920);
+    assert_true(val(&s, "seed") == 42 && val(&s, "refine_passes") == 4096 && s.width == 1920);
     /* parse errors also leave the settings alone: the message never reaches apply */
     expect("{\"type\":\"params\",\"vpls\":64,\"kmax\":3.5}", IIRD_E_BAD_TYPE, "params.kmax");
 }
@@ -852,13 +850,15 @@ static void test_json_replies(void **state)
     iir_light L = spot();
     iir_camera C = cam();
     iird_settings s = iird_settings_default();
-    s.params.seed = 9007199254740992ull;
+    iir_error ie;
+    assert_int_equal(
+        iir_params_set(&s.params, iir_method_any_param("seed"), 9007199254740992.0, &ie), IIR_OK);
     iird_state_view v = {"builtin", &L, &C, &s};
     char *text = iird_json_state(&v, 3);
     assert_non_null(strstr(text, "\"fov\":39.3}"));
     assert_non_null(strstr(text, "\"cone_angle\":60,"));
     assert_non_null(strstr(text, "\"position\":[0,1.9,0]"));
-    assert_non_null(strstr(text, "\"seed\":9007199254740992}"));
+    assert_non_null(strstr(text, "\"seed\":9007199254740992"));
     o = reply_ok(text, "state");
     assert_int_equal(num(o, "seq"), 3);
     assert_string_equal(cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(o, "scene")),
@@ -870,19 +870,26 @@ static void test_json_replies(void **state)
     assert_near3(vec(jc, "target"), C.target, 0.f);
     assert_near3(vec(jc, "up"), C.up, 0.f);
     const cJSON *jp = cJSON_GetObjectItemCaseSensitive(o, "params");
-    assert_int_equal(cJSON_GetArraySize(jp), IIRD_P_COUNT);
-    for (int i = 0; i < IIRD_P_COUNT; i++)
-        assert_non_null(cJSON_GetObjectItemCaseSensitive(jp, iird_params_field_name(i)));
+    /* method, the stream settings and every parameter of the session's method */
+    int rows = 1 + iird_stream_table.count;
+    for (const iir_param_table *const *t = iir_method_tables(s.method); *t; t++) {
+        rows += (*t)->count;
+        for (int i = 0; i < (*t)->count; i++)
+            assert_non_null(cJSON_GetObjectItemCaseSensitive(jp, (*t)->rows[i].name));
+    }
+    assert_int_equal(cJSON_GetArraySize(jp), rows);
     assert_string_equal(cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(jp, "weights")),
-                        s.params.weights == IIR_WEIGHTS_UNIFORM ? "uniform" : "voronoi");
-    assert_int_equal(num(jp, "vpls"), s.params.vpls);
+                        "voronoi");
+    assert_int_equal(num(jp, "vpls"), 256);
     assert_int_equal(num(jp, "width"), 512);
     assert_true(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(jp, "refine")));
     cJSON_Delete(o);
     /* a state reply reads back as a params message that changes nothing (a seed below 1e15:
      * cJSON would print a larger one back rounded) */
-    s.params.seed = 123456789;
+    assert_int_equal(iir_params_set(&s.params, iir_method_any_param("seed"), 123456789, &ie),
+                     IIR_OK);
     text = iird_json_state(&v, IIRD_NO_SEQ);
+    char *was = iird_json_state(&v, IIRD_NO_SEQ);
     o = cJSON_Parse(text);
     free(text);
     cJSON *params = cJSON_DetachItemFromObjectCaseSensitive(o, "params");
@@ -891,7 +898,11 @@ static void test_json_replies(void **state)
     iird_msg m = parse_ok(text);
     iird_settings s2 = s;
     assert_true(iird_apply_params(&m.u.params, &LIM, &s2, &pe));
-    assert_memory_equal(&s, &s2, sizeof s);
+    iird_state_view v2 = {"builtin", &L, &C, &s2};
+    char *now = iird_json_state(&v2, IIRD_NO_SEQ);
+    assert_string_equal(was, now);
+    free(was);
+    free(now);
     free(text);
     cJSON_Delete(params);
     cJSON_Delete(o);
@@ -913,12 +924,27 @@ static void test_json_replies(void **state)
         const cJSON *e = cJSON_GetArrayItem(jm, k);
         assert_string_equal(cJSON_GetObjectItemCaseSensitive(e, "name")->valuestring, *n);
         assert_true(strlen(cJSON_GetObjectItemCaseSensitive(e, "summary")->valuestring) > 0);
+        /* the method's parameters, every row of its tables with its type and range */
+        const cJSON *rows = cJSON_GetObjectItemCaseSensitive(e, "params");
+        int nrows = 0;
+        for (const iir_param_table *const *t = iir_method_tables(*n); *t; t++)
+            for (int i = 0; i < (*t)->count; i++, nrows++) {
+                const cJSON *r = cJSON_GetArrayItem(rows, nrows);
+                assert_string_equal(cJSON_GetObjectItemCaseSensitive(r, "name")->valuestring,
+                                    (*t)->rows[i].name);
+                assert_string_equal(cJSON_GetObjectItemCaseSensitive(r, "type")->valuestring,
+                                    iir_param_type_name((*t)->rows[i].type));
+                assert_non_null(cJSON_GetObjectItemCaseSensitive(r, "default"));
+                assert_non_null(cJSON_GetObjectItemCaseSensitive(r, "help"));
+            }
+        assert_int_equal(cJSON_GetArraySize(rows), nrows);
     }
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(o, "settings")),
+                     iird_stream_table.count);
     assert_int_equal(cJSON_GetArraySize(jm), k);
     const cJSON *jlim = cJSON_GetObjectItemCaseSensitive(o, "limits");
     assert_int_equal(num(jlim, "max_width"), 1920);
     assert_int_equal(num(jlim, "max_height"), 1080);
-    assert_int_equal(num(jlim, "max_vpls"), 4096);
     assert_int_equal(num(jlim, "max_message_bytes"), 65536);
     assert_int_equal(num(jlim, "max_rate"), 250);
     const cJSON *jst = cJSON_GetObjectItemCaseSensitive(o, "state");

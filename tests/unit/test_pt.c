@@ -42,9 +42,9 @@ static void unload(loaded *l)
 static iir_image *render_pt(const loaded *l, int w, int h, int spp, int bounces, uint64_t seed)
 {
     iir_params p = iir_params_default();
-    p.spp = spp;
-    p.bounces = bounces;
-    p.seed = seed;
+    iir_test_set(&p, "spp", spp);
+    iir_test_set(&p, "bounces", bounces);
+    iir_test_set(&p, "seed", seed);
     iir_method *m = NULL;
     iir_error err = {0};
     iir_image *img = iir_image_create(w, h);
@@ -280,10 +280,9 @@ static void test_one_bounce_matches_quadrature(void **state)
 
 static void test_deterministic_and_progressive(void **state)
 {
-    (void)state;
-    loaded l = {iir_scene_create_cornell_box(), NULL};
+    const iir_test_cornell *f = *state;
+    loaded l = {f->scene, f->rt};
     iir_error err = {0};
-    assert_int_equal(iir_rt_create(l.scene, &l.rt, &err), IIR_OK);
     omp_set_num_threads(2);
     iir_image *a = render_pt(&l, 40, 30, 4, 3, 42);
     omp_set_num_threads(1);
@@ -296,7 +295,9 @@ static void test_deterministic_and_progressive(void **state)
     /* render(4 spp) + refine(4 spp) == render(8 spp) up to summation order. */
     iir_image *eight = render_pt(&l, 40, 30, 8, 3, 42);
     iir_params p = iir_params_default();
-    p.spp = 4, p.bounces = 3, p.seed = 42;
+    iir_test_set(&p, "spp", 4);
+    iir_test_set(&p, "bounces", 3);
+    iir_test_set(&p, "seed", 42);
     iir_method *m = NULL;
     iir_frame_stats fs;
     iir_view view = {l.scene->lights, l.scene->num_lights, l.scene->camera};
@@ -314,21 +315,21 @@ static void test_deterministic_and_progressive(void **state)
     iir_image_destroy(b);
     iir_image_destroy(c);
     iir_image_destroy(eight);
-    unload(&l);
 }
 
 static void test_bad_requests(void **state)
 {
-    (void)state;
-    loaded l = {iir_scene_create_cornell_box(), NULL};
+    const iir_test_cornell *f = *state;
+    loaded l = {f->scene, f->rt};
     iir_error err = {0};
-    assert_int_equal(iir_rt_create(l.scene, &l.rt, &err), IIR_OK);
     iir_params p = iir_params_default();
     iir_method *m = NULL;
     assert_int_equal(iir_method_create("nope", l.scene, l.rt, &p, &m, &err), IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "pt"));
-    p.bounces = 0;
-    assert_int_equal(iir_method_create("pt", l.scene, l.rt, &p, &m, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_method_param_set(&p, "bounces", 0, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_method_create("pt", l.scene, l.rt, &p, &m, &err), IIR_OK);
+    iir_method_destroy(m);
+    m = NULL;
     assert_null(m);
     p = iir_params_default();
     assert_int_equal(iir_method_create("pt", l.scene, l.rt, &p, &m, &err), IIR_OK);
@@ -340,7 +341,6 @@ static void test_bad_requests(void **state)
     assert_int_equal(iir_method_render(m, &view, img, &fs, &err), IIR_ERR_INVALID);
     iir_image_destroy(img);
     iir_method_destroy(m);
-    unload(&l);
 }
 
 int main(void)
@@ -349,8 +349,10 @@ int main(void)
         cmocka_unit_test(test_white_furnace),
         cmocka_unit_test(test_point_light_plane),
         cmocka_unit_test(test_one_bounce_matches_quadrature),
-        cmocka_unit_test(test_deterministic_and_progressive),
-        cmocka_unit_test(test_bad_requests),
+        cmocka_unit_test_setup_teardown(test_deterministic_and_progressive, iir_test_cornell_setup,
+                                        iir_test_cornell_teardown),
+        cmocka_unit_test_setup_teardown(test_bad_requests, iir_test_cornell_setup,
+                                        iir_test_cornell_teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -66,7 +66,7 @@ static void full_sum_frame(const fixture *f, iir_method *m, const iir_params *p,
     const iir_vpl *vpls = iir_method_vpls(m, &n);
     iir_renderer *r = iir_renderer_create(f->scene, f->rt);
     iir_indirect_params ind = iir_indirect_params_default();
-    ind.visibility = IIR_VIS_RAYS, ind.interleave = 1, ind.clamp = p->clamp;
+    ind.visibility = IIR_VIS_RAYS, ind.interleave = 1, ind.clamp = (float)iir_test_get(p, "clamp");
     iir_view v = still_view(f);
     iir_error err = {0};
     if (iir_renderer_frame(r, &v.camera, v.lights, v.num_lights, vpls, n, &ind, 0, out, NULL, NULL,
@@ -97,8 +97,9 @@ static void test_sweep_is_full_sum(void **state)
     const char *names[] = {"iir", "ir"};
     for (int k = 0; k < 2; k++) {
         iir_params p = iir_params_default();
-        p.jitter = false;
-        p.refine_passes = 16, p.sm_res = 32; /* the maps only serve the interactive frame */
+        iir_test_set(&p, "jitter", false);
+        iir_test_set(&p, "refine_passes", 16);
+        iir_test_set(&p, "sm_res", 32); /* the maps only serve the interactive frame */
         iir_method *m = iir_test_method(f, names[k], &p);
         iir_image *img = iir_image_create(W, H), *ref = iir_image_create(W, H);
         iir_frame_stats fs;
@@ -131,7 +132,8 @@ static void test_jitter_antialiases(void **state)
     fixture *f = *state;
     enum { S = 8 };
     iir_params p = iir_params_default();
-    p.refine_passes = 16, p.bounces = 1;
+    iir_test_set(&p, "refine_passes", 16);
+    iir_test_set(&p, "bounces", 1);
     iir_method *m = iir_test_method(f, "ir", &p);
     iir_image *img = iir_image_create(W, H), *centre = iir_image_create(W, H);
     iir_image *fine = iir_image_create(S * W, S * H), *box = iir_image_create(W, H);
@@ -172,7 +174,11 @@ static void test_converges_towards_pt(void **state)
     fixture *f = *state;
     iir_view v = still_view(f);
     iir_params p = iir_params_default();
-    p.spp = 256, p.bounces = 2, p.seed = 3, p.vpls = 128, p.sm_res = 64;
+    iir_test_set(&p, "spp", 256);
+    iir_test_set(&p, "bounces", 2);
+    iir_test_set(&p, "seed", 3);
+    iir_test_set(&p, "vpls", 128);
+    iir_test_set(&p, "sm_res", 64);
     iir_image *ref = iir_image_create(W, H), *img = iir_image_create(W, H);
     iir_frame_stats fs;
     iir_method *pt = iir_test_method(f, "pt", &p);
@@ -188,7 +194,7 @@ static void test_converges_towards_pt(void **state)
         double refined = iir_metric_relmse(img, ref);
         print_message("%s vs pt: relMSE interactive %.3e, refined (%d passes) %.3e\n", names[k],
                       interactive, passes, refined);
-        assert_int_equal(passes, p.refine_passes);
+        assert_int_equal(passes, iir_test_get(&p, "refine_passes"));
         assert_true(refined < 0.5 * interactive);
         iir_method_destroy(m);
     }
@@ -218,7 +224,8 @@ static void test_live_set_untouched(void **state)
     const char *names[] = {"iir", "ir"};
     for (int k = 0; k < 2; k++) {
         iir_params p = iir_params_default();
-        p.vpls = 64, p.sm_res = 32;
+        iir_test_set(&p, "vpls", 64);
+        iir_test_set(&p, "sm_res", 32);
         iir_method *a = iir_test_method(f, names[k], &p), *b = iir_test_method(f, names[k], &p);
         iir_image *ia = iir_image_create(W, H), *ib = iir_image_create(W, H);
         iir_frame_stats fs;
@@ -250,7 +257,9 @@ static void test_counting_and_convergence(void **state)
 {
     fixture *f = *state;
     iir_params p = iir_params_default();
-    p.refine_passes = 5, p.vpls = 64, p.sm_res = 32;
+    iir_test_set(&p, "refine_passes", 5);
+    iir_test_set(&p, "vpls", 64);
+    iir_test_set(&p, "sm_res", 32);
     iir_method *m = iir_test_method(f, "iir", &p);
     iir_image *img = iir_image_create(W, H), *kept = iir_image_create(W, H);
     iir_image *small = iir_image_create(W / 2, H);
@@ -286,15 +295,15 @@ static void test_counting_and_convergence(void **state)
     assert_int_equal(fs.samples_per_pixel, 1);
 
     iir_method *bad = NULL;
-    p.refine_passes = 0;
-    assert_int_equal(iir_method_create("ir", f->scene, f->rt, &p, &bad, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_method_param_set(&p, "refine_passes", 0, &err), IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "refine_passes"));
-    p.refine_passes = 4097;
-    assert_int_equal(iir_method_create("iir", f->scene, f->rt, &p, &bad, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_method_param_set(&p, "refine_passes", 4097, &err), IIR_ERR_INVALID);
+    assert_null(bad);
 
     /* pt: converged at refine_passes x spp samples, and still adds samples when asked */
     p = iir_params_default();
-    p.spp = 2, p.refine_passes = 3;
+    iir_test_set(&p, "spp", 2);
+    iir_test_set(&p, "refine_passes", 3);
     iir_method *pt = iir_test_method(f, "pt", &p);
     iir_test_render(pt, &v, img, &fs);
     assert_false(fs.converged);
@@ -318,7 +327,9 @@ static void run_refined(const fixture *f, const char *name, int threads, iir_ima
 {
     omp_set_num_threads(threads);
     iir_params p = iir_params_default();
-    p.seed = 11, p.vpls = 64, p.sm_res = 32;
+    iir_test_set(&p, "seed", 11);
+    iir_test_set(&p, "vpls", 64);
+    iir_test_set(&p, "sm_res", 32);
     iir_method *m = iir_test_method(f, name, &p);
     iir_frame_stats fs;
     iir_view v = still_view(f);
@@ -366,7 +377,9 @@ static void test_stop_early(void **state)
     const char *names[] = {"iir", "ir"};
     for (int k = 0; k < 2; k++) {
         iir_params p = iir_params_default();
-        p.seed = 5, p.vpls = 64, p.sm_res = 32;
+        iir_test_set(&p, "seed", 5);
+        iir_test_set(&p, "vpls", 64);
+        iir_test_set(&p, "sm_res", 32);
         iir_method *a = iir_test_method(f, names[k], &p), *b = iir_test_method(f, names[k], &p);
         iir_image *ia = iir_image_create(W, H), *ib = iir_image_create(W, H);
         iir_frame_stats fa, fb;

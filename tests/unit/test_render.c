@@ -42,14 +42,19 @@ static loaded load(const char *dir, const char *name)
     return l;
 }
 
-static loaded load_cornell(void)
+/* The group fixture's Cornell box (testutil.h) with a renderer of its own, so no G-buffer is
+ * cached from another test; unload_cornell frees only that renderer. */
+static loaded load_cornell(void **state)
 {
-    loaded l = {iir_scene_create_cornell_box(), NULL, NULL};
-    iir_error err = {0};
-    if (iir_rt_create(l.scene, &l.rt, &err) != IIR_OK) fail_msg("rt: %s", err.msg);
-    l.r = iir_renderer_create(l.scene, l.rt);
+    const iir_test_cornell *f = *state;
+    loaded l = {f->scene, f->rt, iir_renderer_create(f->scene, f->rt)};
     assert_non_null(l.r);
     return l;
+}
+
+static void unload_cornell(loaded *l)
+{
+    iir_renderer_destroy(l->r);
 }
 
 static void unload(loaded *l)
@@ -283,9 +288,9 @@ static void test_direct_point_and_spot_over_plane(void **state)
 static iir_image *render_pt(const loaded *l, int w, int h, int spp)
 {
     iir_params p = iir_params_default();
-    p.spp = spp;
-    p.bounces = 1;
-    p.seed = 9;
+    iir_test_set(&p, "spp", spp);
+    iir_test_set(&p, "bounces", 1);
+    iir_test_set(&p, "seed", 9);
     iir_method *m = NULL;
     iir_error err = {0};
     iir_image *img = iir_image_create(w, h);
@@ -352,10 +357,9 @@ static void compare_with_pt(const loaded *l, const char *what, int W, int H, int
 
 static void test_direct_matches_pt_cornell(void **state)
 {
-    (void)state;
-    loaded l = load_cornell();
+    loaded l = load_cornell(state);
     compare_with_pt(&l, "cornell", 64, 48, 256);
-    unload(&l);
+    unload_cornell(&l);
 }
 
 static void test_direct_matches_pt_area_light(void **state)
@@ -389,8 +393,7 @@ static void test_direct_matches_pt_area_light(void **state)
  * few pixels in the ceiling gap) and mean. */
 static void test_shadowmap_agrees_with_rays(void **state)
 {
-    (void)state;
-    loaded l = load_cornell();
+    loaded l = load_cornell(state);
     enum { W = 96, H = 72, N = 64 };
     iir_vpl vpls[N];
     light_vpls(&l, N, vpls);
@@ -441,7 +444,7 @@ static void test_shadowmap_agrees_with_rays(void **state)
     iir_image_destroy(sm);
     iir_image_destroy(ray);
     release_vpls(vpls, N);
-    unload(&l);
+    unload_cornell(&l);
 }
 
 /* ---- interleaved sampling and the filter ---- */
@@ -656,8 +659,7 @@ static void test_clamp(void **state)
 
 static void test_gbuffer_cache_and_determinism(void **state)
 {
-    (void)state;
-    loaded l = load_cornell();
+    loaded l = load_cornell(state);
     enum { W = 64, H = 48, N = 64 };
     iir_vpl vpls[N];
     light_vpls(&l, N, vpls);
@@ -719,15 +721,14 @@ static void test_gbuffer_cache_and_determinism(void **state)
     iir_image_destroy(b);
     iir_image_destroy(small);
     release_vpls(vpls, N);
-    unload(&l);
+    unload_cornell(&l);
 }
 
 /* ---- errors ---- */
 
 static void test_errors(void **state)
 {
-    (void)state;
-    loaded l = load_cornell();
+    loaded l = load_cornell(state);
     enum { N = 8 };
     iir_vpl vpls[N];
     light_vpls(&l, N, vpls);
@@ -781,7 +782,7 @@ static void test_errors(void **state)
         IIR_OK);
     iir_image_destroy(img);
     release_vpls(vpls, N);
-    unload(&l);
+    unload_cornell(&l);
 }
 
 int main(void)
@@ -799,5 +800,5 @@ int main(void)
         cmocka_unit_test(test_gbuffer_cache_and_determinism),
         cmocka_unit_test(test_errors),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

@@ -718,6 +718,63 @@ static void test_resolve(void **state)
                      IIR_ERR_INVALID);
 }
 
+/* ======================== opening a scene with its ray tracer ======================== */
+
+/* Opening must succeed with a scene of the given name and a ray tracer that hits it. */
+static void assert_opens(const char *name_or_path, const char *scenes_dir, const char *want_name)
+{
+    iir_scene *s = NULL;
+    iir_rt *rt = NULL;
+    iir_error err = {0};
+    iir_status st = iir_scene_open(name_or_path, scenes_dir, &s, &rt, &err);
+    if (st != IIR_OK) print_message("opening %s failed: %s\n", name_or_path, err.msg);
+    assert_int_equal(st, IIR_OK);
+    assert_non_null(s);
+    assert_non_null(rt);
+    assert_string_equal(s->name, want_name);
+    iir_vec3 c = iir_scale(iir_add(s->bounds_min, s->bounds_max), 0.5f);
+    iir_ray up = iir_make_ray(c, iir_v3(0.f, 1.f, 0.f), 0.f, INFINITY);
+    iir_hit h;
+    assert_true(iir_rt_intersect(rt, &up, &h, NULL, IIR_RAYS_BENCH)); /* the ceiling */
+    iir_rt_destroy(rt);
+    iir_scene_destroy(s);
+}
+
+/* Opening must fail with both outputs NULL (even when they held something) and a message. */
+static void assert_open_fails(const char *name_or_path, const char *scenes_dir, iir_status want,
+                              const char *needle)
+{
+    iir_scene *s = (iir_scene *)1;
+    iir_rt *rt = (iir_rt *)1;
+    iir_error err = {0};
+    assert_int_equal(iir_scene_open(name_or_path, scenes_dir, &s, &rt, &err), want);
+    assert_null(s);
+    assert_null(rt);
+    assert_int_equal(err.status, want);
+    assert_contains(err.msg, needle);
+}
+
+static void test_open(void **state)
+{
+    (void)state;
+    assert_opens(NULL, NULL, "cornell_box");
+    assert_opens("builtin", NULL, "cornell_box");
+    assert_opens("cornell_box", IIR_SOURCE_DIR "/scenes", "cornell_box");
+    assert_opens(IIR_SOURCE_DIR "/scenes/cornell_box", NULL, "cornell_box");
+
+    /* every step can fail: the name, the lookup, the file */
+    assert_open_fails("no_such_scene", IIR_SOURCE_DIR "/scenes", IIR_ERR_IO, "no_such_scene");
+    assert_open_fails("a/b", IIR_SOURCE_DIR "/scenes", IIR_ERR_INVALID, "'a/b'");
+    assert_open_fails("cornell_box", NULL, IIR_ERR_IO, "no scenes folder");
+    char path[1024];
+    write_file("open_broken.obj", "v 0 0 0\nv 1 0 0\n", path, sizeof path);
+    iir_scene *s = NULL;
+    iir_error load_err = {0};
+    iir_status st = iir_scene_load(path, &s, &load_err);
+    assert_int_not_equal(st, IIR_OK);
+    assert_open_fails(path, NULL, st, "open_broken.obj");
+}
+
 /* ======================== the big shipped scenes ======================== */
 
 static double seconds_since(const struct timespec *t0)
@@ -798,6 +855,7 @@ int main(void)
         cmocka_unit_test(test_sidecar_bad_values),
         cmocka_unit_test(test_sidecar_file_escapes),
         cmocka_unit_test(test_resolve),
+        cmocka_unit_test(test_open),
         cmocka_unit_test(test_conference),
         cmocka_unit_test(test_living_room),
     };

@@ -15,26 +15,7 @@
 #include "iir/scene.h"
 #include "iir/shadowmap.h"
 #include "iir/vpl.h"
-
-typedef struct cornell {
-    iir_scene *scene;
-    iir_rt *rt;
-} cornell;
-
-static cornell cornell_load(void)
-{
-    cornell c = {iir_scene_create_cornell_box(), NULL};
-    iir_error err = {0};
-    assert_non_null(c.scene);
-    if (iir_rt_create(c.scene, &c.rt, &err) != IIR_OK) fail_msg("rt: %s", err.msg);
-    return c;
-}
-
-static void cornell_unload(cornell *c)
-{
-    iir_rt_destroy(c->rt);
-    iir_scene_destroy(c->scene);
-}
+#include "testutil.h"
 
 static iir_vpl vpl_at(uint32_t id, iir_vec3 p, iir_vec3 n)
 {
@@ -88,13 +69,12 @@ static void test_paraboloid_round_trip(void **state)
  * ceiling (y = 1.99) at 1.99 minus the origin's lift. */
 static void test_floor_vpl_sees_ceiling(void **state)
 {
-    (void)state;
-    cornell c = cornell_load();
+    const iir_test_cornell *c = *state;
     iir_vpl v = vpl_at(1, iir_v3(-0.5f, 0.f, 0.6f), iir_v3(0, 1, 0));
-    float eps = iir_rt_epsilon(c.rt);
+    float eps = iir_rt_epsilon(c->rt);
     for (int res = 64; res <= 128; res += 36) { /* 64, 100 (not a multiple of 8) */
         iir_raystats st = {0};
-        assert_true(iir_smap_render(&v.smap, c.rt, &v, res, &st));
+        assert_true(iir_smap_render(&v.smap, c->rt, &v, res, &st));
         assert_int_equal(v.smap.res, res);
         assert_int_equal(st.n[IIR_RAYS_SHADOWMAP], (uint64_t)res * (uint64_t)res);
         assert_int_equal(iir_raystats_total(&st), (uint64_t)res * (uint64_t)res);
@@ -128,18 +108,16 @@ static void test_floor_vpl_sees_ceiling(void **state)
     iir_smap_release(&v.smap);
     assert_null(v.smap.depth);
     assert_int_equal(v.smap.res, 0);
-    cornell_unload(&c);
 }
 
 /* Lookups: the ceiling above is lit, a point beyond the ceiling and points behind the VPL are not,
  * and points around the scene agree with exact occlusion rays away from shadow edges. */
 static void test_lookup_matches_rays(void **state)
 {
-    (void)state;
-    cornell c = cornell_load();
-    float eps = iir_rt_epsilon(c.rt);
+    const iir_test_cornell *c = *state;
+    float eps = iir_rt_epsilon(c->rt);
     iir_vpl v = vpl_at(2, iir_v3(0.5f, 0.f, -0.5f), iir_v3(0, 1, 0));
-    assert_true(iir_smap_render(&v.smap, c.rt, &v, 128, NULL));
+    assert_true(iir_smap_render(&v.smap, c->rt, &v, 128, NULL));
     iir_vec3 down = iir_v3(0, -1, 0);
     assert_true(iir_smap_visibility(&v.smap, &v, iir_v3(0.5f, 1.99f, -0.5f), down, 0.01f, eps) ==
                 1.f);
@@ -159,8 +137,8 @@ static void test_lookup_matches_rays(void **state)
         if (w.y <= 0.05f) continue;
         iir_ray ray = iir_make_ray(iir_madd(v.position, v.normal, eps), w, 0.f, INFINITY);
         iir_hit hit;
-        if (!iir_rt_intersect(c.rt, &ray, &hit, NULL, IIR_RAYS_BENCH)) continue;
-        iir_vec3 n = c.scene->normals[hit.prim];
+        if (!iir_rt_intersect(c->rt, &ray, &hit, NULL, IIR_RAYS_BENCH)) continue;
+        iir_vec3 n = c->scene->normals[hit.prim];
         if (iir_dot(n, w) > 0.f) n = iir_neg(n);
         iir_vec3 x = iir_madd(ray.org, w, hit.t);
         /* The first hit is visible; a point 5% further along the ray is not (it is behind that
@@ -177,42 +155,39 @@ static void test_lookup_matches_rays(void **state)
     if (agree < (int)(0.98 * total))
         fail_msg("map and rays agree on %d of %d lookups", agree, total);
     iir_smap_release(&v.smap);
-    cornell_unload(&c);
 }
 
 /* ---- a set of maps ---- */
 
 static void test_build_only_what_is_missing(void **state)
 {
-    (void)state;
-    cornell c = cornell_load();
+    const iir_test_cornell *c = *state;
     enum { N = 6 };
     iir_vpl vpls[N];
     for (uint32_t i = 0; i < N; i++)
         vpls[i] = vpl_at(i, iir_v3(-0.8f + 0.3f * (float)i, 0.f, 0.5f), iir_v3(0, 1, 0));
     vpls[3].null_sample = true;
     iir_raystats st = {0};
-    assert_int_equal(iir_smaps_build(vpls, N, c.rt, 32, &st), N - 1);
+    assert_int_equal(iir_smaps_build(vpls, N, c->rt, 32, &st), N - 1);
     assert_int_equal(st.n[IIR_RAYS_SHADOWMAP], (uint64_t)(N - 1) * 32 * 32);
     assert_int_equal(vpls[3].smap.res, 0);
     assert_null(vpls[3].smap.depth);
     /* Nothing new: nothing rendered, no rays. */
-    assert_int_equal(iir_smaps_build(vpls, N, c.rt, 32, &st), 0);
+    assert_int_equal(iir_smaps_build(vpls, N, c->rt, 32, &st), 0);
     assert_int_equal(st.n[IIR_RAYS_SHADOWMAP], (uint64_t)(N - 1) * 32 * 32);
     /* A VPL dies and another is born in its slot: only that one is rendered. */
     iir_smap_release(&vpls[1].smap);
     vpls[1] = vpl_at(17, iir_v3(0.2f, 0.f, 0.7f), iir_v3(0, 1, 0));
-    assert_int_equal(iir_smaps_build(vpls, N, c.rt, 32, NULL), 1);
+    assert_int_equal(iir_smaps_build(vpls, N, c->rt, 32, NULL), 1);
     /* Same result as rendering alone (the threads do not interfere). */
     iir_smap alone = {0};
-    assert_true(iir_smap_render(&alone, c.rt, &vpls[1], 32, NULL));
+    assert_true(iir_smap_render(&alone, c->rt, &vpls[1], 32, NULL));
     assert_memory_equal(alone.depth, vpls[1].smap.depth, sizeof(float) * 32 * 32);
     iir_smap_release(&alone);
     /* Another resolution re-renders every non-null map. */
-    assert_int_equal(iir_smaps_build(vpls, N, c.rt, 16, NULL), N - 1);
+    assert_int_equal(iir_smaps_build(vpls, N, c->rt, 16, NULL), N - 1);
     for (int i = 0; i < N; i++) assert_int_equal(vpls[i].smap.res, i == 3 ? 0 : 16);
     for (int i = 0; i < N; i++) iir_smap_release(&vpls[i].smap);
-    cornell_unload(&c);
 }
 
 int main(void)
@@ -223,5 +198,5 @@ int main(void)
         cmocka_unit_test(test_lookup_matches_rays),
         cmocka_unit_test(test_build_only_what_is_missing),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

@@ -48,22 +48,14 @@ iir_status iir_test_load_obj(const char *dir, const char *name, iir_scene **scen
 {
     char path[1200];
     snprintf(path, sizeof path, "%s/%s.obj", dir, name);
-    *rt = NULL;
-    iir_status st = iir_scene_load(path, scene, err);
-    if (st == IIR_OK) st = iir_rt_create(*scene, rt, err);
-    if (st != IIR_OK) {
-        iir_scene_destroy(*scene);
-        *scene = NULL;
-    }
-    return st;
+    return iir_scene_open(path, NULL, scene, rt, err);
 }
 
 int iir_test_cornell_setup(void **state)
 {
     static iir_test_cornell f;
     iir_error err = {0};
-    f.scene = iir_scene_create_cornell_box();
-    if (!f.scene || iir_rt_create(f.scene, &f.rt, &err) != IIR_OK) return -1;
+    if (iir_scene_open("builtin", NULL, &f.scene, &f.rt, &err) != IIR_OK) return -1;
     *state = &f;
     return 0;
 }
@@ -88,4 +80,17 @@ void iir_test_render(iir_method *m, const iir_view *v, iir_image *img, iir_frame
 {
     iir_error err = {0};
     if (iir_method_render(m, v, img, fs, &err) != IIR_OK) fail_msg("%s", err.msg);
+}
+
+void iir_test_set(iir_params *p, const char *name, double v)
+{
+    iir_error err = {0};
+    if (iir_method_param_set(p, name, v, &err) != IIR_OK) fail_msg("%s", err.msg);
+}
+
+double iir_test_get(const iir_params *p, const char *name)
+{
+    const iir_param *row = iir_method_any_param(name);
+    if (!row) fail_msg("no parameter %s", name);
+    return iir_method_param_value(row, p);
 }

@@ -36,6 +36,11 @@ int iir_test_cornell_teardown(void **state);
 
 /* Creates method `name` over the fixture's scene; fails the running cmocka test with the method's
  * error when it cannot. */
+/* Sets parameter `name` of p (any method's), failing the test when it is refused. */
+void iir_test_set(iir_params *p, const char *name, double v);
+/* The value of `name` in p, else its (first declaring method's) default. */
+double iir_test_get(const iir_params *p, const char *name);
+
 iir_method *iir_test_method(const iir_test_cornell *f, const char *name, const iir_params *p);
 /* iir_method_render that fails the running cmocka test with the method's error. */
 void iir_test_render(iir_method *m, const iir_view *v, iir_image *img, iir_frame_stats *fs);

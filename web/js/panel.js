@@ -1,9 +1,10 @@
 // panel.js -- the side panel's forms and read-outs: scene and method pickers, the parameter form
-// built from welcome.state/limits/methods, light and camera fields, snapshot and record buttons,
+// built from the parameter tables the welcome carries (welcome.methods[].params for the method's
+// group, welcome.settings for the frame group, welcome.limits), light and camera fields, snapshot
+// and record buttons,
 // the live numbers of the newest `stats`, and the error line. It turns edits into calls of its
 // handlers; it sends nothing itself. Charts are charts.js, the domain drawing domain.js.
 
-import { PARAM_FIELDS } from './protocol.js';
 import { fmt } from './vec.js';
 
 const $ = (sel, root = document) => root.querySelector(sel);
@@ -60,68 +61,86 @@ export class Panel {
         const sel = $('#scene', this.root);
         sel.replaceChildren(...w.scenes.map((s) => el('option', { value: s, text: s })));
         this.methods = w.methods || [];
-        this.buildForm(w.limits || {});
+        this.settings = w.settings || [];
+        this.limits = w.limits || {};
+        this.formMethod = null;
+        this.buildHead();
+        this.buildGroup($('#params-frame', this.root), this.settings);
         $('#server', this.root).textContent = `${w.server || 'iird'} · session ${w.session}`;
         this.setState(w.state);
     }
 
-    buildForm(limits) {
-        const groups = {
-            head: $('#params-head', this.root),
-            method: $('#params-method', this.root),
-            frame: $('#params-frame', this.root),
-        };
-        for (const g of Object.values(groups)) g.replaceChildren();
-        this.inputs.clear();
-        for (const f of PARAM_FIELDS) {
-            const input = this.makeInput(f, limits);
-            input.id = `param-${f.name}`;
-            input.name = f.name;
-            input.addEventListener('change', () => this.edited(f, input));
-            this.inputs.set(f.name, input);
-            if (f.group === 'head') {
-                groups.head.append(input); // labelled in index.html, beside the scene picker
-                continue;
-            }
-            const label = el('label', { for: input.id, text: f.label || f.name });
-            groups[f.group].append(el('div', { class: 'row' }, label, input));
+    buildHead() {
+        const input = el('select', {}, ...this.methods.map((m) => el('option', { value: m.name, text: m.name, title: m.summary || '' })));
+        input.id = 'param-method';
+        input.name = 'method';
+        input.addEventListener('change', () => this.h.params({ method: input.value }));
+        this.inputs.set('method', input);
+        $('#params-head', this.root).replaceChildren(input); // labelled in index.html
+    }
+
+    // One labelled input per table row into `group` (replacing what it held).
+    buildGroup(group, rows) {
+        for (const [name, input] of this.inputs) if (group.contains(input)) this.inputs.delete(name);
+        group.replaceChildren();
+        for (const row of rows) {
+            const input = this.makeInput(row);
+            input.id = `param-${row.name}`;
+            input.name = row.name;
+            input.title = row.help + (row.unit ? ` (${row.unit})` : '');
+            input.addEventListener('change', () => this.edited(row, input));
+            this.inputs.set(row.name, input);
+            const label = el('label', { for: input.id, text: row.name.replaceAll('_', ' '), title: input.title });
+            group.append(el('div', { class: 'row' }, label, input));
         }
     }
 
-    makeInput(f, limits) {
-        if (f.kind === 'method') {
-            return el('select', {}, ...this.methods.map((m) => el('option', { value: m.name, text: m.name, title: m.summary || '' })));
-        }
-        if (f.kind === 'enum') return el('select', {}, ...f.options.map((o) => el('option', { value: o, text: o })));
-        if (f.kind === 'bool') return el('input', { type: 'checkbox' });
-        const max = f.limit && limits[f.limit] !== undefined ? limits[f.limit] : f.max;
-        const attrs = { type: 'number', min: f.min, max, step: f.step || 1 };
-        return el('input', attrs);
+    // The method group holds the parameters of the method the state names.
+    buildMethodGroup(method) {
+        if (method === this.formMethod) return;
+        const m = this.methods.find((x) => x.name === method);
+        this.buildGroup($('#params-method', this.root), m ? m.params : []);
+        this.formMethod = method;
+    }
+
+    // The most a row may be: a server limit named max_<name> when there is one, else its live max.
+    maxOf(row) {
+        const limit = this.limits[`max_${row.name}`];
+        return limit !== undefined ? Math.min(limit, row.live_max) : row.live_max;
+    }
+
+    makeInput(row) {
+        if (row.type === 'enum') return el('select', {}, ...row.choices.map((o) => el('option', { value: o, text: o })));
+        if (row.type === 'bool') return el('input', { type: 'checkbox' });
+        const step = row.type === 'float' ? 'any' : 1;
+        return el('input', { type: 'number', min: row.min, max: this.maxOf(row), step });
     }
 
     // A form edit: the value if it is valid, else the field marked and nothing sent.
-    edited(f, input) {
+    edited(row, input) {
         let value;
-        if (f.kind === 'bool') value = input.checked;
-        else if (f.kind === 'method' || f.kind === 'enum') value = input.value;
+        if (row.type === 'bool') value = input.checked;
+        else if (row.type === 'enum') value = input.value;
         else {
             value = Number(input.value);
             const min = Number(input.min);
             const max = Number(input.max);
+            const int = row.type !== 'float';
             const bad = input.value === '' || !Number.isFinite(value) || value < min || value > max ||
-                (f.kind === 'int' && !Number.isInteger(value));
+                (int && !Number.isInteger(value));
             if (bad) {
-                this.flagInvalid(input, `${f.name} must be ${f.kind === 'int' ? 'an integer ' : ''}in [${min}, ${max}]`);
+                this.flagInvalid(input, `${row.name} must be ${int ? 'an integer ' : ''}in [${min}, ${max}]`);
                 return;
             }
         }
         input.classList.remove('invalid');
-        this.h.params({ [f.name]: value });
+        this.h.params({ [row.name]: value });
     }
 
     setState(state) {
         this.state = state;
         $('#scene', this.root).value = state.scene;
+        this.buildMethodGroup(state.params.method);
         for (const [name, input] of this.inputs) {
             const val = state.params[name];
             if (val === undefined) continue;

@@ -17,29 +17,8 @@ export const MAX_RATE = 250;
 // Messages that change what the next frame shows: a frame's header seq answers these (latency).
 export const INPUT_TYPES = new Set(['light', 'camera', 'params', 'scene']);
 
-// Parameter fields of the `params` message with their types and ranges (docs/protocol.md, params).
-// `limit` names a welcome.limits field that replaces max. Order is the order of the form.
-export const PARAM_FIELDS = [
-    { name: 'method', kind: 'method', group: 'head' },
-    { name: 'vpls', kind: 'int', min: 1, limit: 'max_vpls', group: 'method', label: 'VPLs' },
-    { name: 'kmin', kind: 'int', min: 0, limit: 'max_vpls', group: 'method', label: 'k min' },
-    { name: 'kmax', kind: 'int', min: 0, limit: 'max_vpls', group: 'method', label: 'k max' },
-    { name: 'weights', kind: 'enum', options: ['uniform', 'voronoi'], group: 'method' },
-    { name: 'visibility', kind: 'enum', options: ['shadowmap', 'rays'], group: 'method' },
-    { name: 'interleave', kind: 'int', min: 1, max: 8, group: 'method' },
-    { name: 'clamp', kind: 'number', min: 0, max: 1e6, step: 'any', group: 'method' },
-    { name: 'sm_res', kind: 'int', min: 8, max: 2048, group: 'method', label: 'SM res' },
-    { name: 'bounces', kind: 'int', min: 1, max: 8, group: 'method' },
-    { name: 'spp', kind: 'int', min: 1, max: 64, group: 'method' },
-    { name: 'seed', kind: 'int', min: 0, max: 2 ** 53, group: 'method' },
-    { name: 'width', kind: 'int', min: 16, limit: 'max_width', group: 'frame' },
-    { name: 'height', kind: 'int', min: 16, limit: 'max_height', group: 'frame' },
-    { name: 'quality', kind: 'int', min: 1, max: 100, group: 'frame', label: 'JPEG q' },
-    { name: 'exposure', kind: 'number', min: -20, max: 20, step: 0.25, group: 'frame' },
-    { name: 'refine', kind: 'bool', group: 'frame' },
-    { name: 'refine_passes', kind: 'int', min: 1, max: 4096, group: 'frame', label: 'passes' },
-    { name: 'domain', kind: 'bool', group: 'frame' },
-];
+// The `params` fields and their types and ranges are not written here: the welcome message carries
+// every method's parameter table and the session settings' (panel.js builds the form from them).
 
 // ---- client -> server ----
 

@@ -1,6 +1,6 @@
-/* image.h -- float RGB images (linear, HDR) and their files: PNG (exposure + sRGB, libpng), EXR
- * (OpenEXR C API, 32-bit float), PFM (written and read directly), and JPEG encoding for streamed
- * frames (libturbojpeg). Not metrics (metrics.h). */
+/* image.h -- float RGB images (linear, HDR) and their files: PNG (exposure + sRGB, libpng) and EXR
+ * (OpenEXR C API, 32-bit float), encoded in memory or written to files, PFM (written and read
+ * directly), and JPEG encoding for streamed frames (libturbojpeg). Not metrics (metrics.h). */
 #ifndef IIR_IMAGE_H
 #define IIR_IMAGE_H
 
@@ -46,6 +46,14 @@ iir_status iir_image_write_png(const iir_image *img, const char *path, float exp
                                iir_error *err);
 iir_status iir_image_write_exr(const iir_image *img, const char *path, iir_error *err);
 iir_status iir_image_write_pfm(const iir_image *img, const char *path, iir_error *err);
+
+/* The bytes of the PNG or EXR file that iir_image_write_png / iir_image_write_exr would write
+ * (those writers encode with these, then save the bytes). On success *data is malloc'ed and the
+ * caller frees it; *size is its length. On error *data is NULL, *size 0, and err says why
+ * (IIR_ERR_NOMEM, or IIR_ERR_INTERNAL when the library fails). */
+iir_status iir_image_encode_png(const iir_image *img, float exposure, uint8_t **data, size_t *size,
+                                iir_error *err);
+iir_status iir_image_encode_exr(const iir_image *img, uint8_t **data, size_t *size, iir_error *err);
 
 /* Reads .exr (R, G, B channels, any pixel type) or .pfm (colour "PF" or grey "Pf"). On error *out
  * stays NULL and err names the file and the problem. */

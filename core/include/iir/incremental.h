@@ -122,14 +122,9 @@ typedef enum iir_incr_phase {
 const char *iir_incr_phase_name(iir_incr_phase phase);
 
 typedef struct iir_incr_stats {
-    uint32_t count;        /* VPLs in the set after the step, null samples included */
-    uint32_t valid;        /* survived VALIDATE (before DELETE / a regeneration) */
-    uint32_t invalidated;  /* died in VALIDATE (or coincided with an older VPL) */
-    uint32_t deleted;      /* removed by DELETE, or survivors discarded by a regeneration */
-    uint32_t inserted;     /* created this frame (N after a regeneration) */
-    uint32_t null_samples; /* null samples in the set after the step */
-    uint32_t regenerated;  /* 1 if the fallback regenerated the whole set this frame */
-    uint32_t initial;      /* 1 on the first update: the set was created from nothing */
+    iir_vpl_counts vpl; /* how the set changed (vpl.h); vpl.shadowmaps stays 0: the step renders
+                           no maps. count - invalidated - deleted + inserted = the new count */
+    uint32_t initial;   /* 1 on the first update: the set was created from nothing */
     double phase_ms[IIR_INCR_PHASE_COUNT], total_ms;
     iir_raystats rays; /* rays of this update (all IIR_RAYS_VPL) */
 } iir_incr_stats;

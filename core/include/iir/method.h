@@ -12,6 +12,7 @@
 #include "iir/image.h"
 #include "iir/incremental.h"
 #include "iir/light.h"
+#include "iir/params.h"
 #include "iir/render.h"
 #include "iir/rt.h"
 #include "iir/status.h"
@@ -21,36 +22,6 @@ extern "C" {
 #endif
 
 struct iir_scene;
-
-/* Every parameter any method reads; each method documents which ones it uses. Ranges are checked
- * by iir_params_validate. */
-typedef struct iir_params {
-    int spp;           /* pt: samples per pixel per render/refine call, [1, 1<<20] */
-    int bounces;       /* pt, ir: light bounces: 1 = direct only, 2 = one diffuse bounce, [1, 1000];
-                          iir is one bounce by construction */
-    uint64_t seed;     /* all randomness derives from it */
-    bool jitter;       /* pt and the refinement of ir/iir: box-filter each pixel (true) or shoot
-                          through its centre, as interactive frames do (false; for references that
-                          compare like with like) */
-    int refine_passes; /* progressive refinement is converged after this many passes (ir, iir:
-                          refine calls; pt: render + refine calls of `spp` each), [1, 4096] */
-
-    /* VPL methods (ir, iir) */
-    int vpls;                  /* N: light paths (ir) or the VPL set's size (iir), [1, 16384] */
-    int kmin, kmax;            /* iir: replacements per frame, 0 <= kmin <= kmax <= vpls */
-    iir_weights weights;       /* iir: uniform or voronoi cell areas */
-    float regen_threshold;     /* iir: regenerate when more than this fraction dies, (0, 1] */
-    iir_visibility visibility; /* shadowmap or rays */
-    int sm_res;                /* shadow-map resolution, [8, 2048] */
-    float sm_bias;             /* shadow-map bias, see shadowmap.h */
-    int interleave;            /* n x n VPL subsets with a geometry-aware filter, [1, 8] */
-    float clamp;               /* geometry-term bound relative to the scene (render.h); 0 = off */
-    bool ir_fresh;             /* ir: fresh random numbers every frame (true) or the same ones */
-} iir_params;
-
-iir_params iir_params_default(void);
-/* IIR_ERR_INVALID naming the parameter and its allowed range. */
-iir_status iir_params_validate(const iir_params *p, iir_error *err);
 
 /* What a frame is rendered from: the scene is fixed, lights and camera move. */
 typedef struct iir_view {
@@ -70,26 +41,18 @@ typedef enum iir_phase {
     IIR_PHASE_COUNT
 } iir_phase;
 
-/* VPL bookkeeping of one frame (zero for methods without VPLs). */
-typedef struct iir_vpl_counts {
-    uint32_t count;        /* VPLs in the set, null samples included */
-    uint32_t valid;        /* survived validation (iir) */
-    uint32_t invalidated;  /* removed by validation (iir) */
-    uint32_t deleted;      /* removed along the shortest Delaunay edges (iir) */
-    uint32_t inserted;     /* new this frame (iir; all of them for ir) */
-    uint32_t null_samples; /* domain points whose rays escaped or hit an emitter */
-    uint32_t regenerated;  /* 1 when the whole set was regenerated this frame */
-    uint32_t shadowmaps;   /* shadow maps rendered this frame */
-} iir_vpl_counts;
-
 typedef struct iir_frame_stats {
     double total_ms;
     double phase_ms[IIR_PHASE_COUNT];
     iir_raystats rays;
     uint64_t samples_per_pixel; /* pt: samples accumulated in the image so far; ir, iir: refinement
                                    passes in the image (0 for an interactive frame) */
-    bool converged;             /* refinement reached params.refine_passes (see refine) */
-    iir_vpl_counts vpl;         /* refinement: count = the size of the pass's VPL set */
+    bool converged;             /* refinement reached the refine_passes parameter (see refine) */
+    bool whole_sweeps;          /* refinement: the passes so far give every interleaved VPL
+                                   subset equal weight, so the image shows no subset pattern
+                                   (always true for pt and for frames) */
+    iir_vpl_counts vpl; /* VPL bookkeeping (vpl.h), zero for methods without VPLs; refinement:
+                           count = the size of the pass's VPL set */
 } iir_frame_stats;
 
 const char *iir_phase_name(iir_phase phase);
@@ -98,6 +61,43 @@ typedef struct iir_method iir_method;
 
 /* Names of the available methods, NULL-terminated. */
 const char *const *iir_method_names(void);
+/* One line saying what method `name` is; "" for an unknown name. */
+const char *iir_method_summary(const char *name);
+
+/* ---- the methods' parameters (params.h) ---- */
+
+/* The parameter tables of method `name`, NULL-terminated (shared tables such as the VPL shading's
+ * appear in every method that uses them); NULL for an unknown name. */
+const iir_param_table *const *iir_method_tables(const char *name);
+/* Every distinct table of every method, NULL-terminated, in registry order. */
+const iir_param_table *const *iir_method_all_tables(void);
+/* The row `name` of method `method`'s tables, or NULL when it declares none. */
+const iir_param *iir_method_find_param(const char *method, const char *name);
+/* The first row `name` of any method's tables, or NULL. Rows of one name agree in type and
+ * choices across methods (test_params checks it), so a CLI option or a protocol field means one
+ * thing; their ranges and defaults may differ per method. */
+const iir_param *iir_method_any_param(const char *name);
+
+/* Sets p[name] after finding its row among all methods' (IIR_ERR_INVALID for a name no method
+ * declares or a value no row of that name allows). */
+iir_status iir_method_param_set(iir_params *p, const char *name, double value, iir_error *err);
+/* Checks every value of p against every row of its name in every method (live: each row's
+ * live.hi instead of hi). IIR_ERR_INVALID naming the first bad value (*bad: its row, may be NULL).
+ */
+iir_status iir_method_params_check(const iir_params *p, bool live, const iir_param **bad,
+                                   iir_error *err);
+/* Binds p for method `name` as create would -- every range and every table's check -- without
+ * creating anything. `given` as in iir_params_bind. IIR_ERR_INVALID (with *bad) otherwise. */
+iir_status iir_method_params_validate(const char *name, const iir_params *p,
+                                      const iir_params *given, const iir_param **bad,
+                                      iir_error *err);
+/* The value method `name` uses for parameter row `name`: p's when set, else the row's default. */
+double iir_method_param_value(const iir_param *row, const iir_params *p);
+
+/* Bytes method `name` would hold with p for a width x height frame (frame buffers, VPLs and their
+ * shadow maps, G-buffer, refinement buffers): an estimate from the parameters alone, so a caller
+ * can refuse a request before anything is allocated. 0 for an unknown name. */
+uint64_t iir_method_memory(const char *name, const iir_params *p, int width, int height);
 
 /* Creates method `name` over a scene and its ray tracer (both must outlive the method).
  * IIR_ERR_INVALID for an unknown name (the message lists the known ones) or bad parameters. */
@@ -105,6 +105,15 @@ iir_status iir_method_create(const char *name, const struct iir_scene *scene, co
                              const iir_params *params, iir_method **out, iir_error *err);
 void iir_method_destroy(iir_method *m);
 const char *iir_method_name(const iir_method *m);
+/* The parameters the method was created with or last given (iir_method_set_params). */
+const iir_params *iir_method_params(const iir_method *m);
+
+/* Gives a live method new parameters. When every changed parameter is IIR_PARAM_LIVE (and the
+ * method can take them) its state -- VPLs, shadow maps, G-buffer -- is kept and *restarted is
+ * false; otherwise the method starts over with the new parameters (*restarted true; may be NULL).
+ * On error (bad parameters, out of memory) the method is unchanged. */
+iir_status iir_method_set_params(iir_method *m, const iir_params *p, bool *restarted,
+                                 iir_error *err);
 
 /* Renders a new frame for `view` into out (its size is the frame size). Stats are overwritten. */
 iir_status iir_method_render(iir_method *m, const iir_view *view, iir_image *out,

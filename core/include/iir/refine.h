@@ -61,6 +61,7 @@ typedef struct iir_refine_stats {
     bool converged;           /* passes == max_passes */
     bool worked;              /* a pass was rendered (false once converged) */
     uint32_t sweep;           /* the sweep of this pass */
+    bool whole_sweeps;        /* passes is a multiple of interleave^2: every subset as often */
     uint32_t num_vpls;        /* size of that sweep's set, null samples included */
     double vpls_ms;           /* in the callback (making a fresh set) */
     double total_ms;          /* the whole call */

@@ -1,7 +1,8 @@
 /* scene.h -- the static scene: triangle meshes with diffuse materials, punctual lights, the camera,
- * named light paths; loading it from OBJ/MTL or glTF 2.0 (assimp) plus a JSON sidecar, and the
- * Cornell box built into the binary. A loaded scene is read-only and shared between threads.
- * Not ray tracing (rt.h) and not light sampling (light.h). Format: docs/scene-format.md. */
+ * named light paths; loading it from OBJ/MTL or glTF 2.0 (assimp) plus a JSON sidecar, the
+ * Cornell box built into the binary, and opening a scene with its ray tracer in one call. A loaded
+ * scene is read-only and shared between threads. Not ray tracing (rt.h) and not light sampling
+ * (light.h). Format: docs/scene-format.md. */
 #ifndef IIR_SCENE_H
 #define IIR_SCENE_H
 
@@ -10,6 +11,7 @@
 
 #include "iir/camera.h"
 #include "iir/light.h"
+#include "iir/rt.h"
 #include "iir/status.h"
 #include "iir/vecmath.h"
 
@@ -69,6 +71,15 @@ iir_status iir_scene_resolve(const char *name_or_path, const char *scenes_dir, c
 iir_scene *iir_scene_create_cornell_box(void);
 
 void iir_scene_destroy(iir_scene *scene);
+
+/* Opens a scene for rendering: NULL or "builtin" is the built-in Cornell box; anything else is
+ * resolved as iir_scene_resolve does (a file or folder, else a bare name in scenes_dir) and loaded
+ * as iir_scene_load does; then its ray tracer is built. The caller owns both outputs and frees them
+ * with iir_rt_destroy, then iir_scene_destroy (the tracer refers to the scene). On error returns
+ * the status of the step that failed with its message in err, and both outputs are NULL (nothing
+ * is left allocated). */
+iir_status iir_scene_open(const char *name_or_path, const char *scenes_dir, iir_scene **scene,
+                          iir_rt **rt, iir_error *err);
 
 /* Human-readable one-line summary ("cornell_box: 32 triangles, 8 materials, 1 light, skipped 0
  * degenerate and 0 duplicate").

@@ -76,6 +76,23 @@ static inline void iir_vpl_set_normal(iir_vpl *v, iir_vec3 n)
     v->frame = iir_frame_from_normal(n);
 }
 
+/* ---- a frame's bookkeeping of a VPL set ---- */
+
+/* How a VPL set changed in one frame: what the incremental step reports (iir_incr_stats) and what
+ * every method reports in its frame stats (iir_frame_stats; zero for methods without VPLs). The
+ * fields marked (iir) are zero for instant radiosity, which draws a new set every frame. */
+typedef struct iir_vpl_counts {
+    uint32_t count;        /* VPLs in the set after the frame, null samples included */
+    uint32_t valid;        /* survived validation, before deletion or a regeneration (iir) */
+    uint32_t invalidated;  /* removed by validation, or coincided with an older VPL (iir) */
+    uint32_t deleted;      /* removed along the shortest Delaunay edges, or survivors discarded by
+                              a regeneration (iir) */
+    uint32_t inserted;     /* new this frame (N after a regeneration; all of them for ir) */
+    uint32_t null_samples; /* in the set: domain points whose rays escaped or hit an emitter */
+    uint32_t regenerated;  /* 1 when the whole set was regenerated this frame */
+    uint32_t shadowmaps;   /* shadow maps rendered this frame */
+} iir_vpl_counts;
+
 #ifdef __cplusplus
 }
 #endif

@@ -2,14 +2,15 @@
  * across frames. Each frame runs the incremental step (core/src/incremental.c) for the first spot
  * light of the view, renders shadow maps only for the VPLs born this frame (a map lives as long as
  * its VPL: the scene is static), and shades with the shared VPL renderer. One bounce by
- * construction. Uses params vpls, kmin, kmax, weights, regen_threshold, seed, visibility, sm_res,
- * sm_bias, interleave, clamp. Direct light comes from every light of the view.
+ * construction. Parameters: the incremental step's (table below), the VPL shading's
+ * (vpl_options.c) and every method's. Direct light comes from every light of the view.
  *
- * Refinement (refine.h; uses refine_passes, jitter, interleave, clamp): sweep 0 shades the live
+ * Refinement (refine.h; refine_passes, jitter, interleave, clamp): sweep 0 shades the live
  * set, sweep s >= 1 a fresh set sampled as a regeneration would (iir_incr_sample_set, stream
  * (frame, s)) into a buffer of this file, so the live set is exactly as before when frames resume.
  * The domain (iir_method_domain) is drawn from the step's triangulation on demand into buffers of
  * this file that grow with the set and are reused. */
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -40,10 +41,102 @@ typedef struct domain_bufs {
     iir_domain d;
 } domain_bufs;
 
+/* ---- parameters ---- */
+
+typedef struct iir_options {
+    iir_method_common common;
+    iir_vpl_options vpl;
+    int vpls;              /* N: the VPL set's size */
+    int kmin, kmax;        /* replacements per frame */
+    iir_weights weights;   /* uniform or Voronoi cell areas */
+    float regen_threshold; /* regenerate when more than this fraction dies */
+} iir_options;
+
+static const char *const WEIGHTS_CHOICES[] = {"uniform", "voronoi", NULL};
+
+static const iir_param IIR_ROWS[] = {
+    {"vpls",
+     IIR_PARAM_INT,
+     offsetof(iir_options, vpls),
+     256,
+     1,
+     16384,
+     {0, 4096},
+     NULL,
+     "VPLs",
+     "the VPL set's size N",
+     IIR_PARAM_RESTART},
+    {"kmin",
+     IIR_PARAM_INT,
+     offsetof(iir_options, kmin),
+     4,
+     0,
+     16384,
+     {0, 4096},
+     NULL,
+     "VPLs",
+     "VPLs replaced per frame at least (the crowded ones)",
+     IIR_PARAM_LIVE},
+    {"kmax",
+     IIR_PARAM_INT,
+     offsetof(iir_options, kmax),
+     8,
+     0,
+     16384,
+     {0, 4096},
+     NULL,
+     "VPLs",
+     "VPLs inserted per frame at most",
+     IIR_PARAM_LIVE},
+    {"weights",
+     IIR_PARAM_ENUM,
+     offsetof(iir_options, weights),
+     IIR_WEIGHTS_VORONOI,
+     0,
+     1,
+     {0, 0},
+     WEIGHTS_CHOICES,
+     "",
+     "VPL flux by Voronoi cell area or uniform (the paper's)",
+     IIR_PARAM_LIVE},
+    {"regen_threshold",
+     IIR_PARAM_FLOAT,
+     offsetof(iir_options, regen_threshold),
+     0.5,
+     1e-6,
+     1,
+     {0, 0},
+     NULL,
+     "",
+     "regenerate the whole set when more than this fraction of it dies",
+     IIR_PARAM_LIVE},
+};
+
+/* kmin <= kmax <= vpls, blaming the one the user gave (kmin, then kmax, when both or neither). */
+static iir_status iir_check(const void *opts, const iir_params *given, const iir_param **bad,
+                            iir_error *err)
+{
+    const iir_options *o = opts;
+    if (o->kmin > o->kmax) {
+        *bad = &IIR_ROWS[iir_params_has(given, "kmin") || !iir_params_has(given, "kmax") ? 1 : 2];
+        return iir_fail(err, IIR_ERR_INVALID, "%s: kmin %d must not exceed kmax %d", (*bad)->name,
+                        o->kmin, o->kmax);
+    }
+    if (o->kmax > o->vpls) {
+        *bad = &IIR_ROWS[iir_params_has(given, "kmax") || !iir_params_has(given, "vpls") ? 2 : 0];
+        return iir_fail(err, IIR_ERR_INVALID, "%s: kmax %d must not exceed vpls %d", (*bad)->name,
+                        o->kmax, o->vpls);
+    }
+    return IIR_OK;
+}
+
+static const iir_param_table IIR_TABLE = {"iir: the incremental step", IIR_ROWS,
+                                          sizeof IIR_ROWS / sizeof IIR_ROWS[0], iir_check};
+
 typedef struct iir_state {
     const iir_scene *scene;
     const iir_rt *rt;
-    iir_params params;
+    iir_options params;
     iir_renderer *renderer;
     iir_incr *incr;
     uint32_t frame;
@@ -77,7 +170,7 @@ static void iir_m_destroy(void *state)
     free(s);
 }
 
-static iir_incr_params incr_params(const iir_params *p)
+static iir_incr_params incr_params(const iir_options *p)
 {
     iir_incr_params ip = iir_incr_params_default();
     ip.target = (uint32_t)p->vpls;
@@ -85,13 +178,14 @@ static iir_incr_params incr_params(const iir_params *p)
     ip.k_max = (uint32_t)p->kmax;
     ip.weights = p->weights;
     ip.regen_threshold = p->regen_threshold;
-    ip.seed = p->seed;
+    ip.seed = p->common.seed;
     return ip;
 }
 
-static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const iir_params *params,
+static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
                                void **state, iir_error *err)
 {
+    const iir_options *params = opts;
     iir_state *s = calloc(1, sizeof *s);
     if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating iir");
     s->scene = scene;
@@ -121,13 +215,7 @@ static const iir_light *first_spot(const iir_view *view)
 
 static void fill_counts(const iir_incr_stats *is, uint32_t maps, iir_vpl_counts *c)
 {
-    c->count = is->count;
-    c->valid = is->valid;
-    c->invalidated = is->invalidated;
-    c->deleted = is->deleted;
-    c->inserted = is->inserted;
-    c->null_samples = is->null_samples;
-    c->regenerated = is->regenerated;
+    *c = is->vpl;
     c->shadowmaps = maps;
 }
 
@@ -153,15 +241,15 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     double t1 = iir_now_ms();
     uint32_t n = 0, maps = 0;
     iir_vpl *vpls = iir_incr_vpls(s->incr, &n);
-    if (s->params.visibility == IIR_VIS_SHADOWMAP)
-        maps = iir_smaps_build(vpls, n, s->rt, s->params.sm_res, &stats->rays);
+    if (s->params.vpl.visibility == IIR_VIS_SHADOWMAP)
+        maps = iir_smaps_build(vpls, n, s->rt, s->params.vpl.sm_res, &stats->rays);
     double t2 = iir_now_ms();
-    iir_indirect_params ind = iir_params_indirect(&s->params);
+    iir_indirect_params ind = iir_vpl_indirect(&s->params.vpl);
     iir_render_timing rt;
     st = iir_renderer_frame(s->renderer, &view->camera, view->lights, view->num_lights, vpls, n,
-                            &ind, iir_hash3(s->params.seed, s->frame, 2), out, &rt, &stats->rays,
-                            err);
-    iir_refine_params rp = iir_params_refine(&s->params);
+                            &ind, iir_hash3(s->params.common.seed, s->frame, 2), out, &rt,
+                            &stats->rays, err);
+    iir_refine_params rp = iir_refine_params_of(&s->params.common, &s->params.vpl);
     if (st == IIR_OK)
         st = iir_refine_begin(s->refine, &view->camera, view->lights, view->num_lights, out->width,
                               out->height, &rp, err);
@@ -344,9 +432,31 @@ static void iir_m_set_stop(void *state, iir_stop_fn fn, void *ctx)
     iir_renderer_set_stop(((iir_state *)state)->renderer, fn, ctx);
 }
 
+/* Only IIR_PARAM_LIVE rows changed: the step's budgets, weights and threshold go to the step. */
+static void iir_m_update(void *state, const void *opts)
+{
+    iir_state *s = state;
+    s->params = *(const iir_options *)opts;
+    iir_incr_params ip = incr_params(&s->params);
+    iir_error err;
+    iir_incr_set_params(s->incr, &ip, &err); /* same N: cannot fail once bound */
+}
+
+/* The set, its Voronoi weights' triangulation (~200 B a site) and refinement's fresh sets. */
+static uint64_t iir_m_memory(const void *opts, int width, int height)
+{
+    const iir_options *o = opts;
+    uint64_t n = (uint64_t)o->vpls;
+    return iir_vpl_memory(&o->vpl, (uint32_t)n, width, height) + n * (sizeof(iir_vpl) + 200);
+}
+
 const iir_method_ops iir_method_iir = {
     .name = "iir",
     .summary = "incremental instant radiosity: VPLs kept across frames, few replaced per frame",
+    .tables = {{&iir_common_table, offsetof(iir_options, common)},
+               {&iir_vpl_table, offsetof(iir_options, vpl)},
+               {&IIR_TABLE, 0}},
+    .opts_size = sizeof(iir_options),
     .create = iir_m_create,
     .destroy = iir_m_destroy,
     .render = iir_m_render,
@@ -354,4 +464,6 @@ const iir_method_ops iir_method_iir = {
     .vpls = iir_m_vpls,
     .domain = iir_m_domain,
     .set_stop = iir_m_set_stop,
+    .update = iir_m_update,
+    .memory = iir_m_memory,
 };

@@ -3,16 +3,17 @@
  * reflects; paths end by Russian roulette or after `bounces - 1` VPL vertices (so bounces = 2 is
  * one-bounce indirect light, like iir). All VPLs are new each frame, so all their shadow maps are
  * rendered each frame: this is the baseline the incremental method must beat.
- * Uses params vpls, bounces, seed, ir_fresh, visibility, sm_res, sm_bias, interleave, clamp.
+ * Parameters: its own table below, the VPL shading's (vpl_options.c) and every method's.
  *
  * The first two dimensions of path i (the point on the spot's disk) are the Halton point i in
  * bases 2 and 3, rotated by a per-frame offset (Cranley-Patterson): the same offset every frame
- * when ir_fresh is false, a new one every frame otherwise. Later dimensions come from PCG streams.
+ * when same_random is set, a new one every frame otherwise. Later dimensions come from PCG streams.
  *
- * Refinement (refine.h; uses refine_passes, jitter, interleave, clamp): sweep 0 shades the frame's
+ * Refinement (refine.h; refine_passes, jitter, interleave, clamp): sweep 0 shades the frame's
  * own paths, sweep s >= 1 a second list of N paths traced with the frame seed hashed with s (new
  * random numbers, same count), so the frame's list and the frame counter stay untouched.
  */
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -34,10 +35,58 @@ typedef struct vpl_list {
     uint32_t next_id; /* the id of the next VPL */
 } vpl_list;
 
+/* ---- parameters ---- */
+
+typedef struct ir_options {
+    iir_method_common common;
+    iir_vpl_options vpl;
+    int vpls;         /* N light paths */
+    int bounces;      /* 1 = direct only, 2 = one diffuse bounce */
+    bool same_random; /* the same random numbers every frame */
+} ir_options;
+
+static const iir_param IR_ROWS[] = {
+    {"vpls",
+     IIR_PARAM_INT,
+     offsetof(ir_options, vpls),
+     256,
+     1,
+     16384,
+     {0, 4096},
+     NULL,
+     "paths",
+     "light paths per frame (each diffuse vertex a VPL)",
+     IIR_PARAM_RESTART},
+    {"bounces",
+     IIR_PARAM_INT,
+     offsetof(ir_options, bounces),
+     2,
+     1,
+     1000,
+     {0, 8},
+     NULL,
+     "",
+     "light bounces: 1 = direct only, 2 = one diffuse bounce",
+     IIR_PARAM_RESTART},
+    {"same_random",
+     IIR_PARAM_BOOL,
+     offsetof(ir_options, same_random),
+     0,
+     0,
+     1,
+     {0, 0},
+     NULL,
+     "",
+     "the same random numbers every frame (default: fresh ones)",
+     IIR_PARAM_RESTART},
+};
+static const iir_param_table IR_TABLE = {"ir: light paths", IR_ROWS,
+                                         sizeof IR_ROWS / sizeof IR_ROWS[0], NULL};
+
 typedef struct ir_state {
     const iir_scene *scene;
     const iir_rt *rt;
-    iir_params params;
+    ir_options params;
     iir_renderer *renderer;
     vpl_list live;          /* the frame's VPLs (with shadow maps) */
     vpl_list fresh;         /* refinement: the current sweep's VPLs (no maps) */
@@ -167,14 +216,14 @@ static iir_status generate_vpls(ir_state *ir, vpl_list *l, const iir_light *ligh
 
 /* ---- the method interface ---- */
 
-static iir_status ir_create(const iir_scene *scene, const iir_rt *rt, const iir_params *params,
+static iir_status ir_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
                             void **state, iir_error *err)
 {
     ir_state *ir = calloc(1, sizeof *ir);
     if (!ir) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating ir");
     ir->scene = scene;
     ir->rt = rt;
-    ir->params = *params;
+    ir->params = *(const ir_options *)opts;
     ir->renderer = iir_renderer_create(scene, rt);
     ir->refine = iir_refine_create();
     if (!ir->renderer || !ir->refine) {
@@ -219,22 +268,23 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
     iir_status st = iir_view_validate(view, err);
     if (st != IIR_OK) return st;
     double t0 = iir_now_ms();
-    ir->seed_rendered = ir->params.ir_fresh ? iir_hash3(ir->params.seed, ir->frame, 0x1f)
-                                            : iir_hash3(ir->params.seed, 0, 0x1f);
+    uint64_t seed = ir->params.common.seed;
+    ir->seed_rendered =
+        ir->params.same_random ? iir_hash3(seed, 0, 0x1f) : iir_hash3(seed, ir->frame, 0x1f);
     st = generate_vpls(ir, &ir->live, view->lights, view->num_lights, ir->seed_rendered,
                        &stats->rays, err);
     if (st != IIR_OK) return st;
     double t1 = iir_now_ms();
     uint32_t maps = 0;
-    if (ir->params.visibility == IIR_VIS_SHADOWMAP)
-        maps = iir_smaps_build(ir->live.v, ir->live.n, ir->rt, ir->params.sm_res, &stats->rays);
+    if (ir->params.vpl.visibility == IIR_VIS_SHADOWMAP)
+        maps = iir_smaps_build(ir->live.v, ir->live.n, ir->rt, ir->params.vpl.sm_res, &stats->rays);
     double t2 = iir_now_ms();
-    iir_indirect_params ind = iir_params_indirect(&ir->params);
+    iir_indirect_params ind = iir_vpl_indirect(&ir->params.vpl);
     iir_render_timing rt;
     st = iir_renderer_frame(ir->renderer, &view->camera, view->lights, view->num_lights, ir->live.v,
-                            ir->live.n, &ind, iir_hash3(ir->params.seed, ir->frame, 2), out, &rt,
-                            &stats->rays, err);
-    iir_refine_params rp = iir_params_refine(&ir->params);
+                            ir->live.n, &ind, iir_hash3(seed, ir->frame, 2), out, &rt, &stats->rays,
+                            err);
+    iir_refine_params rp = iir_refine_params_of(&ir->params.common, &ir->params.vpl);
     if (st == IIR_OK)
         st = iir_refine_begin(ir->refine, &view->camera, view->lights, view->num_lights, out->width,
                               out->height, &rp, err);
@@ -290,9 +340,26 @@ static void ir_set_stop(void *state, iir_stop_fn fn, void *ctx)
     iir_renderer_set_stop(((ir_state *)state)->renderer, fn, ctx);
 }
 
+static void ir_update(void *state, const void *opts)
+{
+    ((ir_state *)state)->params = *(const ir_options *)opts;
+}
+
+/* About one VPL per path and bounce (Russian roulette ends many sooner). */
+static uint64_t ir_memory(const void *opts, int width, int height)
+{
+    const ir_options *o = opts;
+    uint32_t n = (uint32_t)o->vpls * (uint32_t)(o->bounces > 1 ? o->bounces - 1 : 0);
+    return iir_vpl_memory(&o->vpl, n, width, height);
+}
+
 const iir_method_ops iir_method_ir = {
     .name = "ir",
     .summary = "instant radiosity: VPLs from light paths, regenerated every frame",
+    .tables = {{&iir_common_table, offsetof(ir_options, common)},
+               {&iir_vpl_table, offsetof(ir_options, vpl)},
+               {&IR_TABLE, 0}},
+    .opts_size = sizeof(ir_options),
     .create = ir_create,
     .destroy = ir_destroy,
     .render = ir_render,
@@ -300,4 +367,6 @@ const iir_method_ops iir_method_ir = {
     .vpls = ir_vpls,
     .domain = NULL,
     .set_stop = ir_set_stop,
+    .update = ir_update,
+    .memory = ir_memory,
 };

@@ -1,14 +1,15 @@
 /* pt.c -- the reference path tracer (method "pt"): next-event estimation with MIS for area
  * lights, Russian roulette, a maximum bounce count, deterministic seeds, OpenMP over tiles, and
- * progressive refinement (more samples into the same frame). Uses params spp, bounces, seed,
- * jitter, refine_passes (converged once render + refines put refine_passes x spp samples in the
- * image; a refine call still adds its samples after that, so a caller can reach any count).
+ * progressive refinement (more samples into the same frame). Parameters: spp and bounces (below),
+ * seed, jitter, refine_passes (converged once render + refines put refine_passes x spp samples in
+ * the image; a refine call still adds its samples after that, so a caller can reach any count).
  *
  * Bounces count reflections: a light path light -> x_k -> ... -> x_1 -> camera has k of them, so
  * bounces = 1 is direct light only and bounces = 2 adds one diffuse bounce. Emitters seen directly
  * (k = 0) always count. Sample s of pixel (x, y) draws from the stream hash(x, y, s) of the seed,
  * so an image depends on the seed and the sample count only, not on threads or tile order. */
 #include <omp.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -22,10 +23,43 @@
 
 enum { TILE = 16, RR_START = 3 };
 
+typedef struct pt_options {
+    iir_method_common common;
+    int spp;     /* samples per pixel per render or refine call */
+    int bounces; /* 1 = direct only, 2 = one diffuse bounce */
+} pt_options;
+
+static const iir_param PT_ROWS[] = {
+    {"spp",
+     IIR_PARAM_INT,
+     offsetof(pt_options, spp),
+     16,
+     1,
+     1 << 20,
+     {1, 64},
+     NULL,
+     "samples",
+     "samples per pixel per frame (and per refinement pass)",
+     IIR_PARAM_LIVE},
+    {"bounces",
+     IIR_PARAM_INT,
+     offsetof(pt_options, bounces),
+     2,
+     1,
+     1000,
+     {0, 8},
+     NULL,
+     "",
+     "light bounces: 1 = direct only, 2 = one diffuse bounce",
+     IIR_PARAM_LIVE},
+};
+static const iir_param_table PT_TABLE = {"pt: path tracing", PT_ROWS,
+                                         sizeof PT_ROWS / sizeof PT_ROWS[0], NULL};
+
 typedef struct pt_state {
     const iir_scene *scene;
     const iir_rt *rt;
-    iir_params params;
+    pt_options params;
     iir_lightset *lights;
     bool has_area_lights;
     iir_camera_frame cam;
@@ -121,9 +155,10 @@ static void render_tile(pt_state *pt, int tile, int spp, iir_raystats *st)
         for (int x = x0; x < x1; x++) {
             iir_vec3 sum = iir_v3s(0.f);
             for (uint64_t s = pt->spp_done; s < pt->spp_done + (uint64_t)spp; s++) {
-                iir_rng rng = iir_rng_make(pt->params.seed, iir_hash3((uint64_t)x, (uint64_t)y, s));
+                iir_rng rng =
+                    iir_rng_make(pt->params.common.seed, iir_hash3((uint64_t)x, (uint64_t)y, s));
                 iir_vec2 j = iir_rng_uniform2(&rng);
-                if (!pt->params.jitter) j = iir_v2(0.5f, 0.5f);
+                if (!pt->params.common.jitter) j = iir_v2(0.5f, 0.5f);
                 iir_vec3 dir = iir_camera_dir(cam, (float)x + j.x, (float)y + j.y);
                 iir_vec3 L = Li(pt, iir_make_ray(cam->origin, dir, 0.f, INFINITY), &rng, st);
                 if (iir_is_finite3(L)) sum = iir_add(sum, L);
@@ -151,7 +186,7 @@ static void accumulate(pt_state *pt, int spp, iir_frame_stats *stats)
     stats->phase_ms[IIR_PHASE_TRACE] = iir_now_ms() - t0;
     stats->total_ms = stats->phase_ms[IIR_PHASE_TRACE];
     stats->samples_per_pixel = pt->spp_done;
-    stats->converged = pt->spp_done >= (uint64_t)pt->params.refine_passes * (uint64_t)spp;
+    stats->converged = pt->spp_done >= (uint64_t)pt->params.common.refine_passes * (uint64_t)spp;
 }
 
 static void resolve(const pt_state *pt, iir_image *out)
@@ -163,14 +198,14 @@ static void resolve(const pt_state *pt, iir_image *out)
 
 /* ---- the method interface ---- */
 
-static iir_status pt_create(const iir_scene *scene, const iir_rt *rt, const iir_params *params,
+static iir_status pt_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
                             void **state, iir_error *err)
 {
     pt_state *pt = calloc(1, sizeof *pt);
     if (!pt) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the path tracer");
     pt->scene = scene;
     pt->rt = rt;
-    pt->params = *params;
+    pt->params = *(const pt_options *)opts;
     *state = pt;
     return IIR_OK;
 }
@@ -219,12 +254,27 @@ static iir_status pt_refine(void *state, iir_image *out, iir_frame_stats *stats,
     return IIR_OK;
 }
 
+static void pt_update(void *state, const void *opts)
+{
+    ((pt_state *)state)->params = *(const pt_options *)opts;
+}
+
+static uint64_t pt_memory(const void *opts, int width, int height)
+{
+    (void)opts;
+    return (uint64_t)width * (uint64_t)height * sizeof(iir_vec3); /* the sum image */
+}
+
 const iir_method_ops iir_method_pt = {
     .name = "pt",
-    .summary = "reference path tracer (NEE + MIS, Russian roulette)",
+    .summary = "path tracer: the reference (next-event estimation, Russian roulette)",
+    .tables = {{&iir_common_table, offsetof(pt_options, common)}, {&PT_TABLE, 0}},
+    .opts_size = sizeof(pt_options),
     .create = pt_create,
     .destroy = pt_destroy,
     .render = pt_render,
     .refine = pt_refine,
     .vpls = NULL,
+    .update = pt_update,
+    .memory = pt_memory,
 };
