@@ -189,9 +189,13 @@ iir_status iir_refine_pass(iir_refine *rf, iir_renderer *r, iir_refine_vpls_fn v
     if (work && s == IIR_OK) {
         iir_pass_params pp = {p->interleave, i % n2,
                               p->jitter ? iir_refine_jitter(i) : iir_v2(0.5f, 0.5f), p->clamp};
-        s = iir_renderer_pass(r, &rf->camera, rf->lights, rf->num_lights, rf->vpls, rf->num_vpls,
-                              &pp, iir_hash3(p->seed, i, 0x5eed), rf->pass, &st.timing, &st.rays,
-                              err);
+        iir_render_input in = {.camera = &rf->camera,
+                               .lights = rf->lights,
+                               .num_lights = rf->num_lights,
+                               .vpls = rf->vpls,
+                               .num_vpls = rf->num_vpls,
+                               .seed = iir_hash3(p->seed, i, 0x5eed)};
+        s = iir_renderer_pass(r, &in, &pp, rf->pass, &st.timing, &st.rays, err);
     }
     if (work && s == IIR_OK) rf->passes++;
     if (s == IIR_OK && rf->passes > 0) average(rf, work, out);

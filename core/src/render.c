@@ -176,17 +176,17 @@ static bool shade(iir_renderer *r, const shade_job *job, iir_render_timing *tm, 
     return stopped;
 }
 
-iir_status iir_renderer_frame(iir_renderer *r, const iir_camera *cam, const iir_light *lights,
-                              uint32_t num_lights, const iir_vpl *vpls, uint32_t num_vpls,
-                              const iir_indirect_params *p, uint64_t seed, iir_image *out,
-                              iir_render_timing *t, iir_raystats *st, iir_error *err)
+iir_status iir_renderer_frame(iir_renderer *r, const iir_render_input *in,
+                              const iir_indirect_params *p, iir_image *out, iir_render_timing *t,
+                              iir_raystats *st, iir_error *err)
 {
     iir_render_timing tm = {0};
     iir_raystats rays = {0};
-    iir_status s = check_inputs(cam, lights, num_lights, p, out, err);
-    if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, p, false, err);
-    if (s == IIR_OK) s = gbuffer_phase(r, cam, out->width, out->height, &tm, &rays, err);
-    shade_job job = {.lights = lights, .num_lights = num_lights, .p = p, .seed = seed, .out = out};
+    iir_status s = check_inputs(in->camera, in->lights, in->num_lights, p, out, err);
+    if (s == IIR_OK) s = iir_render_subsets(r, in->vpls, in->num_vpls, p, false, err);
+    if (s == IIR_OK) s = gbuffer_phase(r, in->camera, out->width, out->height, &tm, &rays, err);
+    shade_job job = {
+        .lights = in->lights, .num_lights = in->num_lights, .p = p, .seed = in->seed, .out = out};
     if (s == IIR_OK) shade(r, &job, &tm, &rays);
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);
@@ -236,10 +236,8 @@ static bool stop_requested(const iir_renderer *r)
     return r->stop && r->stop(r->stop_ctx);
 }
 
-iir_status iir_renderer_pass(iir_renderer *r, const iir_camera *cam, const iir_light *lights,
-                             uint32_t num_lights, const iir_vpl *vpls, uint32_t num_vpls,
-                             const iir_pass_params *p, uint64_t seed, iir_image *out,
-                             iir_render_timing *t, iir_raystats *st, iir_error *err)
+iir_status iir_renderer_pass(iir_renderer *r, const iir_render_input *in, const iir_pass_params *p,
+                             iir_image *out, iir_render_timing *t, iir_raystats *st, iir_error *err)
 {
     iir_render_timing tm = {0};
     iir_raystats rays = {0};
@@ -249,15 +247,16 @@ iir_status iir_renderer_pass(iir_renderer *r, const iir_camera *cam, const iir_l
     ind.filter = false;
     ind.clamp = p->clamp;
     iir_status s = check_pass(p, err);
-    if (s == IIR_OK) s = check_inputs(cam, lights, num_lights, &ind, out, err);
-    if (s == IIR_OK) s = iir_render_subsets(r, vpls, num_vpls, &ind, true, err);
-    if (s == IIR_OK) s = pass_gbuffer(r, cam, p->jitter, out->width, out->height, &tm, &rays, err);
-    shade_job job = {.lights = lights,
-                     .num_lights = num_lights,
+    if (s == IIR_OK) s = check_inputs(in->camera, in->lights, in->num_lights, &ind, out, err);
+    if (s == IIR_OK) s = iir_render_subsets(r, in->vpls, in->num_vpls, &ind, true, err);
+    if (s == IIR_OK)
+        s = pass_gbuffer(r, in->camera, p->jitter, out->width, out->height, &tm, &rays, err);
+    shade_job job = {.lights = in->lights,
+                     .num_lights = in->num_lights,
                      .p = &ind,
                      .shift = p->shift,
                      .stoppable = true,
-                     .seed = seed,
+                     .seed = in->seed,
                      .out = out};
     bool stopped = s == IIR_OK && stop_requested(r);
     if (s == IIR_OK && !stopped) stopped = shade(r, &job, &tm, &rays);

@@ -280,6 +280,17 @@ async function main() {
     await page.screenshot({ path: shot });
     log(`screenshot: ${shot}`);
 
+    // 4a. the parameter form is the welcome's tables: the method's rows, rebuilt for another method
+    const formOf = () => page.evaluate(() => [...document.querySelectorAll('#params-method [name]')].map((e) => e.name));
+    const rowsOf = (name) => page.evaluate((n) => window.iir.methods.find((m) => m.name === n).params.map((r) => r.name), name);
+    const method0 = await page.evaluate(() => window.iir.state.params.method);
+    check(JSON.stringify(await formOf()) === JSON.stringify(await rowsOf(method0)), `the ${method0} form has its table's rows: ${(await formOf()).join(', ')}`);
+    await page.selectOption('#param-method', 'pt');
+    await page.waitForFunction(() => window.iir.state.params.method === 'pt' && document.querySelector('#param-spp'), null, { timeout: 10000 });
+    check(JSON.stringify(await formOf()) === JSON.stringify(await rowsOf('pt')), `choosing pt rebuilds the form from pt's table: ${(await formOf()).join(', ')}`);
+    await page.selectOption('#param-method', method0);
+    await page.waitForFunction((m) => window.iir.state.params.method === m, method0, { timeout: 10000 });
+
     // 4. connection indicator, help overlay
     const conn = await page.evaluate(() => ({ state: document.querySelector('#conn').dataset.state, text: document.querySelector('#conn').textContent }));
     check(conn.state === 'connected' && /connected/.test(conn.text), `indicator says "${conn.text}"`);

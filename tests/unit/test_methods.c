@@ -85,9 +85,10 @@ static void test_ir_converges_to_pt(void **state)
     iir_render_timing t;
     iir_image *direct = iir_image_create(W, H);
     iir_error err = {0};
-    assert_int_equal(iir_renderer_frame(r, &v.camera, v.lights, v.num_lights, NULL, 0, &ind, 1,
-                                        direct, &t, NULL, &err),
-                     IIR_OK);
+    assert_int_equal(
+        iir_renderer_frame(r, &(iir_render_input){&v.camera, v.lights, v.num_lights, NULL, 0, 1},
+                           &ind, direct, &t, NULL, &err),
+        IIR_OK);
     const iir_gbuffer *gb = iir_renderer_gbuffer(r);
     double rel = 0, rel_direct = 0, sum_img = 0, sum_ref = 0;
     int n = 0;
@@ -147,9 +148,9 @@ static void test_still_light_matches_fresh_maps(void **state)
     iir_error err = {0};
     /* the method's last frame was its 40th (index 39): same seed derivation for the direct part */
     iir_view v = {&light, 1, f->scene->camera};
-    assert_int_equal(
-        iir_renderer_frame(r, &v.camera, v.lights, 1, copy, n, &ind, 0, again, &t, NULL, &err),
-        IIR_OK);
+    assert_int_equal(iir_renderer_frame(r, &(iir_render_input){&v.camera, v.lights, 1, copy, n, 0},
+                                        &ind, again, &t, NULL, &err),
+                     IIR_OK);
     /* Direct light from a spot has no randomness, so the frames match exactly. */
     assert_memory_equal(img->pixels, again->pixels, sizeof(iir_vec3) * W * H);
     for (uint32_t i = 0; i < n; i++) iir_smap_release(&copy[i].smap);

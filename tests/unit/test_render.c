@@ -166,7 +166,8 @@ static iir_render_timing frame(const loaded *l, const iir_camera *cam, const iir
 {
     iir_render_timing t;
     iir_error err = {0};
-    if (iir_renderer_frame(l->r, cam, lights, nl, vpls, nv, p, seed, out, &t, st, &err) != IIR_OK)
+    if (iir_renderer_frame(l->r, &(iir_render_input){cam, lights, nl, vpls, nv, seed}, p, out, &t,
+                           st, &err) != IIR_OK)
         fail_msg("frame: %s", err.msg);
     return t;
 }
@@ -739,20 +740,24 @@ static void test_errors(void **state)
     iir_error err = {0};
     const iir_camera *cam = &l.scene->camera;
     assert_false(vpls[5].null_sample);
-    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
+                                        NULL, NULL, &err),
                      IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "shadow map"));
     /* Exact rays need no maps; a null sample needs none either. */
     p.visibility = IIR_VIS_RAYS;
-    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
+                                        NULL, NULL, &err),
                      IIR_OK);
     p.visibility = IIR_VIS_SHADOWMAP;
     vpls[5].null_sample = true;
-    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
+                                        NULL, NULL, &err),
                      IIR_OK);
     /* Bad parameters, VPLs, cameras, lights. */
     p.interleave = 9;
-    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
+                                        NULL, NULL, &err),
                      IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "interleave"));
     p = iir_indirect_params_default();
@@ -760,26 +765,31 @@ static void test_errors(void **state)
     assert_int_equal(iir_indirect_params_validate(&p, &err), IIR_ERR_INVALID);
     p = iir_indirect_params_default();
     vpls[2].flux.y = NAN;
-    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
+                                        NULL, NULL, &err),
                      IIR_ERR_INVALID);
     vpls[2].flux.y = 0.f;
     vpls[3].normal = iir_scale(vpls[3].normal, 2.f);
-    assert_int_equal(iir_renderer_frame(l.r, cam, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
+                                        NULL, NULL, &err),
                      IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "iir_vpl_set_normal"));
     iir_vpl_set_normal(&vpls[3], iir_normalize(vpls[3].normal));
     iir_camera bad = *cam;
     bad.fov_y = 0.f;
-    assert_int_equal(iir_renderer_frame(l.r, &bad, NULL, 0, vpls, N, &p, 1, img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){&bad, NULL, 0, vpls, N, 1}, &p,
+                                        img, NULL, NULL, &err),
                      IIR_ERR_INVALID);
     iir_light light = l.scene->lights[0];
     light.cone_angle = 2.f;
-    assert_int_equal(iir_renderer_frame(l.r, cam, &light, 1, vpls, N, &p, 1, img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, &light, 1, vpls, N, 1}, &p,
+                                        img, NULL, NULL, &err),
                      IIR_ERR_INVALID);
     /* Still usable afterwards. */
-    assert_int_equal(
-        iir_renderer_frame(l.r, cam, l.scene->lights, 1, vpls, N, &p, 1, img, NULL, NULL, &err),
-        IIR_OK);
+    assert_int_equal(iir_renderer_frame(l.r,
+                                        &(iir_render_input){cam, l.scene->lights, 1, vpls, N, 1},
+                                        &p, img, NULL, NULL, &err),
+                     IIR_OK);
     iir_image_destroy(img);
     release_vpls(vpls, N);
     unload_cornell(&l);

@@ -178,6 +178,7 @@ setInterval(() => {
 
 function onWelcome(w) {
     app.limits = w.limits;
+    app.methods = w.methods;
     if (!app.welcomed || app.resync) {
         app.state = clone(w.state);
     } else {
@@ -322,6 +323,9 @@ $('#show-vpls').addEventListener('change', (e) => actions.toggleVpls(e.target.ch
 $('#retry-now').addEventListener('click', () => conn.retryNow());
 
 window.iir = Object.freeze({
+    get methods() {
+        return app.methods; // welcome.methods: names, summaries, parameter tables
+    },
     get framesReceived() {
         return app.framesReceived;
     },

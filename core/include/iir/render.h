@@ -117,18 +117,29 @@ void iir_renderer_destroy(iir_renderer *r);
  * destroy; owned by the renderer. */
 const iir_gbuffer *iir_renderer_gbuffer(const iir_renderer *r);
 
-/* Renders one frame into out (its size is the frame size): emission + direct light from `lights`
- * + indirect light from the VPLs (see the top of this header). `vpls` may be NULL when num_vpls is
- * 0. The frame depends only on its inputs and the seed, not on the thread count. Rays are added to
- * *st (may be NULL); *t (may be NULL) is overwritten.
+/* What a frame or a pass shades: the camera, the punctual lights (emissive triangles come from the
+ * scene), the VPLs (NULL when num_vpls is 0) and the seed of the frame's random numbers (the
+ * emissive-triangle samples of direct light). All read-only during the call. */
+typedef struct iir_render_input {
+    const iir_camera *camera;
+    const iir_light *lights;
+    uint32_t num_lights;
+    const iir_vpl *vpls;
+    uint32_t num_vpls;
+    uint64_t seed;
+} iir_render_input;
+
+/* Renders one frame of `in` into out (its size is the frame size): emission + direct light +
+ * indirect light from the VPLs (see the top of this header). The frame depends only on its inputs
+ * and the seed, not on the thread count. Rays are added to *st (may be NULL); *t (may be NULL) is
+ * overwritten.
  * Errors (out is then unspecified, the renderer stays usable): IIR_ERR_INVALID for an invalid
  * camera, light or params, a VPL with a non-finite or negative field, or -- with shadow-map
  * visibility -- a non-null VPL whose map is not rendered; IIR_ERR_NOMEM when growing scratch fails.
  */
-iir_status iir_renderer_frame(iir_renderer *r, const iir_camera *cam, const iir_light *lights,
-                              uint32_t num_lights, const iir_vpl *vpls, uint32_t num_vpls,
-                              const iir_indirect_params *p, uint64_t seed, iir_image *out,
-                              iir_render_timing *t, iir_raystats *st, iir_error *err);
+iir_status iir_renderer_frame(iir_renderer *r, const iir_render_input *in,
+                              const iir_indirect_params *p, iir_image *out, iir_render_timing *t,
+                              iir_raystats *st, iir_error *err);
 
 /* ---- one pass of progressive refinement (refine.h averages them) ----
  *
@@ -159,10 +170,9 @@ void iir_renderer_set_stop(iir_renderer *r, iir_stop_fn fn, void *ctx);
 /* Renders one pass into out (every pixel written), as iir_renderer_frame does a frame; the same
  * errors, plus IIR_ERR_INVALID for a shift or jitter out of range, and IIR_ERR_INTERRUPTED when
  * the stop hook asked (out is then unspecified). */
-iir_status iir_renderer_pass(iir_renderer *r, const iir_camera *cam, const iir_light *lights,
-                             uint32_t num_lights, const iir_vpl *vpls, uint32_t num_vpls,
-                             const iir_pass_params *p, uint64_t seed, iir_image *out,
-                             iir_render_timing *t, iir_raystats *st, iir_error *err);
+iir_status iir_renderer_pass(iir_renderer *r, const iir_render_input *in, const iir_pass_params *p,
+                             iir_image *out, iir_render_timing *t, iir_raystats *st,
+                             iir_error *err);
 
 #ifdef __cplusplus
 }

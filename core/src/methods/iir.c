@@ -246,9 +246,13 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     double t2 = iir_now_ms();
     iir_indirect_params ind = iir_vpl_indirect(&s->params.vpl);
     iir_render_timing rt;
-    st = iir_renderer_frame(s->renderer, &view->camera, view->lights, view->num_lights, vpls, n,
-                            &ind, iir_hash3(s->params.common.seed, s->frame, 2), out, &rt,
-                            &stats->rays, err);
+    iir_render_input in = {.camera = &view->camera,
+                           .lights = view->lights,
+                           .num_lights = view->num_lights,
+                           .vpls = vpls,
+                           .num_vpls = n,
+                           .seed = iir_hash3(s->params.common.seed, s->frame, 2)};
+    st = iir_renderer_frame(s->renderer, &in, &ind, out, &rt, &stats->rays, err);
     iir_refine_params rp = iir_refine_params_of(&s->params.common, &s->params.vpl);
     if (st == IIR_OK)
         st = iir_refine_begin(s->refine, &view->camera, view->lights, view->num_lights, out->width,
@@ -453,9 +457,9 @@ static uint64_t iir_m_memory(const void *opts, int width, int height)
 const iir_method_ops iir_method_iir = {
     .name = "iir",
     .summary = "incremental instant radiosity: VPLs kept across frames, few replaced per frame",
-    .tables = {{&iir_common_table, offsetof(iir_options, common)},
+    .tables = {{&IIR_TABLE, 0},
                {&iir_vpl_table, offsetof(iir_options, vpl)},
-               {&IIR_TABLE, 0}},
+               {&iir_common_table, offsetof(iir_options, common)}},
     .opts_size = sizeof(iir_options),
     .create = iir_m_create,
     .destroy = iir_m_destroy,

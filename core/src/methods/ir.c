@@ -281,9 +281,13 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
     double t2 = iir_now_ms();
     iir_indirect_params ind = iir_vpl_indirect(&ir->params.vpl);
     iir_render_timing rt;
-    st = iir_renderer_frame(ir->renderer, &view->camera, view->lights, view->num_lights, ir->live.v,
-                            ir->live.n, &ind, iir_hash3(seed, ir->frame, 2), out, &rt, &stats->rays,
-                            err);
+    iir_render_input in = {.camera = &view->camera,
+                           .lights = view->lights,
+                           .num_lights = view->num_lights,
+                           .vpls = ir->live.v,
+                           .num_vpls = ir->live.n,
+                           .seed = iir_hash3(seed, ir->frame, 2)};
+    st = iir_renderer_frame(ir->renderer, &in, &ind, out, &rt, &stats->rays, err);
     iir_refine_params rp = iir_refine_params_of(&ir->params.common, &ir->params.vpl);
     if (st == IIR_OK)
         st = iir_refine_begin(ir->refine, &view->camera, view->lights, view->num_lights, out->width,
@@ -356,9 +360,9 @@ static uint64_t ir_memory(const void *opts, int width, int height)
 const iir_method_ops iir_method_ir = {
     .name = "ir",
     .summary = "instant radiosity: VPLs from light paths, regenerated every frame",
-    .tables = {{&iir_common_table, offsetof(ir_options, common)},
+    .tables = {{&IR_TABLE, 0},
                {&iir_vpl_table, offsetof(ir_options, vpl)},
-               {&IR_TABLE, 0}},
+               {&iir_common_table, offsetof(ir_options, common)}},
     .opts_size = sizeof(ir_options),
     .create = ir_create,
     .destroy = ir_destroy,

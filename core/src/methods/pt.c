@@ -268,7 +268,7 @@ static uint64_t pt_memory(const void *opts, int width, int height)
 const iir_method_ops iir_method_pt = {
     .name = "pt",
     .summary = "path tracer: the reference (next-event estimation, Russian roulette)",
-    .tables = {{&iir_common_table, offsetof(pt_options, common)}, {&PT_TABLE, 0}},
+    .tables = {{&PT_TABLE, 0}, {&iir_common_table, offsetof(pt_options, common)}},
     .opts_size = sizeof(pt_options),
     .create = pt_create,
     .destroy = pt_destroy,
