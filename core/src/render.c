@@ -154,26 +154,30 @@ typedef struct shade_job {
     uint32_t num_lights;
     const iir_indirect_params *p;
     uint32_t shift; /* added to every pixel's VPL subset (mod n^2) */
-    bool stoppable; /* the indirect phase polls r->stop */
     uint64_t seed;  /* of the direct light's samples */
     iir_image *out;
 } shade_job;
 
 /* The shading phases on the current G-buffer, timed into tm, rays added to rays: direct light,
  * indirect light from the VPL subsets, then the filter into job->out. Returns true when a
- * stoppable job stopped early (out is then incomplete). */
+ * phase stopped early at r->stop's request (out is then incomplete). */
 static bool shade(iir_renderer *r, const shade_job *job, iir_render_timing *tm, iir_raystats *rays)
 {
     double t0 = iir_now_ms();
-    iir_render_direct(r, job->lights, job->num_lights, job->seed, job->out, rays);
+    bool stopped = iir_render_direct(r, job->lights, job->num_lights, job->seed, job->out, rays);
     double t1 = iir_now_ms();
-    bool stopped = iir_render_indirect(r, job->p, job->shift, job->stoppable, rays);
+    if (!stopped) stopped = iir_render_indirect(r, job->p, job->shift, true, rays);
     double t2 = iir_now_ms();
     if (!stopped) iir_render_filter(r, job->p, job->out);
     tm->direct_ms = t1 - t0;
     tm->indirect_ms = t2 - t1;
     tm->filter_ms = iir_now_ms() - t2;
     return stopped;
+}
+
+static bool stop_requested(const iir_renderer *r)
+{
+    return r->stop && r->stop(r->stop_ctx);
 }
 
 iir_status iir_renderer_frame(iir_renderer *r, const iir_render_input *in,
@@ -187,7 +191,9 @@ iir_status iir_renderer_frame(iir_renderer *r, const iir_render_input *in,
     if (s == IIR_OK) s = gbuffer_phase(r, in->camera, out->width, out->height, &tm, &rays, err);
     shade_job job = {
         .lights = in->lights, .num_lights = in->num_lights, .p = p, .seed = in->seed, .out = out};
-    if (s == IIR_OK) shade(r, &job, &tm, &rays);
+    bool stopped = s == IIR_OK && stop_requested(r);
+    if (s == IIR_OK && !stopped) stopped = shade(r, &job, &tm, &rays);
+    if (stopped) s = iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);
     return s;
@@ -231,11 +237,6 @@ void iir_renderer_set_stop(iir_renderer *r, iir_stop_fn fn, void *ctx)
     r->stop_ctx = ctx;
 }
 
-static bool stop_requested(const iir_renderer *r)
-{
-    return r->stop && r->stop(r->stop_ctx);
-}
-
 iir_status iir_renderer_pass(iir_renderer *r, const iir_render_input *in, const iir_pass_params *p,
                              iir_image *out, iir_render_timing *t, iir_raystats *st, iir_error *err)
 {
@@ -255,7 +256,6 @@ iir_status iir_renderer_pass(iir_renderer *r, const iir_render_input *in, const 
                      .num_lights = in->num_lights,
                      .p = &ind,
                      .shift = p->shift,
-                     .stoppable = true,
                      .seed = in->seed,
                      .out = out};
     bool stopped = s == IIR_OK && stop_requested(r);

@@ -132,9 +132,10 @@ static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir
     }
 }
 
-void iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t num_lights,
+bool iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t num_lights,
                        uint64_t seed, iir_image *out, iir_raystats *st)
 {
+    bool stopped = false;
     direct_ctx c = {r, lights, num_lights, seed};
     int w = out->width, h = out->height, tiles = iir_tile_count(w, h, IIR_RENDER_TILE);
     iir_raystats total = {0};
@@ -143,6 +144,11 @@ void iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t 
         iir_raystats local = {0};
 #pragma omp for schedule(dynamic, 1)
         for (int t = 0; t < tiles; t++) {
+            if (r->stop && r->stop(r->stop_ctx)) {
+#pragma omp atomic write
+                stopped = true;
+                continue;
+            }
             iir_tile tl = iir_tile_at(w, h, IIR_RENDER_TILE, t);
             for (int y = tl.y0; y < tl.y1; y += BLOCK_H)
                 for (int x = tl.x0; x < tl.x1; x += BLOCK_W) shade_block(&c, x, y, out, &local);
@@ -151,4 +157,5 @@ void iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t 
         iir_raystats_add(&total, &local);
     }
     iir_raystats_add(st, &total);
+    return stopped;
 }

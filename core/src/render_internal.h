@@ -80,8 +80,10 @@ void iir_gbuffer_free(iir_gbuffer *gb);
 void iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
                         const iir_camera_frame *cf, iir_vec2 jitter, iir_raystats *st);
 
-/* render_direct.c: out = emission + direct light (every pixel written). */
-void iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t num_lights,
+/* render_direct.c: out = emission + direct light (every pixel written). Each tile first polls
+ * r->stop (when set) and is skipped once it said stop; returns true when that happened (out is then
+ * incomplete). */
+bool iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t num_lights,
                        uint64_t seed, iir_image *out, iir_raystats *st);
 
 /* render_indirect.c: builds the per-subset VPL lists (checking the VPLs), a subset's flux scaled

@@ -59,6 +59,12 @@ bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, i
 
 uint32_t iir_smaps_build(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, iir_raystats *st)
 {
+    return iir_smaps_build_until(vpls, n, rt, res, st, NULL, NULL);
+}
+
+uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res,
+                               iir_raystats *st, iir_stop_fn stop, void *ctx)
+{
     uint32_t built = 0;
     iir_raystats total = {0};
 #pragma omp parallel reduction(+ : built)
@@ -67,7 +73,7 @@ uint32_t iir_smaps_build(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, i
 #pragma omp for schedule(dynamic, 1)
         for (int64_t i = 0; i < (int64_t)n; i++) {
             iir_vpl *v = &vpls[i];
-            if (v->null_sample || v->smap.res == res) continue;
+            if (v->null_sample || v->smap.res == res || (stop && stop(ctx))) continue;
             built += iir_smap_render(&v->smap, rt, v, res, &local);
         }
 #pragma omp critical(iir_smap_rays)

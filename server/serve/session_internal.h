@@ -18,6 +18,8 @@ enum {
     IIRD_RATE_BURST = 500,     /* token bucket size */
     IIRD_FPS_WINDOW = 128,     /* send times kept for the fps figure */
     IIRD_DOMAIN_MIN_MS = 100,  /* domain messages at most this often while frames stream */
+    IIRD_FRAME_PATIENCE_MS = 100, /* newer input stops a frame only after it ran this long, so a
+                                     steady drag still shows frames; refinement stops at once */
 };
 
 /* One queued outgoing message: LWS_PRE bytes of headroom, then len bytes. */
@@ -65,6 +67,8 @@ typedef struct worker_state {
     iir_method *method;
     char method_name[16];
     const iird_scene_entry *method_scene;
+    bool refining;     /* the method call under way is a refinement pass (the stop hook) */
+    double started_ms; /* when the call under way started */
     iir_image *img;
     iir_jpeg_encoder *enc;
     byte_buf back; /* the frame being built; swapped with the slot's on publish */

@@ -106,13 +106,15 @@ static bool same_view(const worker_state *w, const render_job *j)
            iir_params_equal(&a->settings.params, &j->settings.params);
 }
 
-/* Refinement's stop hook (called from the renderer's threads without the lock): new input or the
- * session closing ends the pass under way, so input never waits for a whole pass. */
-static bool refine_should_stop(void *ctx)
+/* The method's stop hook (called from its threads without the lock): new input or the session
+ * closing ends the frame or pass under way within a tile, so input never waits for a whole frame
+ * and a closing session frees its worker at once. w.last is the job being rendered or refined. */
+static bool should_stop(void *ctx)
 {
     const iird_session *s = ctx;
-    return atomic_load_explicit(&s->stop, memory_order_relaxed) ||
-           atomic_load_explicit(&s->version, memory_order_relaxed) != s->w.last.version;
+    if (atomic_load_explicit(&s->stop, memory_order_relaxed)) return true;
+    if (atomic_load_explicit(&s->version, memory_order_relaxed) == s->w.last.version) return false;
+    return s->w.refining || iir_now_ms() - s->w.started_ms > IIRD_FRAME_PATIENCE_MS;
 }
 
 /* The session's method for the job: kept when only parameters changed (its VPLs too, when every
@@ -133,7 +135,7 @@ static iir_status ensure_method(iird_session *s, const render_job *j, const iird
     w->have_frame = false;
     iir_status rc = iir_method_create(st->method, sc->scene, sc->rt, &st->params, &w->method, err);
     if (rc != IIR_OK) return rc;
-    iir_method_set_stop(w->method, refine_should_stop, s);
+    iir_method_set_stop(w->method, should_stop, s);
     snprintf(w->method_name, sizeof w->method_name, "%s", st->method);
     w->method_scene = sc;
     return IIR_OK;
@@ -336,6 +338,8 @@ static iir_status render_frame(iird_session *s, const render_job *j, const iird_
     iir_status st = ensure_method(s, j, sc, err);
     if (st == IIR_OK) st = ensure_image(w, j->settings.width, j->settings.height, err);
     if (st == IIR_OK) st = build_view(w, j, sc, light_index, &view, err);
+    w->refining = false;
+    w->started_ms = iir_now_ms();
     if (st == IIR_OK) st = iir_method_render(w->method, &view, w->img, &f->stats, err);
     w->have_frame = st == IIR_OK;
     w->pass = 0;
@@ -387,6 +391,7 @@ static void render_locked(iird_session *s)
     iir_error err = {0};
     iir_status st = IIR_OK;
     bool rendered = !same_view(w, &j);
+    w->last = j;     /* before rendering: the stop hook compares the input version with it */
     if (!rendered) { /* quality, exposure, refine or domain changed */
         f = (frame_info){.id = ++w->next_id, .pass = w->pass, .converged = w->converged};
         f.stats = w->last_stats;
@@ -394,10 +399,9 @@ static void render_locked(iird_session *s)
         st = render_frame(s, &j, sc, light_index, &f, &err);
         w->last_stats = f.stats;
     }
-    w->last = j;
     if (st == IIR_OK)
         publish(s, &j, &f);
-    else
+    else if (st != IIR_ERR_INTERRUPTED) /* stopped by newer input (rendered next) or closing */
         worker_error(s, err_code(st), j.seq, "rendering the frame", &err);
     if (st == IIR_OK && rendered && j.settings.domain) {
         w->domain_stale = true;
@@ -428,6 +432,7 @@ static void refine_locked(iird_session *s)
     pthread_mutex_unlock(&s->lock);
     frame_info f = {0};
     iir_error err = {0};
+    w->refining = true;
     iir_status st = iir_method_refine(w->method, w->img, &f.stats, &err);
     if (st == IIR_OK) {
         f.pass = ++w->pass;

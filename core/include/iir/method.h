@@ -137,10 +137,14 @@ const iir_vpl *iir_method_vpls(const iir_method *m, uint32_t *n);
 bool iir_method_can_refine(const iir_method *m);
 iir_status iir_method_refine(iir_method *m, iir_image *out, iir_frame_stats *stats, iir_error *err);
 
-/* Optional: lets a refine call end early (a live session's new input): fn(ctx) is polled from the
- * method's threads during refine; once it returns true the call returns IIR_ERR_INTERRUPTED with
- * the passes before it kept and `out` unspecified. Render calls never stop early. A no-op for
- * methods whose refine steps are short (pt). fn NULL = never stop. */
+/* Lets render and refine calls end early (a live session's new input, its closing, shutdown):
+ * fn(ctx) is polled from the method's threads between phases and per tile of every phase that
+ * takes time (pt's samples, shadow-map builds per VPL, direct and indirect light), so a call ends
+ * within about a tile of work once it returns true, with IIR_ERR_INTERRUPTED and `out` unspecified.
+ * A stopped refine keeps the passes before it; a stopped render leaves no frame to refine (render
+ * again), while the VPL set has moved on as for a finished frame (iir: maps not built yet are built
+ * by the next frame). Offline callers set no hook, so their frames are never cut short.
+ * fn NULL = never stop. */
 void iir_method_set_stop(iir_method *m, iir_stop_fn fn, void *ctx);
 
 /* ---- the light's domain, for drawing (optional) ---- */

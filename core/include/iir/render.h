@@ -160,11 +160,9 @@ typedef struct iir_pass_params {
     float clamp;     /* as iir_indirect_params.clamp */
 } iir_pass_params;
 
-/* A hook that lets a long pass end early: called (from any of the renderer's threads, so it must
- * be thread-safe, e.g. an atomic load) between a pass's phases and before each of its indirect
- * tiles; once it returns true the pass skips its remaining work and fails with
- * IIR_ERR_INTERRUPTED. Frames (iir_renderer_frame) never stop early. fn NULL = never stop. */
-typedef bool (*iir_stop_fn)(void *ctx);
+/* The hook (status.h) that lets a frame or a pass end early: polled between phases and before each
+ * direct and indirect tile; once it returns true the call skips its remaining work and fails with
+ * IIR_ERR_INTERRUPTED (out unspecified). fn NULL = never stop. */
 void iir_renderer_set_stop(iir_renderer *r, iir_stop_fn fn, void *ctx);
 
 /* Renders one pass into out (every pixel written), as iir_renderer_frame does a frame; the same

@@ -75,6 +75,11 @@ bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, i
  * maps are left alone. Returns how many maps it rendered; a map whose allocation failed is left not
  * rendered (res 0) and is not counted, so a renderer using it reports the VPL as lacking a map. */
 uint32_t iir_smaps_build(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, iir_raystats *st);
+/* The same, skipping the maps not yet begun once stop(ctx) returns true (stop may be NULL): the
+ * caller then sees maps missing and builds them later (they are rendered, not-yet-rendered or
+ * absent, never half-written). */
+uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res,
+                               iir_raystats *st, iir_stop_fn stop, void *ctx);
 
 /* ---- looking points up ---- */
 

@@ -6,6 +6,8 @@
 #ifndef IIR_STATUS_H
 #define IIR_STATUS_H
 
+#include <stdbool.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -37,6 +39,11 @@ const char *iir_status_name(iir_status status);
 /* Process exit code for a status: 0 ok, 2 invalid input/format, 3 io, 4 unsupported, 130
  * interrupted, 1 otherwise. Documented in docs/cli.md. */
 int iir_status_exit_code(iir_status status);
+
+/* A hook that lets long work end early (a live session's new input, a closing session, shutdown):
+ * polled from any of the worker's threads, so it must be thread-safe (e.g. an atomic load); once it
+ * returns true the work skips what remains and fails with IIR_ERR_INTERRUPTED. */
+typedef bool (*iir_stop_fn)(void *ctx);
 
 #ifdef __cplusplus
 }

@@ -146,6 +146,8 @@ typedef struct iir_state {
     uint32_t fresh_n;
     uint32_t refine_frame; /* the frame being refined: the fresh sets' stream */
     domain_bufs dom;
+    iir_stop_fn stop; /* a live session's: frames and passes end early when it says so */
+    void *stop_ctx;
 } iir_state;
 
 static void free_domain(domain_bufs *b)
@@ -242,7 +244,10 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     uint32_t n = 0, maps = 0;
     iir_vpl *vpls = iir_incr_vpls(s->incr, &n);
     if (s->params.vpl.visibility == IIR_VIS_SHADOWMAP)
-        maps = iir_smaps_build(vpls, n, s->rt, s->params.vpl.sm_res, &stats->rays);
+        maps = iir_smaps_build_until(vpls, n, s->rt, s->params.vpl.sm_res, &stats->rays, s->stop,
+                                     s->stop_ctx);
+    if (s->stop && s->stop(s->stop_ctx)) /* the maps not built are built by the next frame */
+        return s->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double t2 = iir_now_ms();
     iir_indirect_params ind = iir_vpl_indirect(&s->params.vpl);
     iir_render_timing rt;
@@ -433,7 +438,10 @@ static bool iir_m_domain(void *state, iir_domain *out)
 
 static void iir_m_set_stop(void *state, iir_stop_fn fn, void *ctx)
 {
-    iir_renderer_set_stop(((iir_state *)state)->renderer, fn, ctx);
+    iir_state *s = state;
+    s->stop = fn;
+    s->stop_ctx = ctx;
+    iir_renderer_set_stop(s->renderer, fn, ctx);
 }
 
 /* Only IIR_PARAM_LIVE rows changed: the step's budgets, weights and threshold go to the step. */

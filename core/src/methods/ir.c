@@ -95,6 +95,8 @@ typedef struct ir_state {
     float *light_pmf; /* per view light, rebuilt each frame; grows with the light count */
     uint32_t pmf_cap;
     iir_refine *refine;
+    iir_stop_fn stop; /* a live session's: frames and passes end early when it says so */
+    void *stop_ctx;
 } ir_state;
 
 /* ---- light paths ---- */
@@ -277,7 +279,10 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
     double t1 = iir_now_ms();
     uint32_t maps = 0;
     if (ir->params.vpl.visibility == IIR_VIS_SHADOWMAP)
-        maps = iir_smaps_build(ir->live.v, ir->live.n, ir->rt, ir->params.vpl.sm_res, &stats->rays);
+        maps = iir_smaps_build_until(ir->live.v, ir->live.n, ir->rt, ir->params.vpl.sm_res,
+                                     &stats->rays, ir->stop, ir->stop_ctx);
+    if (ir->stop && ir->stop(ir->stop_ctx))
+        return ir->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double t2 = iir_now_ms();
     iir_indirect_params ind = iir_vpl_indirect(&ir->params.vpl);
     iir_render_timing rt;
@@ -341,7 +346,10 @@ static iir_status ir_refine(void *state, iir_image *out, iir_frame_stats *stats,
 
 static void ir_set_stop(void *state, iir_stop_fn fn, void *ctx)
 {
-    iir_renderer_set_stop(((ir_state *)state)->renderer, fn, ctx);
+    ir_state *ir = state;
+    ir->stop = fn;
+    ir->stop_ctx = ctx;
+    iir_renderer_set_stop(ir->renderer, fn, ctx);
 }
 
 static void ir_update(void *state, const void *opts)

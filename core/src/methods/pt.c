@@ -65,6 +65,8 @@ typedef struct pt_state {
     iir_camera_frame cam;
     iir_image *sum; /* sum of samples; the frame is sum / spp_done */
     uint64_t spp_done;
+    iir_stop_fn stop; /* a live session's: polled per tile */
+    void *stop_ctx;
 } pt_state;
 
 static float power_heuristic(float pdf_a, float pdf_b)
@@ -168,18 +170,33 @@ static void render_tile(pt_state *pt, int tile, int spp, iir_raystats *st)
         }
 }
 
-static void accumulate(pt_state *pt, int spp, iir_frame_stats *stats)
+/* Adds spp samples to every pixel's sum; once the stop hook says stop, the tiles not begun are
+ * skipped, the sum is forgotten (spp_done 0: refine must start over) and IIR_ERR_INTERRUPTED. */
+static iir_status accumulate(pt_state *pt, int spp, iir_frame_stats *stats, iir_error *err)
 {
     double t0 = iir_now_ms();
     int tiles = ((pt->cam.width + TILE - 1) / TILE) * ((pt->cam.height + TILE - 1) / TILE);
     iir_raystats total = {0};
+    bool stopped = false;
 #pragma omp parallel
     {
         iir_raystats local = {0};
 #pragma omp for schedule(dynamic, 1)
-        for (int t = 0; t < tiles; t++) render_tile(pt, t, spp, &local);
+        for (int t = 0; t < tiles; t++) {
+            if (pt->stop && pt->stop(pt->stop_ctx)) {
+#pragma omp atomic write
+                stopped = true;
+                continue;
+            }
+            render_tile(pt, t, spp, &local);
+        }
 #pragma omp critical(iir_pt_rays)
         iir_raystats_add(&total, &local);
+    }
+    stats->rays = total;
+    if (stopped) {
+        pt->spp_done = 0;
+        return iir_fail(err, IIR_ERR_INTERRUPTED, "pt: frame stopped early");
     }
     pt->spp_done += (uint64_t)spp;
     stats->rays = total;
@@ -187,6 +204,7 @@ static void accumulate(pt_state *pt, int spp, iir_frame_stats *stats)
     stats->total_ms = stats->phase_ms[IIR_PHASE_TRACE];
     stats->samples_per_pixel = pt->spp_done;
     stats->converged = pt->spp_done >= (uint64_t)pt->params.common.refine_passes * (uint64_t)spp;
+    return IIR_OK;
 }
 
 static void resolve(const pt_state *pt, iir_image *out)
@@ -236,9 +254,9 @@ static iir_status pt_render(void *state, const iir_view *view, iir_image *out,
     pt->cam = iir_camera_setup(&view->camera, out->width, out->height);
     iir_image_clear(pt->sum);
     pt->spp_done = 0;
-    accumulate(pt, pt->params.spp, stats);
-    resolve(pt, out);
-    return IIR_OK;
+    st = accumulate(pt, pt->params.spp, stats, err);
+    if (st == IIR_OK) resolve(pt, out);
+    return st;
 }
 
 static iir_status pt_refine(void *state, iir_image *out, iir_frame_stats *stats, iir_error *err)
@@ -249,9 +267,16 @@ static iir_status pt_refine(void *state, iir_image *out, iir_frame_stats *stats,
     if (out->width != pt->sum->width || out->height != pt->sum->height)
         return iir_fail(err, IIR_ERR_INVALID, "pt: refine needs a %dx%d image, got %dx%d",
                         pt->sum->width, pt->sum->height, out->width, out->height);
-    accumulate(pt, pt->params.spp, stats);
-    resolve(pt, out);
-    return IIR_OK;
+    iir_status st = accumulate(pt, pt->params.spp, stats, err);
+    if (st == IIR_OK) resolve(pt, out);
+    return st;
+}
+
+static void pt_set_stop(void *state, iir_stop_fn fn, void *ctx)
+{
+    pt_state *pt = state;
+    pt->stop = fn;
+    pt->stop_ctx = ctx;
 }
 
 static void pt_update(void *state, const void *opts)
@@ -275,6 +300,7 @@ const iir_method_ops iir_method_pt = {
     .render = pt_render,
     .refine = pt_refine,
     .vpls = NULL,
+    .set_stop = pt_set_stop,
     .update = pt_update,
     .memory = pt_memory,
 };
