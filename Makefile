@@ -1,6 +1,6 @@
 # Makefile -- thin wrapper over CMake. `make run` and `make test` do all set-up on a fresh Debian 12:
 # they install missing packages (apt-get; sudo only when not root), configure, build, then run.
-.PHONY: all deps web-deps build run still test bench docs format format-check clean
+.PHONY: all deps web-deps build run still test bench fuzz soak docs format format-check clean
 
 BUILD      ?= build
 TEST_BUILD ?= build-asan
@@ -12,7 +12,8 @@ PACKAGES := build-essential cmake pkg-config git clang-format \
             libembree-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev \
             libwebsockets-dev libssl-dev libcap-dev zlib1g-dev \
             libassimp-dev libcjson-dev libturbojpeg0-dev libopenexr-dev libpng-dev \
-            libcmocka-dev ffmpeg openssl python3 python3-matplotlib python3-websockets python3-pil chromium
+            libcmocka-dev ffmpeg openssl python3 python3-matplotlib python3-websockets python3-pil chromium \
+            clang libclang-rt-14-dev libomp-14-dev
 # Node.js and npm only where no node/npm is on the PATH: a machine may have its own, and Debian's npm
 # installed over another npm can break it.
 NODE_PACKAGES := $(shell command -v node >/dev/null || echo nodejs) \
@@ -83,6 +84,38 @@ bench: build
 	$(BENCH) conference --anim orbit --size 320x240 --methods iir,ir --ref-spp 256 \
 	    --ref-every 100 --out out/bench/conference-orbit
 	/usr/bin/python3 tools/live_bench.py --iird $(BUILD)/iird --out out/bench/live.json
+
+# Coverage-guided fuzzing of the daemon's input parsers (tests/fuzz/, issue 15): a clang build with
+# libFuzzer, ASan and UBSan in $(FUZZ_BUILD), then each target for FUZZ_SECONDS from its seed corpus
+# tests/fuzz/TARGET/. New corpus entries go to $(FUZZ_BUILD)/corpus/TARGET (scratch, not in git: copy
+# the interesting ones into tests/fuzz/TARGET/, where `make test` replays them), crashes, leaks and
+# timeouts to out/fuzz/TARGET-*. Fails when any target found something.
+FUZZ_BUILD   ?= build-fuzz
+FUZZ_SECONDS ?= 600
+FUZZ_TARGETS ?= protocol anim sidecar scene pfm
+FUZZ_DICT     = protocol anim sidecar
+fuzz: deps
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIIR_WERROR=ON \
+	    -DIIR_SANITIZE=address,undefined -DIIR_FUZZ=ON >/dev/null
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target $(addprefix fuzz_,$(FUZZ_TARGETS))
+	@mkdir -p out/fuzz $(FUZZ_BUILD)/test-tmp; status=0; \
+	for t in $(FUZZ_TARGETS); do \
+	    mkdir -p $(FUZZ_BUILD)/corpus/$$t; \
+	    dict=; case " $(FUZZ_DICT) " in *" $$t "*) dict=-dict=tests/fuzz/protocol.dict;; esac; \
+	    echo "== fuzz_$$t for $(FUZZ_SECONDS) s"; \
+	    IIR_TEST_TMP=$(FUZZ_BUILD)/test-tmp OMP_NUM_THREADS=1 \
+	        LSAN_OPTIONS=suppressions=$(CURDIR)/tests/fuzz/lsan.supp $(FUZZ_BUILD)/fuzz_$$t \
+	        $(FUZZ_BUILD)/corpus/$$t tests/fuzz/$$t $$dict -max_total_time=$(FUZZ_SECONDS) \
+	        -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+	        -artifact_prefix=out/fuzz/$$t- || status=1; \
+	done; exit $$status
+
+# A soak of `iird serve` on loopback (tools/soak.py, issue #15): 32 clients dragging the light at 30 Hz
+# for 60 s, then 1000 connect/close and 1000 hello-then-vanish cycles, watching /healthz, RSS, threads
+# and fds; prints every pass criterion with its figure and fails when one does. ~3 min.
+soak: build
+	mkdir -p out
+	/usr/bin/python3 tools/soak.py --iird $(BUILD)/iird --clients 32 --seconds 60 --cycles 1000 --out out/soak.json
 
 # docs/cli.md's parameter tables, regenerated from the methods' own tables (a test compares them).
 docs: build

@@ -185,6 +185,20 @@ iir_status iird_check_params_for(const char *methods, const iir_params *p, iir_e
     return IIR_OK;
 }
 
+iir_status iird_check_memory(const char *method, const iir_params *p, int width, int height,
+                             iir_error *err)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+    double have = pages > 0 && size > 0 ? (double)pages * (double)size : 0.0;
+    double need = (double)iir_method_memory(method, p, width, height);
+    if (have <= 0.0 || need <= 0.9 * have) return IIR_OK;
+    return iir_fail(err, IIR_ERR_INVALID,
+                    "%s with these parameters would need about %.0f MiB for %dx%d, more than 90%% "
+                    "of this machine's %.0f MiB: ask for fewer VPLs, smaller shadow maps or a "
+                    "smaller image",
+                    method, need / 1048576.0, width, height, have / 1048576.0);
+}
+
 /* ---- help ---- */
 
 /* "N", "F", "shadowmap|rays", "[=BOOL]": what an option takes. */

@@ -58,6 +58,12 @@ void iird_print_params_markdown(FILE *f);
 /* Refuses (IIR_ERR_INVALID naming the option) a value of p that no method of `methods` declares. */
 iir_status iird_check_params_for(const char *methods, const iir_params *p, iir_error *err);
 
+/* Refuses (IIR_ERR_INVALID) a method whose parameters would make it allocate more than 90% of the
+ * machine's physical memory for a width x height frame (iir_method_memory), before anything is
+ * allocated: "--vpls 16384 --sm-res 2048" names the estimate instead of swapping for minutes. */
+iir_status iird_check_memory(const char *method, const iir_params *p, int width, int height,
+                             iir_error *err);
+
 /* Parses a parameter value as on the command line (NAME without "--", '-' or '_') into p;
  * IIR_ERR_INVALID naming --NAME. For --sweep values. */
 iir_status iird_parse_param(const char *name, const char *text, iir_params *p, iir_error *err);

@@ -99,8 +99,12 @@ static iir_status get_ranged(const iir_anim_ctx *c, const cJSON *obj, const char
     return IIR_OK;
 }
 
-/* A member [x, y, z] of finite numbers. A plain number is accepted as [v, v, v] when
- * allow_scalar. */
+/* Bound of every vec3 element (coordinates, directions, intensities), as in the protocol and the
+ * sidecar: a direction's or an aim's length, squared, must not overflow a float. */
+#define MAX_VEC3_ELEMENT 1e6
+
+/* A member [x, y, z] of finite numbers within +-MAX_VEC3_ELEMENT. A plain number is accepted as
+ * [v, v, v] when allow_scalar. */
 static iir_status get_vec3(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                            const char *name, bool allow_scalar, iir_vec3 *out, bool *present)
 {
@@ -113,6 +117,8 @@ static iir_status get_vec3(const iir_anim_ctx *c, const cJSON *obj, const char *
         bool dummy;
         double v = 0.0;
         iir_status st = get_number(c, obj, path, name, &v, &dummy);
+        if (st == IIR_OK && fabs(v) > MAX_VEC3_ELEMENT)
+            return anim_fail(c, IIR_ERR_INVALID, p, "%g is outside [-1e6, 1e6]", v);
         *out = iir_v3s((float)v);
         return st;
     }
@@ -126,6 +132,9 @@ static iir_status get_vec3(const iir_anim_ctx *c, const cJSON *obj, const char *
         v[i] = (float)e->valuedouble;
         if (!isfinite(e->valuedouble) || !isfinite(v[i]))
             return anim_fail(c, IIR_ERR_INVALID, p, "element %d is not a finite number", i);
+        if (fabs(e->valuedouble) > MAX_VEC3_ELEMENT)
+            return anim_fail(c, IIR_ERR_INVALID, p, "element %d (%g) is outside [-1e6, 1e6]", i,
+                             e->valuedouble);
     }
     *out = iir_v3(v[0], v[1], v[2]);
     return IIR_OK;

@@ -6,6 +6,8 @@
  * big-endian; its magnitude is ignored. We always write RGB, little-endian, scale -1. */
 #include "iir/image.h"
 
+#include "image_internal.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -182,11 +184,28 @@ static iir_status read_pfm_rows(FILE *f, const char *path, const pfm_header *h, 
     return IIR_OK;
 }
 
+/* Bytes from the current position to the end of f, or -1 when f cannot seek (a pipe). */
+static long bytes_left(FILE *f)
+{
+    long at = ftell(f);
+    if (at < 0 || fseek(f, 0, SEEK_END) != 0) return -1;
+    long end = ftell(f);
+    if (fseek(f, at, SEEK_SET) != 0 || end < at) return -1;
+    return end - at;
+}
+
 static iir_status read_pfm_file(FILE *f, const char *path, iir_image **out, iir_error *err)
 {
     pfm_header h = {0, 0, 0, 0};
     iir_status st = read_pfm_header(f, path, &h, err);
     if (st != IIR_OK) return st;
+    /* a short file is refused before its header's size is allocated (up to 3 GiB) */
+    size_t need = (size_t)h.width * (size_t)h.height * (size_t)h.channels * 4;
+    long left = bytes_left(f);
+    if (left >= 0 && (size_t)left < need)
+        return iir_fail(err, IIR_ERR_FORMAT,
+                        "PFM %s is truncated: %ld bytes of pixel data for %dx%d %s (%zu needed)",
+                        path, left, h.width, h.height, h.channels == 3 ? "RGB" : "grey", need);
     iir_image *img = iir_image_create(h.width, h.height);
     uint8_t *row = malloc((size_t)h.width * (size_t)h.channels * 4);
     if (!img || !row) {
@@ -202,6 +221,20 @@ static iir_status read_pfm_file(FILE *f, const char *path, iir_image **out, iir_
     }
     *out = img;
     return IIR_OK;
+}
+
+iir_status iir_image_read_pfm_memory(const uint8_t *data, size_t size, const char *name,
+                                     iir_image **out, iir_error *err)
+{
+    *out = NULL;
+    static const uint8_t empty[1];
+    /* fmemopen refuses a size of 0 on some C libraries: an empty file is then one past its end */
+    FILE *f = fmemopen((void *)(size ? data : empty), size ? size : 1, "rb");
+    if (!f) return iir_fail(err, IIR_ERR_NOMEM, "cannot read PFM %s: %s", name, strerror(errno));
+    if (!size) fgetc(f);
+    iir_status st = read_pfm_file(f, name, out, err);
+    fclose(f);
+    return st;
 }
 
 iir_status iir_image_read_pfm(const char *path, iir_image **out, iir_error *err)

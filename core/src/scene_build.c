@@ -410,7 +410,13 @@ iir_status iir_builder_finish(iir_scene_builder *b, iir_scene **out, iir_error *
     b->num_triangles = unique;
     bounds bb = triangle_bounds(b, unique);
     if (!b->has_camera) {
+        /* validated too: a scene a few 1e-23 across has no camera distance a float can hold */
         iir_camera cam = default_camera(bb);
+        iir_status st = check_camera(b, &cam, err);
+        if (st != IIR_OK) {
+            iir_scene_destroy(s);
+            return st;
+        }
         iir_builder_set_camera(b, &cam);
     }
     s->bounds_min = bb.lo;

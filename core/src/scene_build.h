@@ -133,6 +133,11 @@ typedef struct iir_sidecar {
  * file and the JSON field path ("lights[0].cone_angle"). On error *sc holds nothing to free. */
 iir_status iir_sidecar_parse(const char *path, iir_sidecar *sc, iir_error *err);
 
+/* The same from len bytes of text in memory (need not be NUL-terminated), as if read from path:
+ * path names it in messages and "file" is joined with path's folder. */
+iir_status iir_sidecar_parse_text(const char *path, const char *text, size_t len, iir_sidecar *sc,
+                                  iir_error *err);
+
 /* Applies a parsed sidecar to a builder that already holds the mesh: unit scale first, then
  * material overrides (an unknown material name is an error), camera, lights, paths (moved). */
 iir_status iir_sidecar_apply(iir_sidecar *sc, iir_scene_builder *b, iir_error *err);

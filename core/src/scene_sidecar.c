@@ -467,6 +467,13 @@ static iir_status parse_json(const char *path, const char *text, size_t len, cJS
 {
     const char *end = NULL;
     *out = cJSON_ParseWithLengthOpts(text, len, &end, false);
+    /* only white space may follow the object: trailing text is a cut-and-paste slip, not ignored */
+    size_t rest = *out && end ? (size_t)(end - text) : 0;
+    while (*out && rest < len && strchr(" \t\r\n", text[rest]) && text[rest]) rest++;
+    if (*out && rest < len) {
+        cJSON_Delete(*out);
+        *out = NULL;
+    }
     if (*out) return IIR_OK;
     int line, col;
     size_t at = end && end >= text && end <= text + len ? (size_t)(end - text) : 0;
@@ -477,24 +484,32 @@ static iir_status parse_json(const char *path, const char *text, size_t len, cJS
 
 /* ======================== the sidecar's life ======================== */
 
-iir_status iir_sidecar_parse(const char *path, iir_sidecar *sc, iir_error *err)
+iir_status iir_sidecar_parse_text(const char *path, const char *text, size_t len, iir_sidecar *sc,
+                                  iir_error *err)
 {
     memset(sc, 0, sizeof *sc);
     sc->unit_scale = 1.f;
     iir_scene_strcpy(sc->path, sizeof sc->path, path);
-    char *text = NULL;
-    size_t len = 0;
-    iir_status st = read_text(path, &text, &len, err);
-    if (st != IIR_OK) return st;
     cJSON *root;
-    st = parse_json(path, text, len, &root, err);
+    iir_status st = parse_json(path, text, len, &root, err);
     if (st == IIR_OK) {
         ctx c = {path, err};
         st = parse_root(&c, root, sc);
         cJSON_Delete(root);
     }
-    free(text);
     if (st != IIR_OK) iir_sidecar_free(sc);
+    return st;
+}
+
+iir_status iir_sidecar_parse(const char *path, iir_sidecar *sc, iir_error *err)
+{
+    memset(sc, 0, sizeof *sc);
+    char *text = NULL;
+    size_t len = 0;
+    iir_status st = read_text(path, &text, &len, err);
+    if (st != IIR_OK) return st;
+    st = iir_sidecar_parse_text(path, text, len, sc, err);
+    free(text);
     return st;
 }
 

@@ -54,7 +54,8 @@ static iir_status apply_setting(iird_bench_run *r, const iird_bench_opts *o, con
         if (len >= sizeof r->setting) len = sizeof r->setting - 1;
     }
     iir_error perr = {0};
-    if (iir_method_params_validate(r->method, &r->params, NULL, NULL, &perr) != IIR_OK)
+    if (iir_method_params_validate(r->method, &r->params, NULL, NULL, &perr) != IIR_OK ||
+        iird_check_memory(r->method, &r->params, o->width, o->height, &perr) != IIR_OK)
         return iir_fail(err, IIR_ERR_INVALID, "--sweep: %s with %s: %s", r->method, r->setting,
                         perr.msg);
     return IIR_OK;

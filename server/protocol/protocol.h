@@ -50,6 +50,7 @@ typedef enum iird_err {
     IIRD_E_SCENE_ERROR,
     IIRD_E_BUSY,
     IIRD_E_INTERNAL,
+    IIRD_E_IDLE_TIMEOUT,
     IIRD_E_COUNT
 } iird_err;
 

@@ -15,7 +15,7 @@ const char *iird_err_name(iird_err code)
     static const char *const names[IIRD_E_COUNT] = {
         "bad_json",     "too_large",   "bad_type",  "unknown_type", "unknown_field",
         "out_of_range", "bad_field",   "not_ready", "unauthorized", "unsupported",
-        "rate_limited", "scene_error", "busy",      "internal"};
+        "rate_limited", "scene_error", "busy",      "internal",     "idle_timeout"};
     return (unsigned)code < IIRD_E_COUNT ? names[code] : "internal";
 }
 
@@ -194,6 +194,14 @@ bool iird_get_vec3(const iird_pctx *c, const cJSON *v, const char *name, double 
 
 /* ======================== strings ======================== */
 
+/* out_of_range naming path when the string held a \u0000 (IIRD_NUL_MARK) escape. */
+static bool no_nul(const iird_pctx *c, const char *path, const cJSON *v)
+{
+    if (!strchr(v->valuestring, IIRD_NUL_MARK)) return true;
+    return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, path,
+                           "%s must not hold a NUL character (\\u0000)", path);
+}
+
 bool iird_get_string(const iird_pctx *c, const cJSON *v, const char *name, size_t max_bytes,
                      char *out)
 {
@@ -202,6 +210,7 @@ bool iird_get_string(const iird_pctx *c, const cJSON *v, const char *name, size_
     if (!cJSON_IsString(v) || !v->valuestring)
         return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, path, "%s must be a string, got %s", path,
                                iird_json_kind(v));
+    if (!no_nul(c, path, v)) return false;
     size_t len = strlen(v->valuestring);
     if (len > max_bytes)
         return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, path,
@@ -218,6 +227,7 @@ bool iird_get_enum(const iird_pctx *c, const cJSON *v, const char *name, const c
     if (!cJSON_IsString(v) || !v->valuestring)
         return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, path, "%s must be a string, got %s", path,
                                iird_json_kind(v));
+    if (!no_nul(c, path, v)) return false;
     for (int i = 0; allowed[i]; i++) {
         if (strcmp(v->valuestring, allowed[i]) == 0) {
             *index = i;

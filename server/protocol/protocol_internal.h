@@ -22,6 +22,13 @@ bool iird_utf8_valid(const char *s, size_t len);
 /* Cuts a trailing incomplete UTF-8 sequence off s (left by truncating it to a buffer). */
 void iird_utf8_trim(char *s);
 
+/* What a \u0000 escape in a client's JSON string becomes before cJSON parses it
+ * (iird_parse_message): cJSON would decode it to a NUL that silently ends the C string
+ * ("cornell_box\u0000/../x" would read as "cornell_box"). 0xFF is never part of well-formed UTF-8
+ * (the message is checked first) nor of what cJSON decodes, so the string readers refuse any
+ * string holding it, naming the field. */
+#define IIRD_NUL_MARK '\xFF'
+
 /* The double nearest to the shortest decimal that reads back as f, so that cJSON prints 0.1f as
  * 0.1 rather than 0.10000000149011612. Non-finite values are returned unchanged. */
 double iird_compact_float(float f);

@@ -14,6 +14,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 enum { MAX_FIELDS = 64 };
@@ -329,6 +330,11 @@ static const struct msg_kind *find_kind(const iird_pctx *c, const cJSON *type)
                         iird_json_kind(type));
         return NULL;
     }
+    if (strchr(type->valuestring, IIRD_NUL_MARK)) {
+        iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, "type",
+                        "type must not hold a NUL character (\\u0000)");
+        return NULL;
+    }
     for (int i = 0; i < NUM_KINDS; i++)
         if (strcmp(KINDS[i].name, type->valuestring) == 0) return &KINDS[i];
     snprintf(got, sizeof got, "%s", type->valuestring);
@@ -358,6 +364,44 @@ static bool parse_root(const cJSON *root, const iird_limits *lim, iird_msg *out,
     return collect_fields(&c, root, k, f) && k->parse(&c, f, lim, out);
 }
 
+/* Where a \u0000 escape starts inside a JSON string of text[0..len) from i on; len if none. A
+ * backslash escapes the next character, so "\\u0000" (a backslash, then u0000) is not one. */
+static size_t next_nul_escape(const char *text, size_t len, size_t i, bool *in_string)
+{
+    for (; i < len; i++) {
+        if (text[i] == '"') {
+            *in_string = !*in_string;
+        } else if (*in_string && text[i] == '\\') {
+            if (len - i >= 6 && text[i + 1] == 'u' && !memcmp(text + i + 2, "0000", 4)) return i;
+            i++;
+        }
+    }
+    return len;
+}
+
+/* A copy of text with every \u0000 escape inside a string replaced by IIRD_NUL_MARK (one byte for
+ * six), or NULL when there is none or no memory (*oom then set). *out_len is the copy's length. */
+static char *mark_nul_escapes(const char *text, size_t len, size_t *out_len, bool *oom)
+{
+    bool in_string = false;
+    size_t at = next_nul_escape(text, len, 0, &in_string);
+    *oom = false;
+    if (at == len) return NULL;
+    char *copy = malloc(len);
+    if (!copy) return *oom = true, NULL;
+    size_t n = 0, from = 0;
+    while (at < len) {
+        memcpy(copy + n, text + from, at - from);
+        n += at - from;
+        copy[n++] = IIRD_NUL_MARK;
+        from = at + 6;
+        at = next_nul_escape(text, len, from, &in_string);
+    }
+    memcpy(copy + n, text + from, len - from);
+    *out_len = n + (len - from);
+    return copy;
+}
+
 static bool json_space(char ch)
 {
     return ch == ' ' || ch == '\t' || ch == '\n' || ch == '\r';
@@ -380,10 +424,15 @@ bool iird_parse_message(const char *text, size_t len, const iird_limits *limits,
     if (!iird_utf8_valid(text, len))
         return iird_proto_fail(err, IIRD_E_BAD_JSON, NULL,
                                "message is not UTF-8 text (or holds a NUL byte)");
+    bool oom = false;
+    char *marked = mark_nul_escapes(text, len, &len, &oom);
+    if (oom) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
+    if (marked) text = marked;
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, false);
     if (!root) {
         long at = end && end >= text && end <= text + len ? (long)(end - text) : 0;
+        free(marked);
         return iird_proto_fail(
             err, IIRD_E_BAD_JSON, NULL,
             "not valid JSON (nested too deeply, or a syntax error near byte %ld)", at);
@@ -395,5 +444,6 @@ bool iird_parse_message(const char *text, size_t len, const iird_limits *limits,
                                     "unexpected text after the JSON value at byte %ld",
                                     (long)(end - text));
     cJSON_Delete(root);
+    free(marked);
     return ok;
 }

@@ -216,6 +216,7 @@ int iird_cmd_render(int argc, char **argv)
     iir_params chunked = o.params;
     iir_status st = iir_params_set(&chunked, iir_method_find_param("pt", "spp"),
                                    chunk_for(still_spp(&o.params)), &err);
+    if (st == IIR_OK) st = iird_check_memory(o.method, &o.params, o.width, o.height, &err);
     if (st == IIR_OK)
         st = iir_scene_open(o.scene, iird_scenes_dir(o.scenes_dir), &scene, &rt, &err);
     if (st == IIR_OK) st = iir_method_create(o.method, scene, rt, &chunked, &m, &err);

@@ -176,6 +176,7 @@ static iir_status load(anim_job *j, iir_error *err)
     const iird_render_opts *o = j->o;
     const char *scenes = iird_scenes_dir(o->scenes_dir);
     iir_status st = iir_method_params_validate(o->method, &o->params, NULL, NULL, err);
+    if (st == IIR_OK) st = iird_check_memory(o->method, &o->params, o->width, o->height, err);
     if (st == IIR_OK && o->video) st = iird_video_check(o->video, o->width, o->height, err);
     if (st == IIR_OK) st = iir_scene_open(o->scene, scenes, &j->scene, &j->rt, err);
     if (st == IIR_OK)

@@ -13,10 +13,14 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "budget.h"
 #include "server.h"
+#include "session.h"
+#include "session.h"
 
 typedef struct serve_opts {
     iird_server_config cfg;
+    iird_budget budget; /* limits from the options; cfg.budget points here */
     const char *scene_arg, *web_opt, *method;
     bool size_given;
 } serve_opts;
@@ -38,9 +42,17 @@ static void serve_usage(FILE *f)
         "  --scenes DIR         where clients' scene names are looked up (default ./scenes)\n"
         "  --web DIR            the web client's folder (default $IIR_WEB, ./web, the source's)\n"
         "  --max-sessions N     open WebSocket sessions at most (default 8)\n"
+        "  --max-sessions-per-address N  sessions one client address may hold (default\n"
+        "                       max(1, max-sessions / 4))\n"
+        "  --idle-timeout S     close a session after S seconds without a client message\n"
+        "                       (default 1800; 0 = never)\n"
         "  --max-size WxH       largest frame a client may ask for (default 1920x1080)\n"
-        "  --origin URL         allowed browser origin, repeatable (default: any origin on a\n"
-        "                       loopback address, else only the server's own)\n"
+        "  --max-memory SIZE    memory all sessions together may take, by their estimates\n"
+        "                       (e.g. 8G; default half of the physical memory)\n"
+        "  --max-session-memory SIZE  memory one session may take (default 2G, at most\n"
+        "                       --max-memory); params beyond either budget are refused\n"
+        "  --origin URL         another allowed browser origin, repeatable (the server's\n"
+        "                       own, http(s)://127.0.0.1|localhost|[::1]|HOST:PORT, always are)\n"
         "  --token T            clients must send this token in hello\n"
         "  --tls-cert F --tls-key F  serve https/wss with this PEM certificate and key\n"
         "  --method NAME        a new session's method: pt | ir | iir (default iir)\n"
@@ -71,6 +83,10 @@ enum {
     OPT_METHOD,
     OPT_SIZE,
     OPT_VERBOSE,
+    OPT_MAX_SESSIONS_PER_ADDRESS,
+    OPT_IDLE_TIMEOUT,
+    OPT_MAX_MEMORY,
+    OPT_MAX_SESSION_MEMORY,
 };
 
 static iir_status parse_host(const char *arg, const char **out, iir_error *err)
@@ -110,6 +126,11 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
         return o->web_opt = arg, IIR_OK;
     case OPT_MAX_SESSIONS:
         return parse_int_opt(arg, "--max-sessions", 1, 1024, &cfg->max_sessions, err);
+    case OPT_MAX_SESSIONS_PER_ADDRESS:
+        return parse_int_opt(arg, "--max-sessions-per-address", 1, 1024,
+                             &cfg->max_sessions_per_address, err);
+    case OPT_IDLE_TIMEOUT:
+        return parse_int_opt(arg, "--idle-timeout", 0, 7 * 86400, &cfg->idle_timeout_s, err);
     case OPT_MAX_SIZE:
         return iird_parse_size(arg, 4096, &cfg->limits.max_width, &cfg->limits.max_height, err);
     case OPT_ORIGIN:
@@ -131,6 +152,16 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
         return iird_parse_size(arg, 4096, &cfg->defaults.width, &cfg->defaults.height, err);
     case OPT_VERBOSE:
         return cfg->verbose = true, IIR_OK;
+    case OPT_MAX_MEMORY:
+    case OPT_MAX_SESSION_MEMORY: {
+        uint64_t *to = c == OPT_MAX_MEMORY ? &o->budget.total_max : &o->budget.session_max;
+        const char *name = c == OPT_MAX_MEMORY ? "--max-memory" : "--max-session-memory";
+        if (!iird_parse_bytes(arg, to) || *to < (16u << 20))
+            return iir_fail(err, IIR_ERR_INVALID,
+                            "%s '%s' is not a size of at least 16M (bytes, or with K, M, G, T)",
+                            name, arg);
+        return IIR_OK;
+    }
     }
     return IIR_OK;
 }
@@ -209,6 +240,25 @@ static iir_status check_files(const iird_server_config *cfg, iir_error *err)
     return cfg->tls_cert ? check_tls_pair(cfg->tls_cert, cfg->tls_key, err) : IIR_OK;
 }
 
+/* The budgets' defaults, and a new session's settings must fit them (a daemon whose every session
+ * would be refused is refused itself). */
+static iir_status check_budget(serve_opts *o, iir_error *err)
+{
+    iird_budget *b = &o->budget;
+    if (!b->total_max) b->total_max = iird_budget_default_total();
+    if (!b->session_max) b->session_max = b->total_max < (2ull << 30) ? b->total_max : 2ull << 30;
+    if (b->session_max > b->total_max)
+        return iir_fail(err, IIR_ERR_INVALID, "--max-session-memory is more than --max-memory");
+    uint64_t need = iird_session_estimate(&o->cfg.defaults), held = 0;
+    iird_proto_error pe;
+    if (!iird_budget_reserve(b, &held, need, &pe))
+        return iir_fail(err, IIR_ERR_INVALID, "a new session's settings do not fit: %s",
+                        pe.message + sizeof "params: " - 1);
+    iird_budget_release(b, &held);
+    o->cfg.budget = b;
+    return check_files(&o->cfg, err);
+}
+
 /* Cross-option checks once everything is parsed. */
 static iir_status check(serve_opts *o, iir_error *err)
 {
@@ -226,7 +276,7 @@ static iir_status check(serve_opts *o, iir_error *err)
     if (d->width < 16 || d->height < 16)
         return iir_fail(err, IIR_ERR_INVALID, "--size: each side must be at least 16");
     iir_status st = iir_method_params_validate(d->method, &d->params, NULL, NULL, err);
-    return st == IIR_OK ? check_files(cfg, err) : st;
+    return st == IIR_OK ? check_budget(o, err) : st;
 }
 
 int iird_cmd_serve(int argc, char **argv)
@@ -238,6 +288,8 @@ int iird_cmd_serve(int argc, char **argv)
         {"scenes", required_argument, 0, OPT_SCENES},
         {"web", required_argument, 0, OPT_WEB},
         {"max-sessions", required_argument, 0, OPT_MAX_SESSIONS},
+        {"max-sessions-per-address", required_argument, 0, OPT_MAX_SESSIONS_PER_ADDRESS},
+        {"idle-timeout", required_argument, 0, OPT_IDLE_TIMEOUT},
         {"max-size", required_argument, 0, OPT_MAX_SIZE},
         {"origin", required_argument, 0, OPT_ORIGIN},
         {"token", required_argument, 0, OPT_TOKEN},
@@ -246,12 +298,15 @@ int iird_cmd_serve(int argc, char **argv)
         {"method", required_argument, 0, OPT_METHOD},
         {"size", required_argument, 0, OPT_SIZE},
         {"verbose", no_argument, 0, OPT_VERBOSE},
+        {"max-memory", required_argument, 0, OPT_MAX_MEMORY},
+        {"max-session-memory", required_argument, 0, OPT_MAX_SESSION_MEMORY},
         {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     static const iird_command cmd = {"serve", longopts, serve_usage, parse_option, NULL};
     serve_opts o = {.cfg = {.host = "127.0.0.1",
                             .port = 8080,
                             .max_sessions = 8,
+                            .idle_timeout_s = 1800,
                             .limits = iird_limits_default(),
                             .defaults = iird_settings_default()}};
     const char *positional = NULL;
@@ -267,6 +322,8 @@ int iird_cmd_serve(int argc, char **argv)
                 o.cfg.tls_cert ? "--tls-key" : "--tls-cert");
         return IIRD_EXIT_USAGE;
     }
+    if (o.cfg.max_sessions_per_address == 0) /* not given */
+        o.cfg.max_sessions_per_address = o.cfg.max_sessions / 4 > 1 ? o.cfg.max_sessions / 4 : 1;
     o.cfg.scene = o.scene_arg ? o.scene_arg : positional;
     o.cfg.scenes_dir = iird_scenes_dir(o.cfg.scenes_dir);
     o.cfg.web_dir = web_dir(o.web_opt);

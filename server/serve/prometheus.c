@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "iir/timer.h"
 
@@ -87,6 +88,20 @@ static void section_traffic(FILE *f, const iird_metrics *m)
                 load(&m->errors[c]));
 }
 
+/* The process's resident set from /proc/self/statm (its second field, in pages); left out where
+ * there is no /proc. */
+static void section_process(FILE *f)
+{
+    unsigned long long size = 0, resident = 0;
+    FILE *statm = fopen("/proc/self/statm", "r");
+    int n = statm ? fscanf(statm, "%llu %llu", &size, &resident) : 0;
+    if (statm) fclose(statm);
+    long page = sysconf(_SC_PAGESIZE);
+    if (n != 2 || page <= 0) return;
+    metric_head(f, "process_resident_memory_bytes", "gauge", "Resident memory size in bytes.");
+    fprintf(f, "process_resident_memory_bytes %llu\n", resident * (unsigned long long)page);
+}
+
 char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session *sessions,
                               size_t num_sessions, size_t scenes_loaded)
 {
@@ -101,6 +116,7 @@ char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session 
     fprintf(f, "iird_scenes_loaded %zu\n", scenes_loaded);
     metric_head(f, "iird_uptime_seconds", "gauge", "Seconds since start.");
     fprintf(f, "iird_uptime_seconds %.3f\n", (iir_now_ms() - m->start_ms) / 1e3);
+    section_process(f);
     if (fclose(f) != 0) {
         free(text);
         return NULL;

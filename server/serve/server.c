@@ -7,11 +7,14 @@
  * and wakes the main thread with lws_cancel_service; the protocol callback then, on
  * LWS_CALLBACK_EVENT_WAIT_CANCELLED, only asks for writable callbacks for the sessions that have
  * output, and on LWS_CALLBACK_SERVER_WRITEABLE writes one message and asks again if more is
- * waiting. SIGINT and SIGTERM are blocked in every thread and taken by a small signal thread
- * (sigwait), which sets the stop flag and wakes the service loop the same way.
+ * waiting. SIGINT, SIGTERM, SIGHUP and SIGQUIT (and the ignored SIGUSR1/SIGUSR2) are blocked in
+ * every thread and taken by a small signal thread (sigwait), which sets the stop flag and wakes
+ * the service loop the same way.
  * A session whose client left is told to stop and parked on the `closing` list; it is freed when
  * its worker has returned (it wakes the service thread once more on its way out), so a client
- * that vanishes mid-render never blocks the service thread. */
+ * that vanishes mid-render never blocks the service thread. Until then it keeps its slot: it
+ * counts against --max-sessions and --max-sessions-per-address and in the sessions and memory
+ * gauges, since its worker may still be rendering. */
 #include "server.h"
 
 #include <arpa/inet.h>
@@ -36,11 +39,18 @@
 #include "scene_cache.h"
 #include "session.h"
 
+/* Why a connection was refused a session (it gets one busy error, then close 1013). */
+typedef enum busy_reason { NOT_BUSY, BUSY_SERVER, BUSY_ADDRESS } busy_reason;
+
+enum { ADDR_BYTES = 64 };
+
 /* Per WebSocket connection (lws allocates and zeroes it). */
 typedef struct conn {
     struct lws *wsi;
     iird_session *session; /* NULL for a refused (busy) connection and after close */
-    bool busy, linked;
+    busy_reason busy;
+    bool linked;
+    char addr[ADDR_BYTES]; /* the peer's IP address, for --max-sessions-per-address */
     struct conn *next;
 } conn;
 
@@ -50,8 +60,10 @@ typedef struct http_req {
     size_t len;
 } http_req;
 
+/* A session whose client left, until its worker has returned: it still holds its slot. */
 typedef struct closing {
     iird_session *session;
+    char addr[ADDR_BYTES];
     struct closing *next;
 } closing;
 
@@ -65,10 +77,11 @@ typedef struct server {
     iird_session_env env;
     conn *conns; /* every open WebSocket connection */
     closing *closing;
-    int active; /* connections with a session */
+    int active; /* sessions whose worker has not returned: open ones and closing ones */
     uint32_t next_id;
     atomic_int stop;
-    bool loopback;
+    int port;                    /* the listening port (cfg->port may be 0) */
+    lws_sorted_usec_list_t tick; /* bounds each lws_service wait during shutdown */
     char web_dir[PATH_MAX];
 } server;
 
@@ -87,22 +100,39 @@ static bool same_origin(const char *a, const char *b)
     return la == lb && !strncasecmp(a, b, la);
 }
 
-/* docs/protocol.md, Transport: the --origin list; else any origin on a loopback bind; else only
- * the server's own. A request without Origin (not a browser) passes unless --origin is given. */
+/* One of the server's own origins: SCHEME://H:PORT for H = 127.0.0.1, localhost, [::1] and the
+ * bound address (SCHEME://H alone when PORT is the scheme's default). Never derived from the
+ * request's Host header, which a DNS-rebinding page controls. */
+static bool own_origin(const server *srv, const char *origin)
+{
+    const iird_server_config *cfg = srv->cfg;
+    const char *scheme = cfg->tls_cert ? "https" : "http";
+    bool v6 = strchr(cfg->host, ':') != NULL,
+         default_port = srv->port == (cfg->tls_cert ? 443 : 80);
+    char bound[80], own[128];
+    snprintf(bound, sizeof bound, "%s%s%s", v6 ? "[" : "", cfg->host, v6 ? "]" : "");
+    const char *hosts[] = {"127.0.0.1", "localhost", "[::1]", bound};
+    for (size_t i = 0; i < sizeof hosts / sizeof *hosts; i++) {
+        snprintf(own, sizeof own, "%s://%s:%d", scheme, hosts[i], srv->port);
+        if (same_origin(origin, own)) return true;
+        snprintf(own, sizeof own, "%s://%s", scheme, hosts[i]);
+        if (default_port && same_origin(origin, own)) return true;
+    }
+    return false;
+}
+
+/* docs/protocol.md, Transport: the server's own origins and the --origin list; anything else
+ * (`null` included) is refused. A request without Origin (not a browser) passes. */
 static bool origin_allowed(server *srv, struct lws *wsi)
 {
-    char origin[512] = "", host[256] = "", own[300];
-    lws_hdr_copy(wsi, origin, sizeof origin, WSI_TOKEN_ORIGIN);
+    char origin[512] = "";
+    if (lws_hdr_total_length(wsi, WSI_TOKEN_ORIGIN) <= 0) return true;
+    if (lws_hdr_copy(wsi, origin, sizeof origin, WSI_TOKEN_ORIGIN) <= 0) return false;
     const iird_server_config *cfg = srv->cfg;
-    if (cfg->num_origins > 0) {
-        for (int i = 0; i < cfg->num_origins; i++)
-            if (origin[0] && same_origin(origin, cfg->origins[i])) return true;
-        return false;
-    }
-    if (!origin[0] || srv->loopback) return true;
-    lws_hdr_copy(wsi, host, sizeof host, WSI_TOKEN_HOST);
-    snprintf(own, sizeof own, "%s://%s", cfg->tls_cert ? "https" : "http", host);
-    return host[0] && same_origin(origin, own);
+    if (own_origin(srv, origin)) return true;
+    for (int i = 0; i < cfg->num_origins; i++)
+        if (same_origin(origin, cfg->origins[i])) return true;
+    return false;
 }
 
 /* Answers a refused handshake with a plain HTTP/1.1 status (lws_return_http_status would say
@@ -154,30 +184,59 @@ static void unlink_conn(server *srv, conn *c)
     c->linked = false;
 }
 
+/* Sessions held by peer address addr, closing ones (worker still running) included. */
+static int sessions_from(const server *srv, const char *addr)
+{
+    int n = 0;
+    for (const conn *c = srv->conns; c; c = c->next) n += c->session && !strcmp(c->addr, addr);
+    for (const closing *z = srv->closing; z; z = z->next) n += !strcmp(z->addr, addr);
+    return n;
+}
+
+/* Arms (or re-arms) the idle timer: LWS_CALLBACK_TIMER after --idle-timeout without a message. */
+static void arm_idle(const server *srv, struct lws *wsi)
+{
+    if (srv->cfg->idle_timeout_s > 0)
+        lws_set_timer_usecs(wsi, (lws_usec_t)srv->cfg->idle_timeout_s * LWS_USEC_PER_SEC);
+}
+
+static void refuse_busy(conn *c, busy_reason why)
+{
+    c->busy = why;
+    lws_callback_on_writable(c->wsi);
+}
+
 static void on_established(server *srv, conn *c, struct lws *wsi)
 {
     link_conn(srv, c, wsi);
-    if (srv->active >= srv->cfg->max_sessions) {
-        c->busy = true;
-        lws_callback_on_writable(wsi);
-        return;
-    }
+    lws_get_peer_simple(wsi, c->addr, sizeof c->addr);
+    if (srv->active >= srv->cfg->max_sessions) return refuse_busy(c, BUSY_SERVER);
+    if (sessions_from(srv, c->addr) >= srv->cfg->max_sessions_per_address)
+        return refuse_busy(c, BUSY_ADDRESS);
     iir_error err = {0};
     c->session = iird_session_create(&srv->env, ++srv->next_id, &err);
     if (!c->session) {
         fprintf(stderr, "iird serve: %s\n", err.msg);
-        c->busy = true;
-        lws_callback_on_writable(wsi);
-        return;
+        return refuse_busy(c, BUSY_SERVER);
     }
     srv->active++;
     /* A client that never says hello must not hold a session slot: lws closes it after this. */
     lws_set_timeout(wsi, PENDING_TIMEOUT_USER_OK, IIRD_HELLO_TIMEOUT_S);
+    arm_idle(srv, wsi);
     atomic_fetch_add(&srv->metrics.sessions, 1);
     atomic_fetch_add(&srv->metrics.sessions_total, 1);
 }
 
-/* The client left: stop the worker without waiting and free the session once it has returned. */
+/* A session's worker has returned: free it and give its slot back. */
+static void release_session(server *srv, iird_session *s)
+{
+    iird_session_destroy(s);
+    srv->active--;
+    atomic_fetch_sub(&srv->metrics.sessions, 1);
+}
+
+/* The client left: stop the worker without waiting; the session keeps its slot until the worker
+ * has returned (reap_closing). */
 static void on_closed(server *srv, conn *c)
 {
     if (c->linked) unlink_conn(srv, c);
@@ -186,14 +245,13 @@ static void on_closed(server *srv, conn *c)
     iird_session_request_stop(c->session);
     if (z) {
         z->session = c->session;
+        memcpy(z->addr, c->addr, sizeof z->addr);
         z->next = srv->closing;
         srv->closing = z;
     } else {
-        iird_session_destroy(c->session); /* out of memory: wait for the worker here */
+        release_session(srv, c->session); /* out of memory: wait for the worker here */
     }
     c->session = NULL;
-    srv->active--;
-    atomic_fetch_sub(&srv->metrics.sessions, 1);
 }
 
 static void reap_closing(server *srv, bool wait)
@@ -202,12 +260,26 @@ static void reap_closing(server *srv, bool wait)
         closing *z = *p;
         if (wait || iird_session_worker_done(z->session)) {
             *p = z->next;
-            iird_session_destroy(z->session);
+            release_session(srv, z->session);
             free(z);
         } else {
             p = &z->next;
         }
     }
+}
+
+/* No client message for --idle-timeout: an idle_timeout error, then close 4000. A client that
+ * does not read either is dropped a few seconds later by lws. */
+static void on_idle(server *srv, conn *c)
+{
+    if (!c->session) return;
+    iird_proto_error e = {.seq = IIRD_NO_SEQ};
+    iird_proto_fail(&e, IIRD_E_IDLE_TIMEOUT, NULL,
+                    "closing the session: no message from the client for %d s (--idle-timeout)",
+                    srv->cfg->idle_timeout_s);
+    iird_session_close_error(c->session, IIRD_CLOSE_IDLE, &e);
+    lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, 5);
+    lws_callback_on_writable(c->wsi);
 }
 
 /* A worker (or the signal thread) woke the loop: ask for writable callbacks where output waits. */
@@ -219,11 +291,17 @@ static void on_wake(server *srv)
 }
 
 /* A refused connection gets one busy error, then close 1013 (try again later). */
-static int write_busy(server *srv, struct lws *wsi)
+static int write_busy(server *srv, conn *c, struct lws *wsi)
 {
     iird_proto_error e = {.seq = IIRD_NO_SEQ};
-    iird_proto_fail(&e, IIRD_E_BUSY, NULL, "the server has its maximum of %d sessions open",
-                    srv->cfg->max_sessions);
+    if (c->busy == BUSY_ADDRESS)
+        iird_proto_fail(&e, IIRD_E_BUSY, NULL,
+                        "this address has its maximum of %d sessions open "
+                        "(--max-sessions-per-address)",
+                        srv->cfg->max_sessions_per_address);
+    else
+        iird_proto_fail(&e, IIRD_E_BUSY, NULL, "the server has its maximum of %d sessions open",
+                        srv->cfg->max_sessions);
     iird_metrics_error(&srv->metrics, IIRD_E_BUSY);
     char *json = iird_json_error(&e);
     size_t len = json ? strlen(json) : 0;
@@ -241,7 +319,7 @@ static int write_busy(server *srv, struct lws *wsi)
 
 static int on_writable(server *srv, conn *c, struct lws *wsi)
 {
-    if (c->busy) return write_busy(srv, wsi);
+    if (c->busy) return write_busy(srv, c, wsi);
     if (!c->session) return 0;
     switch (iird_session_write(c->session, wsi)) {
     case IIRD_WRITE_CLOSE:
@@ -271,7 +349,11 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
         iird_session_receive(c->session, in, len, lws_is_final_fragment(wsi),
                              lws_frame_is_binary(wsi));
         if (iird_session_greeted(c->session)) lws_set_timeout(wsi, NO_PENDING_TIMEOUT, 0);
+        arm_idle(srv, wsi);
         lws_callback_on_writable(wsi);
+        break;
+    case LWS_CALLBACK_TIMER:
+        on_idle(srv, c);
         break;
     case LWS_CALLBACK_SERVER_WRITEABLE:
         return on_writable(srv, c, wsi);
@@ -297,13 +379,19 @@ static char *metrics_text(server *srv)
         if (c->session)
             mem[n++] = (iird_metrics_session){iird_session_id(c->session),
                                               iird_session_memory(c->session)};
+    for (closing *z = srv->closing; z && n < sizeof mem / sizeof *mem; z = z->next)
+        mem[n++] =
+            (iird_metrics_session){iird_session_id(z->session), iird_session_memory(z->session)};
     return iird_metrics_prometheus(&srv->metrics, mem, n, iird_scene_cache_loaded(srv->scenes));
 }
 
-/* Builds the body and sends the headers; the body follows on HTTP_WRITEABLE. */
+/* Builds the body and sends the headers; the body follows on HTTP_WRITEABLE. Only the exact
+ * paths /healthz and /metrics: anything below them is 404. */
 static int http_start(server *srv, struct lws *wsi, http_req *r, const char *path)
 {
-    bool metrics = !strncmp(path, "/metrics", 8);
+    bool metrics = !strcmp(path, "/metrics");
+    if (!metrics && strcmp(path, "/healthz") != 0)
+        return lws_return_http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL), -1;
     char *text = metrics ? metrics_text(srv) : iird_metrics_healthz(&srv->metrics);
     if (!text) return lws_return_http_status(wsi, HTTP_STATUS_INTERNAL_SERVER_ERROR, NULL), -1;
     r->len = strlen(text);
@@ -336,11 +424,10 @@ static int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void
                          size_t len)
 {
     http_req *r = user;
-    char path[64];
+    char path[16] = ""; /* longer than "/healthz" and "/metrics": a path that does not fit is 404 */
     switch (reason) {
     case LWS_CALLBACK_HTTP:
-        /* `in` is the path after the mountpoint; the mountpoint names the endpoint */
-        lws_hdr_copy(wsi, path, sizeof path, WSI_TOKEN_GET_URI);
+        if (lws_hdr_copy(wsi, path, sizeof path, WSI_TOKEN_GET_URI) <= 0) path[0] = '\0';
         return http_start(server_of(wsi), wsi, r, path);
     case LWS_CALLBACK_HTTP_WRITEABLE:
         return http_body(wsi, r);
@@ -379,13 +466,6 @@ static void make_mounts(const server *srv, struct lws_http_mount m[3])
     for (int i = 0; i < 3; i++) m[i].mountpoint_len = (unsigned char)strlen(m[i].mountpoint);
 }
 
-static bool is_loopback(const char *host)
-{
-    struct in_addr a4;
-    if (inet_pton(AF_INET, host, &a4) == 1) return (ntohl(a4.s_addr) >> 24) == 127;
-    return !strcmp(host, "::1");
-}
-
 static struct lws_context *create_context(server *srv, const struct lws_http_mount *mounts)
 {
     const iird_server_config *cfg = srv->cfg;
@@ -418,11 +498,17 @@ typedef struct signal_thread {
     atomic_int quit;
 } signal_thread;
 
+/* The signals the signal thread takes: the first four stop the server cleanly, SIGUSR1 and
+ * SIGUSR2 are ignored (their default would kill the process). */
 static void signal_set(sigset_t *set)
 {
     sigemptyset(set);
     sigaddset(set, SIGINT);
     sigaddset(set, SIGTERM);
+    sigaddset(set, SIGHUP);
+    sigaddset(set, SIGQUIT);
+    sigaddset(set, SIGUSR1);
+    sigaddset(set, SIGUSR2);
 }
 
 static void *signal_main(void *arg)
@@ -434,6 +520,7 @@ static void *signal_main(void *arg)
         int sig = 0;
         sigwait(&set, &sig);
         if (atomic_load(&st->quit)) return NULL;
+        if (sig == SIGUSR1 || sig == SIGUSR2) continue;
         atomic_store(&st->srv->stop, 1);
         pthread_mutex_lock(&st->srv->ctx_lock);
         if (st->srv->ctx) lws_cancel_service(st->srv->ctx);
@@ -456,12 +543,30 @@ static int start(server *srv, iir_error *err)
                                   .limits = srv->cfg->limits,
                                   .defaults = srv->cfg->defaults,
                                   .startup = srv->startup,
-                                  .token = srv->cfg->token};
+                                  .token = srv->cfg->token,
+                                  .budget = srv->cfg->budget};
     return 0;
 }
 
-/* Closes every session with 1001 (going away), lets lws send the close frames for a moment, then
- * joins every worker before the context goes. */
+static void tick_cb(lws_sorted_usec_list_t *sul)
+{
+    (void)sul;
+}
+
+/* Services until no WebSocket is left or until the deadline (ms). lws_service alone would wait
+ * for its next timer (up to ~20 s when a client does not read): a 20 ms tick bounds each wait. */
+static void service_until(server *srv, double until)
+{
+    while (srv->conns && iir_now_ms() < until) {
+        lws_sul_schedule(srv->ctx, 0, &srv->tick, tick_cb, 20 * LWS_US_PER_MS);
+        if (lws_service(srv->ctx, 0) < 0) break;
+    }
+    lws_sul_cancel(&srv->tick);
+}
+
+/* Closes every session with 1001 (going away) and services ~0.6 s so the close frames go out;
+ * then drops the connections still open (clients that do not read) and services ~0.3 s more;
+ * whatever is left goes with the context. Joins every worker before the context goes. */
 static void shut_down(server *srv)
 {
     for (conn *c = srv->conns; c; c = c->next)
@@ -470,11 +575,11 @@ static void shut_down(server *srv)
             iird_session_close(c->session, LWS_CLOSE_STATUS_GOINGAWAY);
             lws_callback_on_writable(c->wsi);
         }
-    double until = iir_now_ms() + 300.0;
-    while (srv->conns && iir_now_ms() < until) lws_service(srv->ctx, 0);
+    service_until(srv, iir_now_ms() + 600.0);
+    for (conn *c = srv->conns; c; c = c->next) lws_set_timeout(c->wsi, 1, LWS_TO_KILL_ASYNC);
+    service_until(srv, iir_now_ms() + 300.0);
     for (conn *c = srv->conns; c; c = c->next) {
-        iird_session_destroy(c->session);
-        if (c->session) srv->active--, atomic_fetch_sub(&srv->metrics.sessions, 1);
+        if (c->session) release_session(srv, c->session);
         c->session = NULL;
     }
     reap_closing(srv, true);
@@ -483,8 +588,7 @@ static void shut_down(server *srv)
 static void print_url(const server *srv)
 {
     const iird_server_config *cfg = srv->cfg;
-    struct lws_vhost *vh = lws_get_vhost_by_name(srv->ctx, "default");
-    int port = vh ? lws_get_vhost_listen_port(vh) : cfg->port;
+    int port = srv->port;
     bool v6 = strchr(cfg->host, ':') != NULL;
     const char *name = srv->startup->name;
     printf("iird: serving %s://%s%s%s:%d/ (%s)\n", cfg->tls_cert ? "https" : "http", v6 ? "[" : "",
@@ -535,6 +639,8 @@ static int serve(server *srv)
         return 1;
     }
     srv->env.lws = srv->ctx;
+    struct lws_vhost *vh = lws_get_vhost_by_name(srv->ctx, "default");
+    srv->port = vh ? lws_get_vhost_listen_port(vh) : srv->cfg->port;
     print_url(srv);
     while (!atomic_load(&srv->stop))
         if (lws_service(srv->ctx, 0) < 0) break;
@@ -566,7 +672,6 @@ int iird_server_run(const iird_server_config *cfg)
     if (!srv) return fprintf(stderr, "iird serve: out of memory\n"), 1;
     srv->cfg = cfg;
     pthread_mutex_init(&srv->ctx_lock, NULL);
-    srv->loopback = is_loopback(cfg->host);
     if (!realpath(cfg->web_dir, srv->web_dir)) snprintf(srv->web_dir, PATH_MAX, "%s", cfg->web_dir);
     signal_thread sig = {.srv = srv};
     pthread_create(&sig.thread, NULL, signal_main, &sig);

@@ -1,6 +1,7 @@
 /* server.h -- `iird serve`'s libwebsockets daemon: the context and its one service thread, the
  * HTTP side (the web client's files, /healthz, /metrics), the WebSocket endpoint /ws and its
- * sessions, the handshake checks (origin, session limit) and the shutdown on SIGINT/SIGTERM.
+ * sessions, the handshake checks (origin, session limits), idle sessions and the shutdown on
+ * SIGINT/SIGTERM/SIGHUP/SIGQUIT.
  * Not the per-client logic (session.h) and not option parsing (cmd_serve.c). */
 #ifndef IIRD_SERVER_H
 #define IIRD_SERVER_H
@@ -12,6 +13,7 @@
 enum {
     IIRD_MAX_ORIGINS = 16,
     IIRD_HELLO_TIMEOUT_S = 10, /* a WebSocket without an accepted hello by then is closed */
+    IIRD_CLOSE_IDLE = 4000,    /* WebSocket close status after --idle-timeout */
 };
 
 typedef struct iird_server_config {
@@ -21,19 +23,24 @@ typedef struct iird_server_config {
     const char *scenes_dir; /* where client scene names are looked up */
     const char *web_dir;    /* the web client's folder (must exist) */
     int max_sessions;
+    int max_sessions_per_address; /* sessions one peer address may hold at once */
+    int idle_timeout_s;           /* close a session after this long without a client message;
+                                     0: never */
     iird_limits limits;
-    const char *origins[IIRD_MAX_ORIGINS]; /* allowed Origin headers; none: see protocol.md */
+    const char *origins[IIRD_MAX_ORIGINS]; /* allowed Origin headers besides the server's own */
     int num_origins;
     const char *token;              /* NULL: no token */
     const char *tls_cert, *tls_key; /* both or neither */
     iird_settings defaults;         /* the state of a new session */
+    struct iird_budget *budget;     /* memory limits and reservations (budget.h); NULL: none */
     bool verbose;                   /* libwebsockets notices on stderr */
 } iird_server_config;
 
 /* Loads the startup scene, starts listening, prints "iird: serving URL (scene)" on stdout, and
- * serves until SIGINT or SIGTERM; then stops every worker, closes every session and frees
- * everything. Returns the process exit code (0 after a signal; 1, 2 or 3 when start-up fails,
- * with the reason on stderr). */
+ * serves until SIGINT, SIGTERM, SIGHUP or SIGQUIT (SIGUSR1 and SIGUSR2 are ignored); then closes
+ * every session (about a second of service at most, whatever the clients do), stops every worker
+ * and frees everything. Returns the process exit code (0 after a signal; 1, 2 or 3 when start-up
+ * fails, with the reason on stderr). */
 int iird_server_run(const iird_server_config *cfg);
 
 #endif

@@ -7,6 +7,7 @@
 
 #include <libwebsockets.h>
 
+#include "budget.h"
 #include "iir/timer.h"
 #include "session_internal.h"
 
@@ -53,6 +54,13 @@ iird_session *iird_session_create(const iird_session_env *env, uint32_t id, iir_
     if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory for a session"), NULL;
     s->env = env;
     s->id = id;
+    iird_proto_error pe = {.seq = IIRD_NO_SEQ};
+    if (!iird_budget_reserve(env->budget, &s->reserved, iird_session_estimate(&env->defaults),
+                             &pe)) {
+        iir_fail(err, IIR_ERR_NOMEM, "%s", pe.message);
+        free(s);
+        return NULL;
+    }
     pthread_mutex_init(&s->lock, NULL);
     pthread_condattr_t attr; /* timed waits on the monotonic clock, as iir_now_ms */
     pthread_condattr_init(&attr);
@@ -114,6 +122,7 @@ void iird_session_destroy(iird_session *s)
     iird_recording_destroy(s->rec);
     iird_worker_free(&s->w); /* the method before the scene it renders */
     iird_scene_cache_release(s->env->scenes, s->scene);
+    iird_budget_release(s->env->budget, &s->reserved);
     pthread_cond_destroy(&s->wake);
     pthread_mutex_destroy(&s->lock);
     free(s);
@@ -195,6 +204,12 @@ void iird_session_close(iird_session *s, int status)
     pthread_mutex_lock(&s->lock);
     if (!s->close_status) s->close_status = status;
     pthread_mutex_unlock(&s->lock);
+}
+
+void iird_session_close_error(iird_session *s, int status, const iird_proto_error *e)
+{
+    iird_queue_error(s, e);
+    iird_session_close(s, status);
 }
 
 /* ======================== writing ======================== */

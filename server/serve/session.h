@@ -38,12 +38,19 @@ typedef struct iird_session_env {
     iird_settings defaults;          /* the state of a new session */
     const iird_scene_entry *startup; /* the scene a new session shows (pinned) */
     const char *token;               /* NULL: hello needs no token */
+    struct iird_budget *budget;      /* memory reservations (budget.h); NULL: no limits */
 } iird_session_env;
 
 typedef struct iird_session iird_session;
 
+/* Bytes a session with these settings will allocate: the frame, the JPEG encoder and three frame
+ * buffers, the receive buffer, and its method's own estimate (iir_method_memory). What the memory
+ * budget reserves and /metrics reports. */
+uint64_t iird_session_estimate(const iird_settings *st);
+
 /* A new session on the startup scene with the default settings, its worker started (waiting for
- * hello). NULL with err filled when out of memory or the thread cannot start. */
+ * hello). NULL with err filled when out of memory, when the default settings do not fit the
+ * daemon's memory budget beside the other sessions, or when the thread cannot start. */
 iird_session *iird_session_create(const iird_session_env *env, uint32_t id, iir_error *err);
 
 /* Asks the worker to stop after its current step; does not block. */
@@ -71,6 +78,8 @@ bool iird_session_take_wake(iird_session *s);
 
 /* Queues a close with this WebSocket status after the pending output (shutdown: 1001). */
 void iird_session_close(iird_session *s, int status);
+/* Queues the error e (counted in the metrics), then a close with this status. */
+void iird_session_close_error(iird_session *s, int status, const iird_proto_error *e);
 
 typedef enum iird_write_result {
     IIRD_WRITE_IDLE, /* nothing more to send now */

@@ -123,6 +123,7 @@ struct iird_session {
     int close_status; /* 0: none; else close with it once the queue is empty */
 
     _Atomic uint64_t memory_bytes;
+    uint64_t reserved; /* bytes held in env->budget (service thread; destroy) */
 
     /* ---- service thread only ---- */
     bool hello_ok;

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "iir/timer.h"
+#include "budget.h"
 #include "session_internal.h"
 
 /* ======================== pieces, size and rate ======================== */
@@ -147,6 +148,9 @@ static bool on_params(iird_session *s, const iird_msg *m, iird_proto_error *err)
         ok = iird_proto_fail(err, IIRD_E_UNSUPPORTED, "params.method",
                              "iir needs a spot light, and scene %s has only a point light",
                              s->scene->name);
+    /* last: the reservation changes only when the settings do */
+    ok = ok &&
+         iird_budget_reserve(s->env->budget, &s->reserved, iird_session_estimate(&settings), err);
     char *json = NULL;
     if (ok) {
         s->settings = settings;

@@ -233,15 +233,14 @@ static char *domain_json(worker_state *w, const render_job *j, const iird_scene_
 /* ======================== memory ======================== */
 
 /* Bytes this session holds, estimated (docs/architecture.md, "Memory per session"). */
-static uint64_t estimate_memory(const iird_session *s, const render_job *j)
+uint64_t iird_session_estimate(const iird_settings *st)
 {
-    const worker_state *w = &s->w;
-    const iird_settings *st = &j->settings;
     uint64_t px = (uint64_t)st->width * (uint64_t)st->height;
-    uint64_t bytes = sizeof *s + IIRD_MAX_MESSAGE_BYTES; /* the struct and the receive buffer */
-    bytes += px * sizeof(iir_vec3);                      /* the frame */
-    bytes += px * 3 + (px * 3 + 2048);                   /* encoder: RGB8 + tjBufSize */
-    bytes += 3 * (uint64_t)w->back.cap;                  /* back, slot and sending buffers */
+    uint64_t jpeg = px * 3 + 2048 + IIRD_FRAME_HEADER_BYTES;        /* tjBufSize's bound */
+    uint64_t bytes = sizeof(iird_session) + IIRD_MAX_MESSAGE_BYTES; /* + the receive buffer */
+    bytes += px * sizeof(iir_vec3);                                 /* the frame */
+    bytes += px * 3 + jpeg;                                         /* encoder: RGB8 + output */
+    bytes += 3 * jpeg; /* back, slot and sending buffers */
     return bytes + iir_method_memory(st->method, &st->params, st->width, st->height);
 }
 
@@ -322,7 +321,7 @@ static void publish(iird_session *s, const render_job *j, frame_info *f)
         worker_error(s, IIRD_E_INTERNAL, j->seq, "encoding the frame", &err);
         return;
     }
-    atomic_store(&s->memory_bytes, estimate_memory(s, j));
+    atomic_store(&s->memory_bytes, iird_session_estimate(&j->settings));
     pthread_mutex_lock(&s->lock);
     fill_slot_locked(s, j, f, size);
     pthread_mutex_unlock(&s->lock);

@@ -45,11 +45,19 @@ SANITIZER_PATTERNS = ("ERROR: AddressSanitizer", "LeakSanitizer", "runtime error
 # ---------------------------------------------------------------- daemon ----
 
 
+# Every test client connects from 127.0.0.1, several at once: unless a test gives its own
+# --max-sessions-per-address, the daemons let one address hold every slot (the product's default is a
+# quarter of --max-sessions).
+PER_ADDRESS_ARGS = ("--max-sessions-per-address", "1024")
+
+
 class Daemon:
     """One `iird serve --port 0` process. stdout and stderr go to files (never a pipe that could
-    fill); the port is read from the `iird: serving http://127.0.0.1:PORT/` line."""
+    fill); the port is read from the `iird: serving http://127.0.0.1:PORT/` line. per_address=False
+    keeps the product's --max-sessions-per-address default; cwd and env_extra set the process's
+    working directory and extra environment variables."""
 
-    def __init__(self, *args, scenes=True):
+    def __init__(self, *args, scenes=True, per_address=True, cwd=None, env_extra=None):
         self.tmp = tempfile.TemporaryDirectory(prefix="iird-integ-", dir=os.environ.get("IIR_TEST_TMP"))
         os.makedirs(self.tmp.name, exist_ok=True)
         self.out_path = os.path.join(self.tmp.name, "stdout")
@@ -57,14 +65,17 @@ class Daemon:
         cmd = [IIRD, "serve", "--port", "0"]
         if scenes:
             cmd += ["--scenes", os.path.join(SRC, "scenes")]
+        if per_address and "--max-sessions-per-address" not in args:
+            cmd += PER_ADDRESS_ARGS
         cmd += list(args)
         env = dict(os.environ)
         env.setdefault("ASAN_OPTIONS", "detect_leaks=1")
         env.setdefault("UBSAN_OPTIONS", "print_stacktrace=1")
         env.setdefault("OMP_NUM_THREADS", "2")
+        env.update(env_extra or {})
         self.cmd = cmd
         with open(self.out_path, "wb") as out, open(self.err_path, "wb") as err:
-            self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=out, stderr=err, env=env)
+            self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=out, stderr=err, env=env, cwd=cwd)
         self.port = self._wait_port(30.0)
         self.stopped = False
 

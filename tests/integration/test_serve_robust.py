@@ -125,11 +125,14 @@ class OriginTest(DaemonTest):
         self.assertEqual((await asyncio.to_thread(healthz, self.daemon.port))["status"], "ok")
 
 
-class AnyOriginOnLoopbackTest(DaemonTest):
-    async def test_any_origin_on_loopback(self):
-        c = await Client.connect(self.daemon, origin="http://evil.example")
+class OwnOriginOnLoopbackTest(DaemonTest):
+    async def test_own_origin_only_on_loopback(self):
+        with self.assertRaises(websockets.InvalidStatusCode) as cm:
+            await Client.connect(self.daemon, origin="http://evil.example")
+        self.assertEqual(cm.exception.status_code, 403, "without --origin a foreign origin is refused, loopback too")
+        c = await Client.connect(self.daemon, origin=f"http://127.0.0.1:{self.daemon.port}")
         try:
-            self.assertIn("session", c.welcome, "without --origin any origin is accepted on loopback")
+            self.assertIn("session", c.welcome, "the page the daemon serves may open a session")
         finally:
             await c.close()
 

@@ -1166,6 +1166,33 @@ static void test_fuzz(void **state)
     assert_true(codes[IIRD_E_BAD_TYPE] + codes[IIRD_E_OUT_OF_RANGE] > 10);
 }
 
+/* A \u0000 escape in any string (issue 15): cJSON's NUL would cut the string short, so
+ * "cornell_box\u0000/../x" must not read as cornell_box nor "iir\u0000xyz" as iir. */
+static void test_embedded_nul(void **state)
+{
+    (void)state;
+    expect("{\"type\":\"scene\",\"name\":\"cornell_box\\u0000/../../etc\"}", IIRD_E_OUT_OF_RANGE,
+           "scene.name");
+    expect("{\"type\":\"scene\",\"name\":\"\\u0000\"}", IIRD_E_OUT_OF_RANGE, "scene.name");
+    expect("{\"type\":\"params\",\"method\":\"iir\\u0000xyz\"}", IIRD_E_OUT_OF_RANGE,
+           "params.method");
+    expect("{\"type\":\"params\",\"method\":\"iir\\u0000\"}", IIRD_E_OUT_OF_RANGE, "params.method");
+    expect("{\"type\":\"hello\",\"client\":\"a\\u0000b\"}", IIRD_E_OUT_OF_RANGE, "hello.client");
+    expect("{\"type\":\"hello\",\"token\":\"t\\u0000\"}", IIRD_E_OUT_OF_RANGE, "hello.token");
+    expect("{\"type\":\"snapshot\",\"format\":\"png\\u0000\"}", IIRD_E_OUT_OF_RANGE,
+           "snapshot.format");
+    expect("{\"type\":\"light\\u0000\"}", IIRD_E_OUT_OF_RANGE, "type");
+    /* a NUL in a member's name is not that member */
+    expect("{\"type\":\"scene\",\"name\\u0000\":\"cornell_box\"}", IIRD_E_UNKNOWN_FIELD,
+           "scene.name");
+    /* an escaped backslash before u0000 is no NUL; a NUL escape outside a string is bad JSON */
+    iird_msg m = parse_ok("{\"type\":\"hello\",\"client\":\"a\\\\u0000b\"}");
+    assert_string_equal(m.u.hello.client, "a\\u0000b");
+    m = parse_ok("{\"type\":\"hello\",\"client\":\"\\u0001\\u00e9\"}");
+    assert_string_equal(m.u.hello.client, "\x01\xc3\xa9");
+    expect("{\"type\":\"hello\"}\\u0000", IIRD_E_BAD_JSON, "");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1177,6 +1204,7 @@ int main(void)
         cmocka_unit_test(test_params_apply), cmocka_unit_test(test_recording_round_trip),
         cmocka_unit_test(test_frame_header), cmocka_unit_test(test_json_replies),
         cmocka_unit_test(test_json_domain),  cmocka_unit_test(test_fuzz),
+        cmocka_unit_test(test_embedded_nul),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -8,13 +8,16 @@
 //
 // Reconnect: after a close (daemon stopped, network gone, `busy`), retry after 250 ms, doubling up to
 // 4 s, with some jitter so that many pages do not reconnect in step; the backoff resets at the next
-// welcome. The page re-sends its state after that welcome (main.js).
+// welcome. The page re-sends its state after that welcome (main.js). Except after the server closed
+// an idle session (an `idle_timeout` error, then close 4000): state 'closed', no retry until the user
+// asks (retryNow), so a forgotten tab does not hold a session forever.
 
 import { hello, parseFrame, INPUT_TYPES, NO_SEQ, MAX_RATE } from './protocol.js';
 
 const RETRY_FIRST_MS = 250;
 const RETRY_MAX_MS = 4000;
 const PENDING_MAX_AGE_MS = 10000;
+const CLOSE_IDLE = 4000;
 
 export class Connection {
     // url: ws(s)://host:port/ws. handlers: {status(info), welcome(msg), message(msg),
@@ -100,6 +103,10 @@ export class Connection {
             this.ready = false;
             this.pending = [];
             if (ev.code !== 1000 && ev.code !== 1005 && ev.reason) this.lastError = `closed ${ev.code}: ${ev.reason}`;
+            if (ev.code === CLOSE_IDLE) {
+                this.status('closed');
+                return;
+            }
             this.scheduleRetry();
         };
         // onerror is always followed by onclose, which handles it.
@@ -115,10 +122,12 @@ export class Connection {
         this.status('disconnected');
     }
 
-    // Skips the wait of the current backoff (the "reconnect now" button).
+    // Skips the wait of the current backoff, or reconnects after an idle close (the "reconnect now"
+    // button).
     retryNow() {
-        if (!this.retryTimer) return;
+        if (this.ws) return;
         clearTimeout(this.retryTimer);
+        this.attempt = 0;
         this.open();
     }
 
@@ -152,7 +161,7 @@ export class Connection {
                 this.h.welcome(msg);
                 return;
             }
-            if (msg.type === 'error' && (msg.code === 'busy' || msg.code === 'unauthorized')) {
+            if (msg.type === 'error' && ['busy', 'unauthorized', 'idle_timeout'].includes(msg.code)) {
                 this.lastError = `${msg.code}: ${msg.message}`;
             }
             this.h.message(msg);

@@ -160,6 +160,7 @@ function showStatus() {
     const conn = $('#conn');
     conn.dataset.state = s.state;
     let text = s.state === 'connecting' ? 'connecting…' : s.state;
+    if (s.state === 'closed') text = 'closed by the server';
     if (s.state === 'disconnected') {
         const secs = Math.max(0, (conn_retryAt() - performance.now()) / 1000);
         text = `disconnected · retry in ${secs.toFixed(1)} s`;

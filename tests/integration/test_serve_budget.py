@@ -1,0 +1,88 @@
+"""test_serve_budget.py -- the daemon's memory budget (issue 15, finding 1): a session reserves what its
+settings will allocate (iird_session_estimate: frame buffers plus the method's own estimate from its
+parameter tables) before anything is allocated, within --max-session-memory and, with every other
+session, --max-memory. The attack message {"vpls":4096,"sm_res":2048} (64 GiB of shadow maps) is
+refused naming the budget and the estimate, and leaves the session as it was; the estimate is checked
+against the daemon's measured RSS. Usage: test_serve_budget.py IIRD SOURCE_DIR"""
+
+import asyncio
+
+import iirserve
+from iirserve import Client, Daemon, DaemonTest, FAST_ARGS, metric, metrics
+
+ATTACK = {"type": "params", "vpls": 4096, "sm_res": 2048}
+# 1024 VPLs with 256^2 shadow maps: 256 MiB of maps, far above everything else the session holds.
+BIG = {"type": "params", "method": "iir", "vpls": 1024, "kmax": 8, "sm_res": 256}
+
+
+def rss_bytes(pid):
+    with open(f"/proc/{pid}/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    raise AssertionError("no VmRSS")
+
+
+def session_bytes(port):
+    return sum(v for n, _, v in metrics(port) if n == "iird_session_memory_bytes")
+
+
+class BudgetTest(DaemonTest):
+    async def test_attack_refused_before_allocation(self):
+        c = await Client.connect(self.daemon)
+        try:
+            rss0 = rss_bytes(self.daemon.proc.pid)
+            seq, e = await c.request(ATTACK, "error")
+            self.assertEqual(e.get("code"), "out_of_range", e)
+            self.assertEqual(e.get("field"), "params", e)
+            self.assertIn("--max-session-memory", e.get("message", ""))
+            self.assertRegex(e.get("message", ""), r"about \d+ MiB")
+            await self.still_streaming(c, "the refused attack")
+            _, st = await c.request({"type": "params", "quality": 70}, "state")
+            self.assertEqual(st["params"]["vpls"], 256, "the session kept its settings")
+            grew = rss_bytes(self.daemon.proc.pid) - rss0
+            self.assertLess(grew, 64 << 20, f"RSS grew {grew >> 20} MiB after a refused attack")
+            print(f"[attack refused; RSS +{grew >> 20} MiB] ", end="")
+        finally:
+            await c.close()
+
+    async def test_estimate_matches_rss(self):
+        d = Daemon(*FAST_ARGS, "--max-session-memory", "2G")
+        try:
+            c = await Client.connect(d)
+            await c.wait_frame()
+            await asyncio.sleep(0.5)
+            rss0, est0 = rss_bytes(d.proc.pid), session_bytes(d.port)
+            seq, _ = await c.request(BIG, "state")
+            await c.wait_frame(min_seq=seq, timeout=120)
+            await asyncio.sleep(0.5)
+            rss1, est1 = rss_bytes(d.proc.pid), session_bytes(d.port)
+            grew, est = rss1 - rss0, est1 - est0
+            print(f"[RSS +{grew / 2**20:.0f} MiB, estimate +{est / 2**20:.0f} MiB] ", end="")
+            self.assertGreater(est, 200 << 20, "the estimate counts the shadow maps")
+            self.assertLess(abs(grew - est), 0.25 * est, f"RSS grew {grew / 2**20:.0f} MiB, estimated {est / 2**20:.0f} MiB")
+            await c.close()
+            d.stop_and_check(self)
+        finally:
+            d.close()
+
+    async def test_daemon_budget_across_sessions(self):
+        d = Daemon(*FAST_ARGS, "--max-memory", "450M", "--max-session-memory", "400M")
+        try:
+            a, b = await Client.connect(d), await Client.connect(d)
+            big = BIG  # ~270 MiB each: one fits in 450M, two do not
+            await a.request(big, "state")
+            seq, e = await b.request(big, "error")
+            self.assertEqual(e.get("code"), "busy", e)
+            self.assertIn("--max-memory", e.get("message", ""))
+            await a.close()
+            await asyncio.sleep(1.0)  # a's reservation returns when its session ends
+            await b.request(big, "state")
+            await b.close()
+            d.stop_and_check(self)
+        finally:
+            d.close()
+
+
+if __name__ == "__main__":
+    iirserve.main()
