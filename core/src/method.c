@@ -272,6 +272,14 @@ uint64_t iir_method_memory(const char *name, const iir_params *p, int width, int
 
 /* ======================== the interface ======================== */
 
+iir_status iir_method_supports(const char *name, const iir_light *lights, uint32_t num_lights,
+                               iir_error *err)
+{
+    const iir_method_ops *ops = find_ops(name);
+    if (!ops) return unknown_method(name, err);
+    return ops->supports ? ops->supports(lights, num_lights, err) : IIR_OK;
+}
+
 iir_status iir_method_create(const char *name, const iir_scene *scene, const iir_rt *rt,
                              const iir_params *params, iir_method **out, iir_error *err)
 {

@@ -57,6 +57,8 @@ typedef struct iir_method_ops {
     /* Takes new options that differ only in IIR_PARAM_LIVE parameters; the next frame uses
      * them. NULL: every change re-creates the method. */
     void (*update)(void *state, const void *opts);
+    /* NULL when the method renders any lights; else IIR_ERR_UNSUPPORTED naming what it needs. */
+    iir_status (*supports)(const iir_light *lights, uint32_t num_lights, iir_error *err);
     /* Bytes the method holds with opts for a width x height frame, beyond the output image. */
     uint64_t (*memory)(const void *opts, int width, int height);
 } iir_method_ops;

@@ -20,6 +20,7 @@
 #include <arpa/inet.h>
 #include <errno.h>
 #include <limits.h>
+#include <malloc.h>
 #include <netdb.h>
 #include <pthread.h>
 #include <signal.h>
@@ -256,16 +257,21 @@ static void on_closed(server *srv, conn *c)
 
 static void reap_closing(server *srv, bool wait)
 {
+    bool freed = false;
     for (closing **p = &srv->closing; *p;) {
         closing *z = *p;
         if (wait || iird_session_worker_done(z->session)) {
             *p = z->next;
             release_session(srv, z->session);
             free(z);
+            freed = true;
         } else {
             p = &z->next;
         }
     }
+    /* The last session gone: give glibc's per-thread arenas (a session's shadow maps were
+       allocated on its worker) back to the system, so an idle daemon's RSS returns to its start. */
+    if (freed && !srv->closing && srv->active == 0) malloc_trim(0);
 }
 
 /* No client message for --idle-timeout: an idle_timeout error, then close 4000. A client that

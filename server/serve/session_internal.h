@@ -18,8 +18,13 @@ enum {
     IIRD_RATE_BURST = 500,     /* token bucket size */
     IIRD_FPS_WINDOW = 128,     /* send times kept for the fps figure */
     IIRD_DOMAIN_MIN_MS = 100,  /* domain messages at most this often while frames stream */
-    IIRD_FRAME_PATIENCE_MS = 100, /* newer input stops a frame only after it ran this long, so a
-                                     steady drag still shows frames; refinement stops at once */
+    IIRD_FRAME_PATIENCE_MS = 250, /* newer input stops a frame only after it ran this long, or 3x
+                                     the last frame's time (at most IIRD_FRAME_PATIENCE_MAX_MS), so
+                                     a drag still shows frames on a loaded machine; refinement
+                                     stops at once */
+    IIRD_FRAME_PATIENCE_MAX_MS = 1000,
+    IIRD_WORKER_NICE =
+        5, /* render workers (and their OpenMP threads) yield to the service thread */
 };
 
 /* One queued outgoing message: LWS_PRE bytes of headroom, then len bytes. */
@@ -67,8 +72,9 @@ typedef struct worker_state {
     iir_method *method;
     char method_name[16];
     const iird_scene_entry *method_scene;
-    bool refining;     /* the method call under way is a refinement pass (the stop hook) */
-    double started_ms; /* when the call under way started */
+    bool refining;      /* the method call under way is a refinement pass (the stop hook) */
+    double started_ms;  /* when the call under way started */
+    double patience_ms; /* how long newer input lets the frame under way run (see should_stop) */
     iir_image *img;
     iir_jpeg_encoder *enc;
     byte_buf back; /* the frame being built; swapped with the slot's on publish */

@@ -144,10 +144,10 @@ static bool on_params(iird_session *s, const iird_msg *m, iird_proto_error *err)
     pthread_mutex_lock(&s->lock);
     iird_settings settings = s->settings;
     bool ok = iird_apply_params(&m->u.params, &s->env->limits, &settings, err);
-    if (ok && !strcmp(settings.method, "iir") && s->light.type != IIR_LIGHT_SPOT)
-        ok = iird_proto_fail(err, IIRD_E_UNSUPPORTED, "params.method",
-                             "iir needs a spot light, and scene %s has only a point light",
-                             s->scene->name);
+    iir_error e;
+    if (ok && iir_method_supports(settings.method, &s->light, 1, &e) != IIR_OK)
+        ok = iird_proto_fail(err, IIRD_E_UNSUPPORTED, "params.method", "scene %s: %s",
+                             s->scene->name, e.msg);
     /* last: the reservation changes only when the settings do */
     ok = ok &&
          iird_budget_reserve(s->env->budget, &s->reserved, iird_session_estimate(&settings), err);

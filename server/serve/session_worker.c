@@ -10,6 +10,9 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 #include <string.h>
 #include <time.h>
 
@@ -114,7 +117,7 @@ static bool should_stop(void *ctx)
     const iird_session *s = ctx;
     if (atomic_load_explicit(&s->stop, memory_order_relaxed)) return true;
     if (atomic_load_explicit(&s->version, memory_order_relaxed) == s->w.last.version) return false;
-    return s->w.refining || iir_now_ms() - s->w.started_ms > IIRD_FRAME_PATIENCE_MS;
+    return s->w.refining || iir_now_ms() - s->w.started_ms > s->w.patience_ms;
 }
 
 /* The session's method for the job: kept when only parameters changed (its VPLs too, when every
@@ -339,6 +342,10 @@ static iir_status render_frame(iird_session *s, const render_job *j, const iird_
     if (st == IIR_OK) st = build_view(w, j, sc, light_index, &view, err);
     w->refining = false;
     w->started_ms = iir_now_ms();
+    double typical = 3.0 * w->last_stats.total_ms;
+    w->patience_ms = typical < IIRD_FRAME_PATIENCE_MS       ? IIRD_FRAME_PATIENCE_MS
+                     : typical > IIRD_FRAME_PATIENCE_MAX_MS ? IIRD_FRAME_PATIENCE_MAX_MS
+                                                            : typical;
     if (st == IIR_OK) st = iir_method_render(w->method, &view, w->img, &f->stats, err);
     w->have_frame = st == IIR_OK;
     w->pass = 0;
@@ -538,13 +545,28 @@ static void load_scene_locked(iird_session *s)
         pthread_mutex_lock(&s->lock);
         return;
     }
+    int index;
+    iir_light light = iird_session_light_for(e->scene, &index);
+    pthread_mutex_lock(&s->lock);
+    char method[sizeof s->settings.method];
+    memcpy(method, s->settings.method, sizeof method);
+    pthread_mutex_unlock(&s->lock);
+    if (iir_method_supports(method, &light, 1, &err) != IIR_OK) { /* keep the old scene */
+        char what[200];
+        snprintf(what, sizeof what, "scene %s with method %s", name, method);
+        worker_error(s, IIRD_E_UNSUPPORTED, seq, what, &err);
+        iird_scene_cache_release(s->env->scenes, e);
+        pthread_mutex_lock(&s->lock);
+        return;
+    }
     iir_method_destroy(s->w.method); /* it renders the old scene */
     s->w.method = NULL;
     s->w.have_frame = false;
     pthread_mutex_lock(&s->lock);
     const iird_scene_entry *old = s->scene;
     s->scene = e;
-    s->light = iird_session_light_for(e->scene, &s->light_index);
+    s->light = light;
+    s->light_index = index;
     s->camera = e->scene->camera;
     s->version++;
     if (seq != IIRD_NO_SEQ) s->seq = seq;
@@ -568,6 +590,10 @@ static bool held_back_locked(const iird_session *s)
 void *iird_session_worker(void *arg)
 {
     iird_session *s = arg;
+    /* a lower priority for this thread and the OpenMP threads it starts (they inherit it), so the
+       service thread answers /healthz and input promptly while many sessions render; failing is
+       harmless (the worker renders at the daemon's priority) */
+    (void)setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), IIRD_WORKER_NICE);
     pthread_mutex_lock(&s->lock);
     while (!s->stop) {
         double wait = 0;

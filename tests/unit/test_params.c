@@ -227,12 +227,32 @@ static void test_set_params_keeps_vpls(void **state)
     iir_method_destroy(m);
 }
 
+/* What params accept renders (issue 15, finding 6): iir refuses lights without a spot up front, and
+ * kmax 0 (the incremental step needs at least one insertion) is out of range. */
+static void test_accepted_renders(void **state)
+{
+    (void)state;
+    iir_error err = {0};
+    iir_light point = {.type = IIR_LIGHT_POINT, .name = "bulb", .intensity = {1, 1, 1}};
+    iir_light spot = point;
+    spot.type = IIR_LIGHT_SPOT;
+    assert_int_equal(iir_method_supports("iir", &point, 1, &err), IIR_ERR_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "spot"));
+    assert_int_equal(iir_method_supports("iir", (iir_light[]){point, spot}, 2, &err), IIR_OK);
+    assert_int_equal(iir_method_supports("pt", &point, 1, &err), IIR_OK);
+    assert_int_equal(iir_method_supports("nope", &point, 1, &err), IIR_ERR_INVALID);
+    iir_params p = iir_params_default();
+    assert_int_equal(iir_method_param_set(&p, "kmin", 0, &err), IIR_OK);
+    assert_int_equal(iir_method_param_set(&p, "kmax", 0, &err), IIR_ERR_INVALID);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_values),
         cmocka_unit_test(test_sets_and_binding),
         cmocka_unit_test(test_methods_agree),
+        cmocka_unit_test(test_accepted_renders),
         cmocka_unit_test_setup_teardown(test_set_params_keeps_vpls, iir_test_cornell_setup,
                                         iir_test_cornell_teardown),
     };

@@ -99,6 +99,13 @@ double iir_method_param_value(const iir_param *row, const iir_params *p);
  * can refuse a request before anything is allocated. 0 for an unknown name. */
 uint64_t iir_method_memory(const char *name, const iir_params *p, int width, int height);
 
+/* Whether method `name` can render these lights (iir: its domain is a spot's disk, so it needs a
+ * spot light): IIR_OK, or IIR_ERR_UNSUPPORTED saying what is missing, so that a caller can refuse a
+ * request before accepting it rather than fail every frame after. IIR_ERR_INVALID for an unknown
+ * name. */
+iir_status iir_method_supports(const char *name, const iir_light *lights, uint32_t num_lights,
+                               iir_error *err);
+
 /* Creates method `name` over a scene and its ray tracer (both must outlive the method).
  * IIR_ERR_INVALID for an unknown name (the message lists the known ones) or bad parameters. */
 iir_status iir_method_create(const char *name, const struct iir_scene *scene, const iir_rt *rt,

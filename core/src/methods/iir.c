@@ -81,7 +81,7 @@ static const iir_param IIR_ROWS[] = {
      IIR_PARAM_INT,
      offsetof(iir_options, kmax),
      8,
-     0,
+     1, /* the step inserts at least one VPL a frame */
      16384,
      {0, 4096},
      NULL,
@@ -213,6 +213,16 @@ static const iir_light *first_spot(const iir_view *view)
     for (uint32_t i = 0; i < view->num_lights; i++)
         if (view->lights[i].type == IIR_LIGHT_SPOT) return &view->lights[i];
     return NULL;
+}
+
+static iir_status iir_m_supports(const iir_light *lights, uint32_t num_lights, iir_error *err)
+{
+    for (uint32_t i = 0; i < num_lights; i++)
+        if (lights[i].type == IIR_LIGHT_SPOT) return IIR_OK;
+    return iir_fail(err, IIR_ERR_UNSUPPORTED,
+                    "iir needs a spot light (its VPL domain is the spot's disk); these %u light(s) "
+                    "have none",
+                    num_lights);
 }
 
 static void fill_counts(const iir_incr_stats *is, uint32_t maps, iir_vpl_counts *c)
@@ -477,5 +487,6 @@ const iir_method_ops iir_method_iir = {
     .domain = iir_m_domain,
     .set_stop = iir_m_set_stop,
     .update = iir_m_update,
+    .supports = iir_m_supports,
     .memory = iir_m_memory,
 };
