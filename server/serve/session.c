@@ -123,6 +123,7 @@ void iird_session_destroy(iird_session *s)
     iird_worker_free(&s->w); /* the method before the scene it renders */
     iird_scene_cache_release(s->env->scenes, s->scene);
     iird_budget_release(s->env->budget, &s->reserved);
+    iird_budget_release(s->env->budget, &s->snapshot_held);
     pthread_cond_destroy(&s->wake);
     pthread_mutex_destroy(&s->lock);
     free(s);
@@ -148,12 +149,17 @@ uint64_t iird_session_memory(iird_session *s)
 void iird_queue_locked(iird_session *s, out_msg msg)
 {
     if (s->q_count == IIRD_QUEUE_CAP) {
-        int victim = 0; /* the oldest droppable entry, else the oldest */
-        for (int i = 0; i < s->q_count; i++)
-            if (s->queue[(s->q_head + i) % IIRD_QUEUE_CAP].droppable) {
+        int victim = -1, oldest = -1; /* the oldest droppable entry, else the oldest other one */
+        for (int i = 0; i < s->q_count; i++) {
+            const out_msg *q = &s->queue[(s->q_head + i) % IIRD_QUEUE_CAP];
+            if (q->snapshot) continue; /* a snapshot's two parts go together */
+            if (oldest < 0) oldest = i;
+            if (q->droppable) {
                 victim = i;
                 break;
             }
+        }
+        if (victim < 0) victim = oldest < 0 ? 0 : oldest;
         free(s->queue[(s->q_head + victim) % IIRD_QUEUE_CAP].buf);
         for (int i = victim; i + 1 < s->q_count; i++)
             s->queue[(s->q_head + i) % IIRD_QUEUE_CAP] =
@@ -168,7 +174,7 @@ void iird_queue_text_locked(iird_session *s, const char *text, bool droppable)
 {
     if (!text) return; /* out of memory building it: nothing to send */
     size_t len = strlen(text);
-    out_msg m = {malloc(LWS_PRE + len), len, false, droppable};
+    out_msg m = {malloc(LWS_PRE + len), len, false, droppable, false};
     if (!m.buf) return;
     memcpy(m.buf + LWS_PRE, text, len);
     iird_queue_locked(s, m);
@@ -296,6 +302,12 @@ iird_write_result iird_session_write(iird_session *s, struct lws *wsi)
         pthread_mutex_unlock(&s->lock);
         ok = write_bytes(s, wsi, m.buf + LWS_PRE, m.len, m.binary);
         free(m.buf);
+        if (m.snapshot && m.binary) { /* the snapshot is out: the next may be asked for */
+            pthread_mutex_lock(&s->lock);
+            iird_budget_release(s->env->budget, &s->snapshot_held);
+            s->snapshot_busy = false;
+            pthread_mutex_unlock(&s->lock);
+        }
     } else if (s->close_status) { /* after the replies, before any further frame */
         int status = s->close_status;
         pthread_mutex_unlock(&s->lock);

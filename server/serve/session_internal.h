@@ -33,6 +33,7 @@ typedef struct out_msg {
     size_t len;
     bool binary;
     bool droppable; /* stats and domain: dropped first when the queue is full */
+    bool snapshot;  /* a snapshot's reply or its binary part: never dropped (they go together) */
 } out_msg;
 
 /* A growable byte buffer with LWS_PRE headroom in front of the data. */
@@ -119,6 +120,8 @@ struct iird_session {
     char scene_name[130];
     int64_t scene_seq;
     bool snapshot_pending, snapshot_exr;
+    bool snapshot_busy;     /* one requested and not yet written out (at most one per session) */
+    uint64_t snapshot_held; /* its bytes, reserved in env->budget while queued */
     int64_t snapshot_seq;
     out_msg queue[IIRD_QUEUE_CAP];
     int q_head, q_count;

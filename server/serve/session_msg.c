@@ -225,9 +225,18 @@ static bool on_pick(iird_session *s, const iird_msg *m, iird_proto_error *err)
     return true;
 }
 
-static bool on_snapshot(iird_session *s, const iird_msg *m)
+/* At most one snapshot per session between the request and its bytes leaving: another request
+ * meanwhile is answered busy (never merged, never queued). */
+static bool on_snapshot(iird_session *s, const iird_msg *m, iird_proto_error *err)
 {
     pthread_mutex_lock(&s->lock);
+    if (s->snapshot_busy) {
+        pthread_mutex_unlock(&s->lock);
+        return iird_proto_fail(err, IIRD_E_BUSY, "snapshot",
+                               "a snapshot is already being made or sent; ask again once it "
+                               "has arrived");
+    }
+    s->snapshot_busy = true;
     s->snapshot_pending = true;
     s->snapshot_exr = m->u.snapshot.exr;
     s->snapshot_seq = m->seq;
@@ -280,7 +289,7 @@ static bool dispatch(iird_session *s, const iird_msg *m, iird_proto_error *err)
     case IIRD_MSG_PICK:
         return on_pick(s, m, err);
     case IIRD_MSG_SNAPSHOT:
-        return on_snapshot(s, m);
+        return on_snapshot(s, m, err);
     case IIRD_MSG_RECORD:
         return on_record(s, m, err);
     }

@@ -18,6 +18,7 @@
 
 #include <libwebsockets.h>
 
+#include "budget.h"
 #include "iir/timer.h"
 #include "session_internal.h"
 
@@ -502,9 +503,23 @@ static void snapshot_locked(iird_session *s)
     unsigned char *buf = w->have_frame
                              ? snapshot_bytes(w->img, exr, w->last.settings.exposure, &size, &err)
                              : (iir_fail(&err, IIR_ERR_INVALID, "no frame yet"), NULL);
+    pthread_mutex_lock(&s->lock);
+    iird_proto_error pe = {.seq = seq};
+    bool fits = buf && iird_budget_reserve(s->env->budget, &s->snapshot_held,
+                                           IIRD_FRAME_HEADER_BYTES + size, &pe);
+    if (!fits) s->snapshot_busy = false;
+    pthread_mutex_unlock(&s->lock);
     if (!buf) {
         worker_error(s, IIRD_E_INTERNAL, seq, "snapshot", &err);
         pthread_mutex_lock(&s->lock);
+        return;
+    }
+    if (!fits) {
+        free(buf);
+        iird_proto_fail(&pe, IIRD_E_BUSY, "snapshot", "snapshot: %s", pe.message);
+        iird_queue_error(s, &pe);
+        pthread_mutex_lock(&s->lock);
+        notify_locked(s);
         return;
     }
     iird_frame_header h = {.kind = 2,
@@ -521,7 +536,8 @@ static void snapshot_locked(iird_session *s)
                                     w->img->width, w->img->height);
     pthread_mutex_lock(&s->lock);
     iird_queue_text_locked(s, json, false);
-    iird_queue_locked(s, (out_msg){buf, IIRD_FRAME_HEADER_BYTES + size, true, false});
+    s->queue[(s->q_head + s->q_count - 1) % IIRD_QUEUE_CAP].snapshot = true; /* the reply's text */
+    iird_queue_locked(s, (out_msg){buf, IIRD_FRAME_HEADER_BYTES + size, true, false, true});
     notify_locked(s);
     free(json);
 }

@@ -84,5 +84,31 @@ class BudgetTest(DaemonTest):
             d.close()
 
 
+class SnapshotTest(DaemonTest):
+    """Finding 7: every snapshot request gets its snapshot or an error; at most one is pending per
+    session (requests close together are no longer merged into one answer)."""
+
+    async def test_one_pending_snapshot(self):
+        c = await Client.connect(self.daemon)
+        try:
+            await c.wait_frame()
+            at = c.mark()
+            first, second = c.next_seq(), c.next_seq()
+            await c.send({"type": "snapshot", "format": "exr", "seq": first})
+            await c.send({"type": "snapshot", "format": "png", "seq": second})
+            e = await c.wait_text("error", since=at, seq=second)
+            self.assertEqual(e.get("code"), "busy", e)
+            self.assertEqual(e.get("field"), "snapshot", e)
+            s = await c.wait_text("snapshot", since=at, seq=first)
+            self.assertEqual(s.get("format"), "exr")
+            b = await c.wait_frame(since=c.log.index(s, at) + 1, kind=2)
+            self.assertEqual(b.seq, first)
+            self.assertEqual(len(c.frames(since=at, kind=2)), 1, "exactly one snapshot for two requests")
+            seq, s = await c.request({"type": "snapshot", "format": "png"}, "snapshot")
+            self.assertEqual(s.get("format"), "png", "once it arrived, the next is made")
+        finally:
+            await c.close()
+
+
 if __name__ == "__main__":
     iirserve.main()
