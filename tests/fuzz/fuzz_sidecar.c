@@ -1,4 +1,4 @@
-/* fuzz_sidecar.c -- libFuzzer target for the JSON scene sidecar (core/src/scene_sidecar.c): the
+/* fuzz_sidecar.c -- libFuzzer target for the JSON scene sidecar (core/src/scene/scene_sidecar.c): the
  * bytes are a NAME.scene.json; iir_sidecar_parse_text must refuse it with a message or parse it,
  * and a parsed sidecar is applied to a small mesh with the Cornell box's material names and the
  * scene finished, as iir_scene_load would. The sidecar "sits" in a scratch directory holding
@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "fuzz.h"
-#include "scene_build.h"
+#include "scene/scene_build.h"
 
 static const char *const MATERIALS[] = {"leftWall", "rightWall", "floor", "ceiling", "backWall",
                                         "shortBox", "tallBox",   "light", NULL};
