@@ -1,6 +1,7 @@
-/* fuzz_pfm.c -- libFuzzer target for the PFM reader (core/src/image/image_pfm.c): the bytes are a file;
- * the reader must refuse it with a message or return an image of the header's size. Dimensions
- * are capped by IIR_IMAGE_MAX_DIM, so a header may ask for a large (but bounded) allocation. */
+/* fuzz_pfm.c -- libFuzzer target for the PFM reader (core/src/image/image_pfm.c): the bytes are a
+ * file; the reader must refuse it with a message or return an image of the header's size.
+ * Dimensions are capped by IIR_IMAGE_MAX_DIM, so a header may ask for a large (but bounded)
+ * allocation. */
 #include "fuzz.h"
 #include "iir/image.h"
 #include "image/image_internal.h"

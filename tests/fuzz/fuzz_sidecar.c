@@ -1,6 +1,6 @@
-/* fuzz_sidecar.c -- libFuzzer target for the JSON scene sidecar (core/src/scene/scene_sidecar.c): the
- * bytes are a NAME.scene.json; iir_sidecar_parse_text must refuse it with a message or parse it,
- * and a parsed sidecar is applied to a small mesh with the Cornell box's material names and the
+/* fuzz_sidecar.c -- libFuzzer target for the JSON scene sidecar (core/src/scene/scene_sidecar.c):
+ * the bytes are a NAME.scene.json; iir_sidecar_parse_text must refuse it with a message or parse
+ * it, and a parsed sidecar is applied to a small mesh with the Cornell box's material names and the
  * scene finished, as iir_scene_load would. The sidecar "sits" in a scratch directory holding
  * m.obj, so that a "file" field can name an existing mesh. */
 #include <string.h>
