@@ -226,7 +226,9 @@ char *iird_json_snapshot(int64_t seq, const char *format, uint32_t frame, uint32
 
 /* ---- recording: light states over time, written as an animation script ---- */
 typedef struct iird_recording iird_recording;
-iird_recording *iird_recording_create(int fps);
+/* scene: the scene it is recorded on, named in the script (NULL: none). */
+iird_recording *iird_recording_create(int fps, const char *scene);
+int iird_recording_fps(const iird_recording *r);
 void iird_recording_destroy(iird_recording *r);
 /* false (too_large) past 100000 keyframes or 36000 s; t in seconds since start, increasing
  * (rounded to microseconds; a t at or before the last key's replaces that key's light). The

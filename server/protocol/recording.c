@@ -4,6 +4,7 @@
 #include "protocol_internal.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 enum { MAX_KEYFRAMES = 100000 };
@@ -17,15 +18,22 @@ typedef struct rec_key {
 
 struct iird_recording {
     int fps;
+    char scene[129]; /* the scene it was recorded on */
     uint32_t count, cap;
     rec_key *keys;
 };
 
-iird_recording *iird_recording_create(int fps)
+iird_recording *iird_recording_create(int fps, const char *scene)
 {
     iird_recording *r = calloc(1, sizeof *r);
     if (r) r->fps = fps < 1 ? 1 : fps > 240 ? 240 : fps;
+    if (r) snprintf(r->scene, sizeof r->scene, "%s", scene ? scene : "");
     return r;
+}
+
+int iird_recording_fps(const iird_recording *r)
+{
+    return r->fps;
 }
 
 void iird_recording_destroy(iird_recording *r)
@@ -100,8 +108,8 @@ static cJSON *key_json(const rec_key *k)
 static cJSON *script_json(const iird_recording *r)
 {
     cJSON *o = cJSON_CreateObject(), *light = NULL, *keys = NULL;
-    bool ok =
-        o && iird_json_add_num(o, "fps", r->fps) && iird_json_add_num(o, "duration", duration(r));
+    bool ok = o && (!r->scene[0] || cJSON_AddStringToObject(o, "scene", r->scene)) &&
+              iird_json_add_num(o, "fps", r->fps) && iird_json_add_num(o, "duration", duration(r));
     if (ok && r->count)
         ok = (light = cJSON_AddObjectToObject(o, "light")) &&
              cJSON_AddStringToObject(light, "interpolation", "linear") &&

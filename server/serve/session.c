@@ -190,6 +190,15 @@ void iird_queue_error(iird_session *s, const iird_proto_error *e)
     free(json);
 }
 
+iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_proto_error *err)
+{
+    iird_recording *r = iird_recording_create(fps, s->scene->name);
+    if (!r) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory"), NULL;
+    s->rec_start_ms = iir_now_ms();
+    if (!iird_recording_add(r, 0.0, &s->light, err)) iird_recording_destroy(r), r = NULL;
+    return r;
+}
+
 iird_state_view iird_state_view_locked(const iird_session *s)
 {
     iird_state_view v = {s->scene->name, &s->light, &s->camera, &s->settings};

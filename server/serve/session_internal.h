@@ -160,6 +160,9 @@ void iird_queue_locked(iird_session *s, out_msg msg);
 void iird_queue_error(iird_session *s, const iird_proto_error *e);
 /* The session's state as the protocol's JSON builders read it (lock held). */
 iird_state_view iird_state_view_locked(const iird_session *s);
+/* A new recording of the session's scene whose first key (t = 0) is the current light; NULL with
+ * err filled on out-of-memory. Lock held. */
+iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_proto_error *err);
 
 /* ---- session_msg.c ---- */
 void iird_session_handle(iird_session *s, const char *text, size_t len);

@@ -245,32 +245,29 @@ static bool on_snapshot(iird_session *s, const iird_msg *m, iird_proto_error *er
     return true;
 }
 
+/* The recording (s->rec, guarded by the lock: a scene switch on the worker ends it too). */
 static bool on_record(iird_session *s, const iird_msg *m, iird_proto_error *err)
 {
     char *json = NULL;
+    bool ok = true;
+    pthread_mutex_lock(&s->lock);
     if (m->u.record.start) {
         iird_recording_destroy(s->rec);
-        s->rec = iird_recording_create(m->u.record.fps);
-        if (!s->rec) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
-        s->rec_start_ms = iir_now_ms();
-        pthread_mutex_lock(&s->lock);
-        iir_light light = s->light;
-        pthread_mutex_unlock(&s->lock);
-        if (!iird_recording_add(s->rec, 0.0, &light, err)) return false;
-        json = iird_json_record_start(m->seq);
+        s->rec = iird_session_record_start_locked(s, m->u.record.fps, err);
+        ok = s->rec != NULL;
+        if (ok) json = iird_json_record_start(m->seq);
+    } else if (!s->rec) {
+        ok = iird_proto_fail(err, IIRD_E_BAD_FIELD, "record.action",
+                             "stop without a recording: send action start first");
     } else {
-        if (!s->rec)
-            return iird_proto_fail(err, IIRD_E_BAD_FIELD, "record.action",
-                                   "stop without a recording: send action start first");
         json = iird_json_record_stop(s->rec, m->seq);
         iird_recording_destroy(s->rec);
         s->rec = NULL;
     }
-    pthread_mutex_lock(&s->lock);
-    iird_queue_text_locked(s, json, false);
+    if (ok) iird_queue_text_locked(s, json, false);
     pthread_mutex_unlock(&s->lock);
     free(json);
-    return true;
+    return ok;
 }
 
 static bool dispatch(iird_session *s, const iird_msg *m, iird_proto_error *err)

@@ -542,6 +542,21 @@ static void snapshot_locked(iird_session *s)
     free(json);
 }
 
+/* A scene switch while recording: the recording so far goes to the client as a `record` reply
+ * (its script names the old scene) and a new one starts on the new scene, its first key the reset
+ * light, so no script mixes scenes and no reset is lost. Lock held, after the swap. */
+static void record_scene_switch_locked(iird_session *s)
+{
+    if (!s->rec) return;
+    iird_proto_error pe = {.seq = IIRD_NO_SEQ};
+    char *json = iird_json_record_stop(s->rec, IIRD_NO_SEQ);
+    int fps = iird_recording_fps(s->rec);
+    iird_queue_text_locked(s, json, false);
+    free(json);
+    iird_recording_destroy(s->rec);
+    s->rec = iird_session_record_start_locked(s, fps, &pe);
+}
+
 /* Loads the requested scene (seconds for a large one, without the lock), then swaps it in and
  * resets the light and camera to the scene's own. */
 static void load_scene_locked(iird_session *s)
@@ -583,6 +598,7 @@ static void load_scene_locked(iird_session *s)
     s->scene = e;
     s->light = light;
     s->light_index = index;
+    record_scene_switch_locked(s);
     s->camera = e->scene->camera;
     s->version++;
     if (seq != IIRD_NO_SEQ) s->seq = seq;

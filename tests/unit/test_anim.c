@@ -57,6 +57,24 @@ static iir_anim *parse_keys3(const char *interp)
 }
 
 /* At every key time each field equals the key's value, for both interpolations. */
+/* A script may name the scene it was made for (recordings do); only as a string. */
+static void test_scene_name(void **state)
+{
+    (void)state;
+    iir_anim *a = parse_ok("{\"duration\": 1, \"scene\": \"cornell_box\"}");
+    assert_string_equal(iir_anim_scene(a), "cornell_box");
+    iir_anim_destroy(a);
+    a = parse_ok("{\"duration\": 1}");
+    assert_string_equal(iir_anim_scene(a), "");
+    iir_anim_destroy(a);
+    iir_error err = {0};
+    a = NULL;
+    assert_int_equal(iir_anim_parse("{\"duration\": 1, \"scene\": 3}", "t", &a, &err),
+                     IIR_ERR_FORMAT);
+    assert_non_null(strstr(err.msg, "scene"));
+    assert_null(a);
+}
+
 static void test_keys_hit_exactly(void **state)
 {
     (void)state;
@@ -482,11 +500,12 @@ static void test_paths_mean_their_names(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_keys_hit_exactly), cmocka_unit_test(test_linear_midpoints),
-        cmocka_unit_test(test_catmull_rom_c1),   cmocka_unit_test(test_held_fields),
-        cmocka_unit_test(test_step_keys),        cmocka_unit_test(test_orbit_and_sweep),
-        cmocka_unit_test(test_aim_and_camera),   cmocka_unit_test(test_frames),
-        cmocka_unit_test(test_bad_scripts),      cmocka_unit_test(test_shipped_paths),
+        cmocka_unit_test(test_scene_name),       cmocka_unit_test(test_keys_hit_exactly),
+        cmocka_unit_test(test_linear_midpoints), cmocka_unit_test(test_catmull_rom_c1),
+        cmocka_unit_test(test_held_fields),      cmocka_unit_test(test_step_keys),
+        cmocka_unit_test(test_orbit_and_sweep),  cmocka_unit_test(test_aim_and_camera),
+        cmocka_unit_test(test_frames),           cmocka_unit_test(test_bad_scripts),
+        cmocka_unit_test(test_shipped_paths),
     };
     const struct CMUnitTest scene_tests[] = {cmocka_unit_test(test_paths_mean_their_names)};
     int failed = cmocka_run_group_tests(tests, NULL, NULL);

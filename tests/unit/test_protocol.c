@@ -697,7 +697,7 @@ static void test_params_apply(void **state)
 static void test_recording_round_trip(void **state)
 {
     (void)state;
-    iird_recording *r = iird_recording_create(24);
+    iird_recording *r = iird_recording_create(24, "builtin");
     assert_non_null(r);
     iird_proto_error e;
     enum { N = 7 };
@@ -752,7 +752,7 @@ static void test_recording_round_trip(void **state)
     iird_recording_destroy(r);
 
     /* one key at t = 0: the script lasts one frame; no key: no light track */
-    r = iird_recording_create(30);
+    r = iird_recording_create(30, NULL);
     iir_light L = spot();
     assert_true(iird_recording_add(r, 0.0, &L, &e));
     script = iird_recording_script(r);
@@ -762,7 +762,7 @@ static void test_recording_round_trip(void **state)
     iir_anim_destroy(a);
     free(script);
     iird_recording_destroy(r);
-    r = iird_recording_create(30);
+    r = iird_recording_create(30, NULL);
     script = iird_recording_script(r);
     assert_int_equal(iir_anim_parse(script, "empty", &a, &ie), IIR_OK);
     assert_false(iir_anim_has_light(a));

@@ -39,6 +39,8 @@ void iir_anim_destroy(iir_anim *a);
 /* Script length in seconds, and frames per second, as given. */
 double iir_anim_duration(const iir_anim *a);
 double iir_anim_fps(const iir_anim *a);
+/* The scene the script names ("scene": recordings name the scene they were made on), "" if none. */
+const char *iir_anim_scene(const iir_anim *a);
 
 /* Number of frames: floor(duration * fps) + 1 (frame 0 is t = 0; the last frame is at or just
  * before t = duration). Always >= 1. */

@@ -53,6 +53,7 @@ typedef struct iir_anim_track {
 } iir_anim_track;
 
 struct iir_anim {
+    char scene[129]; /* the scene the script was made for ("" when it names none) */
     double fps, duration;
     iir_anim_track light, camera;
 };

@@ -359,7 +359,8 @@ static iir_status parse_track(iir_anim_ctx *c, const cJSON *obj, const char *nam
 
 /* ======================== the script ======================== */
 
-static const char *const TOP_FIELDS[] = {"fps", "duration", "light", "camera", "description", NULL};
+static const char *const TOP_FIELDS[] = {"fps",         "duration", "light", "camera",
+                                         "description", "scene",    NULL};
 
 static iir_status parse_root(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
 {
@@ -368,6 +369,11 @@ static iir_status parse_root(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
     const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
     if (st == IIR_OK && desc && !cJSON_IsString(desc))
         return anim_fail(c, IIR_ERR_FORMAT, "description", "must be a string");
+    const cJSON *scene = cJSON_GetObjectItemCaseSensitive(root, "scene");
+    if (st == IIR_OK && scene &&
+        (!cJSON_IsString(scene) || strlen(scene->valuestring) >= sizeof a->scene))
+        return anim_fail(c, IIR_ERR_FORMAT, "scene", "must be a scene name of at most 128 bytes");
+    if (scene) snprintf(a->scene, sizeof a->scene, "%s", scene->valuestring);
     a->fps = 30.0;
     if (st == IIR_OK) st = get_ranged(c, root, "", "fps", 1.0, false, 1000.0, &a->fps, &has);
     if (st == IIR_OK)
@@ -441,6 +447,11 @@ double iir_anim_duration(const iir_anim *a)
 double iir_anim_fps(const iir_anim *a)
 {
     return a->fps;
+}
+
+const char *iir_anim_scene(const iir_anim *a)
+{
+    return a->scene;
 }
 
 int iir_anim_frame_count(const iir_anim *a)
