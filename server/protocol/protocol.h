@@ -238,6 +238,9 @@ bool iird_recording_add(iird_recording *r, double t, const iir_light *light, iir
  * at every recorded time; wrapped in the `record` reply. */
 char *iird_json_record_stop(const iird_recording *r, int64_t seq);
 char *iird_json_record_start(int64_t seq);
+/* The `record` reply with the script so far; continues: the recording goes on (a scene switch:
+ * "recording": true, the client keeps its recording state). iird_json_record_stop = not. */
+char *iird_json_record_part(const iird_recording *r, int64_t seq, bool continues);
 /* The script alone (malloc'd JSON text, NULL on out-of-memory), e.g. to save it to a file. */
 char *iird_recording_script(const iird_recording *r);
 

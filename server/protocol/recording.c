@@ -131,9 +131,15 @@ char *iird_recording_script(const iird_recording *r)
 
 char *iird_json_record_stop(const iird_recording *r, int64_t seq)
 {
+    return iird_json_record_part(r, seq, false);
+}
+
+char *iird_json_record_part(const iird_recording *r, int64_t seq, bool continues)
+{
     cJSON *o = cJSON_CreateObject(), *script = script_json(r);
     bool ok = o && script && cJSON_AddStringToObject(o, "type", "record") &&
               (seq < 0 || iird_json_add_num(o, "seq", (double)seq)) &&
+              (!continues || cJSON_AddBoolToObject(o, "recording", true)) &&
               iird_json_add_num(o, "keyframes", r->count) &&
               iird_json_add_num(o, "duration", duration(r)) &&
               cJSON_AddItemToObject(o, "script", script);

@@ -549,7 +549,7 @@ static void record_scene_switch_locked(iird_session *s)
 {
     if (!s->rec) return;
     iird_proto_error pe = {.seq = IIRD_NO_SEQ};
-    char *json = iird_json_record_stop(s->rec, IIRD_NO_SEQ);
+    char *json = iird_json_record_part(s->rec, IIRD_NO_SEQ, true);
     int fps = iird_recording_fps(s->rec);
     iird_queue_text_locked(s, json, false);
     free(json);

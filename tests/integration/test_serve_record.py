@@ -20,6 +20,7 @@ class RecordSceneTest(DaemonTest):
             first = await c.wait_for(lambda m: isinstance(m, dict) and m.get("type") == "record" and "script" in m,
                                      since=at, what="the recording up to the switch")
             self.assertEqual(first["script"].get("scene"), "builtin", first)
+            self.assertIs(first.get("recording"), True, "the recording goes on")
             self.assertGreaterEqual(first.get("keyframes", 0), 2, first)
             seq, r = await c.request({"type": "record", "action": "stop"}, "record")
             script = r["script"]

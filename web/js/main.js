@@ -250,14 +250,12 @@ function onState(msg) {
     domainView.update(app.lastDomain, s.params.method);
 }
 
+// A `record` reply: start (recording), stop (the script), or a scene switch while recording (the
+// script of the old scene, and recording goes on).
 function onRecord(msg) {
-    if (msg.recording) {
-        panel.setRecording(true);
-        return;
-    }
-    panel.setRecording(false);
+    panel.setRecording(!!msg.recording);
     if (msg.script) {
-        const name = `light-path-${app.state.scene}.json`;
+        const name = `light-path-${msg.script.scene || app.state.scene}.json`;
         download(new Blob([JSON.stringify(msg.script, null, 2) + '\n'], { type: 'application/json' }), name);
         panel.setRecordInfo(`${msg.keyframes} keyframes, ${Number(msg.duration).toFixed(1)} s → ${name}`);
     }
