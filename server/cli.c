@@ -118,26 +118,27 @@ static const struct option *build_longopts(const iird_command *cmd)
     return opts;
 }
 
-iir_status iird_parse_param(const char *name, const char *text, iir_params *p, iir_error *err)
+const iir_param *iird_param_by_option(const char *name)
 {
-    char key[40], opt[48];
+    char key[40];
     snprintf(key, sizeof key, "%s", name);
     for (char *c = key; *c; c++)
         if (*c == '-') *c = '_';
-    const iir_param *row = iir_method_any_param(key);
+    return iir_method_any_param(key);
+}
+
+iir_status iird_parse_param(const char *name, const char *text, iir_params *p, iir_error *err)
+{
+    const iir_param *row = iird_param_by_option(name);
     if (!row) return iir_fail(err, IIR_ERR_INVALID, "--%s is not a parameter of any method", name);
     double v = 0.0;
-    const iir_param *bad = row;
     iir_status st = iir_param_parse(row, text, &v, err);
-    if (st == IIR_OK) {
-        iir_params one = iir_params_default();
-        st = iir_params_set(&one, row, v, err);
-        if (st == IIR_OK) st = iir_method_params_check(&one, false, &bad, err);
+    if (st == IIR_OK) st = iir_method_param_set(p, row->name, v, err);
+    if (st != IIR_OK) { /* every message starts with the parameter's name: spell it as an option */
+        char opt[48] = "--";
+        iir_param_option_name(row, opt + 2, sizeof opt - 2);
+        iir_param_reword(err, row, opt);
     }
-    if (st == IIR_OK) st = iir_params_set(p, row, v, err);
-    iir_param_option_name(row, key, sizeof key);
-    snprintf(opt, sizeof opt, "--%s", key);
-    if (st != IIR_OK) iir_param_reword(err, bad ? bad : row, opt);
     return st;
 }
 

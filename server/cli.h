@@ -64,6 +64,9 @@ iir_status iird_check_params_for(const char *methods, const iir_params *p, iir_e
 iir_status iird_check_memory(const char *method, const iir_params *p, int width, int height,
                              iir_error *err);
 
+/* The parameter an option names, spelled either way ("sm-res" or "sm_res"); NULL for none. */
+const iir_param *iird_param_by_option(const char *name);
+
 /* Parses a parameter value as on the command line (NAME without "--", '-' or '_') into p;
  * IIR_ERR_INVALID naming --NAME. For --sweep values. */
 iir_status iird_parse_param(const char *name, const char *text, iir_params *p, iir_error *err);

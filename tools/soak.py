@@ -47,13 +47,13 @@ import statistics
 import subprocess
 import sys
 import time
-import http.client
 import inspect
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tests", "integration"))
 
 import iirserve  # noqa: E402  (the integration tests' daemon harness)
+from iirserve import pct  # noqa: E402
 
 HEADER_SIZE = 40
 NO_SEQ = 0xFFFFFFFF
@@ -99,15 +99,6 @@ CYCLES_NOISE_MIB = 4
 ASAN_QUARANTINE_MB = 16
 
 
-def pct(xs, p):
-    xs = sorted(xs)
-    if not xs:
-        return float("nan")
-    k = (len(xs) - 1) * p / 100.0
-    lo, hi = math.floor(k), math.ceil(k)
-    return xs[lo] + (xs[hi] - xs[lo]) * (k - lo)
-
-
 def is_sanitized(path):
     """True when the binary carries AddressSanitizer (its runtime's strings are in the file)."""
     with open(path, "rb") as f:
@@ -126,12 +117,7 @@ def help_has(iird, option):
 
 def proc_snapshot(pid):
     """RSS (bytes), threads and open fds of a process."""
-    rss = 0
-    with open(f"/proc/{pid}/status") as f:
-        for line in f:
-            if line.startswith("VmRSS:"):
-                rss = int(line.split()[1]) * 1024
-    return {"rss": rss, "threads": len(os.listdir(f"/proc/{pid}/task")), "fds": len(os.listdir(f"/proc/{pid}/fd"))}
+    return {"rss": iirserve.rss_bytes(pid), "threads": len(os.listdir(f"/proc/{pid}/task")), "fds": len(os.listdir(f"/proc/{pid}/fd"))}
 
 
 def malloc_trim(pid):
@@ -157,16 +143,6 @@ def traced_trim(r, pid):
     return v
 
 
-def http_get(port, path, timeout=10.0):
-    c = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
-    try:
-        c.request("GET", path)
-        r = c.getresponse()
-        return r.status, r.read()
-    finally:
-        c.close()
-
-
 def sampler_main(port, pid, rss_every, out_path):
     """The sampler process: /healthz every second, /proc every rss_every seconds, JSON lines to
     out_path (flushed each line) until SIGTERM."""
@@ -183,7 +159,7 @@ def sampler_main(port, pid, rss_every, out_path):
             t = time.monotonic()
             rec = {"t": t}
             try:
-                status, body = http_get(port, "/healthz", timeout=10.0)
+                status, _, body = iirserve.http_get(port, "/healthz", timeout=10.0)
                 rec["healthz_ms"] = (time.monotonic() - t) * 1000.0
                 rec["status"] = status
                 rec["sessions"] = json.loads(body).get("sessions") if status == 200 else None

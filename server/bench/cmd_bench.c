@@ -121,9 +121,7 @@ static iir_status parse_sweep(iird_bench_opts *o, const char *arg, iir_error *er
     memset(s, 0, sizeof *s);
     char key[sizeof s->name];
     snprintf(key, sizeof key, "%.*s", (int)len, arg);
-    for (char *c = key; *c; c++)
-        if (*c == '-') *c = '_';
-    if (!(s->row = iir_method_any_param(key)))
+    if (!(s->row = iird_param_by_option(key)))
         return iir_fail(err, IIR_ERR_INVALID,
                         "--sweep %.*s: not a parameter of any method (iird bench --help lists "
                         "them)",

@@ -83,6 +83,10 @@ bool iird_get_enum(const iird_pctx *c, const cJSON *v, const char *name, const c
  * names), naming "params.<name>" in errors. */
 bool iird_get_param(const iird_pctx *c, const cJSON *v, const iir_param *row, double *out);
 
+/* A parameter's value as JSON: enum names, booleans, numbers (every digit of a large u64). NULL
+ * only on out-of-memory. */
+cJSON *iird_json_param_value(const iir_param *row, double v);
+
 /* The row of a params field: the stream table's, else any method's; NULL for an unknown name. */
 const iir_param *iird_params_row(const char *name);
 

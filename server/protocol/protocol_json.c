@@ -156,10 +156,7 @@ static cJSON *params_json(const iird_settings *s)
     bool ok = o && cJSON_AddItemToObject(o, "method", cJSON_CreateString(s->method));
     for (int i = 0; ok && i < iird_stream_table.count; i++) {
         const iir_param *row = &iird_stream_table.rows[i];
-        double v = iir_param_read(row, s);
-        ok = row->type == IIR_PARAM_BOOL    ? add_bool(o, row->name, v != 0.0)
-             : row->type == IIR_PARAM_FLOAT ? iird_json_add_float(o, row->name, (float)v)
-                                            : iird_json_add_num(o, row->name, v);
+        ok = add_item(o, row->name, iird_json_param_value(row, iir_param_read(row, s)));
     }
     return keep_if(o, ok);
 }

@@ -120,8 +120,7 @@ static bool add(cJSON *o, const char *name, cJSON *item)
     return false;
 }
 
-/* A value as JSON: enum names, booleans, numbers. */
-static cJSON *value_json(const iir_param *row, double v)
+cJSON *iird_json_param_value(const iir_param *row, double v)
 {
     if (row->type == IIR_PARAM_BOOL) return cJSON_CreateBool(v != 0.0);
     if (row->type == IIR_PARAM_ENUM) {
@@ -142,8 +141,8 @@ static cJSON *row_json(const iir_param *row)
     cJSON *o = cJSON_CreateObject(), *choices = NULL;
     bool ok = o && add(o, "name", cJSON_CreateString(row->name)) &&
               add(o, "type", cJSON_CreateString(iir_param_type_name(row->type))) &&
-              add(o, "default", value_json(row, row->def)) &&
-              add(o, "live_default", value_json(row, iir_param_default(row, true)));
+              add(o, "default", iird_json_param_value(row, row->def)) &&
+              add(o, "live_default", iird_json_param_value(row, iir_param_default(row, true)));
     if (ok && row->type != IIR_PARAM_BOOL && row->type != IIR_PARAM_ENUM)
         ok = iird_json_add_num(o, "min", row->lo) && iird_json_add_num(o, "max", row->hi) &&
              iird_json_add_num(o, "live_max", iir_param_max(row, true));
@@ -180,7 +179,7 @@ cJSON *iird_json_method_params(const char *method, const iir_params *p)
     for (int t = 0; o && tables && tables[t]; t++)
         for (int i = 0; i < tables[t]->count; i++) {
             const iir_param *row = &tables[t]->rows[i];
-            if (!add(o, row->name, value_json(row, iir_method_param_value(row, p)))) {
+            if (!add(o, row->name, iird_json_param_value(row, iir_method_param_value(row, p)))) {
                 cJSON_Delete(o);
                 return NULL;
             }

@@ -149,6 +149,28 @@ class Daemon:
         self.tmp.cleanup()
 
 
+# ------------------------------------------------------------- figures ----
+
+
+def pct(xs, p):
+    """The p-th percentile of xs, linearly interpolated; NaN for no values."""
+    xs = sorted(xs)
+    if not xs:
+        return float("nan")
+    k = (len(xs) - 1) * p / 100.0
+    lo, hi = math.floor(k), math.ceil(k)
+    return xs[lo] + (xs[hi] - xs[lo]) * (k - lo)
+
+
+def rss_bytes(pid):
+    """Resident memory of process pid (VmRSS)."""
+    with open(f"/proc/{pid}/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    raise AssertionError(f"no VmRSS in /proc/{pid}/status")
+
+
 # ------------------------------------------------------------------ HTTP ----
 
 

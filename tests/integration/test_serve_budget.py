@@ -8,19 +8,11 @@ against the daemon's measured RSS. Usage: test_serve_budget.py IIRD SOURCE_DIR""
 import asyncio
 
 import iirserve
-from iirserve import Client, Daemon, DaemonTest, FAST_ARGS, metric, metrics
+from iirserve import Client, Daemon, DaemonTest, FAST_ARGS, metrics, rss_bytes
 
 ATTACK = {"type": "params", "vpls": 4096, "sm_res": 2048}
 # 1024 VPLs with 256^2 shadow maps: 256 MiB of maps, far above everything else the session holds.
 BIG = {"type": "params", "method": "iir", "vpls": 1024, "kmax": 8, "sm_res": 256}
-
-
-def rss_bytes(pid):
-    with open(f"/proc/{pid}/status") as f:
-        for line in f:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) * 1024
-    raise AssertionError("no VmRSS")
 
 
 def session_bytes(port):
