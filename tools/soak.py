@@ -559,7 +559,7 @@ def mib(x):
 
 
 async def soak(iird, clients=32, seconds=60.0, cycles_k=1000, warmup=None, rss_every=5.0, lanes=4, rate=30.0,
-               domain_every=4, profile=None, trim=None, log=print):
+               domain_every=4, profile=None, trim=None, daemon_args=(), log=print):
     """Runs the whole soak; returns the result dict (figures and a `criteria` list)."""
     iird = os.path.abspath(iird)
     iirserve.IIRD = iird
@@ -574,6 +574,7 @@ async def soak(iird, clients=32, seconds=60.0, cycles_k=1000, warmup=None, rss_e
     args = ["--max-sessions", str(clients), "--size", "128x96"]
     if per_addr:
         args += ["--max-sessions-per-address", str(clients)]
+    args += list(daemon_args)
     r = {"iird": iird, "sanitized": sanitized, "thresholds": th, "clients": clients, "seconds": seconds,
          "cycles": cycles_k, "warmup_s": warmup, "rate_hz": rate, "domain_every": domain_every,
          "per_address_option": per_addr, "malloc_trim": trim, "cpus": os.cpu_count(), "loadavg_before": os.getloadavg()}
@@ -864,6 +865,9 @@ def main():
     ap.add_argument("--malloc-trim", choices=("auto", "on", "off"), default="auto",
                     help="call malloc_trim(0) in the daemon through gdb after each phase, to tell a leak from "
                          "memory glibc keeps (auto: when gdb is installed and the build has no sanitizer)")
+    ap.add_argument("--daemon-arg", action="append", default=[], metavar="ARG",
+                    help="one more argument for `iird serve`, repeatable (e.g. --daemon-arg=--render-slots "
+                         "--daemon-arg=2)")
     ap.add_argument("--out", default=None)
     a = ap.parse_args()
     import logging
@@ -871,7 +875,8 @@ def main():
     logging.getLogger("asyncio").setLevel(logging.ERROR)
     r = asyncio.run(soak(a.iird, a.clients, a.seconds, a.cycles, a.warmup, a.rss_every, a.lanes,
                          domain_every=a.domain_every, profile=a.profile,
-                         trim={"auto": None, "on": True, "off": False}[a.malloc_trim]))
+                         trim={"auto": None, "on": True, "off": False}[a.malloc_trim],
+                         daemon_args=a.daemon_arg))
     print(report(r))
     if a.out:
         os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)

@@ -47,6 +47,8 @@ static void serve_usage(FILE *f)
         "  --idle-timeout S     close a session after S seconds without a client message\n"
         "                       (default 1800; 0 = never)\n"
         "  --max-size WxH       largest frame a client may ask for (default 1920x1080)\n"
+        "  --render-slots N     sessions that render at once; the others wait their turn,\n"
+        "                       the cores shared fairly (default 2; 1 on a 1-core machine)\n"
         "  --max-memory SIZE    memory all sessions together may take, by their estimates\n"
         "                       (e.g. 8G; default half of the physical memory)\n"
         "  --max-session-memory SIZE  memory one session may take (default 2G, at most\n"
@@ -87,6 +89,7 @@ enum {
     OPT_IDLE_TIMEOUT,
     OPT_MAX_MEMORY,
     OPT_MAX_SESSION_MEMORY,
+    OPT_RENDER_SLOTS,
 };
 
 static iir_status parse_host(const char *arg, const char **out, iir_error *err)
@@ -129,6 +132,8 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
     case OPT_MAX_SESSIONS_PER_ADDRESS:
         return parse_int_opt(arg, "--max-sessions-per-address", 1, 1024,
                              &cfg->max_sessions_per_address, err);
+    case OPT_RENDER_SLOTS:
+        return parse_int_opt(arg, "--render-slots", 1, 64, &cfg->render_slots, err);
     case OPT_IDLE_TIMEOUT:
         return parse_int_opt(arg, "--idle-timeout", 0, 7 * 86400, &cfg->idle_timeout_s, err);
     case OPT_MAX_SIZE:
@@ -300,6 +305,7 @@ int iird_cmd_serve(int argc, char **argv)
         {"verbose", no_argument, 0, OPT_VERBOSE},
         {"max-memory", required_argument, 0, OPT_MAX_MEMORY},
         {"max-session-memory", required_argument, 0, OPT_MAX_SESSION_MEMORY},
+        {"render-slots", required_argument, 0, OPT_RENDER_SLOTS},
         {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     static const iird_command cmd = {"serve", longopts, serve_usage, parse_option, NULL};

@@ -56,6 +56,27 @@ static void section_sessions(FILE *f, const iird_metrics *m, const iird_metrics_
     for (size_t i = 0; i < n; i++)
         fprintf(f, "iird_session_memory_bytes{session=\"%u\"} %llu\n", sessions[i].session,
                 (unsigned long long)sessions[i].bytes);
+    metric_head(f, "iird_session_render_seconds_total", "counter",
+                "Render time each open session has used (its turns on the cores).");
+    for (size_t i = 0; i < n; i++)
+        fprintf(f, "iird_session_render_seconds_total{session=\"%u\"} %.6f\n", sessions[i].session,
+                sessions[i].render_s);
+}
+
+static void section_sched(FILE *f, const iird_sched_stats *st)
+{
+    metric_head(f, "iird_render_slots", "gauge", "Sessions that may render at once.");
+    fprintf(f, "iird_render_slots %d\n", st->slots);
+    metric_head(f, "iird_sessions_rendering", "gauge", "Sessions rendering now.");
+    fprintf(f, "iird_sessions_rendering %d\n", st->running);
+    metric_head(f, "iird_sessions_waiting", "gauge", "Sessions waiting for their turn to render.");
+    fprintf(f, "iird_sessions_waiting %d\n", st->waiting);
+    metric_head(f, "iird_render_handovers_total", "counter",
+                "Turns on the cores ended for another session (slice over or preempted).");
+    fprintf(f, "iird_render_handovers_total %llu\n", (unsigned long long)st->handovers);
+    metric_head(f, "iird_render_wait_seconds_total", "counter",
+                "Time sessions waited for their turn to render.");
+    fprintf(f, "iird_render_wait_seconds_total %.6f\n", st->wait_ms / 1e3);
 }
 
 static void section_frames(FILE *f, const iird_metrics *m)
@@ -103,13 +124,15 @@ static void section_process(FILE *f)
 }
 
 char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session *sessions,
-                              size_t num_sessions, size_t scenes_loaded)
+                              size_t num_sessions, const iird_sched_stats *sched,
+                              size_t scenes_loaded)
 {
     char *text = NULL;
     size_t size = 0;
     FILE *f = open_memstream(&text, &size);
     if (!f) return NULL;
     section_sessions(f, m, sessions, num_sessions);
+    section_sched(f, sched);
     section_frames(f, m);
     section_traffic(f, m);
     metric_head(f, "iird_scenes_loaded", "gauge", "Scenes in memory.");

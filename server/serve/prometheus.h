@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "protocol/protocol.h"
+#include "scheduler.h"
 
 /* Upper bounds of the frame-time histogram buckets in seconds, +Inf implied after the last. */
 #define IIRD_FRAME_BUCKETS 9
@@ -31,6 +32,7 @@ typedef struct iird_metrics {
 typedef struct iird_metrics_session {
     uint32_t session;
     uint64_t bytes;
+    double render_s; /* render time it has used (scheduler.h) */
 } iird_metrics_session;
 
 void iird_metrics_init(iird_metrics *m);
@@ -41,7 +43,8 @@ void iird_metrics_error(iird_metrics *m, iird_err code);
 
 /* The /metrics text: malloc'd, NUL-terminated; NULL only when out of memory. */
 char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session *sessions,
-                              size_t num_sessions, size_t scenes_loaded);
+                              size_t num_sessions, const iird_sched_stats *sched,
+                              size_t scenes_loaded);
 
 /* The /healthz JSON: {"status":"ok","sessions":N,"uptime_s":S}; malloc'd, NULL when out of
  * memory. */

@@ -35,9 +35,12 @@
 
 #include <libwebsockets.h>
 
+#include <omp.h>
+
 #include "iir/timer.h"
 #include "prometheus.h"
 #include "scene_cache.h"
+#include "scheduler.h"
 #include "session.h"
 
 /* Why a connection was refused a session (it gets one busy error, then close 1013). */
@@ -76,6 +79,7 @@ typedef struct server {
     iird_scene_cache *scenes;
     const iird_scene_entry *startup;
     iird_session_env env;
+    iird_sched *sched;
     conn *conns; /* every open WebSocket connection */
     closing *closing;
     int active; /* sessions whose worker has not returned: open ones and closing ones */
@@ -377,18 +381,23 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
 
 /* ======================== /healthz and /metrics ======================== */
 
+static iird_metrics_session session_metrics(iird_session *s)
+{
+    return (iird_metrics_session){iird_session_id(s), iird_session_memory(s),
+                                  iird_session_render_seconds(s)};
+}
+
 static char *metrics_text(server *srv)
 {
     iird_metrics_session mem[256];
     size_t n = 0;
     for (conn *c = srv->conns; c && n < sizeof mem / sizeof *mem; c = c->next)
-        if (c->session)
-            mem[n++] = (iird_metrics_session){iird_session_id(c->session),
-                                              iird_session_memory(c->session)};
+        if (c->session) mem[n++] = session_metrics(c->session);
     for (closing *z = srv->closing; z && n < sizeof mem / sizeof *mem; z = z->next)
-        mem[n++] =
-            (iird_metrics_session){iird_session_id(z->session), iird_session_memory(z->session)};
-    return iird_metrics_prometheus(&srv->metrics, mem, n, iird_scene_cache_loaded(srv->scenes));
+        mem[n++] = session_metrics(z->session);
+    iird_sched_stats sched = iird_sched_get_stats(srv->sched);
+    return iird_metrics_prometheus(&srv->metrics, mem, n, &sched,
+                                   iird_scene_cache_loaded(srv->scenes));
 }
 
 /* Builds the body and sends the headers; the body follows on HTTP_WRITEABLE. Only the exact
@@ -544,13 +553,18 @@ static int start(server *srv, iir_error *err)
     if (st != IIR_OK) return iir_status_exit_code(st);
     iird_scene_cache_pin(srv->scenes, srv->startup);
     iird_metrics_init(&srv->metrics);
+    int threads = omp_get_max_threads();
+    int slots = srv->cfg->render_slots ? srv->cfg->render_slots : threads > 1 ? 2 : 1;
+    srv->sched = iird_sched_create(slots, threads, IIRD_SCHED_SLICE_MS);
+    if (!srv->sched) return iir_fail(err, IIR_ERR_NOMEM, "out of memory"), 1;
     srv->env = (iird_session_env){.scenes = srv->scenes,
                                   .metrics = &srv->metrics,
                                   .limits = srv->cfg->limits,
                                   .defaults = srv->cfg->defaults,
                                   .startup = srv->startup,
                                   .token = srv->cfg->token,
-                                  .budget = srv->cfg->budget};
+                                  .budget = srv->cfg->budget,
+                                  .sched = srv->sched};
     return 0;
 }
 
@@ -664,6 +678,7 @@ static void finish(server *srv)
         iird_scene_cache_release(srv->scenes, srv->startup);
         iird_scene_cache_destroy(srv->scenes);
     }
+    iird_sched_destroy(srv->sched);
 }
 
 int iird_server_run(const iird_server_config *cfg)

@@ -24,8 +24,9 @@ typedef struct iird_server_config {
     const char *web_dir;    /* the web client's folder (must exist) */
     int max_sessions;
     int max_sessions_per_address; /* sessions one peer address may hold at once */
-    int idle_timeout_s;           /* close a session after this long without a client message;
-                                     0: never */
+    int render_slots;   /* sessions rendering at once (scheduler.h); 0: 2, or 1 on one core */
+    int idle_timeout_s; /* close a session after this long without a client message;
+                           0: never */
     iird_limits limits;
     const char *origins[IIRD_MAX_ORIGINS]; /* allowed Origin headers besides the server's own */
     int num_origins;

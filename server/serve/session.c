@@ -68,6 +68,8 @@ iird_session *iird_session_create(const iird_session_env *env, uint32_t id, iir_
     pthread_cond_init(&s->wake, &attr);
     pthread_condattr_destroy(&attr);
     init_state(s, env);
+    iird_sched_add(env->sched, &s->sched);
+    s->sched_added = true;
     s->w.enc = iir_jpeg_encoder_create();
     if (!s->w.enc) {
         iir_fail(err, IIR_ERR_NOMEM, "out of memory for a JPEG encoder");
@@ -90,6 +92,7 @@ void iird_session_request_stop(iird_session *s)
     s->stop = true;
     pthread_cond_broadcast(&s->wake);
     pthread_mutex_unlock(&s->lock);
+    if (s->sched_added) iird_sched_cancel(s->env->sched, &s->sched); /* its waits end */
 }
 
 bool iird_session_worker_done(iird_session *s)
@@ -117,6 +120,7 @@ void iird_session_destroy(iird_session *s)
         iird_session_request_stop(s);
         pthread_join(s->thread, NULL);
     }
+    if (s->sched_added) iird_sched_remove(s->env->sched, &s->sched);
     free_output(s);
     free(s->rx);
     iird_recording_destroy(s->rec);
@@ -137,6 +141,11 @@ uint32_t iird_session_id(const iird_session *s)
 bool iird_session_greeted(const iird_session *s)
 {
     return s->hello_ok;
+}
+
+double iird_session_render_seconds(iird_session *s)
+{
+    return s->sched_added ? iird_sched_used_ms(s->env->sched, &s->sched) / 1e3 : 0.0;
 }
 
 uint64_t iird_session_memory(iird_session *s)

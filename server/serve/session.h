@@ -39,6 +39,7 @@ typedef struct iird_session_env {
     const iird_scene_entry *startup; /* the scene a new session shows (pinned) */
     const char *token;               /* NULL: hello needs no token */
     struct iird_budget *budget;      /* memory reservations (budget.h); NULL: no limits */
+    struct iird_sched *sched;        /* who renders when (scheduler.h) */
 } iird_session_env;
 
 typedef struct iird_session iird_session;
@@ -66,6 +67,8 @@ uint32_t iird_session_id(const iird_session *s);
 bool iird_session_greeted(const iird_session *s);
 /* Estimated bytes the session holds (images, method, encoder, frames; docs/architecture.md). */
 uint64_t iird_session_memory(iird_session *s);
+/* Render time the session has used so far, in seconds (its turns on the cores, scheduler.h). */
+double iird_session_render_seconds(iird_session *s);
 
 /* ---- service thread only ---- */
 

@@ -9,6 +9,7 @@
 
 #include "iir/image.h"
 #include "iir/method.h"
+#include "scheduler.h"
 #include "session.h"
 
 enum {
@@ -130,6 +131,9 @@ struct iird_session {
     bool wake_service; /* the worker queued output since the service thread last looked */
     uint64_t dropped;
     int close_status; /* 0: none; else close with it once the queue is empty */
+
+    iird_sched_entity sched; /* its place in env->sched (worker: enter/leave; threads: yield) */
+    bool sched_added;
 
     _Atomic uint64_t memory_bytes;
     uint64_t reserved; /* bytes held in env->budget (service thread; destroy) */

@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include <libwebsockets.h>
+#include <omp.h>
 
 #include "budget.h"
 #include "iir/timer.h"
@@ -110,12 +111,15 @@ static bool same_view(const worker_state *w, const render_job *j)
            iir_params_equal(&a->settings.params, &j->settings.params);
 }
 
-/* The method's stop hook (called from its threads without the lock): new input or the session
- * closing ends the frame or pass under way within a tile, so input never waits for a whole frame
- * and a closing session frees its worker at once. w.last is the job being rendered or refined. */
+/* The method's stop hook (called from its threads without the lock, per tile): new input or the
+ * session closing ends the frame or pass under way within a tile, so input never waits for a
+ * whole frame and a closing session frees its worker at once. w.last is the job being rendered or
+ * refined. It is also where the session hands the cores to another whose turn it is (scheduler.h).
+ */
 static bool should_stop(void *ctx)
 {
-    const iird_session *s = ctx;
+    iird_session *s = ctx;
+    iird_sched_yield(s->env->sched, &s->sched); /* the cores may go to another session first */
     if (atomic_load_explicit(&s->stop, memory_order_relaxed)) return true;
     if (atomic_load_explicit(&s->version, memory_order_relaxed) == s->w.last.version) return false;
     return s->w.refining || iir_now_ms() - s->w.started_ms > s->w.patience_ms;
@@ -398,7 +402,8 @@ static void render_locked(iird_session *s)
     iir_error err = {0};
     iir_status st = IIR_OK;
     bool rendered = !same_view(w, &j);
-    w->last = j;     /* before rendering: the stop hook compares the input version with it */
+    w->last = j; /* before rendering: the stop hook compares the input version with it */
+    omp_set_num_threads(iird_sched_enter(s->env->sched, &s->sched)); /* the frame, its JPEG */
     if (!rendered) { /* quality, exposure, refine or domain changed */
         f = (frame_info){.id = ++w->next_id, .pass = w->pass, .converged = w->converged};
         f.stats = w->last_stats;
@@ -406,9 +411,10 @@ static void render_locked(iird_session *s)
         st = render_frame(s, &j, sc, light_index, &f, &err);
         w->last_stats = f.stats;
     }
-    if (st == IIR_OK)
-        publish(s, &j, &f);
-    else if (st != IIR_ERR_INTERRUPTED) /* stopped by newer input (rendered next) or closing */
+    if (st == IIR_OK) publish(s, &j, &f);
+    iird_sched_leave(s->env->sched, &s->sched);
+    if (st != IIR_OK &&
+        st != IIR_ERR_INTERRUPTED) /* stopped by newer input (rendered next) or closing */
         worker_error(s, err_code(st), j.seq, "rendering the frame", &err);
     if (st == IIR_OK && rendered && j.settings.domain) {
         w->domain_stale = true;
@@ -440,6 +446,7 @@ static void refine_locked(iird_session *s)
     frame_info f = {0};
     iir_error err = {0};
     w->refining = true;
+    omp_set_num_threads(iird_sched_enter(s->env->sched, &s->sched)); /* the pass, its JPEG */
     iir_status st = iir_method_refine(w->method, w->img, &f.stats, &err);
     if (st == IIR_OK) {
         f.pass = ++w->pass;
@@ -449,11 +456,13 @@ static void refine_locked(iird_session *s)
             f.id = ++w->next_id;
             publish(s, &j, &f);
         }
-    } else if (st == IIR_ERR_INTERRUPTED) {
+    }
+    iird_sched_leave(s->env->sched, &s->sched);
+    if (st == IIR_ERR_INTERRUPTED) {
         /* New input (or closing) stopped the pass: nothing of it is published, and w->img is
          * unspecified, so the next job renders afresh (no re-encode, no snapshot of it). */
         w->have_frame = false;
-    } else {
+    } else if (st != IIR_OK) {
         w->converged = true; /* do not try again until the next frame */
         worker_error(s, err_code(st), j.seq, "refining the frame", &err);
     }

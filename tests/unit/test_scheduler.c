@@ -1,0 +1,201 @@
+/* test_scheduler.c -- the daemon's render scheduler (server/serve/scheduler.c): one slot is held by one
+ * session at a time, busy sessions get equal render time, a session waking from sleep preempts a
+ * running one at its next yield, a cancelled wait returns, and the OpenMP team a session gets. */
+#include <pthread.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stddef.h>
+#include <time.h>
+#include <cmocka.h>
+
+#include "iir/timer.h"
+#include "scheduler.h"
+
+static void sleep_ms(double ms)
+{
+    struct timespec ts = {(time_t)(ms / 1e3), (long)((ms - 1e3 * (double)(long)(ms / 1e3)) * 1e6)};
+    nanosleep(&ts, NULL);
+}
+
+static void test_alone_gets_every_thread_and_never_waits(void **state)
+{
+    (void)state;
+    iird_sched *s = iird_sched_create(1, 8, 10.0);
+    iird_sched_entity a;
+    iird_sched_add(s, &a);
+    assert_int_equal(iird_sched_enter(s, &a), 8);
+    sleep_ms(15); /* past the slice: nobody waits, so yield returns at once */
+    double t0 = iir_now_ms();
+    iird_sched_yield(s, &a);
+    assert_true(iir_now_ms() - t0 < 5.0);
+    assert_true(atomic_load(&a.running));
+    iird_sched_leave(s, &a);
+    assert_false(atomic_load(&a.running));
+    assert_true(iird_sched_used_ms(s, &a) >= 15.0);
+    iird_sched_remove(s, &a);
+    iird_sched_destroy(s);
+}
+
+/* ---- two busy sessions on one slot ---- */
+
+typedef struct busy {
+    iird_sched *s;
+    iird_sched_entity e;
+    double until_ms;
+    atomic_int *inside; /* sessions between a granted enter/yield and the next yield/leave */
+    int max_inside;
+} busy;
+
+/* Frames of 12 ms of spinning (longer than the slice), yielding every 0.1 ms, until until_ms. */
+static void *busy_main(void *arg)
+{
+    busy *b = arg;
+    while (iir_now_ms() < b->until_ms) {
+        iird_sched_enter(b->s, &b->e);
+        double end = iir_now_ms() + 12.0;
+        while (iir_now_ms() < end) {
+            int n = atomic_fetch_add(b->inside, 1) + 1;
+            if (n > b->max_inside) b->max_inside = n;
+            double step = iir_now_ms() + 0.1;
+            while (iir_now_ms() < step) {
+            }
+            atomic_fetch_sub(b->inside, 1);
+            iird_sched_yield(b->s, &b->e);
+        }
+        iird_sched_leave(b->s, &b->e);
+    }
+    return NULL;
+}
+
+static void test_busy_sessions_share_one_slot_equally(void **state)
+{
+    (void)state;
+    iird_sched *s = iird_sched_create(1, 2, 5.0);
+    atomic_int inside = 0;
+    double until = iir_now_ms() + 400.0;
+    busy b[2] = {{.s = s, .until_ms = until, .inside = &inside},
+                 {.s = s, .until_ms = until, .inside = &inside}};
+    pthread_t t[2];
+    for (int i = 0; i < 2; i++) iird_sched_add(s, &b[i].e);
+    for (int i = 0; i < 2; i++) pthread_create(&t[i], NULL, busy_main, &b[i]);
+    for (int i = 0; i < 2; i++) pthread_join(t[i], NULL);
+    double u0 = iird_sched_used_ms(s, &b[0].e), u1 = iird_sched_used_ms(s, &b[1].e);
+    print_message("render time used: %.1f and %.1f ms; handovers %llu\n", u0, u1,
+                  (unsigned long long)iird_sched_get_stats(s).handovers);
+    assert_int_equal(b[0].max_inside, 1);
+    assert_int_equal(b[1].max_inside, 1);
+    assert_true(u0 > 0.0 && u1 > 0.0);
+    assert_true(u0 < 1.5 * u1 && u1 < 1.5 * u0);
+    assert_true(iird_sched_get_stats(s).handovers > 0);
+    for (int i = 0; i < 2; i++) iird_sched_remove(s, &b[i].e);
+    iird_sched_destroy(s);
+}
+
+/* ---- a waiting session ---- */
+
+typedef struct waiter {
+    iird_sched *s;
+    iird_sched_entity *e;
+    atomic_bool entered;
+} waiter;
+
+/* Enters (blocking until granted or cancelled), then leaves at once. */
+static void *enter_main(void *arg)
+{
+    waiter *w = arg;
+    iird_sched_enter(w->s, w->e);
+    atomic_store(&w->entered, true);
+    iird_sched_leave(w->s, w->e);
+    return NULL;
+}
+
+static void wait_until_waiting(iird_sched *s, int n)
+{
+    for (int i = 0; i < 5000 && iird_sched_get_stats(s).waiting < n; i++) sleep_ms(1);
+    assert_int_equal(iird_sched_get_stats(s).waiting, n);
+}
+
+static void test_a_cancelled_wait_returns_without_a_slot(void **state)
+{
+    (void)state;
+    iird_sched *s = iird_sched_create(1, 2, 10.0);
+    iird_sched_entity a, b;
+    iird_sched_add(s, &a);
+    iird_sched_add(s, &b);
+    iird_sched_enter(s, &a); /* a holds the only slot and never yields */
+    waiter w = {.s = s, .e = &b};
+    pthread_t t;
+    pthread_create(&t, NULL, enter_main, &w);
+    wait_until_waiting(s, 1);
+    assert_false(atomic_load(&w.entered));
+    iird_sched_cancel(s, &b);
+    pthread_join(t, NULL);
+    assert_true(atomic_load(&w.entered));
+    assert_false(atomic_load(&b.running));
+    assert_true(atomic_load(&a.running));
+    assert_int_equal(iird_sched_get_stats(s).waiting, 0);
+    iird_sched_enter(s, &b); /* cancelled for good: no more waiting */
+    assert_false(atomic_load(&b.running));
+    iird_sched_leave(s, &a);
+    iird_sched_remove(s, &a);
+    iird_sched_remove(s, &b);
+    iird_sched_destroy(s);
+}
+
+static void test_a_waking_session_preempts_at_the_next_yield(void **state)
+{
+    (void)state;
+    iird_sched *s = iird_sched_create(1, 4, 1000.0); /* a slice far longer than the test */
+    iird_sched_entity a, b;
+    iird_sched_add(s, &a);
+    iird_sched_add(s, &b);
+    assert_int_equal(iird_sched_enter(s, &a), 4);
+    sleep_ms(20); /* a has rendered 20 ms; b has rendered nothing */
+    waiter w = {.s = s, .e = &b};
+    pthread_t t;
+    pthread_create(&t, NULL, enter_main, &w);
+    wait_until_waiting(s, 1);
+    assert_true(atomic_load(&a.preempt));
+    iird_sched_yield(s, &a); /* hands over, and blocks until b leaves */
+    assert_true(atomic_load(&w.entered));
+    assert_true(atomic_load(&a.running));
+    assert_false(atomic_load(&a.preempt));
+    pthread_join(t, NULL);
+    assert_int_equal(iird_sched_get_stats(s).handovers, 1);
+    iird_sched_leave(s, &a);
+    iird_sched_remove(s, &a);
+    iird_sched_remove(s, &b);
+    iird_sched_destroy(s);
+}
+
+static void test_teams_split_the_threads_between_slots(void **state)
+{
+    (void)state;
+    iird_sched *s = iird_sched_create(2, 4, 10.0);
+    iird_sched_entity a, b;
+    iird_sched_add(s, &a);
+    iird_sched_add(s, &b);
+    assert_int_equal(iird_sched_enter(s, &a), 4); /* alone: every thread */
+    assert_int_equal(iird_sched_enter(s, &b), 2); /* beside a, in the second slot: half */
+    assert_true(atomic_load(&a.running) && atomic_load(&b.running));
+    iird_sched_leave(s, &a);
+    iird_sched_leave(s, &b);
+    assert_int_equal(iird_sched_enter(s, &b), 4); /* alone again */
+    iird_sched_leave(s, &b);
+    iird_sched_remove(s, &a);
+    iird_sched_remove(s, &b);
+    iird_sched_destroy(s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_alone_gets_every_thread_and_never_waits),
+        cmocka_unit_test(test_busy_sessions_share_one_slot_equally),
+        cmocka_unit_test(test_a_cancelled_wait_returns_without_a_slot),
+        cmocka_unit_test(test_a_waking_session_preempts_at_the_next_yield),
+        cmocka_unit_test(test_teams_split_the_threads_between_slots),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
