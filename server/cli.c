@@ -437,12 +437,53 @@ static iir_status unknown_path(const iir_scene *scene, const char *arg, const cJ
         arg, scene->name, arg, used ? "its paths: " : "its sidecar lists no \"paths\"", names);
 }
 
+/* ARG names a script file rather than a path of the scene's sidecar. */
+static bool anim_is_file(const char *arg)
+{
+    struct stat sb;
+    return stat(arg, &sb) == 0 || strchr(arg, '/') || ends_with(arg, ".json") || !is_bare_name(arg);
+}
+
+const char *iird_anim_scene_arg(const char *scene_arg, const char *anim_arg, char *buf, size_t n)
+{
+    if (scene_arg || !anim_arg || !anim_is_file(anim_arg)) return scene_arg;
+    iir_anim *a = NULL;
+    iir_error err = {0};
+    if (iir_anim_load(anim_arg, &a, &err) != IIR_OK) return NULL;
+    snprintf(buf, n, "%s", iir_anim_scene(a));
+    iir_anim_destroy(a);
+    return buf[0] ? buf : NULL;
+}
+
+/* The scene opened from arg is the one called name: the argument itself, its last path
+ * component, or the loaded scene's short name. */
+static bool same_scene(const char *name, const char *arg, const iir_scene *scene)
+{
+    if (!arg) return !strcmp(name, "builtin");
+    size_t len = strlen(arg);
+    while (len > 1 && arg[len - 1] == '/') len--;
+    size_t start = len;
+    while (start > 0 && arg[start - 1] != '/') start--;
+    bool base = strlen(name) == len - start && !strncmp(arg + start, name, len - start);
+    return base || !strcmp(name, arg) || !strcmp(name, scene->name);
+}
+
+void iird_warn_anim_scene(const char *cmd, const iir_anim *anim, const char *scene_arg,
+                          const iir_scene *scene)
+{
+    const char *named = iir_anim_scene(anim);
+    if (!named[0] || same_scene(named, scene_arg, scene)) return;
+    fprintf(stderr,
+            "iird %s: warning: the script was made on scene '%s'; rendering it on '%s' (give "
+            "SCENE %s to render it there)\n",
+            cmd, named, scene_arg ? scene_arg : "builtin", named);
+}
+
 iir_status iird_resolve_anim(const iir_scene *scene, const char *scenes_dir, const char *arg,
                              iir_anim **out, char *label, size_t n, iir_error *err)
 {
-    struct stat sb;
     *out = NULL;
-    if (stat(arg, &sb) == 0 || strchr(arg, '/') || ends_with(arg, ".json") || !is_bare_name(arg)) {
+    if (anim_is_file(arg)) {
         snprintf(label, n, "%s", arg);
         return iir_anim_load(arg, out, err);
     }

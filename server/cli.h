@@ -99,6 +99,16 @@ const char *iird_scenes_dir(const char *option);
 iir_status iird_resolve_anim(const iir_scene *scene, const char *scenes_dir, const char *arg,
                              iir_anim **out, char *label, size_t n, iir_error *err);
 
+/* The scene to open for --anim ARG: scene_arg when given; else, when ARG is a script file that
+ * names its scene (recordings from the browser do), that name (copied into buf, size n); else NULL
+ * (the built-in box). A script that cannot be read is reported later, by iird_resolve_anim. */
+const char *iird_anim_scene_arg(const char *scene_arg, const char *anim_arg, char *buf, size_t n);
+
+/* A warning on stderr ("iird CMD: warning: ...") when the script names a scene other than the one
+ * opened (from scene_arg, NULL: builtin); nothing when it names none. */
+void iird_warn_anim_scene(const char *cmd, const iir_anim *anim, const char *scene_arg,
+                          const iir_scene *scene);
+
 /* Reports an error to stderr as "iird <cmd>: <message>" and returns its exit code. */
 int iird_report(const char *cmd, const iir_error *err);
 

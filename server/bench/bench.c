@@ -134,11 +134,14 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     snprintf(b->path_label, sizeof b->path_label, "built-in orbit");
     iir_status st = IIR_OK;
     const char *scenes = iird_scenes_dir(o->scenes_dir);
-    if (st == IIR_OK) st = iir_scene_open(o->scene, scenes, &b->scene, &b->rt, err);
+    char named[128];
+    const char *scene = iird_anim_scene_arg(o->scene, o->anim, named, sizeof named);
+    if (st == IIR_OK) st = iir_scene_open(scene, scenes, &b->scene, &b->rt, err);
     if (st == IIR_OK) st = iird_find_spot(b->scene, &b->spot, err);
     if (st == IIR_OK && o->anim)
         st = iird_resolve_anim(b->scene, scenes, o->anim, &b->anim, b->path_label,
                                sizeof b->path_label, err);
+    if (st == IIR_OK && b->anim) iird_warn_anim_scene("bench", b->anim, scene, b->scene);
     if (st == IIR_OK) st = set_range(b, err);
     if (st == IIR_OK) st = parse_methods(b, o->methods, err);
     if (st != IIR_OK) return st;

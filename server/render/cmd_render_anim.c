@@ -178,10 +178,13 @@ static iir_status load(anim_job *j, iir_error *err)
     iir_status st = iir_method_params_validate(o->method, &o->params, NULL, NULL, err);
     if (st == IIR_OK) st = iird_check_memory(o->method, &o->params, o->width, o->height, err);
     if (st == IIR_OK && o->video) st = iird_video_check(o->video, o->width, o->height, err);
-    if (st == IIR_OK) st = iir_scene_open(o->scene, scenes, &j->scene, &j->rt, err);
+    char named[128];
+    const char *scene = iird_anim_scene_arg(o->scene, o->anim, named, sizeof named);
+    if (st == IIR_OK) st = iir_scene_open(scene, scenes, &j->scene, &j->rt, err);
     if (st == IIR_OK)
         st = iird_resolve_anim(j->scene, scenes, o->anim, &j->anim, j->script, sizeof j->script,
                                err);
+    if (st == IIR_OK) iird_warn_anim_scene("render", j->anim, scene, j->scene);
     if (st == IIR_OK) st = set_range(j, err);
     if (st == IIR_OK) st = set_spot(j, err);
     if (st == IIR_OK) st = iird_prepare_dir(o->out, "--out", err);

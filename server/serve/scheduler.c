@@ -1,5 +1,5 @@
-/* scheduler.c -- gang scheduling of the sessions' renders with fair shares (scheduler.h): slots, the
- * waiting sessions, virtual time. One mutex guards it all; yield's fast path reads two atomics
+/* scheduler.c -- gang scheduling of the sessions' renders with fair shares (scheduler.h): slots,
+ * the waiting sessions, virtual time. One mutex guards it all; yield's fast path reads two atomics
  * and the clock, so a lone session pays nothing per tile. */
 #include "scheduler.h"
 
@@ -13,7 +13,7 @@ struct iird_sched {
     int threads; /* a session's team when it renders alone */
     double slice_ms;
     int running;
-    atomic_int waiting; /* read without the lock by yield's fast path */
+    atomic_int waiting;     /* read without the lock by yield's fast path */
     iird_sched_entity head; /* sentinel of the registered entities' ring */
     double floor_ms;        /* the least virtual time of the busy sessions, as it last was */
     uint64_t next_ticket;

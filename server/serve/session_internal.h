@@ -75,7 +75,8 @@ typedef struct worker_state {
     char method_name[16];
     const iird_scene_entry *method_scene;
     bool refining;      /* the method call under way is a refinement pass (the stop hook) */
-    double started_ms;  /* when the call under way started */
+    double started_ms;  /* the session's render time (scheduler.h) when the call under way
+                           started: patience counts its turns on the cores, not its waits */
     double patience_ms; /* how long newer input lets the frame under way run (see should_stop) */
     iir_image *img;
     iir_jpeg_encoder *enc;

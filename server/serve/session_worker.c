@@ -122,7 +122,8 @@ static bool should_stop(void *ctx)
     iird_sched_yield(s->env->sched, &s->sched); /* the cores may go to another session first */
     if (atomic_load_explicit(&s->stop, memory_order_relaxed)) return true;
     if (atomic_load_explicit(&s->version, memory_order_relaxed) == s->w.last.version) return false;
-    return s->w.refining || iir_now_ms() - s->w.started_ms > s->w.patience_ms;
+    return s->w.refining ||
+           iird_sched_used_ms(s->env->sched, &s->sched) - s->w.started_ms > s->w.patience_ms;
 }
 
 /* The session's method for the job: kept when only parameters changed (its VPLs too, when every
@@ -346,7 +347,7 @@ static iir_status render_frame(iird_session *s, const render_job *j, const iird_
     if (st == IIR_OK) st = ensure_image(w, j->settings.width, j->settings.height, err);
     if (st == IIR_OK) st = build_view(w, j, sc, light_index, &view, err);
     w->refining = false;
-    w->started_ms = iir_now_ms();
+    w->started_ms = iird_sched_used_ms(s->env->sched, &s->sched);
     double typical = 3.0 * w->last_stats.total_ms;
     w->patience_ms = typical < IIRD_FRAME_PATIENCE_MS       ? IIRD_FRAME_PATIENCE_MS
                      : typical > IIRD_FRAME_PATIENCE_MAX_MS ? IIRD_FRAME_PATIENCE_MAX_MS

@@ -164,6 +164,29 @@ else
     fail "--video checks need ffmpeg and ffprobe: run make deps (it installs ffmpeg)"
 fi
 
+# ---- a script that names its scene (a browser recording): rendered there without SCENE; another
+# SCENE gets a warning naming both ----
+python3 - "$orbit" "$tmp/rec.json" conference <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+d["scene"] = sys.argv[3]
+json.dump(d, open(sys.argv[2], "w"))
+PY
+sed 's/"conference"/"cornell_box"/' "$tmp/rec.json" >"$tmp/rec_box.json"
+out=$("$iird" render --anim "$tmp/rec_box.json" --scenes "$src/scenes" --out "$tmp/s1" --frames 0:1 \
+    "${small[@]}" 2>&1) || fail "a script naming cornell_box: $out"
+python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert d["scene_source"].endswith("cornell_box.scene.json"), d["scene_source"]' \
+    "$tmp/s1/render.json" || fail "without SCENE the script's scene (cornell_box) is not the one rendered"
+echo "$out" | grep -q warning && fail "a warning for the script's own scene: $out"
+out=$("$iird" render builtin --anim "$tmp/rec.json" --out "$tmp/s2" --frames 0:1 "${small[@]}" 2>&1) ||
+    fail "a script naming another scene: $out"
+echo "$out" | grep -q "warning: the script was made on scene 'conference'; rendering it on 'builtin'" ||
+    fail "no warning for a script made on another scene: $out"
+out=$("$iird" bench builtin --anim "$tmp/rec.json" --methods iir --frames 0:2 --size 64x48 --out "$tmp/s3" 2>&1) ||
+    fail "bench with a script naming another scene: $out"
+echo "$out" | grep -q "iird bench: warning: the script was made on scene 'conference'" ||
+    fail "bench: no warning for a script made on another scene: $out"
+
 if [ $failures -gt 0 ]; then
     echo "$failures failure(s)"
     exit 1

@@ -1,6 +1,6 @@
-/* test_scheduler.c -- the daemon's render scheduler (server/serve/scheduler.c): one slot is held by one
- * session at a time, busy sessions get equal render time, a session waking from sleep preempts a
- * running one at its next yield, a cancelled wait returns, and the OpenMP team a session gets. */
+/* test_scheduler.c -- the daemon's render scheduler (server/serve/scheduler.c): one slot is held by
+ * one session at a time, busy sessions get equal render time, a session waking from sleep preempts
+ * a running one at its next yield, a cancelled wait returns, and the OpenMP team a session gets. */
 #include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
