@@ -55,7 +55,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "tests", "integration"))
 import iirserve  # noqa: E402  (the integration tests' daemon harness)
 from iirserve import pct  # noqa: E402
 
-HEADER_SIZE = 40
+HEADER_SIZE = 44
 NO_SEQ = 0xFFFFFFFF
 
 # Pass thresholds.

@@ -19,7 +19,7 @@ struct iir_domain; /* method.h: the light's disk domain (sites, Delaunay edges, 
 enum {
     IIRD_PROTOCOL_VERSION = 1,
     IIRD_MAX_MESSAGE_BYTES = 65536,
-    IIRD_FRAME_HEADER_BYTES = 40,
+    IIRD_FRAME_HEADER_BYTES = 44,
     IIRD_NO_SEQ = -1, /* a message without "seq" */
 };
 
@@ -182,6 +182,8 @@ typedef struct iird_state_view {
     const iir_light *light;
     const iir_camera *camera;
     const iird_settings *settings;
+    uint32_t generation; /* bumped by every accepted scene switch and params change */
+    bool default_light;  /* the scene has no light: the session's spot was made up */
 } iird_state_view;
 
 char *iird_json_error(const iird_proto_error *e);
@@ -254,9 +256,10 @@ typedef struct iird_frame_header {
     uint32_t pass;
     uint32_t flags; /* bit 0 converged, bit 1 refinement frame */
     uint32_t payload_bytes;
+    uint32_t generation; /* of the session state it shows (docs/protocol.md, `state`) */
 } iird_frame_header;
 
-/* Writes the 40-byte little-endian header of docs/protocol.md. */
+/* Writes the 44-byte little-endian header of docs/protocol.md (version 2). */
 void iird_frame_header_write(const iird_frame_header *h, uint8_t out[IIRD_FRAME_HEADER_BYTES]);
 
 #endif

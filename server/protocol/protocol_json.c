@@ -164,7 +164,9 @@ static cJSON *params_json(const iird_settings *s)
 /* Adds scene, light, camera and params to o. */
 static bool add_state(cJSON *o, const iird_state_view *s)
 {
-    return add_str(o, "scene", s->scene) && add_item(o, "light", light_json(s->light)) &&
+    return add_str(o, "scene", s->scene) && iird_json_add_num(o, "generation", s->generation) &&
+           add_item(o, "light", light_json(s->light)) &&
+           add_bool(o, "default_light", s->default_light) &&
            add_item(o, "camera", camera_json(s->camera)) &&
            add_item(o, "params", params_json(s->settings));
 }
@@ -395,7 +397,7 @@ void iird_frame_header_write(const iird_frame_header *h, uint8_t out[IIRD_FRAME_
     out[2] = 'R';
     out[3] = 'F';
     out[4] = h->kind;
-    out[5] = 1; /* header version */
+    out[5] = 2; /* header version */
     put16(out + 6, IIRD_FRAME_HEADER_BYTES);
     put32(out + 8, h->frame_id);
     put32(out + 12, h->seq);
@@ -406,4 +408,5 @@ void iird_frame_header_write(const iird_frame_header *h, uint8_t out[IIRD_FRAME_
     put32(out + 28, h->pass);
     put32(out + 32, h->flags);
     put32(out + 36, h->payload_bytes);
+    put32(out + 40, h->generation);
 }

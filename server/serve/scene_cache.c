@@ -28,8 +28,10 @@ struct iird_scene_cache {
     char *dir;
     char **names; /* NULL-terminated */
     pthread_mutex_t lock;
-    pthread_cond_t loaded; /* broadcast when a load finishes (either way) */
-    cache_slot *slots;     /* guarded by lock */
+    pthread_cond_t loaded;     /* broadcast when a load finishes (either way) */
+    cache_slot *slots;         /* guarded by lock */
+    const cache_slot *startup; /* pinned before any session exists; its name may come from a path
+                                  outside dir */
 };
 
 /* ======================== the list of names ======================== */
@@ -150,6 +152,11 @@ static iir_status resolve(const iird_scene_cache *c, const char *arg, char *key,
     if (!arg || !strcmp(arg, "builtin")) {
         strcpy(key, "builtin");
         strcpy(name, "builtin");
+        return IIR_OK;
+    }
+    if (c->startup && !strcmp(arg, c->startup->entry.name)) { /* the startup scene, wherever */
+        snprintf(key, PATH_MAX, "%s", c->startup->key);
+        snprintf(name, 130, "%s", c->startup->entry.name);
         return IIR_OK;
     }
     char path[PATH_MAX];
@@ -281,11 +288,35 @@ void iird_scene_cache_release(iird_scene_cache *c, const iird_scene_entry *e)
     if (dead) slot_free(dead);
 }
 
+/* Adds name to the list (after "builtin", in order) unless it is there. */
+static void list_name(iird_scene_cache *c, const char *name)
+{
+    size_t n = 0;
+    while (c->names[n]) n++;
+    char *copy = iird_scene_cache_has(c, name) ? NULL : strdup(name);
+    char **grown = copy ? realloc(c->names, (n + 2) * sizeof *grown) : NULL;
+    if (!grown) {
+        free(copy);
+        return;
+    }
+    grown[n] = copy;
+    grown[n + 1] = NULL;
+    qsort(grown + 1, n, sizeof *grown, cmp_names);
+    c->names = grown;
+}
+
 void iird_scene_cache_pin(iird_scene_cache *c, const iird_scene_entry *e)
 {
     pthread_mutex_lock(&c->lock);
     ((cache_slot *)e)->pinned = true;
     pthread_mutex_unlock(&c->lock);
+}
+
+void iird_scene_cache_set_startup(iird_scene_cache *c, const iird_scene_entry *e)
+{
+    iird_scene_cache_pin(c, e);
+    c->startup = (const cache_slot *)e;
+    list_name(c, e->name);
 }
 
 size_t iird_scene_cache_loaded(iird_scene_cache *c)

@@ -51,6 +51,10 @@ void iird_scene_cache_ref(iird_scene_cache *c, const iird_scene_entry *e);
 void iird_scene_cache_release(iird_scene_cache *c, const iird_scene_entry *e);
 /* Keeps e loaded even with no session on it (the startup scene). Takes no reference. */
 void iird_scene_cache_pin(iird_scene_cache *c, const iird_scene_entry *e);
+/* Pins e as the startup scene and lists its name, so that clients can pick it again even when
+ * it was given as a path outside the scenes directory (its name then means it, not a scene of
+ * the directory with the same name). Before any session exists. */
+void iird_scene_cache_set_startup(iird_scene_cache *c, const iird_scene_entry *e);
 
 /* Scenes in memory now. */
 size_t iird_scene_cache_loaded(iird_scene_cache *c);

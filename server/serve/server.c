@@ -551,7 +551,7 @@ static int start(server *srv, iir_error *err)
     if (!srv->scenes) return iir_fail(err, IIR_ERR_NOMEM, "out of memory"), 1;
     iir_status st = iird_scene_cache_acquire(srv->scenes, srv->cfg->scene, &srv->startup, err);
     if (st != IIR_OK) return iir_status_exit_code(st);
-    iird_scene_cache_pin(srv->scenes, srv->startup);
+    iird_scene_cache_set_startup(srv->scenes, srv->startup);
     iird_metrics_init(&srv->metrics);
     int threads = omp_get_max_threads();
     int slots = srv->cfg->render_slots ? srv->cfg->render_slots : threads > 1 ? 2 : 1;

@@ -210,7 +210,8 @@ iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_
 
 iird_state_view iird_state_view_locked(const iird_session *s)
 {
-    iird_state_view v = {s->scene->name, &s->light, &s->camera, &s->settings};
+    iird_state_view v = {s->scene->name, &s->light,     &s->camera,
+                         &s->settings,   s->generation, s->light_index < 0};
     return v;
 }
 
@@ -345,4 +346,20 @@ iird_write_result iird_session_write(iird_session *s, struct lws *wsi)
     bool more = more_locked(s);
     pthread_mutex_unlock(&s->lock);
     return more ? IIRD_WRITE_MORE : IIRD_WRITE_IDLE;
+}
+
+void iird_session_alternatives(const iir_light *light, const char *except, char *out, size_t n)
+{
+    const char *ok[16];
+    int k = 0;
+    iir_error err;
+    for (const char *const *m = iir_method_names(); *m && k < 16; m++)
+        if (strcmp(*m, except) && iir_method_supports(*m, light, 1, &err) == IIR_OK) ok[k++] = *m;
+    size_t used = (size_t)snprintf(out, n, "%s", k ? " -- try " : "");
+    for (int i = 0; i < k && used < n; i++)
+        used += (size_t)snprintf(out + used, n - used, "%s%s",
+                                 i == 0       ? ""
+                                 : i == k - 1 ? " or "
+                                              : ", ",
+                                 ok[i]);
 }

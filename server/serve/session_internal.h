@@ -62,6 +62,7 @@ typedef struct frame_slot {
 /* A copy of the state the worker renders (taken under the lock). */
 typedef struct render_job {
     uint64_t version;
+    uint32_t generation;
     iir_light light;
     iir_camera camera;
     iird_settings settings;
@@ -85,8 +86,9 @@ typedef struct worker_state {
     uint32_t lights_cap;
     render_job last; /* the last job rendered (version 0: none) */
     iir_frame_stats last_stats;
-    bool have_frame; /* img holds last's frame */
-    uint32_t pass;   /* refinement passes on it */
+    iir_vpl_counts frame_vpl; /* the VPL set of the last interactive frame (refinement keeps it) */
+    bool have_frame;          /* img holds last's frame */
+    uint32_t pass;            /* refinement passes on it */
     bool converged;
     uint32_t next_id, last_id;
     float (*vpl_px)[2];
@@ -114,9 +116,10 @@ struct iird_session {
     _Atomic uint64_t version; /* bumped by every applied input; also read without the lock by
                                  refinement's stop hook */
     int64_t seq;              /* newest input's seq (IIRD_NO_SEQ: none) */
-    double input_ms;          /* when it was received */
-    bool ready;               /* hello received: the worker may render */
-    atomic_bool stop;         /* read without the lock by refinement's stop hook */
+    uint32_t generation; /* bumped by every accepted params and scene switch (frames carry it) */
+    double input_ms;     /* when it was received */
+    bool ready;          /* hello received: the worker may render */
+    atomic_bool stop;    /* read without the lock by refinement's stop hook */
     bool worker_done;
     bool scene_pending;
     char scene_name[130];
@@ -168,6 +171,10 @@ iird_state_view iird_state_view_locked(const iird_session *s);
 /* A new recording of the session's scene whose first key (t = 0) is the current light; NULL with
  * err filled on out-of-memory. Lock held. */
 iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_proto_error *err);
+
+/* " -- try ir or pt": the methods that can render light, other than `except`, as the end of an
+ * `unsupported` message ("" when none can). */
+void iird_session_alternatives(const iir_light *light, const char *except, char *out, size_t n);
 
 /* ---- session_msg.c ---- */
 void iird_session_handle(iird_session *s, const char *text, size_t len);

@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "iir/light_move.h"
 #include "iir/timer.h"
 #include "budget.h"
 #include "session_internal.h"
@@ -110,19 +111,44 @@ static bool on_hello(iird_session *s, const iird_msg *m, iird_proto_error *err)
     return true;
 }
 
+/* A moved light stays in the scene (iir/light_move.h): the position is stopped short of the first
+ * surface between the old and the new one, and a light aimed at a target is aimed at it again from
+ * there. True when the position changed from what was asked. */
+static bool keep_inside_locked(const iird_session *s, const iird_msg_light *m, iir_light *light)
+{
+    if (!(m->has & (1u << IIRD_L_POSITION))) return false;
+    const iird_scene_entry *sc = s->scene;
+    iir_vec3 p = iir_light_move_inside(sc->scene, sc->rt, s->light.position, light->position);
+    if (p.x == light->position.x && p.y == light->position.y && p.z == light->position.z)
+        return false;
+    light->position = p;
+    iir_vec3 d = iir_sub(m->target, p);
+    if ((m->has & (1u << IIRD_L_TARGET)) && iir_length(d) > 0.f)
+        light->direction = iir_normalize(d);
+    return true;
+}
+
 static bool on_light(iird_session *s, const iird_msg *m, iird_proto_error *err)
 {
     pthread_mutex_lock(&s->lock);
     iir_light light = s->light;
     bool ok = iird_apply_light(&m->u.light, &light, err);
+    bool moved = ok && keep_inside_locked(s, &m->u.light, &light);
     /* Recorded before it is applied: a full recording refuses the whole message. */
     if (ok && s->rec)
         ok = iird_recording_add(s->rec, (iir_now_ms() - s->rec_start_ms) / 1e3, &light, err);
+    char *json = NULL;
     if (ok) {
         s->light = light;
         input_changed_locked(s, m->seq);
     }
+    if (ok && moved) { /* the client learns the position used */
+        iird_state_view v = iird_state_view_locked(s);
+        json = iird_json_state(&v, m->seq);
+        iird_queue_text_locked(s, json, false);
+    }
     pthread_mutex_unlock(&s->lock);
+    free(json);
     return ok;
 }
 
@@ -145,15 +171,19 @@ static bool on_params(iird_session *s, const iird_msg *m, iird_proto_error *err)
     iird_settings settings = s->settings;
     bool ok = iird_apply_params(&m->u.params, &s->env->limits, &settings, err);
     iir_error e;
-    if (ok && iir_method_supports(settings.method, &s->light, 1, &e) != IIR_OK)
-        ok = iird_proto_fail(err, IIRD_E_UNSUPPORTED, "params.method", "scene %s: %s",
-                             s->scene->name, e.msg);
+    if (ok && iir_method_supports(settings.method, &s->light, 1, &e) != IIR_OK) {
+        char alt[96];
+        iird_session_alternatives(&s->light, settings.method, alt, sizeof alt);
+        ok = iird_proto_fail(err, IIRD_E_UNSUPPORTED, "params.method", "scene %s: %s%s",
+                             s->scene->name, e.msg, alt);
+    }
     /* last: the reservation changes only when the settings do */
     ok = ok &&
          iird_budget_reserve(s->env->budget, &s->reserved, iird_session_estimate(&settings), err);
     char *json = NULL;
     if (ok) {
         s->settings = settings;
+        s->generation++;
         input_changed_locked(s, m->seq);
         iird_state_view v = iird_state_view_locked(s);
         json = iird_json_state(&v, m->seq);

@@ -284,7 +284,8 @@ static iir_status encode_frame(worker_state *w, const render_job *j, frame_info 
                            .encode_ms = (float)f->encode_ms,
                            .pass = f->pass,
                            .flags = (f->converged ? 1u : 0u) | (f->pass > 0 ? 2u : 0u),
-                           .payload_bytes = (uint32_t)*size};
+                           .payload_bytes = (uint32_t)*size,
+                           .generation = j->generation};
     unsigned char *out = w->back.buf + LWS_PRE;
     iird_frame_header_write(&h, out);
     memcpy(out + IIRD_FRAME_HEADER_BYTES, jpeg, *size);
@@ -394,7 +395,8 @@ static void send_stale_domain(iird_session *s, const iird_scene_entry *sc)
 static void render_locked(iird_session *s)
 {
     worker_state *w = &s->w;
-    render_job j = {s->version, s->light, s->camera, s->settings, s->seq, s->input_ms};
+    render_job j = {s->version,  s->generation, s->light,   s->camera,
+                    s->settings, s->seq,        s->input_ms};
     const iird_scene_entry *sc = s->scene;
     int light_index = s->light_index;
     pthread_mutex_unlock(&s->lock);
@@ -411,6 +413,7 @@ static void render_locked(iird_session *s)
     } else {
         st = render_frame(s, &j, sc, light_index, &f, &err);
         w->last_stats = f.stats;
+        w->frame_vpl = f.stats.vpl;
     }
     if (st == IIR_OK) publish(s, &j, &f);
     iird_sched_leave(s->env->sched, &s->sched);
@@ -435,6 +438,15 @@ static void domain_locked(iird_session *s)
     pthread_mutex_lock(&s->lock);
 }
 
+/* The VPL counts of a refinement frame: the set of the frame it refines, unchanged (every VPL of it
+ * valid, none inserted or removed), whatever sets the passes drew: what the stats mean stays the
+ * same from a frame to its refinement. */
+static iir_vpl_counts refined_vpl(const iir_vpl_counts *frame)
+{
+    return (iir_vpl_counts){
+        .count = frame->count, .valid = frame->count, .null_samples = frame->null_samples};
+}
+
 /* A VPL method's refined frame is worth showing only after whole sweeps of its n x n subsets:
  * in between, pixels have seen different numbers of subsets and the image shows the n x n
  * pattern (refine.h). pt's passes are whole samples per pixel: every one is shown. */
@@ -450,6 +462,7 @@ static void refine_locked(iird_session *s)
     omp_set_num_threads(iird_sched_enter(s->env->sched, &s->sched)); /* the pass, its JPEG */
     iir_status st = iir_method_refine(w->method, w->img, &f.stats, &err);
     if (st == IIR_OK) {
+        f.stats.vpl = refined_vpl(&w->frame_vpl);
         f.pass = ++w->pass;
         f.converged = w->converged = f.stats.converged;
         w->last_stats = f.stats;
@@ -540,7 +553,8 @@ static void snapshot_locked(iird_session *s)
                            .encode_ms = (float)(iir_now_ms() - t0),
                            .pass = w->pass,
                            .flags = (w->converged ? 1u : 0u) | (w->pass > 0 ? 2u : 0u),
-                           .payload_bytes = (uint32_t)size};
+                           .payload_bytes = (uint32_t)size,
+                           .generation = w->last.generation};
     iird_frame_header_write(&h, buf + LWS_PRE);
     char *json = iird_json_snapshot(seq, exr ? "exr" : "png", w->last_id, w->pass, size,
                                     w->img->width, w->img->height);
@@ -593,7 +607,9 @@ static void load_scene_locked(iird_session *s)
     memcpy(method, s->settings.method, sizeof method);
     pthread_mutex_unlock(&s->lock);
     if (iir_method_supports(method, &light, 1, &err) != IIR_OK) { /* keep the old scene */
-        char what[200];
+        char what[300], alt[96];
+        iird_session_alternatives(&light, method, alt, sizeof alt);
+        snprintf(err.msg + strlen(err.msg), sizeof err.msg - strlen(err.msg), "%s", alt);
         snprintf(what, sizeof what, "scene %s with method %s", name, method);
         worker_error(s, IIRD_E_UNSUPPORTED, seq, what, &err);
         iird_scene_cache_release(s->env->scenes, e);
@@ -611,6 +627,7 @@ static void load_scene_locked(iird_session *s)
     record_scene_switch_locked(s);
     s->camera = e->scene->camera;
     s->version++;
+    s->generation++;
     if (seq != IIRD_NO_SEQ) s->seq = seq;
     s->input_ms = iir_now_ms();
     iird_state_view v = iird_state_view_locked(s);

@@ -1,6 +1,6 @@
 """iirserve.py -- shared harness of the `iird serve` integration tests: starts and stops a daemon on a
 free loopback port (checking its exit code and its stderr for sanitizer reports), a WebSocket client
-that logs every message (frames decoded from the 40-byte header of docs/protocol.md, text as JSON)
+that logs every message (frames decoded from the 44-byte header of docs/protocol.md, text as JSON)
 and waits on them, plain HTTP GETs, and the unittest entry point. Not a test file itself.
 
 Usage of a test file: `python3 test_X.py IIRD SOURCE_DIR` (as ctest runs it)."""
@@ -27,8 +27,8 @@ from PIL import Image
 IIRD = None  # path of the iird binary, from argv
 SRC = None  # source tree, from argv
 
-HEADER = struct.Struct("<4sBBHIIHHffIII")
-assert HEADER.size == 40
+HEADER = struct.Struct("<4sBBHIIHHffIIII")
+assert HEADER.size == 44
 NO_SEQ = 0xFFFFFFFF
 MAX_MSG = 64 << 20  # frames and EXR snapshots are larger than websockets' 1 MiB default
 
@@ -234,7 +234,7 @@ class Frame:
 
     def __init__(self, data):
         if len(data) < HEADER.size:
-            raise AssertionError(f"binary message of {len(data)} bytes is shorter than the 40-byte header")
+            raise AssertionError(f"binary message of {len(data)} bytes is shorter than the 44-byte header")
         (
             self.magic,
             self.kind,
@@ -249,6 +249,7 @@ class Frame:
             self.pass_,
             self.flags,
             self.payload_len,
+            self.generation,
         ) = HEADER.unpack_from(data)
         self.size = len(data)
         self.payload = bytes(data[self.header_len :]) if self.header_len <= len(data) else b""
@@ -257,9 +258,9 @@ class Frame:
     def check_header(self, test, kind=1):
         test.assertEqual(self.magic, b"IIRF", "frame magic")
         test.assertEqual(self.kind, kind, "frame kind")
-        test.assertEqual(self.version, 1, "frame header version")
-        test.assertEqual(self.header_len, 40, "frame header length")
-        test.assertEqual(self.payload_len, self.size - 40, "payload length field vs message size")
+        test.assertEqual(self.version, 2, "frame header version")
+        test.assertEqual(self.header_len, 44, "frame header length")
+        test.assertEqual(self.payload_len, self.size - 44, "payload length field vs message size")
         test.assertEqual(self.flags & ~3, 0, f"unknown flag bits {self.flags:#x}")
         if kind == 1:
             test.assertGreaterEqual(self.width, 16)

@@ -445,6 +445,15 @@ class StreamTest(DaemonTest):
             for m in refined:
                 self.assertTrue(m.flags & 2, f"refinement frame {m} has flag bit 1")
                 self.assertEqual(m.seq, seq, "refinement frames show the same input")
+            # a refined frame's stats keep the VPL set of the frame it refines (issue 16: not "0/256")
+            frame_stats = await c.wait_for(lambda m: isinstance(m, dict) and m.get("type") == "stats"
+                                           and m.get("frame") == f.id, what="the frame's stats")
+            last = await c.wait_for(lambda m: isinstance(m, dict) and m.get("type") == "stats"
+                                    and m.get("frame") == conv.id, what="the converged frame's stats")
+            v, v0 = last["vpl"], frame_stats["vpl"]
+            self.assertEqual((v["count"], v["valid"], v["null"]), (v0["count"], v0["count"], v0["null"]),
+                             f"refined {v} vs frame {v0}")
+            self.assertEqual((v["inserted"], v["deleted"], v["invalidated"]), (0, 0, 0), v)
             self.assertLessEqual(conv.pass_, 3, "converged within refine_passes")
             n = len(c.frames())
             await asyncio.sleep(1.0)

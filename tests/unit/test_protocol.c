@@ -805,14 +805,15 @@ static void test_frame_header(void **state)
                            .encode_ms = -2.f,
                            .pass = 7,
                            .flags = 3,
-                           .payload_bytes = 0xA0B0C0D0u};
+                           .payload_bytes = 0xA0B0C0D0u,
+                           .generation = 0x0A0B0C0Du};
     uint8_t b[IIRD_FRAME_HEADER_BYTES];
     memset(b, 0xEE, sizeof b);
     iird_frame_header_write(&h, b);
     const uint8_t want[IIRD_FRAME_HEADER_BYTES] = {
-        'I',  'I',  'R',  'F',  1,    1,    40,   0,    0x04, 0x03, 0x02, 0x01, 0xFF, 0xFF,
-        0xFF, 0xFF, 0x00, 0x02, 0x80, 0x01, 0x00, 0x00, 0xC0, 0x3F, 0x00, 0x00, 0x00, 0xC0,
-        7,    0,    0,    0,    3,    0,    0,    0,    0xD0, 0xC0, 0xB0, 0xA0};
+        'I',  'I',  'R',  'F',  1,    2,    44,   0,    0x04, 0x03, 0x02, 0x01, 0xFF, 0xFF, 0xFF,
+        0xFF, 0x00, 0x02, 0x80, 0x01, 0x00, 0x00, 0xC0, 0x3F, 0x00, 0x00, 0x00, 0xC0, 7,    0,
+        0,    0,    3,    0,    0,    0,    0xD0, 0xC0, 0xB0, 0xA0, 0x0D, 0x0C, 0x0B, 0x0A};
     assert_memory_equal(b, want, sizeof want);
 }
 
@@ -853,10 +854,12 @@ static void test_json_replies(void **state)
     iir_error ie;
     assert_int_equal(
         iir_params_set(&s.params, iir_method_any_param("seed"), 9007199254740992.0, &ie), IIR_OK);
-    iird_state_view v = {"builtin", &L, &C, &s};
+    iird_state_view v = {"builtin", &L, &C, &s, 4, false};
     char *text = iird_json_state(&v, 3);
     assert_non_null(strstr(text, "\"fov\":39.3}"));
     assert_non_null(strstr(text, "\"cone_angle\":60,"));
+    assert_non_null(strstr(text, "\"generation\":4,"));
+    assert_non_null(strstr(text, "\"default_light\":false,"));
     assert_non_null(strstr(text, "\"position\":[0,1.9,0]"));
     assert_non_null(strstr(text, "\"seed\":9007199254740992"));
     o = reply_ok(text, "state");
@@ -898,7 +901,7 @@ static void test_json_replies(void **state)
     iird_msg m = parse_ok(text);
     iird_settings s2 = s;
     assert_true(iird_apply_params(&m.u.params, &LIM, &s2, &pe));
-    iird_state_view v2 = {"builtin", &L, &C, &s2};
+    iird_state_view v2 = {"builtin", &L, &C, &s2, 4, false};
     char *now = iird_json_state(&v2, IIRD_NO_SEQ);
     assert_string_equal(was, now);
     free(was);

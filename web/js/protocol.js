@@ -1,9 +1,9 @@
 // protocol.js -- the wire format of docs/protocol.md as plain values: client message builders and
-// the parser of the 40-byte binary frame header. No sockets, no DOM: connection.js sends what these
+// the parser of the 44-byte binary frame header. No sockets, no DOM: connection.js sends what these
 // build, view.js draws what parseFrame returns.
 
 export const PROTOCOL_VERSION = 1;
-export const FRAME_HEADER_BYTES = 40;
+export const FRAME_HEADER_BYTES = 44;
 export const NO_SEQ = 0xffffffff; // a frame that answers no input yet
 export const KIND_FRAME = 1; // JPEG
 export const KIND_SNAPSHOT = 2; // PNG or EXR file
@@ -67,7 +67,7 @@ export function recordStop() {
 // ---- server -> client ----
 
 // Parses a binary message (ArrayBuffer). Returns {kind, version, frameId, seq, width, height,
-// renderMs, encodeMs, pass, flags, converged, refinement, payload (Uint8Array view)} or throws an
+// renderMs, encodeMs, pass, flags, converged, refinement, generation, payload (Uint8Array view)} or throws an
 // Error saying what is wrong (bad magic, short message, payload length mismatch).
 export function parseFrame(buf) {
     if (buf.byteLength < FRAME_HEADER_BYTES) {
@@ -95,6 +95,7 @@ export function parseFrame(buf) {
         flags,
         converged: (flags & FLAG_CONVERGED) !== 0,
         refinement: (flags & FLAG_REFINEMENT) !== 0,
+        generation: dv.getUint32(40, true),
         payload: new Uint8Array(buf, headerLen, payloadLen),
     };
 }

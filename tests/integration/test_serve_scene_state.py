@@ -1,0 +1,114 @@
+"""test_serve_scene_state.py -- the state a client sees is the scene it picked (issue 16): a light moved
+through the Cornell box's red wall or ceiling stays inside, and the `state` reply says where; every frame
+carries the generation of the state it shows, so a client can drop frames of the previous method or
+scene; a startup scene given as a path outside the scenes directory is in `welcome.scenes` and can be
+picked again after switching away; a scene without lights says its spot is made up.
+Usage: test_serve_scene_state.py IIRD SOURCE_DIR"""
+
+import os
+import shutil
+
+import iirserve
+from iirserve import Client, Daemon, DaemonTest, FAST_ARGS, stop_class_daemon
+
+RED_WALL_X = -1.02  # the built-in box's red wall (slanted, x -1.01..-1.02); its ceiling is at y = 1.99
+
+
+class LightBoundsTest(DaemonTest):
+    async def move(self, c, **fields):
+        """Sends a light move; returns (the state reply or None, the frame answering it)."""
+        seq, f = await c.move_light(**fields)
+        states = [m for m in c.texts("state") if m.get("seq") == seq]
+        return (states[0] if states else None), f
+
+    async def test_a_light_moved_through_the_wall_stays_inside(self):
+        c = await Client.connect(self.daemon)
+        try:
+            st, _ = await self.move(c, position=[0.0, 1.5, 0.0])
+            self.assertIsNone(st, f"a free move got a state reply: {st}")
+            st, f = await self.move(c, position=[-1.11, 1.5, 0.0])
+            self.assertIsNotNone(st, "a move through the red wall got no state reply")
+            x = st["light"]["position"][0]
+            self.assertTrue(RED_WALL_X < x < RED_WALL_X + 0.05, f"light x {x} after a move to -1.11")
+            st, _ = await self.move(c, position=[0.0, 1.5, 0.0], target=[0.0, 0.0, 0.0])
+            st, _ = await self.move(c, position=[0.0, 2.6, 0.0], target=[0.0, 0.0, 0.0])
+            self.assertIsNotNone(st, "a move above the ceiling got no state reply")
+            y = st["light"]["position"][1]
+            self.assertTrue(1.9 < y < 1.99, f"light y {y} after a move to 2.6")
+            d = st["light"]["direction"]
+            self.assertLess(d[1], -0.99, f"the light aimed at the floor's centre points {d}")
+        finally:
+            await c.close()
+
+    async def test_frames_carry_the_generation_of_their_state(self):
+        c = await Client.connect(self.daemon)
+        try:
+            g0 = c.welcome["state"]["generation"]
+            f = await c.wait_frame()
+            self.assertEqual(f.generation, g0, "the first frame's generation")
+            _, st = await c.request({"type": "params", "method": "pt", "spp": 1}, "state")
+            self.assertEqual(st["generation"], g0 + 1, "params bumps the generation")
+            at = c.mark()
+            f = await c.wait_frame(since=at, min_seq=st["seq"])
+            self.assertEqual(f.generation, g0 + 1, "the frame answering params")
+            seq, f = await c.move_light(position=[0.1, 1.5, 0.0])
+            self.assertEqual(f.generation, g0 + 1, "a light move keeps the generation")
+            _, st = await c.request({"type": "scene", "name": "cornell_box"}, "state", timeout=60)
+            self.assertEqual(st["generation"], g0 + 2, "a scene switch bumps the generation")
+            f = await c.wait_frame(since=c.mark(), min_seq=st["seq"])
+            self.assertEqual(f.generation, g0 + 2, "the frame of the new scene")
+        finally:
+            await c.close()
+
+
+class StartupSceneTest(DaemonTest):
+    """iird serve PATH with a scene outside the scenes directory (a user's own room)."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = os.path.join(os.environ.get("IIR_TEST_TMP", "/tmp"), f"scene-state-{os.getpid()}")
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+        room = os.path.join(cls.tmp, "my_room")
+        shutil.copytree(os.path.join(iirserve.SRC, "scenes", "cornell_box"), room,
+                        ignore=shutil.ignore_patterns("paths"))
+        dark = os.path.join(cls.tmp, "dark_room")
+        os.makedirs(dark)
+        for f in ("CornellBox-Original.obj", "CornellBox-Original.mtl"):
+            shutil.copy(os.path.join(room, f), dark)
+        cls.dark = dark
+        cls.daemon = Daemon(*FAST_ARGS, room)
+
+    @classmethod
+    def tearDownClass(cls):
+        stop_class_daemon(cls.daemon)
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    async def test_the_startup_scene_can_be_picked_again(self):
+        c = await Client.connect(self.daemon)
+        try:
+            self.assertEqual(c.welcome["state"]["scene"], "my_room")
+            self.assertIn("my_room", c.welcome["scenes"], "the startup scene is not in the picker")
+            self.assertIn("builtin", c.welcome["scenes"])
+            _, st = await c.request({"type": "scene", "name": "builtin"}, "state", timeout=60)
+            self.assertEqual(st["scene"], "builtin")
+            _, st = await c.request({"type": "scene", "name": "my_room"}, "state", timeout=60)
+            self.assertEqual(st["scene"], "my_room")
+            self.assertFalse(st["default_light"], "my_room has the box's spot")
+            f = await c.wait_frame(since=c.mark(), min_seq=st["seq"])
+            self.assertEqual(f.generation, st["generation"])
+        finally:
+            await c.close()
+
+    async def test_a_scene_without_lights_says_its_spot_is_made_up(self):
+        d = Daemon(*FAST_ARGS, self.dark)
+        try:
+            c = await Client.connect(d)
+            self.assertTrue(c.welcome["state"]["default_light"], c.welcome["state"])
+            await c.wait_frame()
+            await c.close()
+        finally:
+            stop_class_daemon(d)
+
+
+if __name__ == "__main__":
+    iirserve.main()
