@@ -17,7 +17,8 @@ iir_view iird_anim_view(const iir_anim *a, const iir_scene *scene, uint32_t spot
                         int f)
 {
     double t = iir_anim_frame_time(a, f);
-    memcpy(lights, scene->lights, sizeof(iir_light) * scene->num_lights);
+    if (scene->num_lights) /* a scene of emissive triangles only has no light array */
+        memcpy(lights, scene->lights, sizeof(iir_light) * scene->num_lights);
     if (spot < scene->num_lights) lights[spot] = iir_anim_light(a, &scene->lights[spot], t);
     iir_view v = {lights, scene->num_lights, iir_anim_camera(a, &scene->camera, t)};
     return v;

@@ -267,19 +267,30 @@ void iird_print_params(FILE *f, const char *methods)
     fprintf(f, "  --threads N                OpenMP threads (default: all cores)\n");
 }
 
-/* The "live session" cell: its maximum and its default where they differ from a command's. */
+/* The "live session" cell: the most a live session may ask for, where that is less. */
 static void live_cell(const iir_param *r, char *buf, size_t n)
 {
     char v[32];
     buf[0] = '\0';
-    if (r->live.hi > 0.0) {
-        iir_param_format(r, r->live.hi, v, sizeof v);
+    if (r->live_hi > 0.0) {
+        iir_param_format(r, r->live_hi, v, sizeof v);
         snprintf(buf, n, "at most %s", v);
     }
-    if (r->live.def != 0.0) {
-        iir_param_format(r, r->live.def, v, sizeof v);
-        snprintf(buf + strlen(buf), n - strlen(buf), "%sdefault %s", buf[0] ? ", " : "", v);
-    }
+}
+
+void iird_settings_text(const char *method, const iir_params *p, char *buf, size_t n)
+{
+    const iir_param_table *const *t = iir_method_tables(method);
+    size_t used = 0;
+    buf[0] = '\0';
+    for (int k = 0; t && t[k]; k++)
+        for (int i = 0; i < t[k]->count && used < n; i++) {
+            const iir_param *row = &t[k]->rows[i];
+            char opt[40], v[32];
+            iir_param_option_name(row, opt, sizeof opt);
+            iir_param_format(row, iir_method_param_value(row, p), v, sizeof v);
+            used += (size_t)snprintf(buf + used, n - used, "%s%s %s", used ? ", " : "", opt, v);
+        }
 }
 
 void iird_print_params_markdown(FILE *f)

@@ -55,6 +55,10 @@ void iird_print_params(FILE *f, const char *methods);
  * --markdown`; a test compares the two). */
 void iird_print_params_markdown(FILE *f);
 
+/* Every parameter method `method` reads, with the value it uses (p's, else the default), as
+ * "spp 1, bounces 2, seed 1, refine-passes 64, jitter true": the settings summaries print it. */
+void iird_settings_text(const char *method, const iir_params *p, char *buf, size_t n);
+
 /* Refuses (IIR_ERR_INVALID naming the option) a value of p that no method of `methods` declares. */
 iir_status iird_check_params_for(const char *methods, const iir_params *p, iir_error *err);
 
@@ -109,19 +113,46 @@ const char *iird_anim_scene_arg(const char *scene_arg, const char *anim_arg, cha
 void iird_warn_anim_scene(const char *cmd, const iir_anim *anim, const char *scene_arg,
                           const iir_scene *scene);
 
+/* ---- what a command tells about the scene it renders (scene_notes.c), on stderr ---- */
+
+/* "iird CMD: camera: ..." when the scene has no camera of its own (the one it was framed with). */
+void iird_note_camera(const char *cmd, const iir_scene *scene);
+
+/* "iird CMD: warning: light 'sun': ..." for every light and material that a method of `methods`
+ * (comma-separated) does not render (iir_method_dropped); what no method renders once. */
+void iird_warn_dropped(const char *cmd, const char *methods, const iir_scene *scene,
+                       const iir_light *lights, uint32_t num_lights);
+
+/* Whether every pixel of img is black (no channel above 0). */
+bool iird_image_black(const iir_image *img);
+
+/* "iird CMD: warning: WHAT entirely black: REASON" (iir_scene_explain_dark for the view); WHAT
+ * ends in its verb: "the image is", "2 of 5 frames (first: frame 3) are". */
+void iird_warn_black(const char *cmd, const char *what, const iir_scene *scene, const iir_rt *rt,
+                     const iir_view *view);
+
 /* Reports an error to stderr as "iird <cmd>: <message>" and returns its exit code. */
 int iird_report(const char *cmd, const iir_error *err);
 
-/* A progress bar on stderr, drawn only when stderr is a terminal. */
+/* A progress bar on stderr, drawn only when stderr is a terminal. Its ETA is the measured time
+ * per unit from the first update with work done (so set-up and a cold first frame do not count)
+ * times the units left, plus what iird_progress_set_after says comes after it. */
 typedef struct iird_progress {
     bool enabled;
     const char *label;
     double total, start_ms, last_draw_ms;
+    double mark_ms, mark_done; /* the first update with work done; -1 before it */
+    double after_s;            /* seconds expected after this bar; < 0: nothing shown */
+    const char *after_label;   /* what the whole is called ("bench") */
 } iird_progress;
 
 void iird_progress_start(iird_progress *p, const char *label, double total);
 void iird_progress_update(iird_progress *p, double done);
 void iird_progress_finish(iird_progress *p);
+/* Shows ", LABEL MM:SS" after the bar's ETA: its ETA plus `seconds` of later work. */
+void iird_progress_set_after(iird_progress *p, const char *label, double seconds);
+/* Seconds per unit measured so far with `done` units at now_ms (iir_now_ms); < 0 before any. */
+double iird_progress_rate(const iird_progress *p, double done, double now_ms);
 
 /* Ctrl-C / SIGTERM: installs a handler that sets a flag long-running commands poll. */
 void iird_catch_interrupts(void);

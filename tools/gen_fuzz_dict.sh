@@ -12,7 +12,7 @@ out=$2
     for w in type seq hello light camera params scene pick snapshot record \
         protocol token client position direction target cone_angle intensity up fov \
         method width height quality exposure refine domain name x y format png exr \
-        action start stop fps pt ir iir builtin cornell_box; do
+        action start stop fps save pt ir iir builtin cornell_box; do
         printf 'kw_%s="\\"%s\\""\n' "$w" "$w"
     done
     "$iird" params --markdown | awk -F'|' '/^\| `--/ {

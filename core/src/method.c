@@ -26,42 +26,18 @@ struct iir_method {
 /* ======================== the options every method has ======================== */
 
 static const iir_param COMMON_ROWS[] = {
-    {"seed",
-     IIR_PARAM_U64,
-     offsetof(iir_method_common, seed),
-     1,
-     0,
-     9007199254740992.0,
-     {0, 0},
-     NULL,
-     "",
-     "random seed: the same seed gives the same images",
-     IIR_PARAM_RESTART},
+    {"seed", IIR_PARAM_U64, offsetof(iir_method_common, seed), 1, 0, 9007199254740992.0, 0, NULL,
+     "", "random seed: the same seed gives the same images", IIR_PARAM_RESTART},
     /* 4 sweeps of the default 4x4 interleave: every pixel sees 4 independent VPL sets (the VPL
        noise halves against one set) through 64 jittered points (edges within ~1/64 of their
        contrast); ~5 s at 512x384 on two cores, after which more passes barely show */
-    {"refine_passes",
-     IIR_PARAM_INT,
-     offsetof(iir_method_common, refine_passes),
-     64,
-     1,
-     IIR_REFINE_MAX_PASSES,
-     {0, 0},
-     NULL,
-     "passes",
-     "refinement has converged after this many passes (pt: of spp samples each)",
+    {"refine_passes", IIR_PARAM_INT, offsetof(iir_method_common, refine_passes), 64, 1,
+     IIR_REFINE_MAX_PASSES, 0, NULL, "passes",
+     "a converged frame (a still) has this many refinement passes (pt: samples per pixel, "
+     "rounded up to whole frames of spp)",
      IIR_PARAM_LIVE},
-    {"jitter",
-     IIR_PARAM_BOOL,
-     offsetof(iir_method_common, jitter),
-     1,
-     0,
-     1,
-     {0, 0},
-     NULL,
-     "",
-     "pt and refinement: box-filter each pixel (true) or trace its centre (false)",
-     IIR_PARAM_LIVE},
+    {"jitter", IIR_PARAM_BOOL, offsetof(iir_method_common, jitter), 1, 0, 1, 0, NULL, "",
+     "pt and refinement: box-filter each pixel (true) or trace its centre (false)", IIR_PARAM_LIVE},
 };
 const iir_param_table iir_common_table = {"every method", COMMON_ROWS,
                                           sizeof COMMON_ROWS / sizeof COMMON_ROWS[0], NULL};
@@ -126,6 +102,11 @@ static const iir_method_ops *find_ops(const char *name)
     for (int i = 0; i < NUM_METHODS; i++)
         if (strcmp(registry[i]->name, name) == 0) return registry[i];
     return NULL;
+}
+
+const iir_method_ops *iir_method_ops_of(const char *name)
+{
+    return find_ops(name);
 }
 
 const char *iir_method_summary(const char *name)
@@ -258,6 +239,22 @@ iir_status iir_method_params_validate(const char *name, const iir_params *p,
     void *opts = bind_opts(ops, p, given, bad, err);
     free(opts);
     return opts ? IIR_OK : err->status;
+}
+
+uint64_t iir_method_converged_at(const char *name, const iir_params *p)
+{
+    const iir_method_ops *ops = find_ops(name);
+    if (!ops || !ops->refine) return 0;
+    iir_error err;
+    void *opts = bind_opts(ops, p, NULL, NULL, &err);
+    uint64_t at = 0;
+    if (opts && ops->converged_at)
+        at = ops->converged_at(opts);
+    else if (opts)
+        at = (uint64_t)iir_method_param_value(
+            iir_param_table_find(&iir_common_table, "refine_passes"), p);
+    free(opts);
+    return at;
 }
 
 uint64_t iir_method_memory(const char *name, const iir_params *p, int width, int height)

@@ -61,7 +61,27 @@ typedef struct iir_method_ops {
     iir_status (*supports)(const iir_light *lights, uint32_t num_lights, iir_error *err);
     /* Bytes the method holds with opts for a width x height frame, beyond the output image. */
     uint64_t (*memory)(const void *opts, int width, int height);
+    /* samples_per_pixel at which refinement converges (iir_method_converged_at). NULL: the
+     * refine_passes parameter (one pass per refine call). */
+    uint64_t (*converged_at)(const void *opts);
+    /* NULL when the method renders all of every light it is given (pt). Otherwise appends to out
+     * (at most max entries; returns how many there are) what it leaves out of these lights and
+     * the scene's emissive materials (iir_method_dropped). */
+    uint32_t (*dropped)(const struct iir_scene *scene, const iir_light *lights, uint32_t num_lights,
+                        iir_dropped *out, uint32_t max);
 } iir_method_ops;
+
+/* The operations of method `name`, or NULL (method.c). */
+const iir_method_ops *iir_method_ops_of(const char *name);
+
+/* Appends an entry to out (when *n < max; printf-style `what`) and counts it in *n (dropped.c). */
+void iir_dropped_add(iir_dropped *out, uint32_t max, uint32_t *n, const char *method,
+                     const char *kind, const char *name, const char *fmt, ...)
+    __attribute__((format(printf, 7, 8)));
+/* An entry per emissive material of the scene: `method` leaves out its indirect light. Returns how
+ * many; writes at most max. */
+uint32_t iir_dropped_emitters(const struct iir_scene *scene, const char *method, iir_dropped *out,
+                              uint32_t max);
 
 extern const iir_method_ops iir_method_pt;
 extern const iir_method_ops iir_method_ir;

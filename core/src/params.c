@@ -83,12 +83,7 @@ const char *iir_param_type_name(iir_param_type t)
 
 double iir_param_max(const iir_param *row, bool live)
 {
-    return live && row->live.hi > 0.0 ? row->live.hi : row->hi;
-}
-
-double iir_param_default(const iir_param *row, bool live)
-{
-    return live && row->live.def != 0.0 ? row->live.def : row->def;
+    return live && row->live_hi > 0.0 ? row->live_hi : row->hi;
 }
 
 static iir_status choice_error(const iir_param *row, const char *got, iir_error *err)

@@ -10,6 +10,7 @@
 
 #include "animview.h"
 #include "cli.h"
+#include "iir/timer.h"
 #include "iir/metrics.h"
 #include "iir/vpl.h"
 #include "orbit.h"
@@ -137,6 +138,7 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     char named[128];
     const char *scene = iird_anim_scene_arg(o->scene, o->anim, named, sizeof named);
     if (st == IIR_OK) st = iir_scene_open(scene, scenes, &b->scene, &b->rt, err);
+    if (st == IIR_OK) iird_note_camera("bench", b->scene);
     if (st == IIR_OK) st = iird_find_spot(b->scene, &b->spot, err);
     if (st == IIR_OK && o->anim)
         st = iird_resolve_anim(b->scene, scenes, o->anim, &b->anim, b->path_label,
@@ -145,6 +147,7 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     if (st == IIR_OK) st = set_range(b, err);
     if (st == IIR_OK) st = parse_methods(b, o->methods, err);
     if (st != IIR_OK) return st;
+    iird_warn_dropped("bench", o->methods, b->scene, b->scene->lights, b->scene->num_lights);
     b->scene_hash = iird_bench_scene_hash(b->scene);
     b->lights = malloc(sizeof(iir_light) * b->scene->num_lights);
     b->rows = calloc((size_t)b->frames * (size_t)b->num_runs, sizeof(iird_bench_row));
@@ -161,6 +164,37 @@ iir_view iird_bench_view(iird_bench *b, int i)
         iird_orbit_light(b->scene, b->rt, &b->scene->lights[b->spot], f, b->path_frames);
     iir_view v = {b->lights, b->scene->num_lights, b->scene->camera};
     return v;
+}
+
+/* ---- what the rest will take ---- */
+
+/* Mean ms per frame of run r after its first (cold) frame. */
+static double run_ms(const iird_bench *b, int r)
+{
+    double sum = 0;
+    for (int i = 1; i < b->frames; i++) sum += b->rows[(size_t)r * b->frames + i].stats.total_ms;
+    return sum / (b->frames - 1);
+}
+
+static double estimate_ms(const iird_bench *b, int q, int current, double current_ms)
+{
+    const iird_bench_run *run = &b->runs[q];
+    for (int p = current - 1; p >= 0; p--)
+        if (!strcmp(b->runs[p].method, run->method)) return run_ms(b, p);
+    const iir_param *spp = iir_method_find_param(run->method, "spp");
+    if (!strcmp(run->method, "pt") && spp && b->refs_rendered > 0 && b->o->ref_spp > 0)
+        return b->refs_render_ms / b->refs_rendered * iir_method_param_value(spp, &run->params) /
+               b->o->ref_spp;
+    return current_ms;
+}
+
+double iird_bench_after_s(const iird_bench *b, int current, double current_ms)
+{
+    if (current_ms < 0) return -1;
+    double ms = 0;
+    for (int q = current + 1; q < b->num_runs; q++)
+        ms += b->frames * estimate_ms(b, q, current, current_ms);
+    return ms / 1e3;
 }
 
 bool iird_bench_is_ref_frame(const iird_bench *b, int i)
@@ -249,6 +283,8 @@ iir_status iird_bench_run_one(iird_bench *b, int r, iir_error *err)
         row->mean_lum = mean_luminance(img);
         if (st == IIR_OK && b->refsets[run->refset].img[i]) st = save_image(b, run, i, img, err);
         iir_image_copy(prev, img);
+        double rate = iird_progress_rate(&bar, i + 1, iir_now_ms());
+        iird_progress_set_after(&bar, "bench", iird_bench_after_s(b, r, rate * 1e3));
         iird_progress_update(&bar, i + 1);
         if (iird_interrupted()) st = iir_fail(err, IIR_ERR_INTERRUPTED, "interrupted");
     }
@@ -257,6 +293,21 @@ iir_status iird_bench_run_one(iird_bench *b, int r, iir_error *err)
     iir_image_destroy(img);
     iir_image_destroy(prev);
     return st;
+}
+
+void iird_bench_warn_black(iird_bench *b)
+{
+    for (int r = 0; r < b->num_runs; r++) {
+        int black = 0, first = -1;
+        for (int i = 0; i < b->frames; i++)
+            if (b->rows[(size_t)r * b->frames + i].mean_lum <= 0.0 && black++ == 0) first = i;
+        if (black == 0) continue;
+        char what[160];
+        snprintf(what, sizeof what, "%s %s: %d of %d frames (first: frame %d) are",
+                 b->runs[r].method, b->runs[r].setting, black, b->frames, b->first + first);
+        iir_view v = iird_bench_view(b, first);
+        iird_warn_black("bench", what, b->scene, b->rt, &v);
+    }
 }
 
 void iird_bench_free(iird_bench *b)

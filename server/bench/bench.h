@@ -87,6 +87,8 @@ typedef struct iird_bench {
     int num_refsets;
     iird_bench_refset refsets[IIRD_BENCH_MAX_REFSETS];
     int refs_total, refs_cached; /* references needed, and how many came from the cache */
+    int refs_rendered;           /* references rendered (not read from the cache) ... */
+    double refs_render_ms;       /* ... and the time they took */
     char cache_dir[4096];        /* "" = no cache */
     iird_bench_row *rows;        /* num_runs x frames */
     double refs_s;               /* seconds spent on references (cache reads included) */
@@ -100,10 +102,17 @@ typedef struct iird_bench {
 iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *err);
 /* Runs run r over every frame, scoring frames that have references. */
 iir_status iird_bench_run_one(iird_bench *b, int r, iir_error *err);
+/* Seconds the runs after phase `current` (-1: the references; else a run) will take, for the
+ * progress bar's whole-bench ETA: each run's frames times its expected ms per frame -- measured
+ * by a finished run of the same method, else for pt scaled from the references rendered, else
+ * current_ms (the current phase's measured ms per frame). < 0 when current_ms is unknown (< 0). */
+double iird_bench_after_s(const iird_bench *b, int current, double current_ms);
 /* The light and camera of run frame i (0-based within the range); lights live in b->lights. */
 iir_view iird_bench_view(iird_bench *b, int i);
 /* Reference frames: the first two of the range, and every K-th after with its successor. */
 bool iird_bench_is_ref_frame(const iird_bench *b, int i);
+/* After the runs: a warning per run with entirely black frames, saying why the first may be. */
+void iird_bench_warn_black(iird_bench *b);
 void iird_bench_free(iird_bench *b);
 
 /* ---- bench_refs.c: references and their cache ---- */

@@ -314,6 +314,20 @@ static void print_ratios(const iird_bench *b, const run_summary *s, FILE *f)
     }
 }
 
+/* The parameters each method read, from its first run (the setting column gives swept values). */
+static void print_settings(const iird_bench *b, FILE *f)
+{
+    for (int r = 0; r < b->num_runs; r++) {
+        bool first = true;
+        for (int q = 0; q < r; q++) first = first && strcmp(b->runs[q].method, b->runs[r].method);
+        if (!first) continue;
+        char text[1024];
+        iird_settings_text(b->runs[r].method, &b->runs[r].params, text, sizeof text);
+        fprintf(f, "%s settings: %s%s\n", b->runs[r].method, text,
+                strcmp(b->runs[r].setting, "default") ? " (swept values: the setting column)" : "");
+    }
+}
+
 void iird_bench_summary(const iird_bench *b, FILE *f)
 {
     run_summary s[IIRD_BENCH_MAX_RUNS];
@@ -337,6 +351,7 @@ void iird_bench_summary(const iird_bench *b, FILE *f)
         fputc('\n', f);
     }
     print_ratios(b, s, f);
+    print_settings(b, f);
 }
 
 /* ---- charts ---- */

@@ -143,12 +143,15 @@ static iir_status reference(iird_bench *b, iird_bench_refset *rs, const iir_para
     iir_view v = iird_bench_view(b, i);
     uint64_t key = ref_key(b, &v, p);
     if (b->cache_dir[0] && (rs->img[i] = cache_get(b, key))) return b->refs_cached++, IIR_OK;
+    double t0 = iir_now_ms();
     iir_status st = *pt ? IIR_OK : iir_method_create("pt", b->scene, b->rt, p, pt, err);
     rs->img[i] = iir_image_create(b->o->width, b->o->height);
     if (!rs->img[i]) return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
     iir_frame_stats fs;
     if (st == IIR_OK) st = iir_method_render(*pt, &v, rs->img[i], &fs, err);
     if (st == IIR_OK && b->cache_dir[0]) cache_put(b, key, rs->img[i]);
+    b->refs_rendered++;
+    b->refs_render_ms += iir_now_ms() - t0;
     return st;
 }
 
@@ -166,7 +169,10 @@ static iir_status refset_render(iird_bench *b, iird_bench_refset *rs, iird_progr
         if (iird_interrupted()) st = iir_fail(err, IIR_ERR_INTERRUPTED, "interrupted");
         if (st == IIR_OK) st = reference(b, rs, &p, &pt, i, err);
         if (st == IIR_OK) st = save_image(b, rs, i, err);
-        iird_progress_update(bar, ++*done);
+        ++*done;
+        double rate = iird_progress_rate(bar, *done, iir_now_ms());
+        iird_progress_set_after(bar, "bench", iird_bench_after_s(b, -1, rate * 1e3));
+        iird_progress_update(bar, *done);
     }
     iir_method_destroy(pt);
     return st;

@@ -253,6 +253,7 @@ int iird_cmd_bench(int argc, char **argv)
     if (st == IIR_OK && o.out_dir) st = iird_prepare_dir(o.out_dir, "--out", &err);
     if (st == IIR_OK) st = iird_bench_references(&run, &err);
     for (int r = 0; st == IIR_OK && r < run.num_runs; r++) st = iird_bench_run_one(&run, r, &err);
+    if (st == IIR_OK) iird_bench_warn_black(&run);
     run.wall_s = (iir_now_ms() - t0) / 1e3;
     if (st == IIR_OK) st = iird_bench_write_csv(&run, &err);
     if (st == IIR_OK) st = iird_bench_write_json(&run, &err);

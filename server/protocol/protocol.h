@@ -32,6 +32,7 @@ typedef enum iird_msg_type {
     IIRD_MSG_PICK,
     IIRD_MSG_SNAPSHOT,
     IIRD_MSG_RECORD,
+    IIRD_MSG_SAVE,
 } iird_msg_type;
 
 /* Error codes, in the order of docs/protocol.md's table; names via iird_err_name. */
@@ -75,6 +76,7 @@ bool iird_proto_fail(iird_proto_error *e, iird_err code, const char *field, cons
  * bound by their tables' live maxima (params.h). */
 typedef struct iird_limits {
     int max_width, max_height;
+    bool allow_save; /* `save` with a name may write into the scenes directory (--allow-save) */
 } iird_limits;
 
 /* The defaults of `iird serve`: 1920 x 1080. */
@@ -150,6 +152,10 @@ typedef struct iird_msg {
             bool start;
             int fps;
         } record;
+        struct {
+            bool has_name; /* write the scene under this name; else only reply with it */
+            char name[129];
+        } save;
     } u;
 } iird_msg;
 
@@ -184,6 +190,7 @@ typedef struct iird_state_view {
     const iird_settings *settings;
     uint32_t generation; /* bumped by every accepted scene switch and params change */
     bool default_light;  /* the scene has no light: the session's spot was made up */
+    const struct iir_scene *scene_data; /* for `notes` (iir_method_dropped); NULL: none */
 } iird_state_view;
 
 char *iird_json_error(const iird_proto_error *e);
@@ -226,18 +233,34 @@ char *iird_json_pick(int64_t seq, bool hit, iir_vec3 position, iir_vec3 normal, 
 char *iird_json_snapshot(int64_t seq, const char *format, uint32_t frame, uint32_t pass,
                          size_t bytes, int width, int height);
 
-/* ---- recording: light states over time, written as an animation script ---- */
+/* ---- recording: what a session showed over time (its light, camera and exposure), written as an
+ * animation script ---- */
 typedef struct iird_recording iird_recording;
 /* scene: the scene it is recorded on, named in the script (NULL: none). */
 iird_recording *iird_recording_create(int fps, const char *scene);
 int iird_recording_fps(const iird_recording *r);
 void iird_recording_destroy(iird_recording *r);
-/* false (too_large) past 100000 keyframes or 36000 s; t in seconds since start, increasing
- * (rounded to microseconds; a t at or before the last key's replaces that key's light). The
- * session should add the light at t = 0 on `start`, so the script starts where the light was. */
+/* Each adds the state applied at t seconds since start to its track. t is rounded to
+ * microseconds; a t at or before the track's last key replaces that key's value. The key that
+ * ends a pause of the light or camera longer than a frame (1/fps) is a step key (held, then a
+ * jump at t). False (too_large) past 100000 keys in all or 36000 s, internal for a t that is not
+ * finite or out of memory; the recording is then unchanged. The session adds every part at t = 0
+ * on `start`, so the script starts where the session was; the light track is named after the
+ * first light added. */
 bool iird_recording_add(iird_recording *r, double t, const iir_light *light, iird_proto_error *err);
-/* The script (docs/animation-format.md) that iir_anim_parse accepts and that reproduces the light
- * at every recorded time; wrapped in the `record` reply. */
+bool iird_recording_add_camera(iird_recording *r, double t, const iir_camera *camera,
+                               iird_proto_error *err);
+bool iird_recording_add_exposure(iird_recording *r, double t, float stops, iird_proto_error *err);
+/* True when one more state can be added at t (false with err as an add would fill it), and then
+ * the add of one state at t that follows, before any other, cannot fail: for a message that must
+ * check everything before it changes anything. */
+bool iird_recording_room(iird_recording *r, double t, iird_proto_error *err);
+/* Where the recording ends (stop, or a scene switch), t seconds since start: the script lasts a
+ * whole number of frames until at least then, so its last frame shows the state at t. */
+void iird_recording_end(iird_recording *r, double t);
+/* The script (docs/animation-format.md) that iir_anim_parse accepts and that reproduces the light,
+ * camera and exposure at every recorded time; wrapped in the `record` reply, whose "keyframes" are
+ * the light track's keys. */
 char *iird_json_record_stop(const iird_recording *r, int64_t seq);
 char *iird_json_record_start(int64_t seq);
 /* The `record` reply with the script so far; continues: the recording goes on (a scene switch:
@@ -245,6 +268,21 @@ char *iird_json_record_start(int64_t seq);
 char *iird_json_record_part(const iird_recording *r, int64_t seq, bool continues);
 /* The script alone (malloc'd JSON text, NULL on out-of-memory), e.g. to save it to a file. */
 char *iird_recording_script(const iird_recording *r);
+
+/* ---- save: the session's lights and camera as a scene sidecar (docs/scene-format.md) ---- */
+typedef struct iird_sidecar_view {
+    const char *base; /* the scene it is based on: "builtin" or a name in the scenes dir */
+    const iir_camera *camera;
+    float aspect; /* the camera's width / height (the session's frame) */
+    const iir_light *lights;
+    uint32_t num_lights;
+} iird_sidecar_view;
+/* The sidecar as indented JSON text, for the file (malloc'd; NULL on out-of-memory). */
+char *iird_sidecar_text(const iird_sidecar_view *v);
+/* The `save` reply: the sidecar, and with a name (NULL: none) that name and the scene names a
+ * client may now ask for (scenes: NULL-terminated). */
+char *iird_json_save(const iird_sidecar_view *v, int64_t seq, const char *name,
+                     const char *const *scenes);
 
 /* ---- binary frames ---- */
 typedef struct iird_frame_header {

@@ -22,12 +22,6 @@ iird_settings iird_settings_default(void)
     snprintf(s.method, sizeof s.method, "%s", "iir");
     s.params = iir_params_default();
     iir_params_defaults(&iird_stream_table, &s);
-    for (const iir_param_table *const *t = iir_method_all_tables(); *t; t++)
-        for (int i = 0; i < (*t)->count; i++) {
-            const iir_param *row = &(*t)->rows[i];
-            iir_error e;
-            if (row->live.def != 0.0) iir_params_set(&s.params, row, row->live.def, &e);
-        }
     return s;
 }
 

@@ -162,13 +162,34 @@ static cJSON *params_json(const iird_settings *s)
 }
 
 /* Adds scene, light, camera and params to o. */
+/* What the method does not render of the scene (iir_method_dropped), for the client's notes. */
+static cJSON *notes_json(const iird_state_view *s)
+{
+    cJSON *a = cJSON_CreateArray();
+    if (!a || !s->scene_data) return a;
+    enum { MAX_NOTES = 32 };
+    iir_dropped d[MAX_NOTES];
+    const iir_scene *sc = s->scene_data;
+    bool own = sc->num_lights > 0;
+    uint32_t n = iir_method_dropped(s->settings->method, sc, own ? sc->lights : s->light,
+                                    own ? sc->num_lights : 1, d, MAX_NOTES);
+    bool ok = true;
+    for (uint32_t i = 0; ok && i < n && i < MAX_NOTES; i++) {
+        cJSON *e = cJSON_CreateObject();
+        ok = add_item(a, NULL, e) && add_str(e, "method", d[i].method) &&
+             add_str(e, "kind", d[i].kind) && add_str(e, "name", d[i].name) &&
+             add_str(e, "what", d[i].what);
+    }
+    return keep_if(a, ok);
+}
+
 static bool add_state(cJSON *o, const iird_state_view *s)
 {
     return add_str(o, "scene", s->scene) && iird_json_add_num(o, "generation", s->generation) &&
            add_item(o, "light", light_json(s->light)) &&
            add_bool(o, "default_light", s->default_light) &&
            add_item(o, "camera", camera_json(s->camera)) &&
-           add_item(o, "params", params_json(s->settings));
+           add_item(o, "params", params_json(s->settings)) && add_item(o, "notes", notes_json(s));
 }
 
 char *iird_json_state(const iird_state_view *s, int64_t seq)
@@ -204,7 +225,7 @@ static cJSON *limits_json(const iird_limits *lim)
     bool ok = o && iird_json_add_num(o, "max_width", lim->max_width) &&
               iird_json_add_num(o, "max_height", lim->max_height) &&
               iird_json_add_num(o, "max_message_bytes", IIRD_MAX_MESSAGE_BYTES) &&
-              iird_json_add_num(o, "max_rate", 250);
+              iird_json_add_num(o, "max_rate", 250) && add_bool(o, "allow_save", lim->allow_save);
     return keep_if(o, ok);
 }
 

@@ -49,6 +49,7 @@ static const char *const SCENE_FIELDS[] = {"name", NULL};
 static const char *const PICK_FIELDS[] = {"x", "y", NULL};
 static const char *const SNAPSHOT_FIELDS[] = {"format", NULL};
 static const char *const RECORD_FIELDS[] = {"action", "fps", NULL};
+static const char *const SAVE_FIELDS[] = {"name", NULL};
 
 static const char *const FORMAT_NAMES[] = {"png", "exr", NULL};
 static const char *const ACTION_NAMES[] = {"start", "stop", NULL};
@@ -254,6 +255,27 @@ static bool parse_record(const iird_pctx *c, const cJSON *const *f, const iird_l
     return true;
 }
 
+/* A name to save a scene under: a bare name as the scenes directory's (letters, digits, '_',
+ * '-', '.'; not starting with '.', no '..'), and not the built-in box's. */
+static bool parse_save(const iird_pctx *c, const cJSON *const *f, const iird_limits *lim,
+                       iird_msg *out)
+{
+    (void)lim;
+    char *name = out->u.save.name;
+    out->u.save.has_name = f[0] != NULL;
+    if (!f[0]) return true;
+    if (!iird_get_string(c, f[0], "name", 100, name)) return false;
+    bool bad = name[0] == '\0' || name[0] == '.' || strstr(name, "..") || !strcmp(name, "builtin");
+    for (const char *s = name; *s && !bad; s++)
+        bad = !((*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') || (*s >= '0' && *s <= '9') ||
+                *s == '_' || *s == '-' || *s == '.');
+    if (bad)
+        return iird_proto_fail(c->err, IIRD_E_BAD_FIELD, "save.name",
+                               "save.name must be a new scene's bare name: letters, digits, '_', "
+                               "'-' and '.', not starting with '.', no '..', not \"builtin\"");
+    return true;
+}
+
 /* ======================== the message ======================== */
 
 typedef bool (*parse_fn)(const iird_pctx *c, const cJSON *const *f, const iird_limits *lim,
@@ -273,6 +295,7 @@ static const struct msg_kind {
     {"pick", IIRD_MSG_PICK, PICK_FIELDS, parse_pick},
     {"snapshot", IIRD_MSG_SNAPSHOT, SNAPSHOT_FIELDS, parse_snapshot},
     {"record", IIRD_MSG_RECORD, RECORD_FIELDS, parse_record},
+    {"save", IIRD_MSG_SAVE, SAVE_FIELDS, parse_save},
 };
 enum { NUM_KINDS = sizeof KINDS / sizeof KINDS[0] };
 

@@ -30,8 +30,10 @@ static void render_usage(FILE *f)
         "                       With --anim a directory (created if missing) that gets\n"
         "                       frame_NNNNN.<format> and render.json\n"
         "  --method NAME        pt | ir | iir (default pt; with --anim iir)\n"
-        "  --size WxH           image size (default 512x512; with --anim 1280x720)\n"
-        "  --exposure E         PNG (and video) exposure in stops (default 0)\n"
+        "  --size WxH           image size (default 512x512; with --anim 512 high and as wide\n"
+        "                       as the scene camera's aspect asks, 910x512 when it gives none)\n"
+        "  --exposure E         PNG (and video) exposure in stops (default 0; with --anim\n"
+        "                       the script's exposure when it has one)\n"
         "  --anim PATH          animation script (docs/animation-format.md), or a path the\n"
         "                       scene's sidecar names\n"
         "  --frames A:B         with --anim: script frames A..B-1 (B excluded); A: = to the end.\n"
@@ -90,6 +92,7 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
         break;
     case OPT_EXPOSURE:
         st = iird_parse_float(arg, "--exposure", -30.f, 30.f, &o->exposure, err);
+        o->exposure_given = true;
         break;
     }
     return st;
@@ -130,46 +133,51 @@ static int parse_args(int argc, char **argv, render_opts *o)
         return IIRD_EXIT_USAGE;
     }
     o->method = render_method(o);
-    if (!o->size_given && o->anim) o->width = 1280, o->height = 720;
-    if (o->anim) return -1;
+    if (o->anim) return -1; /* its default size follows the scene (cmd_render_anim.c) */
     iir_error err = {0};
     if (iird_check_output(o->out, &err) != IIR_OK) return iird_report("render", &err);
     return -1;
 }
 
-/* A still's samples per pixel: the spp parameter as pt reads it (ir and iir refine at most that
- * many passes, fewer when they converge first). */
-static int still_spp(const iir_params *p)
+/* Largest divisor of total that is at most total/20, so ~20 progress steps add up to exactly it. */
+static int chunk_for(uint64_t total)
 {
-    return (int)iir_method_param_value(iir_method_find_param("pt", "spp"), p);
-}
-
-/* Largest divisor of spp that is at most spp/20, so ~20 progress steps add up to exactly spp. */
-static int chunk_for(int spp)
-{
-    int limit = spp / 20 > 1 ? spp / 20 : 1;
-    for (int d = limit; d > 1; d--)
-        if (spp % d == 0) return d;
+    uint64_t limit = total / 20 > 1 ? total / 20 : 1;
+    for (uint64_t d = limit; d > 1; d--)
+        if (total % d == 0) return (int)d;
     return 1;
 }
 
-static iir_status render_still(const render_opts *o, iir_method *m, const iir_scene *scene,
+/* A still is the method's converged frame (iir_method_converged_at: pt's refine_passes samples,
+ * at least spp; ir's and iir's refine_passes passes) into *total (0: one frame, for a method that
+ * cannot refine). A method with spp (pt) renders it in about 20 chunks of equal samples -- its
+ * image depends on the total only -- so the progress bar moves and Ctrl-C keeps what is done; the
+ * others refine one pass at a time. *chunked: the parameters to create the method with. */
+static iir_status still_total(const render_opts *o, iir_params *chunked, uint64_t *total,
+                              iir_error *err)
+{
+    *total = iir_method_converged_at(o->method, &o->params);
+    const iir_param *spp = iir_method_find_param(o->method, "spp");
+    *chunked = o->params;
+    return spp && *total > 0 ? iir_params_set(chunked, spp, chunk_for(*total), err) : IIR_OK;
+}
+
+static iir_status render_still(iir_method *m, uint64_t total, const iir_scene *scene,
                                iir_image *img, iir_frame_stats *sum, iir_error *err)
 {
     iir_view view = {scene->lights, scene->num_lights, scene->camera};
     iir_frame_stats fs;
     iird_progress bar;
-    int spp = still_spp(&o->params);
-    iird_progress_start(&bar, "render", spp);
+    iird_progress_start(&bar, "render", (double)total);
     iir_status st = iir_method_render(m, &view, img, &fs, err);
     *sum = fs;
-    while (st == IIR_OK && iir_method_can_refine(m) && !fs.converged &&
-           fs.samples_per_pixel < (uint64_t)spp) {
+    while (st == IIR_OK && iir_method_can_refine(m) && fs.samples_per_pixel < total) {
         iird_progress_update(&bar, (double)fs.samples_per_pixel);
         if (iird_interrupted())
-            return iir_fail(err, IIR_ERR_INTERRUPTED,
-                            "interrupted after %llu of %d samples per pixel",
-                            (unsigned long long)fs.samples_per_pixel, spp);
+            return iir_fail(err, IIR_ERR_INTERRUPTED, "interrupted after %llu of %llu %s",
+                            (unsigned long long)fs.samples_per_pixel, (unsigned long long)total,
+                            iir_method_find_param(iir_method_name(m), "spp") ? "samples per pixel"
+                                                                             : "refinement passes");
         st = iir_method_refine(m, img, &fs, err);
         sum->total_ms += fs.total_ms;
         iir_raystats_add(&sum->rays, &fs.rays);
@@ -179,21 +187,35 @@ static iir_status render_still(const render_opts *o, iir_method *m, const iir_sc
     return st;
 }
 
+/* What the frame holds: samples per pixel (pt) or refinement passes, and the VPLs. */
+static void work_text(const render_opts *o, const iir_frame_stats *fs, char *buf, size_t n)
+{
+    unsigned long long done = (unsigned long long)fs->samples_per_pixel;
+    const char *s = done == 1 ? "" : "s";
+    if (iir_method_find_param(o->method, "spp"))
+        snprintf(buf, n, "%llu sample%s per pixel", done, s);
+    else
+        snprintf(buf, n, "%llu refinement pass%s over %u VPLs", done, done == 1 ? "" : "es",
+                 fs->vpl.count);
+}
+
 static void print_summary(const render_opts *o, const iir_scene *scene, const iir_frame_stats *fs)
 {
     double rays = (double)iir_raystats_total(&fs->rays);
-    char work[64];
-    if (fs->samples_per_pixel > 0)
-        snprintf(work, sizeof work, "%llu spp, %.0f bounces",
-                 (unsigned long long)fs->samples_per_pixel,
-                 iir_method_param_value(iir_method_find_param("pt", "bounces"), &o->params));
-    else
-        snprintf(work, sizeof work, "%u VPLs (%u null), %u shadow maps", fs->vpl.count,
-                 fs->vpl.null_samples, fs->vpl.shadowmaps);
-    printf("wrote %s: %s, %dx%d, method %s, %s, seed %llu, %.2f s, %.1f Mrays (%.2f Mrays/s)\n",
-           o->out, scene->name, o->width, o->height, o->method, work,
-           (unsigned long long)iir_method_param_value(iir_method_any_param("seed"), &o->params),
-           fs->total_ms / 1e3, rays / 1e6, fs->total_ms > 0 ? rays / (fs->total_ms * 1e3) : 0.0);
+    char work[96], settings[1024];
+    work_text(o, fs, work, sizeof work);
+    iird_settings_text(o->method, &o->params, settings, sizeof settings);
+    printf("wrote %s: %s, %dx%d, method %s, %s, %.2f s, %.1f Mrays (%.2f Mrays/s)\n"
+           "%s settings: %s\n",
+           o->out, scene->name, o->width, o->height, o->method, work, fs->total_ms / 1e3,
+           rays / 1e6, fs->total_ms > 0 ? rays / (fs->total_ms * 1e3) : 0.0, o->method, settings);
+}
+
+/* The camera note and the warnings before rendering: what the method leaves out. */
+static void before_render(const render_opts *o, const iir_scene *scene)
+{
+    iird_note_camera("render", scene);
+    iird_warn_dropped("render", o->method, scene, scene->lights, scene->num_lights);
 }
 
 int iird_cmd_render(int argc, char **argv)
@@ -213,16 +235,18 @@ int iird_cmd_render(int argc, char **argv)
     iir_rt *rt = NULL;
     iir_method *m = NULL;
     iir_image *img = iir_image_create(o.width, o.height);
-    iir_params chunked = o.params;
-    iir_status st = iir_params_set(&chunked, iir_method_find_param("pt", "spp"),
-                                   chunk_for(still_spp(&o.params)), &err);
+    iir_params chunked;
+    uint64_t total = 0;
+    iir_status st = iir_method_params_validate(o.method, &o.params, NULL, NULL, &err);
+    if (st == IIR_OK) st = still_total(&o, &chunked, &total, &err);
     if (st == IIR_OK) st = iird_check_memory(o.method, &o.params, o.width, o.height, &err);
     if (st == IIR_OK)
         st = iir_scene_open(o.scene, iird_scenes_dir(o.scenes_dir), &scene, &rt, &err);
+    if (st == IIR_OK) before_render(&o, scene);
     if (st == IIR_OK) st = iir_method_create(o.method, scene, rt, &chunked, &m, &err);
     iir_frame_stats fs = {0};
     iird_catch_interrupts();
-    if (st == IIR_OK) st = render_still(&o, m, scene, img, &fs, &err);
+    if (st == IIR_OK) st = render_still(m, total, scene, img, &fs, &err);
     if (st == IIR_OK || (st == IIR_ERR_INTERRUPTED && fs.samples_per_pixel > 0)) {
         iir_error werr = {0};
         if (iir_image_write(img, o.out, o.exposure, &werr) != IIR_OK)
@@ -231,6 +255,10 @@ int iird_cmd_render(int argc, char **argv)
             print_summary(&o, scene, &fs);
         else
             fprintf(stderr, "iird render: wrote the partial image to %s\n", o.out);
+    }
+    if (st == IIR_OK && iird_image_black(img)) {
+        iir_view view = {scene->lights, scene->num_lights, scene->camera};
+        iird_warn_black("render", "the image is", scene, rt, &view);
     }
     rc = st == IIR_OK ? 0 : iird_report("render", &err);
     iir_method_destroy(m);

@@ -15,6 +15,7 @@
 #define _GNU_SOURCE /* program_invocation_name */
 #include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <omp.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -97,7 +98,8 @@ static void end_bar(iird_progress *bar, iir_status st)
 /* ---- one run ---- */
 
 typedef struct anim_job {
-    const iird_render_opts *o;
+    const iird_render_opts *o; /* &opts */
+    iird_render_opts opts;     /* the options, with the default size settled (set_size) */
     iir_scene *scene;
     iir_rt *rt;
     iir_anim *anim;
@@ -112,6 +114,7 @@ typedef struct anim_job {
     iird_video *video;
     iird_render_run run;
     double start_ms, frames_start_ms, render_ms, last_log_ms;
+    int black_frames, first_black; /* frames that came out entirely black */
 } anim_job;
 
 /* FNV-1a 64 over bytes. */
@@ -128,8 +131,17 @@ static uint64_t fnv_vec(uint64_t h, iir_vec3 v)
     return fnv(h, f, sizeof f);
 }
 
-/* A hash of what the script does at every frame (the moved light and the camera), so a resume
- * with an edited script is refused while the same script by another path is not. */
+/* The exposure of frame f: --exposure when given, else the script's (--exposure's default, 0,
+ * when it has none). */
+static float frame_exposure(const anim_job *j, int f)
+{
+    if (j->o->exposure_given) return j->o->exposure;
+    return iir_anim_exposure(j->anim, j->o->exposure, iir_anim_frame_time(j->anim, f));
+}
+
+/* A hash of what the script does at every frame (the moved light, the camera and, when it sets
+ * the frames' exposure, the exposure), so a resume with an edited script is refused while the
+ * same script by another path is not. */
 static uint64_t script_hash(anim_job *j)
 {
     uint64_t h = fnv(0xcbf29ce484222325ull, &j->count, sizeof j->count);
@@ -139,6 +151,9 @@ static uint64_t script_hash(anim_job *j)
         iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, f);
         h = fnv_vec(fnv_vec(h, v.camera.position), v.camera.target);
         h = fnv(fnv_vec(h, v.camera.up), &v.camera.fov_y, sizeof v.camera.fov_y);
+        float exposure = frame_exposure(j, f);
+        if (!j->o->exposure_given && iir_anim_has_exposure(j->anim))
+            h = fnv(h, &exposure, sizeof exposure);
         if (j->spot == UINT32_MAX) continue;
         const iir_light *l = &v.lights[j->spot];
         h = fnv_vec(fnv_vec(fnv_vec(h, l->position), l->direction), l->intensity);
@@ -169,28 +184,48 @@ static iir_status set_spot(anim_job *j, iir_error *err)
     return st;
 }
 
-/* Scene, script, range, then the output folders (made only once the rest is accepted):
- * everything that can be refused before any work. */
+/* Without --size: the pixels of a 512x512 still's height, as wide as the scene camera's aspect
+ * asks (16:9 for a scene that gives none), at most 1280 wide; even, for the video. */
+static void set_size(anim_job *j)
+{
+    enum { HEIGHT = 512, MAX_WIDTH = 1280 };
+    if (j->opts.size_given) return;
+    double a = j->scene->aspect > 0.f ? j->scene->aspect : 16.0 / 9.0;
+    long w = 2 * lround(HEIGHT * a / 2), h = HEIGHT;
+    if (w > MAX_WIDTH) w = MAX_WIDTH, h = 2 * lround(MAX_WIDTH / a / 2);
+    j->opts.width = w > 2 ? (int)w : 2;
+    j->opts.height = h > 2 ? (int)h : 2;
+}
+
+/* Scene (and the size that follows it), script, range, then the output folders (made only once
+ * the rest is accepted): everything that can be refused before any work. */
 static iir_status load(anim_job *j, iir_error *err)
 {
     const iird_render_opts *o = j->o;
     const char *scenes = iird_scenes_dir(o->scenes_dir);
     iir_status st = iir_method_params_validate(o->method, &o->params, NULL, NULL, err);
-    if (st == IIR_OK) st = iird_check_memory(o->method, &o->params, o->width, o->height, err);
-    if (st == IIR_OK && o->video) st = iird_video_check(o->video, o->width, o->height, err);
+    if (st == IIR_OK && o->video && o->size_given)
+        st = iird_video_check(o->video, o->width, o->height, err);
     char named[128];
     const char *scene = iird_anim_scene_arg(o->scene, o->anim, named, sizeof named);
     if (st == IIR_OK) st = iir_scene_open(scene, scenes, &j->scene, &j->rt, err);
+    if (st == IIR_OK) set_size(j);
+    if (st == IIR_OK) st = iird_check_memory(o->method, &o->params, o->width, o->height, err);
+    if (st == IIR_OK && o->video && !o->size_given)
+        st = iird_video_check(o->video, o->width, o->height, err);
     if (st == IIR_OK)
         st = iird_resolve_anim(j->scene, scenes, o->anim, &j->anim, j->script, sizeof j->script,
                                err);
     if (st == IIR_OK) iird_warn_anim_scene("render", j->anim, scene, j->scene);
+    if (st == IIR_OK) iird_note_camera("render", j->scene);
     if (st == IIR_OK) st = set_range(j, err);
     if (st == IIR_OK) st = set_spot(j, err);
     if (st == IIR_OK) st = iird_prepare_dir(o->out, "--out", err);
     if (st == IIR_OK && o->video) st = iird_prepare_parent(o->video, "--video", err);
     if (st == IIR_OK && !(j->lights = malloc(sizeof(iir_light) * (j->scene->num_lights + 1))))
         st = iir_fail(err, IIR_ERR_NOMEM, "out of memory");
+    if (st == IIR_OK)
+        iird_warn_dropped("render", o->method, j->scene, j->scene->lights, j->scene->num_lights);
     return st;
 }
 
@@ -208,7 +243,7 @@ static iir_status prepare(anim_job *j, iir_error *err)
                                .format = iird_format_ext(o->format),
                                .width = o->width,
                                .height = o->height,
-                               .exposure = o->exposure,
+                               .exposure = frame_exposure(j, 0),
                                .params = &o->params};
     j->run = (iird_render_run){.first = j->first,
                                .end = j->end,
@@ -274,7 +309,8 @@ static iir_status write_frame(anim_job *j, int f, const iir_frame_stats *fs, iir
     snprintf(path, sizeof path, "%s/%s", o->out, name);
     snprintf(part, sizeof part, "%s.part", path);
     double t0 = iir_now_ms();
-    iir_status st = write_image(j->img, o->format, part, o->exposure, err);
+    float exposure = frame_exposure(j, f);
+    iir_status st = write_image(j->img, o->format, part, exposure, err);
     if (st == IIR_OK && rename(part, path) != 0)
         st = iir_fail(err, IIR_ERR_IO, "cannot rename %s to %s: %s", part, name, strerror(errno));
     if (st != IIR_OK) {
@@ -282,10 +318,11 @@ static iir_status write_frame(anim_job *j, int f, const iir_frame_stats *fs, iir
         return st;
     }
     double write_ms = iir_now_ms() - t0;
+    if (iird_image_black(j->img) && j->black_frames++ == 0) j->first_black = f;
     iird_render_log_frame(j->log, f, iir_anim_frame_time(j->anim, f), name, fs, write_ms);
     j->run.done++;
     j->render_ms += fs->total_ms;
-    return j->video ? iird_video_frame(j->video, j->img, o->exposure, err) : IIR_OK;
+    return j->video ? iird_video_frame(j->video, j->img, exposure, err) : IIR_OK;
 }
 
 /* Keeps render.json current during long runs, so even a killed run leaves a useful log. */
@@ -407,6 +444,20 @@ static void report_stop(const anim_job *j, iir_status st, const iir_error *err)
     fputc('\n', stderr);
 }
 
+/* After the frames: how many came out entirely black, and why the first may have. */
+static void warn_black(anim_job *j)
+{
+    if (j->black_frames == 0) return;
+    char what[96];
+    if (j->black_frames == j->run.done)
+        snprintf(what, sizeof what, "all %d frames are", j->black_frames);
+    else
+        snprintf(what, sizeof what, "%d of %d frames (first: frame %d) are", j->black_frames,
+                 j->run.done, j->first_black);
+    iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, j->first_black);
+    iird_warn_black("render", what, j->scene, j->rt, &v);
+}
+
 static void print_summary(const anim_job *j, int video_frames)
 {
     const iird_render_opts *o = j->o;
@@ -425,6 +476,9 @@ static void print_summary(const anim_job *j, int video_frames)
     if (o->video)
         printf("video %s: %d frames at %g fps (H.264)\n", o->video, video_frames,
                iir_anim_fps(j->anim));
+    char settings[1024];
+    iird_settings_text(o->method, &o->params, settings, sizeof settings);
+    printf("%s settings: %s\n", o->method, settings);
 }
 
 /* Closes the video, writes render.json, says what happened; returns the final status. */
@@ -441,6 +495,7 @@ static iir_status finish(anim_job *j, iir_status st, iir_error *err)
     if (vst != IIR_OK && st == IIR_OK) j->run.status = "failed";
     iir_status lst = j->log ? iird_render_log_write(j->log, &lerr) : IIR_OK;
     if (st == IIR_OK && vst == IIR_OK && lst == IIR_OK) print_summary(j, video_frames);
+    if (st == IIR_OK) warn_black(j);
     if (st == IIR_OK && vst != IIR_OK)
         st = vst, *err = verr;
     else if (vst != IIR_OK)
@@ -466,7 +521,8 @@ static void free_job(anim_job *j)
 
 int iird_render_anim(const iird_render_opts *o)
 {
-    anim_job j = {.o = o, .start_ms = iir_now_ms()};
+    anim_job j = {.opts = *o, .start_ms = iir_now_ms()};
+    j.o = &j.opts;
     iir_error err = {0};
     iird_catch_interrupts();
     iir_status st = load(&j, &err);

@@ -17,6 +17,7 @@ typedef struct iird_render_opts {
     int width, height;
     bool size_given;
     float exposure;
+    bool exposure_given; /* --exposure given: it wins over an --anim script's exposure */
     iir_params params;
     /* --anim only. frames_arg / format_arg / video are the option values as given: pointers
      * into argv (the resume hint drops --frames and --video by them), NULL when absent. */

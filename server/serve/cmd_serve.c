@@ -40,6 +40,8 @@ static void serve_usage(FILE *f)
         "  --port N             TCP port (default 8080; 0 = any free port)\n"
         "  --scene NAME|PATH    the startup scene\n"
         "  --scenes DIR         where clients' scene names are looked up (default ./scenes)\n"
+        "  --allow-save         clients may save their lights and camera as a new scene in\n"
+        "                       the scenes directory (save with a name; never over a scene)\n"
         "  --web DIR            the web client's folder (default $IIR_WEB, ./web, the source's)\n"
         "  --max-sessions N     open WebSocket sessions at most (default 8)\n"
         "  --max-sessions-per-address N  sessions one client address may hold (default\n"
@@ -66,7 +68,7 @@ static void serve_usage(FILE *f)
         "64 usage.\n"
         "\n"
         "The parameters below set a new session's defaults, which are otherwise each\n"
-        "parameter's live-session default (welcome in docs/protocol.md; pt's spp is 1);\n"
+        "parameter's one default (as for every command; welcome in docs/protocol.md);\n"
         "clients change them with params.\n");
 }
 
@@ -90,6 +92,7 @@ enum {
     OPT_MAX_MEMORY,
     OPT_MAX_SESSION_MEMORY,
     OPT_RENDER_SLOTS,
+    OPT_ALLOW_SAVE,
 };
 
 static iir_status parse_host(const char *arg, const char **out, iir_error *err)
@@ -134,6 +137,8 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
                              &cfg->max_sessions_per_address, err);
     case OPT_RENDER_SLOTS:
         return parse_int_opt(arg, "--render-slots", 1, 64, &cfg->render_slots, err);
+    case OPT_ALLOW_SAVE:
+        return cfg->limits.allow_save = true, IIR_OK;
     case OPT_IDLE_TIMEOUT:
         return parse_int_opt(arg, "--idle-timeout", 0, 7 * 86400, &cfg->idle_timeout_s, err);
     case OPT_MAX_SIZE:
@@ -306,6 +311,7 @@ int iird_cmd_serve(int argc, char **argv)
         {"max-memory", required_argument, 0, OPT_MAX_MEMORY},
         {"max-session-memory", required_argument, 0, OPT_MAX_SESSION_MEMORY},
         {"render-slots", required_argument, 0, OPT_RENDER_SLOTS},
+        {"allow-save", no_argument, 0, OPT_ALLOW_SAVE},
         {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     static const iird_command cmd = {"serve", longopts, serve_usage, parse_option, NULL};

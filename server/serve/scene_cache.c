@@ -26,7 +26,8 @@ typedef struct cache_slot {
 
 struct iird_scene_cache {
     char *dir;
-    char **names; /* NULL-terminated */
+    char **names; /* NULL-terminated; guarded by lock. Only the service thread adds names (a saved
+                     scene), so it may read them without the lock. */
     pthread_mutex_t lock;
     pthread_cond_t loaded;     /* broadcast when a load finishes (either way) */
     cache_slot *slots;         /* guarded by lock */
@@ -129,11 +130,34 @@ const char *const *iird_scene_cache_names(const iird_scene_cache *c)
     return (const char *const *)c->names;
 }
 
-bool iird_scene_cache_has(const iird_scene_cache *c, const char *name)
+static bool has_locked(const iird_scene_cache *c, const char *name)
 {
     for (char **n = c->names; *n; n++)
         if (!strcmp(*n, name)) return true;
     return false;
+}
+
+bool iird_scene_cache_has(const iird_scene_cache *c, const char *name)
+{
+    pthread_mutex_t *lock = (pthread_mutex_t *)&c->lock; /* guards names, not c's other fields */
+    pthread_mutex_lock(lock);
+    bool has = has_locked(c, name);
+    pthread_mutex_unlock(lock);
+    return has;
+}
+
+const char *iird_scene_cache_dir(const iird_scene_cache *c)
+{
+    return c->dir;
+}
+
+bool iird_scene_cache_in_dir(const iird_scene_cache *c, const iird_scene_entry *e)
+{
+    const cache_slot *s = (const cache_slot *)e;
+    char path[PATH_MAX], real[PATH_MAX];
+    if (!strcmp(s->key, "builtin")) return true;
+    snprintf(path, sizeof path, "%s/%s", c->dir, e->name);
+    return realpath(path, real) && !strcmp(real, s->key);
 }
 
 static const char *base_name(const char *path)
@@ -192,12 +216,23 @@ static void unlink_slot(iird_scene_cache *c, cache_slot *s)
 
 /* Loads the slot's scene with the lock released (its key is "builtin" or an existing path, so
  * nothing is looked up in a scenes folder); publishes the result under it. */
+/* A camera iird chose (the scene has none) goes to the log, so the operator knows where it is. */
+static void log_camera(const char *name, const iir_scene *scene)
+{
+    if (scene->camera_origin != IIR_CAMERA_OUTSIDE && scene->camera_origin != IIR_CAMERA_INSIDE)
+        return;
+    char line[512];
+    iir_scene_describe_camera(scene, line, sizeof line);
+    fprintf(stderr, "iird serve: scene %s: camera: %s\n", name, line);
+}
+
 static iir_status load_slot(iird_scene_cache *c, cache_slot *s, iir_error *err)
 {
     iir_scene *scene = NULL;
     iir_rt *rt = NULL;
     pthread_mutex_unlock(&c->lock);
     iir_status st = iir_scene_open(s->key, NULL, &scene, &rt, err);
+    if (st == IIR_OK) log_camera(s->entry.name, scene);
     pthread_mutex_lock(&c->lock);
     s->loading = false;
     s->scene = scene;
@@ -288,12 +323,12 @@ void iird_scene_cache_release(iird_scene_cache *c, const iird_scene_entry *e)
     if (dead) slot_free(dead);
 }
 
-/* Adds name to the list (after "builtin", in order) unless it is there. */
+/* Adds name to the list (after "builtin", in order) unless it is there (the lock is held). */
 static void list_name(iird_scene_cache *c, const char *name)
 {
     size_t n = 0;
     while (c->names[n]) n++;
-    char *copy = iird_scene_cache_has(c, name) ? NULL : strdup(name);
+    char *copy = has_locked(c, name) ? NULL : strdup(name);
     char **grown = copy ? realloc(c->names, (n + 2) * sizeof *grown) : NULL;
     if (!grown) {
         free(copy);
@@ -316,7 +351,16 @@ void iird_scene_cache_set_startup(iird_scene_cache *c, const iird_scene_entry *e
 {
     iird_scene_cache_pin(c, e);
     c->startup = (const cache_slot *)e;
+    pthread_mutex_lock(&c->lock);
     list_name(c, e->name);
+    pthread_mutex_unlock(&c->lock);
+}
+
+void iird_scene_cache_add_name(iird_scene_cache *c, const char *name)
+{
+    pthread_mutex_lock(&c->lock);
+    list_name(c, name);
+    pthread_mutex_unlock(&c->lock);
 }
 
 size_t iird_scene_cache_loaded(iird_scene_cache *c)

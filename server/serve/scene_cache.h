@@ -34,10 +34,19 @@ iird_scene_cache *iird_scene_cache_create(const char *scenes_dir);
 void iird_scene_cache_destroy(iird_scene_cache *c);
 
 /* The names a client may load, NULL-terminated, sorted: "builtin" then the folders (and scene
- * files) of the scenes directory. Valid until destroy. */
+ * files) of the scenes directory, and scenes saved since. Service thread only: valid until the
+ * next iird_scene_cache_add_name. */
 const char *const *iird_scene_cache_names(const iird_scene_cache *c);
-/* True when name is one of iird_scene_cache_names. */
+/* True when name is one of iird_scene_cache_names. Any thread. */
 bool iird_scene_cache_has(const iird_scene_cache *c, const char *name);
+/* Lists a scene just saved into the scenes directory (a folder of that name), for every session
+ * from now on. Service thread only; out of memory leaves the list as it was. */
+void iird_scene_cache_add_name(iird_scene_cache *c, const char *name);
+/* The scenes directory, as given. */
+const char *iird_scene_cache_dir(const iird_scene_cache *c);
+/* True when e is the built-in box or the scene of its name in the scenes directory (not a
+ * startup scene given as a path elsewhere), so a sidecar can name it as its "base". */
+bool iird_scene_cache_in_dir(const iird_scene_cache *c, const iird_scene_entry *e);
 
 /* A new reference to scene `name_or_path`, loading it if no session holds it (this can take
  * seconds for a large scene). "builtin" (or NULL) is the built-in Cornell box; any other text is

@@ -204,14 +204,17 @@ iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_
     iird_recording *r = iird_recording_create(fps, s->scene->name);
     if (!r) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory"), NULL;
     s->rec_start_ms = iir_now_ms();
-    if (!iird_recording_add(r, 0.0, &s->light, err)) iird_recording_destroy(r), r = NULL;
+    bool ok = iird_recording_add(r, 0.0, &s->light, err) &&
+              iird_recording_add_camera(r, 0.0, &s->camera, err) &&
+              iird_recording_add_exposure(r, 0.0, s->settings.exposure, err);
+    if (!ok) iird_recording_destroy(r), r = NULL;
     return r;
 }
 
 iird_state_view iird_state_view_locked(const iird_session *s)
 {
-    iird_state_view v = {s->scene->name, &s->light,     &s->camera,
-                         &s->settings,   s->generation, s->light_index < 0};
+    iird_state_view v = {s->scene->name, &s->light,          &s->camera,     &s->settings,
+                         s->generation,  s->light_index < 0, s->scene->scene};
     return v;
 }
 

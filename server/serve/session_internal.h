@@ -168,8 +168,8 @@ void iird_queue_locked(iird_session *s, out_msg msg);
 void iird_queue_error(iird_session *s, const iird_proto_error *e);
 /* The session's state as the protocol's JSON builders read it (lock held). */
 iird_state_view iird_state_view_locked(const iird_session *s);
-/* A new recording of the session's scene whose first key (t = 0) is the current light; NULL with
- * err filled on out-of-memory. Lock held. */
+/* A new recording of the session's scene whose first keys (t = 0) are the current light, camera
+ * and exposure; NULL with err filled on out-of-memory. Lock held. */
 iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_proto_error *err);
 
 /* " -- try ir or pt": the methods that can render light, other than `except`, as the end of an

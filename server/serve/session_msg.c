@@ -9,6 +9,7 @@
 #include "iir/light_move.h"
 #include "iir/timer.h"
 #include "budget.h"
+#include "scene_save.h"
 #include "session_internal.h"
 
 /* ======================== pieces, size and rate ======================== */
@@ -66,6 +67,12 @@ void iird_session_receive(iird_session *s, const void *data, size_t len, bool fi
 }
 
 /* ======================== the messages ======================== */
+
+/* Seconds since the recording started (the lock is held). */
+static double rec_time_locked(const iird_session *s)
+{
+    return (iir_now_ms() - s->rec_start_ms) / 1e3;
+}
 
 /* An input changed the state (the lock is held): the worker renders the newest. */
 static void input_changed_locked(iird_session *s, int64_t seq)
@@ -157,6 +164,8 @@ static bool on_camera(iird_session *s, const iird_msg *m, iird_proto_error *err)
     pthread_mutex_lock(&s->lock);
     iir_camera camera = s->camera;
     bool ok = iird_apply_camera(&m->u.camera, &camera, err);
+    if (ok && s->rec) /* recorded before it is applied, as the light */
+        ok = iird_recording_add_camera(s->rec, rec_time_locked(s), &camera, err);
     if (ok) {
         s->camera = camera;
         input_changed_locked(s, m->seq);
@@ -177,10 +186,15 @@ static bool on_params(iird_session *s, const iird_msg *m, iird_proto_error *err)
         ok = iird_proto_fail(err, IIRD_E_UNSUPPORTED, "params.method", "scene %s: %s%s",
                              s->scene->name, e.msg, alt);
     }
+    /* a new exposure is recorded once nothing can refuse the message any more */
+    bool rec_exposure = ok && s->rec && settings.exposure != s->settings.exposure;
+    double rec_t = s->rec ? rec_time_locked(s) : 0.0;
+    if (rec_exposure) ok = iird_recording_room(s->rec, rec_t, err);
     /* last: the reservation changes only when the settings do */
     ok = ok &&
          iird_budget_reserve(s->env->budget, &s->reserved, iird_session_estimate(&settings), err);
     char *json = NULL;
+    if (ok && rec_exposure) iird_recording_add_exposure(s->rec, rec_t, settings.exposure, err);
     if (ok) {
         s->settings = settings;
         s->generation++;
@@ -290,12 +304,89 @@ static bool on_record(iird_session *s, const iird_msg *m, iird_proto_error *err)
         ok = iird_proto_fail(err, IIRD_E_BAD_FIELD, "record.action",
                              "stop without a recording: send action start first");
     } else {
+        iird_recording_end(s->rec, rec_time_locked(s));
         json = iird_json_record_stop(s->rec, m->seq);
         iird_recording_destroy(s->rec);
         s->rec = NULL;
     }
     if (ok) iird_queue_text_locked(s, json, false);
     pthread_mutex_unlock(&s->lock);
+    free(json);
+    return ok;
+}
+
+/* ---- save ---- */
+
+/* What a save needs of the session, copied under its lock (the worker may swap the scene). */
+typedef struct save_state {
+    char scene[130];
+    bool in_dir; /* the scene can be a sidecar's base */
+    iir_camera camera;
+    float aspect;
+    iir_light *lights; /* the session's light first, then the scene's others, as rendered */
+    uint32_t num_lights;
+} save_state;
+
+static bool copy_save_state(iird_session *s, save_state *st)
+{
+    pthread_mutex_lock(&s->lock);
+    const iir_scene *scene = s->scene->scene;
+    snprintf(st->scene, sizeof st->scene, "%s", s->scene->name);
+    st->in_dir = iird_scene_cache_in_dir(s->env->scenes, s->scene);
+    st->camera = s->camera;
+    st->aspect = (float)s->settings.width / (float)s->settings.height;
+    st->lights = malloc((scene->num_lights + 1) * sizeof *st->lights);
+    if (st->lights) st->lights[st->num_lights++] = s->light;
+    for (uint32_t i = 0; st->lights && i < scene->num_lights; i++)
+        if ((int)i != s->light_index) st->lights[st->num_lights++] = scene->lights[i];
+    pthread_mutex_unlock(&s->lock);
+    return st->lights != NULL;
+}
+
+/* Writes the sidecar as the new scene `name` and lists it; false with err filled otherwise. */
+static bool save_named(iird_session *s, const save_state *st, const iird_sidecar_view *v,
+                       const char *name, iird_proto_error *err)
+{
+    if (!s->env->limits.allow_save)
+        return iird_proto_fail(err, IIRD_E_UNSUPPORTED, "save.name",
+                               "this server does not write scenes (it was started without "
+                               "--allow-save); send save without a name to get the sidecar");
+    if (iird_scene_cache_has(s->env->scenes, name))
+        return iird_proto_fail(err, IIRD_E_BAD_FIELD, "save.name",
+                               "a scene named '%s' exists; pick another name", name);
+    if (!st->in_dir)
+        return iird_proto_fail(err, IIRD_E_UNSUPPORTED, "save.name",
+                               "scene %s was loaded from outside the scenes directory, so a saved "
+                               "scene cannot name it as its base; send save without a name to "
+                               "get the sidecar",
+                               st->scene);
+    char *text = iird_sidecar_text(v);
+    bool ok = text ? iird_scene_save(iird_scene_cache_dir(s->env->scenes), name, text, err)
+                   : iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
+    free(text);
+    if (ok) iird_scene_cache_add_name(s->env->scenes, name);
+    return ok;
+}
+
+/* `save`: the session's lights and camera as a sidecar based on its scene, sent back; with a
+ * name also written into the scenes directory as a new scene (only with --allow-save). */
+static bool on_save(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    const char *name = m->u.save.has_name ? m->u.save.name : NULL;
+    save_state st = {0};
+    if (!copy_save_state(s, &st))
+        return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
+    iird_sidecar_view v = {st.scene, &st.camera, st.aspect, st.lights, st.num_lights};
+    bool ok = !name || save_named(s, &st, &v, name, err);
+    char *json =
+        ok ? iird_json_save(&v, m->seq, name, iird_scene_cache_names(s->env->scenes)) : NULL;
+    free(st.lights);
+    if (ok && !json) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
+    if (ok) {
+        pthread_mutex_lock(&s->lock);
+        iird_queue_text_locked(s, json, false);
+        pthread_mutex_unlock(&s->lock);
+    }
     free(json);
     return ok;
 }
@@ -319,6 +410,8 @@ static bool dispatch(iird_session *s, const iird_msg *m, iird_proto_error *err)
         return on_snapshot(s, m, err);
     case IIRD_MSG_RECORD:
         return on_record(s, m, err);
+    case IIRD_MSG_SAVE:
+        return on_save(s, m, err);
     }
     return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "unhandled message type %d", (int)m->type);
 }

@@ -258,6 +258,7 @@ uint64_t iird_session_estimate(const iird_settings *st)
 typedef struct frame_info {
     uint32_t id, pass;
     bool converged;
+    bool reencoded; /* the last frame's image again, only its encoding changed */
     iir_frame_stats stats;
     double encode_ms;
 } frame_info;
@@ -283,7 +284,8 @@ static iir_status encode_frame(worker_state *w, const render_job *j, frame_info 
                            .render_ms = (float)f->stats.total_ms,
                            .encode_ms = (float)f->encode_ms,
                            .pass = f->pass,
-                           .flags = (f->converged ? 1u : 0u) | (f->pass > 0 ? 2u : 0u),
+                           .flags = (f->converged ? 1u : 0u) | (f->pass > 0 ? 2u : 0u) |
+                                    (f->reencoded ? 4u : 0u),
                            .payload_bytes = (uint32_t)*size,
                            .generation = j->generation};
     unsigned char *out = w->back.buf + LWS_PRE;
@@ -338,6 +340,15 @@ static void publish(iird_session *s, const render_job *j, frame_info *f)
 }
 
 /* ======================== the steps ======================== */
+
+/* The VPL counts of a refinement or re-encoded frame: the set of the frame it shows again,
+ * unchanged (every VPL of it valid, none inserted or removed), whatever sets refinement passes
+ * drew: what the stats mean stays the same from a frame to its refinement. */
+static iir_vpl_counts refined_vpl(const iir_vpl_counts *frame)
+{
+    return (iir_vpl_counts){
+        .count = frame->count, .valid = frame->count, .null_samples = frame->null_samples};
+}
 
 static iir_status render_frame(iird_session *s, const render_job *j, const iird_scene_entry *sc,
                                int light_index, frame_info *f, iir_error *err)
@@ -407,9 +418,13 @@ static void render_locked(iird_session *s)
     bool rendered = !same_view(w, &j);
     w->last = j; /* before rendering: the stop hook compares the input version with it */
     omp_set_num_threads(iird_sched_enter(s->env->sched, &s->sched)); /* the frame, its JPEG */
-    if (!rendered) { /* quality, exposure, refine or domain changed */
-        f = (frame_info){.id = ++w->next_id, .pass = w->pass, .converged = w->converged};
-        f.stats = w->last_stats;
+    if (!rendered) { /* quality, exposure, refine or domain changed: no render, no VPL step */
+        f = (frame_info){
+            .id = ++w->next_id, .pass = w->pass, .converged = w->converged, .reencoded = true};
+        f.stats.samples_per_pixel = w->last_stats.samples_per_pixel;
+        f.stats.converged = w->last_stats.converged;
+        f.stats.whole_sweeps = true;
+        f.stats.vpl = refined_vpl(&w->frame_vpl);
     } else {
         st = render_frame(s, &j, sc, light_index, &f, &err);
         w->last_stats = f.stats;
@@ -436,15 +451,6 @@ static void domain_locked(iird_session *s)
     pthread_mutex_unlock(&s->lock);
     send_stale_domain(s, sc);
     pthread_mutex_lock(&s->lock);
-}
-
-/* The VPL counts of a refinement frame: the set of the frame it refines, unchanged (every VPL of it
- * valid, none inserted or removed), whatever sets the passes drew: what the stats mean stays the
- * same from a frame to its refinement. */
-static iir_vpl_counts refined_vpl(const iir_vpl_counts *frame)
-{
-    return (iir_vpl_counts){
-        .count = frame->count, .valid = frame->count, .null_samples = frame->null_samples};
 }
 
 /* A VPL method's refined frame is worth showing only after whole sweeps of its n x n subsets:
@@ -567,18 +573,23 @@ static void snapshot_locked(iird_session *s)
 }
 
 /* A scene switch while recording: the recording so far goes to the client as a `record` reply
- * (its script names the old scene) and a new one starts on the new scene, its first key the reset
- * light, so no script mixes scenes and no reset is lost. Lock held, after the swap. */
+ * (its script names the old scene) and a new one starts on the new scene, its first keys the reset
+ * light, the new scene's camera and the exposure, so no script mixes scenes and no reset is lost.
+ * Lock held, after the swap. */
 static void record_scene_switch_locked(iird_session *s)
 {
     if (!s->rec) return;
     iird_proto_error pe = {.seq = IIRD_NO_SEQ};
+    iird_recording_end(s->rec, (iir_now_ms() - s->rec_start_ms) / 1e3);
     char *json = iird_json_record_part(s->rec, IIRD_NO_SEQ, true);
     int fps = iird_recording_fps(s->rec);
     iird_queue_text_locked(s, json, false);
     free(json);
     iird_recording_destroy(s->rec);
     s->rec = iird_session_record_start_locked(s, fps, &pe);
+    /* the switch resets the camera to the new scene's right after this: start from that one */
+    if (s->rec && !iird_recording_add_camera(s->rec, 0.0, &s->scene->scene->camera, &pe))
+        iird_recording_destroy(s->rec), s->rec = NULL;
 }
 
 /* Loads the requested scene (seconds for a large one, without the lock), then swaps it in and

@@ -36,8 +36,8 @@ expect 2 "broken.scene.json" -- "$iird" render "$tmp/broken.scene.json" --size 8
 
 # A render writes the file and says so; PNG, EXR and PFM all work.
 for ext in png exr pfm; do
-    expect 0 "wrote .*cornell_box, 24x16, method pt, 4 spp" -- \
-        "$iird" render --spp 4 --size 24x16 --out "$tmp/c.$ext"
+    expect 0 "wrote .*cornell_box, 24x16, method pt, 4 samples per pixel" -- \
+        "$iird" render --spp 4 --refine-passes 4 --size 24x16 --out "$tmp/c.$ext"
     [ -s "$tmp/c.$ext" ] || fail "no $ext written"
 done
 head -c 8 "$tmp/c.png" | od -An -tx1 | grep -q "89 50 4e 47" || fail "c.png is not a PNG"

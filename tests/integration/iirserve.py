@@ -261,7 +261,7 @@ class Frame:
         test.assertEqual(self.version, 2, "frame header version")
         test.assertEqual(self.header_len, 44, "frame header length")
         test.assertEqual(self.payload_len, self.size - 44, "payload length field vs message size")
-        test.assertEqual(self.flags & ~3, 0, f"unknown flag bits {self.flags:#x}")
+        test.assertEqual(self.flags & ~7, 0, f"unknown flag bits {self.flags:#x}")
         if kind == 1:
             test.assertGreaterEqual(self.width, 16)
             test.assertGreaterEqual(self.height, 16)

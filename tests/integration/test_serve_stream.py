@@ -292,6 +292,16 @@ class StreamTest(DaemonTest):
             self.assertAlmostEqual(st["params"]["exposure"], 1.5)
             f = await c.wait_frame(min_seq=seq)
             self.assertEqual(f.width, 320)
+            # only the encoding changed: the frame is re-encoded, flagged, and its stats say no render
+            # happened and the VPL set is the one shown before (issue 16)
+            self.assertTrue(f.flags & 4, f"a quality/exposure change re-encodes: flags {f.flags:#x}")
+            s = await c.wait_for(lambda m: isinstance(m, dict) and m.get("type") == "stats" and m.get("frame") == f.id,
+                                 what="the re-encoded frame's stats")
+            self.assertEqual(s["total_ms"], 0, s)
+            self.assertEqual((s["vpl"]["inserted"], s["vpl"]["deleted"]), (0, 0), s)
+            self.assertEqual(s["vpl"]["valid"], s["vpl"]["count"], s)
+            seq, f = await c.move_light(cone_angle=41)
+            self.assertFalse(f.flags & 4, "a light move renders")
         finally:
             await c.close()
 

@@ -1,6 +1,7 @@
 /* test_anim.c -- animation scripts: keys hit exactly, linear and Catmull-Rom interpolation (C1),
- * held fields, step keys, orbit and sweep paths, frame arithmetic, rejection of bad scripts with
- * the field's path in the message, and the shipped Cornell-box paths. */
+ * held fields, step keys, orbit and sweep paths, frame arithmetic, exposure tracks, the camera's up
+ * and the light track's name, a recording's script, rejection of bad scripts with the field's path
+ * in the message, and the shipped Cornell-box paths. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -245,6 +246,93 @@ static void test_aim_and_camera(void **state)
     iir_anim_destroy(a);
 }
 
+/* Exposure: a number is a constant; keys follow the track's interpolation (a recording's step
+ * track holds each value until the next key); without one, the base. */
+static void test_exposure(void **state)
+{
+    (void)state;
+    iir_anim *a = parse_ok("{\"duration\": 2}");
+    assert_false(iir_anim_has_exposure(a));
+    assert_float_equal(iir_anim_exposure(a, 0.5f, 1.0), 0.5f, 0.f);
+    iir_anim_destroy(a);
+    a = parse_ok("{\"duration\": 2, \"exposure\": -1.5}");
+    assert_true(iir_anim_has_exposure(a));
+    assert_float_equal(iir_anim_exposure(a, 0.f, 0.0), -1.5f, 0.f);
+    assert_float_equal(iir_anim_exposure(a, 0.f, 2.0), -1.5f, 0.f);
+    iir_anim_destroy(a);
+    const char *json = "{\"duration\": 2, \"exposure\": {\"interpolation\": \"%s\", \"keys\": ["
+                       "{\"t\": 0, \"stops\": 0}, {\"t\": 1, \"stops\": 2}]}}";
+    char buf[256];
+    snprintf(buf, sizeof buf, json, "step");
+    a = parse_ok(buf);
+    assert_float_equal(iir_anim_exposure(a, 9.f, 0.0), 0.f, 0.f);
+    assert_float_equal(iir_anim_exposure(a, 9.f, 0.999), 0.f, 0.f);
+    assert_float_equal(iir_anim_exposure(a, 9.f, 1.0), 2.f, 0.f);
+    assert_float_equal(iir_anim_exposure(a, 9.f, 5.0), 2.f, 0.f);
+    assert_false(iir_anim_has_light(a) || iir_anim_has_camera(a));
+    iir_anim_destroy(a);
+    snprintf(buf, sizeof buf, json, "linear");
+    a = parse_ok(buf);
+    assert_float_equal(iir_anim_exposure(a, 9.f, 0.5), 1.f, 1e-6f);
+    iir_anim_destroy(a);
+}
+
+/* A camera key may give up (interpolated, any length, the base's when absent); the light track
+ * may name the light it moves. */
+static void test_camera_up_and_light_name(void **state)
+{
+    (void)state;
+    iir_anim *a =
+        parse_ok("{\"duration\": 2, \"light\": {\"name\": \"desk lamp\", \"keys\": [{\"t\": 0}]},"
+                 "\"camera\": {\"keys\": [{\"t\": 0, \"up\": [0, 2, 0]}, {\"t\": 1, \"fov_y\": 40},"
+                 "{\"t\": 2, \"up\": [2, 0, 0]}]}}");
+    assert_string_equal(iir_anim_light_name(a), "desk lamp");
+    iir_camera cam = {iir_v3(0, 1, 3.9f), iir_v3(0, 1, 0), iir_v3(0, 0, 1), 39.3f};
+    assert_near3(iir_anim_camera(a, &cam, 0.0).up, iir_v3(0, 2, 0), 0.f);
+    assert_near3(iir_anim_camera(a, &cam, 1.0).up, iir_v3(1, 1, 0), 1e-6f);
+    assert_near3(iir_anim_camera(a, &cam, 2.0).up, iir_v3(2, 0, 0), 0.f);
+    iir_anim_destroy(a);
+    a = parse_ok("{\"duration\": 2, \"camera\": {\"keys\": [{\"t\": 0, \"fov_y\": 30}]}}");
+    assert_string_equal(iir_anim_light_name(a), "");
+    assert_near3(iir_anim_camera(a, &cam, 1.0).up, iir_v3(0, 0, 1), 0.f);
+    iir_anim_destroy(a);
+}
+
+/* A recording's script (what iird serve's `record` writes) replays its keys exactly: linear light
+ * and camera tracks whose key after a pause is a step key, a step exposure track. */
+static void test_recorded_script(void **state)
+{
+    (void)state;
+    iir_anim *a = parse_ok(
+        "{\"scene\": \"builtin\", \"fps\": 5, \"duration\": 1.6,"
+        "\"light\": {\"name\": \"spot\", \"interpolation\": \"linear\", \"keys\": ["
+        "{\"t\": 0, \"position\": [0, 1.9, 0], \"direction\": [0, -1, 0], \"cone_angle\": 60,"
+        "\"smooth\": 0, \"intensity\": [4.0482664, 2.8575997, 0.95253325]},"
+        "{\"t\": 0.501097, \"step\": true, \"position\": [0.3, 1.7, 0.2],"
+        "\"direction\": [0, -1, 0], \"cone_angle\": 45, \"smooth\": 0, \"intensity\": [4, 2, 1]},"
+        "{\"t\": 0.532105, \"position\": [0.4, 1.7, 0.2]}]},"
+        "\"camera\": {\"interpolation\": \"linear\", \"keys\": ["
+        "{\"t\": 0, \"position\": [0, 1, 3.9], \"target\": [0, 1, 0], \"up\": [0, 1, 0],"
+        "\"fov_y\": 39.3}]},"
+        "\"exposure\": {\"interpolation\": \"step\", \"keys\": [{\"t\": 0, \"stops\": 0},"
+        "{\"t\": 1.2, \"stops\": 1.5}]}}");
+    iir_light base = base_spot();
+    iir_light first = iir_anim_light(a, &base, iir_anim_frame_time(a, 0));
+    iir_light last = iir_anim_light(a, &base, iir_anim_frame_time(a, iir_anim_frame_count(a) - 1));
+    assert_int_equal(iir_anim_frame_count(a), 9);
+    assert_true(first.position.x == 0.f && first.position.y == 1.9f);
+    assert_true(first.cone_angle == iir_radians(60.f));
+    assert_true(last.position.x == 0.4f && last.position.z == 0.2f);
+    assert_true(last.intensity.x == 4.f && last.intensity.z == 1.f);
+    /* held through the pause, not drifting from t = 0; the key itself is hit exactly */
+    assert_true(iir_anim_light(a, &base, 0.5).position.x == 0.f);
+    assert_true(iir_anim_light(a, &base, 0.501097).position.x == 0.3f);
+    assert_float_equal(iir_anim_light(a, &base, 0.516601).position.x, 0.35f, 1e-4f);
+    assert_float_equal(iir_anim_exposure(a, 0.f, iir_anim_frame_time(a, 5)), 0.f, 0.f);
+    assert_float_equal(iir_anim_exposure(a, 0.f, iir_anim_frame_time(a, 6)), 1.5f, 0.f);
+    iir_anim_destroy(a);
+}
+
 /* floor(duration * fps) + 1 frames at frame / fps, clamped. */
 static void test_frames(void **state)
 {
@@ -316,6 +404,20 @@ static const bad_case BAD[] = {
     {"{\"duration\": 5, \"light\": [1]}", "light"},
     {"{\"duration\": 5, \"camera\": {\"keys\": [{\"t\": 0, \"fov_y\": 180}]}}",
      "camera.keys[0].fov_y"},
+    {"{\"duration\": 5, \"camera\": {\"keys\": [{\"t\": 0, \"up\": [0, 0, 0]}]}}",
+     "camera.keys[0].up"},
+    {"{\"duration\": 5, \"camera\": {\"name\": \"cam\", \"keys\": [{\"t\": 0}]}}", "camera.name"},
+    {"{\"duration\": 5, \"light\": {\"name\": 3, \"keys\": [{\"t\": 0}]}}", "light.name"},
+    {"{\"duration\": 5, \"light\": {\"name\": \"\", \"keys\": [{\"t\": 0}]}}", "light.name"},
+    {"{\"duration\": 5, \"exposure\": 31}", "exposure"},
+    {"{\"duration\": 5, \"exposure\": \"1\"}", "exposure"},
+    {"{\"duration\": 5, \"exposure\": {\"keys\": [{\"t\": 0, \"stops\": -31}]}}",
+     "exposure.keys[0].stops"},
+    {"{\"duration\": 5, \"exposure\": {\"keys\": [{\"t\": 0, \"position\": [0, 1, 0]}]}}",
+     "exposure.keys[0].position"},
+    {"{\"duration\": 5, \"exposure\": {\"orbit\": {\"center\": [0, 1, 0], \"radius\": 1}}}",
+     "exposure.orbit"},
+    {"{\"duration\": 5, \"exposure\": {}}", "exposure"},
     {"[1, 2]", "top level"},
     {"{\"duration\": 5,", "JSON"},
 };
@@ -500,12 +602,20 @@ static void test_paths_mean_their_names(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_scene_name),       cmocka_unit_test(test_keys_hit_exactly),
-        cmocka_unit_test(test_linear_midpoints), cmocka_unit_test(test_catmull_rom_c1),
-        cmocka_unit_test(test_held_fields),      cmocka_unit_test(test_step_keys),
-        cmocka_unit_test(test_orbit_and_sweep),  cmocka_unit_test(test_aim_and_camera),
-        cmocka_unit_test(test_frames),           cmocka_unit_test(test_bad_scripts),
+        cmocka_unit_test(test_scene_name),
+        cmocka_unit_test(test_keys_hit_exactly),
+        cmocka_unit_test(test_linear_midpoints),
+        cmocka_unit_test(test_catmull_rom_c1),
+        cmocka_unit_test(test_held_fields),
+        cmocka_unit_test(test_step_keys),
+        cmocka_unit_test(test_orbit_and_sweep),
+        cmocka_unit_test(test_aim_and_camera),
+        cmocka_unit_test(test_frames),
+        cmocka_unit_test(test_bad_scripts),
         cmocka_unit_test(test_shipped_paths),
+        cmocka_unit_test(test_exposure),
+        cmocka_unit_test(test_camera_up_and_light_name),
+        cmocka_unit_test(test_recorded_script),
     };
     const struct CMUnitTest scene_tests[] = {cmocka_unit_test(test_paths_mean_their_names)};
     int failed = cmocka_run_group_tests(tests, NULL, NULL);

@@ -29,20 +29,11 @@ static iir_status n_below_f(const void *o, const iir_params *given, const iir_pa
                             iir_error *err);
 
 static const iir_param ROWS[] = {
-    {"n", IIR_PARAM_INT, offsetof(opts, n), 4, 1, 10, {2, 8}, NULL, "things", "n", IIR_PARAM_LIVE},
-    {"f", IIR_PARAM_FLOAT, offsetof(opts, f), 0.5, 0, 100, {0, 0}, NULL, "", "f", IIR_PARAM_LIVE},
-    {"b", IIR_PARAM_BOOL, offsetof(opts, b), 1, 0, 1, {0, 0}, NULL, "", "b", IIR_PARAM_RESTART},
-    {"e", IIR_PARAM_ENUM, offsetof(opts, e), 2, 0, 2, {0, 0}, ABC, "", "e", IIR_PARAM_LIVE},
-    {"u",
-     IIR_PARAM_U64,
-     offsetof(opts, u),
-     7,
-     0,
-     9007199254740992.0,
-     {0, 0},
-     NULL,
-     "",
-     "u",
+    {"n", IIR_PARAM_INT, offsetof(opts, n), 4, 1, 10, 8, NULL, "things", "n", IIR_PARAM_LIVE},
+    {"f", IIR_PARAM_FLOAT, offsetof(opts, f), 0.5, 0, 100, 0, NULL, "", "f", IIR_PARAM_LIVE},
+    {"b", IIR_PARAM_BOOL, offsetof(opts, b), 1, 0, 1, 0, NULL, "", "b", IIR_PARAM_RESTART},
+    {"e", IIR_PARAM_ENUM, offsetof(opts, e), 2, 0, 2, 0, ABC, "", "e", IIR_PARAM_LIVE},
+    {"u", IIR_PARAM_U64, offsetof(opts, u), 7, 0, 9007199254740992.0, 0, NULL, "", "u",
      IIR_PARAM_RESTART},
 };
 static const iir_param_table TABLE = {"test", ROWS, 5, n_below_f};
@@ -69,7 +60,8 @@ static void test_values(void **state)
     assert_int_equal(iir_param_check(&ROWS[0], 2.5, false, &err), IIR_ERR_INVALID);
     assert_int_equal(iir_param_check(&ROWS[1], NAN, false, &err), IIR_ERR_INVALID);
     assert_int_equal(iir_param_check(&ROWS[1], 99.5, false, &err), IIR_OK);
-    assert_true(iir_param_default(&ROWS[0], true) == 2 && iir_param_default(&ROWS[0], false) == 4);
+    /* one default, for a live session and a command alike; only the maximum differs */
+    assert_true(iir_param_max(&ROWS[0], true) == 8 && iir_param_max(&ROWS[0], false) == 10);
 
     assert_int_equal(iir_param_parse(&ROWS[3], "b", &v, &err), IIR_OK);
     assert_true(v == 1);
@@ -144,7 +136,8 @@ static void test_methods_agree(void **state)
             assert_non_null(y);
             assert_int_equal(x->type, y->type);
             assert_true(x->def >= x->lo && x->def <= x->hi);
-            assert_true(iir_param_default(x, true) <= iir_param_max(x, true));
+            /* one default per parameter (issue 16), and one a live session may use */
+            assert_true(x->def <= iir_param_max(x, true));
             assert_true(strlen(x->help) > 0);
             if (x->type == IIR_PARAM_ENUM) {
                 for (int k = 0; x->choices[k] || y->choices[k]; k++)
@@ -169,6 +162,10 @@ static void test_methods_agree(void **state)
     assert_true(iir_method_param_value(iir_method_find_param("iir", "weights"), &p) == ip.weights);
     assert_true((float)iir_method_param_value(iir_method_find_param("iir", "regen_threshold"),
                                               &p) == ip.regen_threshold);
+    /* pt's frames have 1 sample everywhere; a converged frame (a still) has refine_passes */
+    assert_true(iir_method_param_value(iir_method_find_param("pt", "spp"), &p) == 1);
+    assert_int_equal(iir_method_converged_at("pt", &p),
+                     (uint64_t)iir_method_param_value(iir_method_any_param("refine_passes"), &p));
     iir_indirect_params ind = iir_indirect_params_default();
     assert_true(iir_method_param_value(iir_method_any_param("interleave"), &p) == ind.interleave);
     assert_true((float)iir_method_param_value(iir_method_any_param("clamp"), &p) == ind.clamp);

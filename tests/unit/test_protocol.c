@@ -22,7 +22,7 @@
 
 /* ======================== helpers ======================== */
 
-static iird_limits LIM = {1920, 1080};
+static iird_limits LIM = {.max_width = 1920, .max_height = 1080};
 
 static iird_msg parse_ok(const char *json)
 {
@@ -637,7 +637,7 @@ static void test_params_apply(void **state)
     iird_settings s = iird_settings_default(), before;
     iird_proto_error e;
     assert_string_equal(s.method, "iir");
-    /* a live session starts at each row's live default: pt at 1 sample per pixel */
+    /* a live session starts at each row's one default: pt at 1 sample per pixel */
     assert_true(val(&s, "bounces") == 2 && val(&s, "spp") == 1 && s.width == 512 &&
                 s.height == 384);
     assert_true(s.quality == 80 && s.exposure == 0.f && s.refine && s.domain);
@@ -666,7 +666,7 @@ static void test_params_apply(void **state)
          "params.width"},
         {"{\"type\":\"params\",\"height\":600}", IIRD_E_OUT_OF_RANGE, "params.height"},
     };
-    iird_limits small = {640, 480};
+    iird_limits small = {.max_width = 640, .max_height = 480};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         m = parse_ok(bad[i].json);
         before = s;
@@ -854,7 +854,7 @@ static void test_json_replies(void **state)
     iir_error ie;
     assert_int_equal(
         iir_params_set(&s.params, iir_method_any_param("seed"), 9007199254740992.0, &ie), IIR_OK);
-    iird_state_view v = {"builtin", &L, &C, &s, 4, false};
+    iird_state_view v = {"builtin", &L, &C, &s, 4, false, NULL};
     char *text = iird_json_state(&v, 3);
     assert_non_null(strstr(text, "\"fov\":39.3}"));
     assert_non_null(strstr(text, "\"cone_angle\":60,"));
@@ -901,7 +901,7 @@ static void test_json_replies(void **state)
     iird_msg m = parse_ok(text);
     iird_settings s2 = s;
     assert_true(iird_apply_params(&m.u.params, &LIM, &s2, &pe));
-    iird_state_view v2 = {"builtin", &L, &C, &s2, 4, false};
+    iird_state_view v2 = {"builtin", &L, &C, &s2, 4, false, NULL};
     char *now = iird_json_state(&v2, IIRD_NO_SEQ);
     assert_string_equal(was, now);
     free(was);

@@ -300,21 +300,35 @@ static void test_counting_and_convergence(void **state)
     assert_int_equal(iir_method_param_set(&p, "refine_passes", 4097, &err), IIR_ERR_INVALID);
     assert_null(bad);
 
-    /* pt: converged at refine_passes x spp samples, and still adds samples when asked */
+    /* pt: converged once it holds refine_passes samples per pixel, rounded up to whole frames of
+       spp (iir_method_converged_at says so too), and still adds samples when asked */
     p = iir_params_default();
     iir_test_set(&p, "spp", 2);
-    iir_test_set(&p, "refine_passes", 3);
+    iir_test_set(&p, "refine_passes", 5);
+    assert_int_equal(iir_method_converged_at("pt", &p), 6);
     iir_method *pt = iir_test_method(f, "pt", &p);
     iir_test_render(pt, &v, img, &fs);
     assert_false(fs.converged);
     refine(pt, img, &fs);
     assert_false(fs.converged);
+    assert_int_equal(fs.samples_per_pixel, 4);
     refine(pt, img, &fs);
     assert_true(fs.converged);
     assert_int_equal(fs.samples_per_pixel, 6);
     refine(pt, img, &fs);
     assert_true(fs.converged);
     assert_int_equal(fs.samples_per_pixel, 8);
+    /* one frame of more samples than refine_passes is converged at once */
+    iir_test_set(&p, "spp", 8);
+    assert_int_equal(iir_method_converged_at("pt", &p), 8);
+    iir_method_destroy(pt);
+    pt = iir_test_method(f, "pt", &p);
+    iir_test_render(pt, &v, img, &fs);
+    assert_true(fs.converged);
+    /* ir and iir converge after refine_passes passes; a method that does not exist never does */
+    assert_int_equal(iir_method_converged_at("iir", &p), 5);
+    assert_int_equal(iir_method_converged_at("ir", &p), 5);
+    assert_int_equal(iir_method_converged_at("nope", &p), 0);
     iir_method_destroy(pt);
     iir_method_destroy(m);
     iir_image_destroy(img);

@@ -1,9 +1,11 @@
 // charts.js -- live charts of the `stats` stream with uPlot (served from web/vendor/uplot/, copied
 // from npm by `make web-deps`): per-phase render time stacked over time, fps and input-to-frame
-// latency, and VPL counts (valid / invalidated / inserted / deleted). Keeps the last WINDOW_S
-// seconds; redraws at most REDRAW_HZ times a second.
+// latency, and VPL counts (the set's size; kept / invalidated / inserted / deleted by the frame's
+// step, as vplstats.js reads them: a frame without a VPL step leaves a gap, a new set has no "kept").
+// Keeps the last WINDOW_S seconds; redraws at most REDRAW_HZ times a second.
 
 import uPlot from '../vendor/uplot/uPlot.esm.js';
+import { vplStep } from './vplstats.js';
 
 const WINDOW_S = 30;
 const REDRAW_HZ = 8;
@@ -40,7 +42,7 @@ export class Charts {
         this.phaseNames = [];
         this.phaseData = null; // [t, ...per phase raw]
         this.perf = [[], [], [], []]; // t, fps, client latency, render ms
-        this.vpl = [[], [], [], [], []]; // t, valid, invalidated, inserted, deleted
+        this.vpl = [[], [], [], [], [], []]; // t, count, kept, invalidated, inserted, deleted
         this.plots = {};
         this.dirty = false;
         this.timer = setInterval(() => this.redraw(), 1000 / REDRAW_HZ);
@@ -64,12 +66,22 @@ export class Charts {
         this.phaseData[0].push(t);
         names.forEach((n, i) => this.phaseData[i + 1].push(phases[n] || 0));
         push(this.perf, [t, stats.fps ?? null, latency, stats.total_ms ?? null]);
-        // VPL counts describe the incremental step of interactive frames; refinement passes have none.
-        const v = !stats.pass && stats.vpl ? stats.vpl : {};
-        push(this.vpl, [t, v.valid ?? null, v.invalidated ?? null, v.inserted ?? null, v.deleted ?? null]);
+        // Only frames with a VPL step have points: refinement passes keep their frame's set, pt has none.
+        const st = vplStep(stats);
+        const step = st.kind === 'new' || st.kind === 'updated';
+        const val = (x) => (step ? x : null);
+        push(this.vpl, [t, val(st.count), val(st.kept), val(st.invalidated), val(st.inserted), val(st.deleted)]);
         for (const d of [this.phaseData, this.perf, this.vpl]) trim(d, t - WINDOW_S);
         if (!this.plots.perf) this.makeFixedCharts();
         this.dirty = true;
+    }
+
+    // The VPL chart's newest n rows: [t, count, kept, invalidated, inserted, deleted] (null: no point).
+    vplRows(n = 50) {
+        const len = this.vpl[0].length;
+        const rows = [];
+        for (let i = Math.max(0, len - n); i < len; i++) rows.push(this.vpl.map((col) => col[i]));
+        return rows;
     }
 
     redraw() {
@@ -122,7 +134,8 @@ export class Charts {
         ], { fpsAxis: true });
         this.plots.vpl = this.plot($('#chart-vpl'), '', [
             { label: 't' },
-            { label: 'valid', stroke: '#ffc83c', width: 1.2, points: pts, value: fix(0), spanGaps: true },
+            { label: 'VPLs', stroke: '#d9dde1', width: 1.2, points: pts, value: fix(0), spanGaps: true },
+            { label: 'kept', stroke: '#ffc83c', width: 1.2, points: pts, value: fix(0), spanGaps: false },
             { label: 'invalid', stroke: '#ff5a5a', width: 1, points: pts, value: fix(0), spanGaps: true },
             { label: 'inserted', stroke: '#50ff8c', width: 1, points: pts, value: fix(0), spanGaps: true },
             { label: 'deleted', stroke: '#c77dff', width: 1, points: pts, value: fix(0), spanGaps: true },

@@ -20,7 +20,8 @@ const PENDING_MAX_AGE_MS = 10000;
 const CLOSE_IDLE = 4000;
 
 export class Connection {
-    // url: ws(s)://host:port/ws. handlers: {status(info), welcome(msg), message(msg),
+    // url: ws(s)://host:port/ws. handlers: {status(info), welcome(msg, fresh: the first welcome on
+    // this socket, i.e. a new session; later ones answer a hello sent again), message(msg),
     // frame(header, sentAt: performance.now() of the newest input it answers, or null), badFrame(error)}. token: optional hello token.
     constructor(url, handlers, { client = 'iir-web', token = null } = {}) {
         this.url = url;
@@ -153,12 +154,13 @@ export class Connection {
                 return;
             }
             if (msg.type === 'welcome') {
+                const fresh = !this.ready; // the first on this socket: a new session
                 this.ready = true;
                 this.attempt = 0;
                 this.lastError = '';
                 this.session = msg.session;
                 this.status('connected');
-                this.h.welcome(msg);
+                this.h.welcome(msg, fresh);
                 return;
             }
             if (msg.type === 'error' && ['busy', 'unauthorized', 'idle_timeout'].includes(msg.code)) {

@@ -7,9 +7,15 @@
 //   shift-drag       move the light in the view plane        wheel        light along its axis
 //   right-drag       orbit the camera around its target      shift-wheel  camera dolly
 //   keys             see KEYS below (and the help overlay, index.html)
+//
+// The arrows tilt the spot's aim across the screen (left/right/up/down as the user sees it), so they
+// change something for every spot, also one pointing straight down, where a yaw about the up axis
+// would change nothing; on a point light (no axis) they move the light in the view plane instead.
+// The daemon keeps a moved light inside the scene: main.js puts its position back into the model.
 
 import * as v from './vec.js';
 import { pick as pickMsg } from './protocol.js';
+import { isPoint } from './gizmo.js';
 
 const AIM_STEP_DEG = 2; // arrows; shift: x5
 const MOVE_STEP = 0.02; // WASD/QE, in units of the camera's distance to its target; shift: x5
@@ -140,15 +146,22 @@ export class Controls {
         this.queueLight({ position: L.position });
     }
 
-    // Rotates the spot's axis: yaw about the camera's up hint, pitch about the light's side (the
-    // camera's right when the spot points straight up or down, so "up" tilts it up the screen).
-    aimBy(yawDeg, pitchDeg) {
+    // Tilts the spot's axis so its aim moves right (rightDeg > 0) and up (upDeg > 0) on the screen:
+    // rotations about d x r and d x u, the axes that move d towards the camera's right r and up u.
+    // When the axis points along r (or u) itself, that rotation falls back to one about the camera's
+    // up (or right), which turns it into or out of the screen. A point light moves instead.
+    aimBy(rightDeg, upDeg) {
         const L = this.model.light;
-        const up = this.model.camera.up || [0, 1, 0];
-        let d = v.rotate(L.direction, v.normalize(up), yawDeg * v.DEG);
-        const side = v.cross(d, v.normalize(up));
-        const axis = v.length(side) > 0.05 ? v.normalize(side) : v.cameraBasis(this.model.camera).r;
-        d = v.rotate(d, axis, pitchDeg * v.DEG);
+        const { r, u } = v.cameraBasis(this.model.camera);
+        if (isPoint(L)) {
+            const step = (MOVE_STEP * this.sceneScale()) / AIM_STEP_DEG;
+            this.moveLight(v.add(v.scale(r, rightDeg * step), v.scale(u, upDeg * step)));
+            return;
+        }
+        const about = (k, fallback) => (v.length(k) > 1e-3 ? v.normalize(k) : fallback);
+        let d = v.normalize(L.direction);
+        d = v.rotate(d, about(v.cross(d, r), u), rightDeg * v.DEG);
+        d = v.rotate(d, about(v.cross(d, u), r), upDeg * v.DEG);
         L.direction = v.normalize(d, L.direction);
         this.queueLight({ direction: L.direction });
     }
@@ -230,8 +243,8 @@ export class Controls {
 
 // key -> action(controls, multiplier). Documented in the help overlay and README.
 const KEYS = {
-    ArrowLeft: (c, m) => c.aimBy(AIM_STEP_DEG * m, 0),
-    ArrowRight: (c, m) => c.aimBy(-AIM_STEP_DEG * m, 0),
+    ArrowLeft: (c, m) => c.aimBy(-AIM_STEP_DEG * m, 0),
+    ArrowRight: (c, m) => c.aimBy(AIM_STEP_DEG * m, 0),
     ArrowUp: (c, m) => c.aimBy(0, AIM_STEP_DEG * m),
     ArrowDown: (c, m) => c.aimBy(0, -AIM_STEP_DEG * m),
     w: (c, m) => c.moveLight(v.scale(v.cameraBasis(c.model.camera).u, MOVE_STEP * m * c.sceneScale())),

@@ -1,8 +1,13 @@
 // domain.js -- a live drawing of the spot light's disk domain from `domain` messages: the unit disk,
 // each VPL site's Voronoi cell clipped to it, the Delaunay edges, the sites (new ones and null
-// samples marked) and the sites removed this frame. Drawing only; the data comes from main.js.
-
-const TRAIL = 6; // frames a removed site stays visible, fading
+// samples marked) and the sites removed by the frame shown. Drawing and its caption only; main.js
+// says which domain and which frame are shown.
+//
+// One frame counter: the caption names the frame on screen (the server's frame id, as the image's
+// overlay and the stats panel do). A refinement pass keeps the set of the frame it refines, so its
+// drawing is that frame's sites with nothing new and nothing removed; while frames stream faster than
+// domains come (at most one every 100 ms) the caption says which frame the drawing is of. Removed
+// sites are drawn for the frame that removed them only: they do not pile up.
 
 const COLORS = {
     disk: '#15171a',
@@ -24,8 +29,9 @@ export class DomainView {
         this.caption = caption;
         this.ctx = canvas.getContext('2d');
         this.domain = null;
-        this.method = '';
-        this.trail = []; // `removed` of the last TRAIL domain messages, newest first (fading)
+        this.shown = null; // {frameId, pass, base}: the frame on screen; base: the interactive frame it refines
+        this.note = 'waiting for the first frame'; // the caption when there is no drawing
+        this.removedDrawn = 0; // crosses in the drawing (for tests)
         new ResizeObserver(() => this.resize()).observe(canvas);
         this.resize();
     }
@@ -40,15 +46,12 @@ export class DomainView {
         this.draw();
     }
 
-    // domain: the `domain` message (or null); method: the current method's name for the caption.
-    update(domain, method) {
-        if (!domain) this.trail = [];
-        else if (domain !== this.domain) {
-            this.trail.unshift(domain.removed || []);
-            this.trail.length = Math.min(this.trail.length, TRAIL);
-        }
+    // domain: the `domain` message of the current method, or null; shown: the frame on screen
+    // {frameId, pass, base} or null; note: the caption without a drawing ("pt has no VPL domain").
+    update(domain, shown, note) {
         this.domain = domain;
-        this.method = method || this.method;
+        this.shown = shown;
+        this.note = note;
         this.draw();
     }
 
@@ -57,28 +60,38 @@ export class DomainView {
         const S = this.canvas.width;
         const dpr = window.devicePixelRatio || 1;
         c.clearRect(0, 0, S, S);
+        this.removedDrawn = 0;
+        const d = this.domain;
+        if (!d || !d.sites) {
+            this.caption.textContent = this.note;
+            return;
+        }
         const R = S * 0.46; // unit disk radius in canvas pixels
         const map = ([x, y]) => [S / 2 + x * R, S / 2 - y * R]; // +y up, as on the disk
         this.drawDisk(c, S, R, dpr);
-        const d = this.domain;
-        if (!d || !d.sites) {
-            const m = this.method || 'this method';
-            this.caption.textContent = d ? `${m} has no disk domain` : `no domain from ${m} yet`;
-            return;
-        }
+        // What the drawing is of: the frame shown, a refinement of it, or an earlier frame.
+        const f = this.shown;
+        const refined = f && f.pass > 0 && f.base === d.frame;
+        const current = f && f.pass === 0 && f.frameId === d.frame;
         c.save();
         c.beginPath();
         c.arc(S / 2, S / 2, R + dpr, 0, 2 * Math.PI);
         c.clip();
-        this.drawCells(c, d, map, dpr);
+        this.drawCells(c, d, map, dpr, !refined);
         this.drawEdges(c, d, map, dpr);
         c.restore();
-        this.drawSites(c, d, map, dpr);
-        this.drawRemoved(c, d, map, dpr);
-        const fresh = d.sites.filter((s) => s[3] & 1).length;
+        this.drawSites(c, d, map, dpr, !refined);
+        if (!refined) this.drawRemoved(c, d, map, dpr);
         const nulls = d.sites.filter((s) => s[3] & 2).length;
+        const sets = `${d.sites.length} VPLs${nulls ? ` (${nulls} null)` : ''}`;
+        if (refined) {
+            this.caption.textContent = `frame ${f.frameId} · pass ${f.pass} of frame ${d.frame} · ${sets} · unchanged`;
+            return;
+        }
+        const fresh = d.sites.filter((s) => s[3] & 1).length;
         const removed = d.removed ? d.removed.length : 0;
-        this.caption.textContent = `frame ${d.frame} · ${d.sites.length} sites · ${fresh} new · ${removed} removed · ${nulls} null`;
+        const head = current || !f ? `frame ${d.frame}` : `frame ${d.frame} (on screen: frame ${f.frameId})`;
+        this.caption.textContent = `${head} · ${sets} · ${fresh} new · ${removed} removed`;
     }
 
     drawDisk(c, S, R, dpr) {
@@ -101,7 +114,7 @@ export class DomainView {
         c.stroke();
     }
 
-    drawCells(c, d, map, dpr) {
+    drawCells(c, d, map, dpr, markNew) {
         if (!d.cells) return;
         c.lineWidth = dpr;
         c.strokeStyle = COLORS.cell;
@@ -115,7 +128,7 @@ export class DomainView {
             });
             c.closePath();
             const site = d.sites[i];
-            if (site && site[3] & 1) {
+            if (markNew && site && site[3] & 1) {
                 c.fillStyle = COLORS.cellNew;
                 c.fill();
             }
@@ -142,12 +155,12 @@ export class DomainView {
 
     // Dots shrink with the site count so that 4096 sites stay readable: about a sixth of the mean
     // spacing of N sites on the disk, between 1 and 2.2 CSS pixels.
-    drawSites(c, d, map, dpr) {
+    drawSites(c, d, map, dpr, markNew) {
         const spacing = ((this.canvas.width * 0.46) / dpr) * Math.sqrt(Math.PI / Math.max(1, d.sites.length));
         const r = Math.min(2.2, Math.max(1, spacing / 6)) * dpr;
         for (const s of d.sites) {
             const [x, y] = map(s);
-            const flags = s[3];
+            const flags = markNew ? s[3] : s[3] & ~1;
             c.beginPath();
             if (flags & 2) {
                 c.arc(x, y, r, 0, 2 * Math.PI);
@@ -162,23 +175,21 @@ export class DomainView {
         }
     }
 
-    // Removed sites of this frame as red crosses, those of the frames before fading out.
+    // The sites this domain's frame removed, as red crosses (where they were on the disk).
     drawRemoved(c, d, map, dpr) {
+        const removed = d.removed || [];
         const r = 4 * dpr;
         c.strokeStyle = COLORS.removed;
         c.lineWidth = 1.6 * dpr;
-        for (let age = this.trail.length - 1; age >= 0; age--) {
-            c.globalAlpha = 1 - age / TRAIL;
-            c.beginPath();
-            for (const p of this.trail[age]) {
-                const [x, y] = map(p);
-                c.moveTo(x - r, y - r);
-                c.lineTo(x + r, y + r);
-                c.moveTo(x + r, y - r);
-                c.lineTo(x - r, y + r);
-            }
-            c.stroke();
+        c.beginPath();
+        for (const p of removed) {
+            const [x, y] = map(p);
+            c.moveTo(x - r, y - r);
+            c.lineTo(x + r, y + r);
+            c.moveTo(x + r, y - r);
+            c.lineTo(x - r, y + r);
         }
-        c.globalAlpha = 1;
+        c.stroke();
+        this.removedDrawn = removed.length;
     }
 }

@@ -1,10 +1,12 @@
 // main.js -- wiring: the page's model of the session (scene, light, camera, params), the connection,
 // and the views that show it. Owns what happens on welcome (adopt the server's state the first
-// time, re-send ours after a reconnect), on state, stats, domain, pick, snapshot, record and error.
+// time, re-send ours after a reconnect), on state, stats, domain, pick, snapshot, record, save and
+// error: each reply is matched to the request it answers (requests.js), switches go through
+// switcher.js and the frame gate (gate.js), errors become banners of their request's kind
+// (errors.js), saves go to saving.js, and the stats and domain shown are those of the frame on
+// screen (one frame counter everywhere).
 //
-// window.iir is a read-only view for tests and the console: framesReceived, framesDrawn, lastFrame
-// (header of the newest drawn frame), lastDomain, lastStats, connected, state, inputSeq (newest
-// input sent), latencyMs.
+// window.iir (inspect.js) is a read-only view of all this for tests and the console.
 
 import * as P from './protocol.js';
 import { Connection, defaultUrl } from './connection.js';
@@ -13,13 +15,28 @@ import { Controls } from './controls.js';
 import { Panel } from './panel.js';
 import { Charts } from './charts.js';
 import { DomainView } from './domain.js';
+import { Requests, errorKind } from './requests.js';
+import { ErrorBanners } from './errors.js';
+import { FrameGate } from './gate.js';
+import { Curtain } from './curtain.js';
+import { Switcher } from './switcher.js';
+import { SaveControls } from './saving.js';
+import { inspector } from './inspect.js';
+import { isPoint } from './gizmo.js';
+import * as v from './vec.js';
 
 const $ = (sel) => document.querySelector(sel);
 
 const app = {
     framesReceived: 0,
     framesDrawn: 0,
+    framesHeld: 0,
     lastFrame: null,
+    drawn: [], // {frameId, generation, pass, t} of the last DRAWN_KEPT frames drawn
+    lastInteractiveId: 0, // id of the newest interactive frame received (a pass refines it)
+    shown: null, // {frameId, pass, base}: the frame on screen
+    stats: new Map(), // frame id -> its stats (the last STATS_KEPT)
+    noDisk: new Set(), // methods whose domain messages have no disk (ir)
     lastDomain: null,
     lastStats: null,
     connected: false,
@@ -34,15 +51,25 @@ const app = {
     frameLatencyMs: null, // of the newest frame, null when it answered no new input
     inputSeq: 0, // seq of the newest input (light, camera, params, scene) sent
     snapshot: null, // the `snapshot` text reply waiting for its binary message
+    afterScene: null, // after a reconnect: sends the page's light and camera once its scene is back
 };
 
 const clone = (x) => JSON.parse(JSON.stringify(x));
+const DRAWN_KEPT = 400;
+// Settings the daemon applies by encoding the image again, not rendering it (docs/architecture.md).
+const ENCODING_ONLY = new Set(['exposure', 'quality', 'refine', 'domain']);
+const STATS_KEPT = 32;
 
 // ---- views ----
 
 const view = new View($('#viewport'));
 const domainView = new DomainView($('#domain'), $('#domain-caption'));
 const charts = new Charts($('#chart-phases').parentElement);
+const requests = new Requests();
+const errors = new ErrorBanners($('#errors'));
+const gate = new FrameGate();
+const curtain = new Curtain($('#curtain'));
+view.mayShow = (h) => gate.mayShow(h);
 
 const conn = new Connection(defaultUrl(), {
     status: onStatus,
@@ -54,16 +81,21 @@ const conn = new Connection(defaultUrl(), {
 
 // ---- sending ----
 
-function send(msg) {
+// Every message goes out here and is remembered with its kind (details: kept with it).
+function send(msg, details = {}) {
     const seq = conn.send(msg);
     if (seq > 0 && P.INPUT_TYPES.has(msg.type)) app.inputSeq = seq;
+    if (seq > 0) requests.sent(seq, msg.type, details);
     return seq;
 }
 
+// The position sent is kept with the request: a `state` reply to it says where the daemon put the
+// light instead (kept inside the scene), and the model moves by the difference.
 function sendLight(fields) {
-    const seq = send(P.light(fields));
+    const seq = send(P.light(fields), fields.position ? { position: fields.position } : {});
     if (seq > 0) app.lastLightSeq = seq;
     panel.setLight(app.state.light);
+    showGizmo();
     return seq;
 }
 
@@ -71,17 +103,24 @@ function sendCamera(fields) {
     const seq = send(P.camera(fields));
     if (seq > 0) app.lastCameraSeq = seq;
     panel.setCamera(app.state.camera);
+    showGizmo();
     return seq;
+}
+
+function showGizmo() {
+    const s = app.state;
+    view.setGizmo(s && s.light && s.camera ? { light: s.light, camera: s.camera, madeUp: !!s.default_light } : null);
 }
 
 // The model's params change only with the server's `state` reply (a refused edit changes nothing).
 function sendParams(fields) {
-    return send(P.params(fields));
+    return switcher.params(fields);
 }
 
 const actions = {
     cone(delta) {
         const L = app.state.light;
+        if (isPoint(L)) return; // a point light has no cone
         L.cone_angle = Math.min(90, Math.max(1, Math.round(L.cone_angle + delta)));
         sendLight({ cone_angle: L.cone_angle });
         panel.setLight(L);
@@ -104,7 +143,7 @@ const actions = {
     help(show = $('#help').hidden) {
         $('#help').hidden = !show;
     },
-    resetView: () => send(P.scene(app.state.scene)),
+    resetView: () => switcher.scene(app.state.scene),
 };
 
 const controls = new Controls($('#stage'), view, {
@@ -117,7 +156,7 @@ const controls = new Controls($('#stage'), view, {
 }, { light: sendLight, camera: sendCamera, pick: send }, actions);
 
 const panel = new Panel($('#panel'), {
-    scene: (name) => send(P.scene(name)),
+    scene: (name) => switcher.scene(name),
     params: sendParams,
     light(fields) {
         const L = app.state.light;
@@ -146,12 +185,34 @@ const panel = new Panel($('#panel'), {
     },
 });
 
+const switcher = new Switcher({
+    gate,
+    view,
+    curtain,
+    panel,
+    send,
+    state: () => app.state,
+    busy: () => updateEnabled(),
+});
+
+const saving = new SaveControls($('#panel'), {
+    send,
+    download: (blob, name) => download(blob, name),
+    scenes: (list) => panel.setScenes(list),
+    scene: () => app.state.scene,
+});
+
+// Light and camera input needs a session, and no scene on its way (the switch resets both).
+function updateEnabled() {
+    controls.enabled = app.connected && !!app.state && !switcher.sceneLoading;
+}
+
 // ---- connection events ----
 
 function onStatus(s) {
     app.connected = s.state === 'connected';
     app.status = s;
-    controls.enabled = app.connected && !!app.state;
+    updateEnabled();
     showStatus();
 }
 
@@ -177,32 +238,53 @@ setInterval(() => {
     panel.tickRecording();
 }, 200);
 
-function onWelcome(w) {
+// newSession: the first welcome on a new socket (session ids start again when the daemon restarts).
+function onWelcome(w, newSession) {
     app.limits = w.limits;
     app.methods = w.methods;
-    if (!app.welcomed || app.resync) {
-        app.state = clone(w.state);
-    } else {
-        resend(app.state, w.state);
+    if (newSession) {
+        requests.reset();
+        app.stats.clear();
+        app.lastInteractiveId = 0;
     }
+    requests.take(w.seq); // the hello it answers
+    switcher.welcome(w, newSession);
+    const first = !app.welcomed || app.resync;
+    if (first) app.state = clone(w.state);
     app.welcomed = true;
     app.resync = false;
-    controls.enabled = true;
     panel.setWelcome({ ...w, state: app.state });
+    saving.setLimits(w.limits);
+    if (!first) resend(app.state, w.state);
+    else if (!app.framesDrawn) curtain.loading(`waiting for the first frame…`, `${app.state.scene} with ${app.state.params.method}`);
+    updateEnabled();
+    showGizmo();
+    showDomain();
     showStatus();
 }
 
 // After a reconnect: the new session starts from the server's defaults; make it show what the page
-// showed (scene first: it resets the light and camera, which follow).
+// showed. Parameters first (the method must be one that renders the scene), then the scene, and the
+// light and camera only once the scene is there (a scene switch resets both).
 function resend(mine, theirs) {
-    if (mine.scene !== theirs.scene) send(P.scene(mine.scene));
-    const L = mine.light;
-    sendLight({ position: L.position, direction: L.direction, cone_angle: L.cone_angle, intensity: L.intensity });
-    const C = mine.camera;
-    sendCamera({ position: C.position, target: C.target, up: C.up, fov: C.fov });
+    const keep = clone(mine);
     const diff = {};
-    for (const [k, val] of Object.entries(mine.params)) if (theirs.params[k] !== val) diff[k] = val;
-    if (Object.keys(diff).length) send(P.params(diff));
+    for (const [k, val] of Object.entries(keep.params)) if (theirs.params[k] !== val) diff[k] = val;
+    if (Object.keys(diff).length) sendParams(diff);
+    const lightAndCamera = () => {
+        const s = app.state;
+        s.light = keep.light;
+        s.camera = keep.camera;
+        const L = keep.light;
+        sendLight(isPoint(L) ? { position: L.position, intensity: L.intensity }
+            : { position: L.position, direction: L.direction, cone_angle: L.cone_angle, intensity: L.intensity });
+        const C = keep.camera;
+        sendCamera({ position: C.position, target: C.target, up: C.up, fov: C.fov });
+    };
+    app.afterScene = null;
+    if (keep.scene === theirs.scene) return lightAndCamera();
+    app.afterScene = lightAndCamera;
+    switcher.scene(keep.scene, theirs.scene);
 }
 
 function onMessage(msg) {
@@ -210,22 +292,21 @@ function onMessage(msg) {
     case 'state':
         return onState(msg);
     case 'stats':
-        app.lastStats = msg;
-        charts.push(msg, app.frameLatencyMs);
-        panel.setStats(msg, app.latencyMs, app.lastFrame);
-        return;
+        return onStats(msg);
     case 'domain':
-        app.lastDomain = msg;
-        view.setVpls(msg.vpls || null);
-        domainView.update(msg, app.state && app.state.params.method);
-        return;
+        return onDomain(msg);
     case 'pick':
+        settled(msg);
         return controls.onPick(msg);
     case 'snapshot':
+        settled(msg);
         app.snapshot = msg;
         return;
     case 'record':
+        settled(msg);
         return onRecord(msg);
+    case 'save':
+        return saving.saved(msg, settled(msg));
     case 'error':
         return onError(msg);
     default:
@@ -233,21 +314,80 @@ function onMessage(msg) {
     }
 }
 
-// A state after params/scene/hello. Our light and camera stay when we sent newer ones since.
+// A reply that settles its request: an error of that kind from before it goes.
+function settled(msg) {
+    const req = requests.take(msg.seq);
+    if (req) errors.succeeded(req.kind, req.seq);
+    return req;
+}
+
+// A state after params/scene/hello, or after a light move the daemon kept inside the scene. Our
+// light and camera stay when we sent newer ones since (a kept-inside light moves by the difference
+// between the position sent and the position used).
 function onState(msg) {
+    const req = settled(msg);
     const s = app.state;
     const fresh = msg.seq === undefined;
+    const changed = Object.keys(msg.params).filter((k) => msg.params[k] !== s.params[k]);
+    const sameRender = msg.scene === s.scene && changed.every((k) => ENCODING_ONLY.has(k));
     if (msg.params.method !== s.params.method || msg.scene !== s.scene) {
         app.lastDomain = null; // the old method's or scene's VPLs mean nothing now
         view.setVpls(null);
     }
     s.scene = msg.scene;
     s.params = msg.params;
+    s.generation = msg.generation;
+    s.default_light = !!msg.default_light;
     if (fresh || msg.seq >= app.exposureSeq) app.exposureAsked = null;
     if (fresh || msg.seq >= app.lastLightSeq) s.light = msg.light;
+    else if (req && req.kind === 'light' && req.position) {
+        const moved = v.sub(msg.light.position, req.position);
+        s.light.position = v.add(s.light.position, moved);
+    }
     if (fresh || msg.seq >= app.lastCameraSeq) s.camera = msg.camera;
+    switcher.stated(msg, req, sameRender);
     panel.setState(s);
-    domainView.update(app.lastDomain, s.params.method);
+    saving.sceneChanged();
+    if (req && req.kind === 'scene' && app.afterScene) {
+        const then = app.afterScene;
+        app.afterScene = null;
+        then();
+    }
+    showGizmo();
+    showDomain();
+}
+
+function onStats(msg) {
+    if (!gate.belongs(msg.frame)) return; // a frame of a state no longer shown
+    app.lastStats = msg;
+    charts.push(msg, app.frameLatencyMs);
+    app.stats.set(msg.frame, msg);
+    if (app.stats.size > STATS_KEPT) app.stats.delete(app.stats.keys().next().value);
+    if (app.shown && app.shown.frameId === msg.frame) panel.setStats(msg, app.latencyMs, app.lastFrame);
+}
+
+function onDomain(msg) {
+    if (!gate.belongs(msg.frame)) return;
+    app.lastDomain = msg;
+    if (!msg.sites && app.state) app.noDisk.add(app.state.params.method);
+    showDomain();
+}
+
+// The domain drawing of the frame on screen, or one line on why there is none; and the VPLs on the
+// image, marked new only on the frame that inserted them (a refinement pass changes nothing).
+function showDomain() {
+    const d = app.lastDomain;
+    const refined = !!(d && app.shown && app.shown.pass > 0 && app.shown.base === d.frame);
+    view.setVpls(d ? d.vpls || null : null, !refined);
+    const s = app.state;
+    const m = s ? s.params.method : '';
+    const row = s && app.methods ? app.methods.find((x) => x.name === m) : null;
+    const hasVpls = !!(row && row.params.some((p) => p.name === 'vpls'));
+    let note = `waiting for the first frame of ${m || 'the session'}`;
+    if (row && !hasVpls) note = `${m} has no VPL domain`;
+    else if (s && s.params.domain === false) note = 'the domain drawing is off (Frame & stream: domain)';
+    else if (app.noDisk.has(m)) note = `${m} has no disk domain: it makes a new VPL set every frame (its VPLs are the dots on the image)`;
+    domainView.update(hasVpls ? app.lastDomain : null, app.shown, note);
 }
 
 // A `record` reply: start (recording), stop (the script), or a scene switch while recording (the
@@ -261,14 +401,24 @@ function onRecord(msg) {
     }
 }
 
+// An error belongs to the request that caused it: a banner of that kind, until a later request of
+// the same kind succeeds or the user dismisses it. A refused switch puts the panel back.
 function onError(msg) {
     const text = P.describeError(msg);
     console.warn(`iir: server error: ${text}`);
-    panel.showError(text, msg.field);
-    const field = msg.field || '';
-    if (field === 'record.action' || field === 'action') panel.setRecording(false);
+    const req = requests.take(msg.seq);
+    const kind = errorKind(msg, req);
+    errors.show(kind, text, msg.seq || 0);
+    panel.flagField(msg.field, text);
+    if (req && (req.kind === 'scene' || req.kind === 'params')) {
+        if (req.kind === 'scene') app.afterScene = null; // the light and camera of a scene not shown
+        switcher.refused(msg, req);
+        showDomain(); // the VPLs over the image shown again
+    }
+    if (kind === 'record') panel.setRecording(false);
+    if (kind === 'save') saving.refused(msg);
     // A refused light or camera leaves the server's state as it was: fetch it again.
-    if (/^(light|camera)/.test(field) && msg.code !== 'rate_limited') {
+    if ((kind === 'light' || kind === 'camera') && msg.code !== 'rate_limited') {
         app.resync = true;
         send(P.hello('iir-web'));
     }
@@ -280,8 +430,12 @@ function onFrame(h, sentAt) {
     if (h.kind === P.KIND_SNAPSHOT) return onSnapshotFile(h);
     if (h.kind !== P.KIND_FRAME) return;
     app.framesReceived++;
+    if (h.seq !== P.NO_SEQ) for (const r of requests.answeredByFrame(h.seq)) errors.succeeded(r.kind, r.seq);
+    if (!h.pass) app.lastInteractiveId = h.frameId;
+    h.base = h.pass ? app.lastInteractiveId : h.frameId;
     h.sentAt = sentAt;
-    view.show(h);
+    if (gate.seen(h)) view.show(h);
+    else app.framesHeld++;
 }
 
 view.onDrawn = (h) => {
@@ -290,9 +444,16 @@ view.onDrawn = (h) => {
     if (app.frameLatencyMs !== null) app.latencyMs = app.frameLatencyMs;
     const { payload, ...header } = h;
     app.lastFrame = { ...header, bytes: payload.byteLength, drawnAt: performance.now() };
+    app.drawn.push({ frameId: h.frameId, generation: h.generation, pass: h.pass, t: performance.now() });
+    if (app.drawn.length > DRAWN_KEPT) app.drawn.shift();
+    app.shown = { frameId: h.frameId, pass: h.pass, base: h.base };
     const pass = h.pass ? ` · pass ${h.pass}${h.converged ? ' converged' : ''}` : '';
     const lat = app.latencyMs !== null ? ` · ${app.latencyMs.toFixed(0)} ms` : '';
     $('#hud-frame').textContent = `${h.width}×${h.height} · frame ${h.frameId}${pass} · ${h.renderMs.toFixed(1)} ms render${lat}`;
+    const st = app.stats.get(h.frameId);
+    if (st) panel.setStats(st, app.latencyMs, app.lastFrame);
+    switcher.drawn();
+    showDomain();
 };
 
 function onSnapshotFile(h) {
@@ -321,37 +482,6 @@ $('#help').addEventListener('click', () => actions.help(false));
 $('#show-vpls').addEventListener('change', (e) => actions.toggleVpls(e.target.checked));
 $('#retry-now').addEventListener('click', () => conn.retryNow());
 
-window.iir = Object.freeze({
-    get methods() {
-        return app.methods; // welcome.methods: names, summaries, parameter tables
-    },
-    get framesReceived() {
-        return app.framesReceived;
-    },
-    get framesDrawn() {
-        return app.framesDrawn;
-    },
-    get lastFrame() {
-        return app.lastFrame;
-    },
-    get lastDomain() {
-        return app.lastDomain;
-    },
-    get lastStats() {
-        return app.lastStats;
-    },
-    get inputSeq() {
-        return app.inputSeq;
-    },
-    get latencyMs() {
-        return app.latencyMs;
-    },
-    get connected() {
-        return app.connected;
-    },
-    get state() {
-        return app.state && clone(app.state);
-    },
-});
+window.iir = inspector({ app, gate, errors, curtain, view, charts, domainView });
 
 conn.start();

@@ -2,10 +2,13 @@
 // built from the parameter tables the welcome carries (welcome.methods[].params for the method's
 // group, welcome.settings for the frame group, welcome.limits), light and camera fields, snapshot
 // and record buttons,
-// the live numbers of the newest `stats`, and the error line. It turns edits into calls of its
-// handlers; it sends nothing itself. Charts are charts.js, the domain drawing domain.js.
+// the live numbers of the frame on screen (its `stats`), the note on a light iird made up, and the
+// marking of a refused field. It turns edits into calls of its handlers; it sends nothing itself.
+// Charts are charts.js, the domain drawing domain.js, error banners errors.js.
 
 import { fmt } from './vec.js';
+import { isPoint } from './gizmo.js';
+import { vplStep, describeStep } from './vplstats.js';
 
 const $ = (sel, root = document) => root.querySelector(sel);
 
@@ -30,7 +33,6 @@ export class Panel {
         this.state = null;
         this.methods = [];
         this.recording = null; // {since} while recording
-        this.errorTimer = 0;
         this.bindStatic();
     }
 
@@ -58,8 +60,7 @@ export class Panel {
     // ---- welcome and state ----
 
     setWelcome(w) {
-        const sel = $('#scene', this.root);
-        sel.replaceChildren(...w.scenes.map((s) => el('option', { value: s, text: s })));
+        this.setScenes(w.scenes);
         this.methods = w.methods || [];
         this.settings = w.settings || [];
         this.limits = w.limits || {};
@@ -68,6 +69,13 @@ export class Panel {
         this.buildGroup($('#params-frame', this.root), this.settings);
         $('#server', this.root).textContent = `${w.server || 'iird'} · session ${w.session}`;
         this.setState(w.state);
+    }
+
+    // The scene picker's names (a save on the server adds one); the scene shown stays picked.
+    setScenes(names) {
+        const sel = $('#scene', this.root);
+        sel.replaceChildren(...names.map((s) => el('option', { value: s, text: s })));
+        if (this.state) sel.value = this.state.scene;
     }
 
     buildHead() {
@@ -152,12 +160,16 @@ export class Panel {
         $('#method-summary', this.root).textContent = m && m.summary ? m.summary : '';
         this.setLight(state.light);
         this.setCamera(state.camera);
+        $('#light-note', this.root).hidden = !state.default_light;
     }
 
     setLight(L) {
         if (!L) return;
         const cone = $('#cone', this.root);
-        if (document.activeElement !== cone) {
+        const point = isPoint(L);
+        cone.disabled = point;
+        if (point) $('#cone-value', this.root).textContent = 'point';
+        else if (document.activeElement !== cone) {
             cone.value = String(L.cone_angle);
             $('#cone-value', this.root).textContent = `${Math.round(L.cone_angle)}°`;
         }
@@ -167,7 +179,7 @@ export class Panel {
             intensity.value = String(Number(I.toPrecision(4)));
         }
         $('#light-pos', this.root).textContent = fmt(L.position);
-        $('#light-dir', this.root).textContent = fmt(L.direction);
+        $('#light-dir', this.root).textContent = point ? 'all around (point light)' : fmt(L.direction);
     }
 
     setCamera(C) {
@@ -183,20 +195,13 @@ export class Panel {
 
     // ---- errors ----
 
-    // msg: an `error` reply. Marks the named params field (its value goes back to the state).
-    showError(text, field) {
-        const line = $('#error', this.root);
-        line.textContent = text;
-        line.hidden = false;
-        clearTimeout(this.errorTimer);
-        this.errorTimer = setTimeout(() => (line.hidden = true), 8000);
+    // A refused params field (`params.kmax`): its input is marked and shows the state's value again.
+    flagField(field, text) {
         const name = field && field.startsWith('params.') ? field.slice(7).replace(/\[.*$/, '') : null;
         const input = name && this.inputs.get(name);
-        if (input) {
-            this.flagInvalid(input, text);
-            if (this.state) this.setState(this.state);
-            input.classList.add('invalid');
-        }
+        if (!input) return;
+        if (this.state) this.setState(this.state);
+        this.flagInvalid(input, text);
     }
 
     flagInvalid(input, text) {
@@ -227,25 +232,24 @@ export class Panel {
 
     // ---- live numbers ----
 
-    // s: the `stats` message; clientLatency: input-to-frame latency measured by the page (ms) or null.
+    // s: the `stats` of the frame on screen (frame: its header); clientLatency: input-to-frame
+    // latency measured by the page (ms) or null. Every number here is that frame's.
     setStats(s, clientLatency, frame) {
         const set = (id, text) => ($(`#${id}`, this.root).textContent = text);
         set('st-fps', s.fps !== undefined ? s.fps.toFixed(1) : '–');
         set('st-latency', clientLatency !== null ? `${clientLatency.toFixed(0)} ms` : '–');
-        // Server latency and VPL counts belong to interactive frames; refinement passes keep them.
-        if (!s.pass) this.interactive = s;
-        const live = this.interactive || s;
-        set('st-server-latency', live.latency_ms !== undefined ? `${live.latency_ms.toFixed(1)} ms` : '–');
+        set('st-server-latency', !s.pass && s.latency_ms !== undefined ? `${s.latency_ms.toFixed(1)} ms` : '–');
         set('st-render', `${(s.total_ms || 0).toFixed(1)} ms`);
         set('st-encode', `${(s.encode_ms || 0).toFixed(1)} ms`);
         set('st-bytes', `${((s.bytes || 0) / 1024).toFixed(1)} KiB`);
         const pass = s.pass ? `pass ${s.pass}${s.converged ? ' ✓' : ''}` : 'interactive';
         set('st-pass', pass);
         set('st-frame', frame ? `${frame.frameId} · ${frame.width}×${frame.height}` : String(s.frame));
-        const vpl = live.vpl || {};
-        set('st-vpls', vpl.count !== undefined ? `${vpl.valid}/${vpl.count}` : '–');
-        set('st-vpl-change', vpl.count !== undefined ? `+${vpl.inserted} −${vpl.deleted} ✗${vpl.invalidated}` : '–');
-        set('st-regen', vpl.regenerated !== undefined ? String(vpl.regenerated) : '–');
+        const text = describeStep(vplStep(s), s.method, s.pass);
+        set('st-vpls', text.set);
+        set('st-vpl-change', text.change);
+        const vpl = s.vpl || {};
+        set('st-regen', vpl.count ? String(vpl.regenerated || 0) : '–');
         set('st-dropped', String(s.dropped || 0));
         set('st-memory', s.memory_bytes ? `${(s.memory_bytes / 1048576).toFixed(1)} MiB` : '–');
         this.tickRecording();

@@ -9,6 +9,7 @@ export const KIND_FRAME = 1; // JPEG
 export const KIND_SNAPSHOT = 2; // PNG or EXR file
 export const FLAG_CONVERGED = 1;
 export const FLAG_REFINEMENT = 2;
+export const FLAG_REENCODED = 4;
 
 // Per docs/protocol.md: 65536 bytes per text message, 250 messages/s (bucket of 250, burst 500).
 export const MAX_MESSAGE_BYTES = 65536;
@@ -67,7 +68,7 @@ export function recordStop() {
 // ---- server -> client ----
 
 // Parses a binary message (ArrayBuffer). Returns {kind, version, frameId, seq, width, height,
-// renderMs, encodeMs, pass, flags, converged, refinement, generation, payload (Uint8Array view)} or throws an
+// renderMs, encodeMs, pass, flags, converged, refinement, reencoded, generation, payload (Uint8Array view)} or throws an
 // Error saying what is wrong (bad magic, short message, payload length mismatch).
 export function parseFrame(buf) {
     if (buf.byteLength < FRAME_HEADER_BYTES) {
@@ -95,6 +96,7 @@ export function parseFrame(buf) {
         flags,
         converged: (flags & FLAG_CONVERGED) !== 0,
         refinement: (flags & FLAG_REFINEMENT) !== 0,
+        reencoded: (flags & FLAG_REENCODED) !== 0,
         generation: dv.getUint32(40, true),
         payload: new Uint8Array(buf, headerLen, payloadLen),
     };

@@ -1,9 +1,13 @@
 // view.js -- the image: a canvas that shows the newest frame (JPEG decoded with createImageBitmap),
 // scaled to fill its container at the frame's aspect ratio, and an overlay canvas above it for the
-// VPLs and the aim marker. Maps pointer positions to frame pixels. Not input handling (controls.js).
+// VPLs, the light's gizmo (gizmo.js) and the aim marker. Maps pointer positions to frame pixels.
+// Greys the image while a switch is under way and puts the last frame back when it is refused. Not
+// input handling (controls.js), not which frames may be shown (gate.js: the mayShow predicate).
 //
 // Decoding is latest-wins like the server: while one JPEG decodes, only the newest frame that
 // arrives meanwhile is kept; older ones are dropped, never queued.
+
+import { drawGizmo } from './gizmo.js';
 
 export class View {
     constructor(container) {
@@ -21,6 +25,11 @@ export class View {
         this.next = null; // the newest frame waiting for the decoder
         this.drawnId = 0;
         this.onDrawn = () => {};
+        this.mayShow = () => true; // checked again after decoding: the gate may have closed meanwhile
+        this.bitmap = null; // the frame drawn last, kept to put it back after a refused switch
+        this.greyed = false;
+        this.gizmo = null; // {light, camera, madeUp}: the light to draw over the image
+        this.gizmoAt = { x: NaN, y: NaN, visible: false }; // where it was drawn, frame pixels
         this.vpls = null; // domain.vpls of the newest domain message: [[sx, sy, flags], ...]
         this.showVpls = true;
         this.marker = null; // {x, y, kind} in frame pixels while dragging
@@ -45,8 +54,9 @@ export class View {
         this.decoding = true;
         try {
             const bitmap = await createImageBitmap(new Blob([h.payload], { type: 'image/jpeg' }));
-            this.draw(h, bitmap); // one decode at a time, frames arrive in order: never older
-            bitmap.close();
+            // One decode at a time, frames arrive in order: never older.
+            if (this.mayShow(h)) this.draw(h, bitmap);
+            else bitmap.close();
         } catch (e) {
             console.warn(`iir: frame ${h.frameId} did not decode: ${e.message || e}`);
         }
@@ -61,8 +71,40 @@ export class View {
             this.fit();
         }
         this.ctx.drawImage(bitmap, 0, 0);
+        if (this.bitmap) this.bitmap.close();
+        this.bitmap = bitmap;
         this.drawnId = h.frameId;
+        this.setGreyed(false);
         this.onDrawn(h);
+    }
+
+    // The image greyed out and darkened (a switch is under way: what it shows is about to go).
+    grey() {
+        if (this.greyed) return;
+        const c = this.ctx;
+        c.save();
+        c.filter = 'grayscale(1) brightness(0.35) blur(2px)';
+        if (this.bitmap) c.drawImage(this.bitmap, 0, 0);
+        else {
+            c.fillStyle = '#202226';
+            c.fillRect(0, 0, this.canvas.width, this.canvas.height);
+        }
+        c.restore();
+        this.setGreyed(true);
+    }
+
+    // The last frame drawn, as it was (a switch was refused: the session still shows it).
+    restore() {
+        if (!this.greyed) return;
+        if (this.bitmap) this.ctx.drawImage(this.bitmap, 0, 0);
+        this.setGreyed(false);
+    }
+
+    setGreyed(on) {
+        if (this.greyed === on) return;
+        this.greyed = on;
+        this.canvas.classList.toggle('greyed', on);
+        this.drawOverlay();
     }
 
     // Largest rectangle of the frame's aspect ratio inside the container, centred.
@@ -106,8 +148,16 @@ export class View {
         return { width: this.canvas.width, height: this.canvas.height };
     }
 
-    setVpls(vpls) {
+    // vpls: domain.vpls ([[x, y, flags], ...]) or null; markNew: draw the new ones as new.
+    setVpls(vpls, markNew = true) {
         this.vpls = vpls;
+        this.vplsMarkNew = markNew;
+        this.drawOverlay();
+    }
+
+    // g: {light, camera, madeUp} or null.
+    setGizmo(g) {
+        this.gizmo = g;
         this.drawOverlay();
     }
 
@@ -124,15 +174,23 @@ export class View {
         const sx = W / this.canvas.width;
         const sy = H / this.canvas.height;
         const dpr = window.devicePixelRatio || 1;
+        if (this.greyed) {
+            this.gizmoAt = { x: NaN, y: NaN, visible: false };
+            return; // nothing of the old state over a greyed image
+        }
         if (this.showVpls && this.vpls) this.drawVpls(o, sx, sy, dpr);
+        this.gizmoAt = this.gizmo && this.drawnId
+            ? drawGizmo(o, { ...this.gizmo, width: this.canvas.width, height: this.canvas.height }, sx, sy, dpr)
+            : { x: NaN, y: NaN, visible: false };
         if (this.marker) this.drawMarker(o, this.marker.x * sx, this.marker.y * sy, dpr);
     }
 
     drawVpls(o, sx, sy, dpr) {
         const r = 1.9 * dpr;
         o.lineWidth = dpr;
-        for (const [x, y, flags] of this.vpls) {
+        for (const [x, y, f] of this.vpls) {
             if (x < 0 || y < 0) continue;
+            const flags = this.vplsMarkNew ? f : f & ~1;
             const px = x * sx;
             const py = y * sy;
             o.beginPath();

@@ -2,7 +2,8 @@
  * and evaluating "the light and camera at time t / frame f". Not rendering or benchmarking them.
  *
  * A script has an optional light track and an optional camera track, each either keyframes
- * (linear, Catmull-Rom or step) or a parametric path (orbit, sweep). Evaluation starts from the
+ * (linear, Catmull-Rom or step) or a parametric path (orbit, sweep), and an optional exposure
+ * (a number or keyframes). Evaluation starts from the
  * scene's own light or camera and overrides only what the script animates. An iir_anim is
  * immutable after parsing, so any number of threads may evaluate the same one. */
 #ifndef IIR_ANIM_H
@@ -49,10 +50,15 @@ int iir_anim_frame_count(const iir_anim *a);
 /* Time in seconds of a frame: frame / fps. Frames outside [0, frame_count) are clamped into it. */
 double iir_anim_frame_time(const iir_anim *a, int frame);
 
-/* True when the script animates the light / the camera. Without a track, iir_anim_light and
- * iir_anim_camera return the base unchanged. */
+/* True when the script animates the light / the camera / the exposure. Without a track,
+ * iir_anim_light, iir_anim_camera and iir_anim_exposure return the base unchanged. */
 bool iir_anim_has_light(const iir_anim *a);
 bool iir_anim_has_camera(const iir_anim *a);
+bool iir_anim_has_exposure(const iir_anim *a);
+
+/* The name of the scene light the light track moves ("light": {"name": ...}; recordings write
+ * it), "" when the script names none. */
+const char *iir_anim_light_name(const iir_anim *a);
 
 /* The light at time t (seconds; clamped into [0, duration]): a copy of *base (the scene's spot)
  * with what the script animates overridden. Keeps base's type, name and up hint. If base passes
@@ -61,9 +67,14 @@ bool iir_anim_has_camera(const iir_anim *a);
  * Catmull-Rom overshoot is clamped). */
 iir_light iir_anim_light(const iir_anim *a, const iir_light *base, double t);
 
-/* The camera at time t, likewise from *base: position, target and fov_y (kept in (0, 180)) are
- * overridden where animated; up is base's. */
+/* The camera at time t, likewise from *base: position, target, fov_y (kept in (0, 180)) and up
+ * (as interpolated, of any length; base's where the keys' ups cancel) are overridden where
+ * animated. */
 iir_camera iir_anim_camera(const iir_anim *a, const iir_camera *base, double t);
+
+/* The exposure in stops at time t (the script's "exposure", kept in [-30, 30]), or base when the
+ * script has none. */
+float iir_anim_exposure(const iir_anim *a, float base, double t);
 
 #ifdef __cplusplus
 }

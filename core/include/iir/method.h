@@ -15,6 +15,7 @@
 #include "iir/params.h"
 #include "iir/render.h"
 #include "iir/rt.h"
+#include "iir/scene.h"
 #include "iir/status.h"
 
 #ifdef __cplusplus
@@ -82,7 +83,7 @@ const iir_param *iir_method_any_param(const char *name);
  * declares or a value no row of that name allows). */
 iir_status iir_method_param_set(iir_params *p, const char *name, double value, iir_error *err);
 /* Checks every value of p against every row of its name in every method (live: each row's
- * live.hi instead of hi). IIR_ERR_INVALID naming the first bad value (*bad: its row, may be NULL).
+ * live_hi instead of hi). IIR_ERR_INVALID naming the first bad value (*bad: its row, may be NULL).
  */
 iir_status iir_method_params_check(const iir_params *p, bool live, const iir_param **bad,
                                    iir_error *err);
@@ -93,6 +94,12 @@ iir_status iir_method_params_validate(const char *name, const iir_params *p,
                                       iir_error *err);
 /* The value method `name` uses for parameter row `name`: p's when set, else the row's default. */
 double iir_method_param_value(const iir_param *row, const iir_params *p);
+
+/* The samples_per_pixel at which method `name`'s refinement with p converges (iir_method_refine):
+ * pt: refine_passes samples rounded up to whole frames of spp; ir, iir: refine_passes passes. A
+ * still is a converged frame (iird render). 0 for an unknown name, bad parameters, or a method
+ * that cannot refine. */
+uint64_t iir_method_converged_at(const char *name, const iir_params *p);
 
 /* Bytes method `name` would hold with p for a width x height frame (frame buffers, VPLs and their
  * shadow maps, G-buffer, refinement buffers): an estimate from the parameters alone, so a caller
@@ -105,6 +112,16 @@ uint64_t iir_method_memory(const char *name, const iir_params *p, int width, int
  * name. */
 iir_status iir_method_supports(const char *name, const iir_light *lights, uint32_t num_lights,
                                iir_error *err);
+
+/* What method `name` does not render of the scene and these lights: first the scene's own notes
+ * (lights and materials of the file that no method renders: iir_scene.dropped, method ""), then
+ * the method's (method `name`; ir: the indirect light of emissive materials; iir: that too, and
+ * the indirect light of every light but the first spot). For warnings: the CLI prints them, the
+ * daemon can send them. Writes at most max entries into out (NULL when max is 0) and returns how
+ * many there are; 0 for an unknown name. */
+uint32_t iir_method_dropped(const char *name, const struct iir_scene *scene,
+                            const iir_light *lights, uint32_t num_lights, iir_dropped *out,
+                            uint32_t max);
 
 /* Creates method `name` over a scene and its ray tracer (both must outlive the method).
  * IIR_ERR_INVALID for an unknown name (the message lists the known ones) or bad parameters. */
@@ -134,8 +151,9 @@ const iir_vpl *iir_method_vpls(const iir_method *m, uint32_t *n);
  * writes the improved frame to out, which must have the size of that frame. Any render starts
  * over (a new view). IIR_ERR_UNSUPPORTED if the method cannot, IIR_ERR_INVALID if nothing was
  * rendered (or the last render failed).
- *  - pt: `spp` more samples per pixel per call; converged once the image holds refine_passes x spp
- *    samples, but it keeps adding samples when asked (iird render asks for an exact count).
+ *  - pt: `spp` more samples per pixel per call; converged once the image holds refine_passes
+ *    samples (rounded up to whole calls: iir_method_converged_at), but it keeps adding samples
+ *    when asked.
  *  - ir, iir: one pass of refine.h per call (jittered camera rays, one interleaved VPL subset per
  *    pixel with exact visibility, no filter; after every interleave^2 passes a fresh, independent
  *    VPL set; the live set is left exactly as it was). samples_per_pixel = passes so far. Once

@@ -43,10 +43,8 @@ typedef struct iir_param {
     iir_param_type type;
     size_t offset;      /* of the C field in the table's options struct */
     double def, lo, hi; /* default and inclusive range (ENUM: indices) */
-    struct {
-        double def; /* a live session's default (pt's spp: 1 for interactive frames); 0 = def */
-        double hi;  /* the most a live session may ask for (a frame stays interactive); 0 = hi */
-    } live;
+    double live_hi;     /* the most a live session may ask for (a frame stays interactive); 0 = hi.
+                           There is one default, `def`, for commands and live sessions alike. */
     const char *const *choices; /* ENUM: the names, NULL-terminated */
     const char *unit;           /* "" or a unit for messages and help: "pixels", "VPLs" */
     const char *help;           /* one line */
@@ -96,7 +94,7 @@ bool iir_params_equal(const iir_params *a, const iir_params *b);
 
 /* ---- one value against its row ---- */
 
-/* IIR_ERR_INVALID unless v is finite, in [lo, hi] (live.hi instead of hi when live), and an
+/* IIR_ERR_INVALID unless v is finite, in [lo, hi] (live_hi instead of hi when live), and an
  * integer for INT, U64, BOOL and ENUM. The message starts with row->name, e.g. "vpls must be in
  * [1, 16384], got 0", so that a caller can swap the name for its own spelling (iir_param_reword).
  */
@@ -109,9 +107,8 @@ iir_status iir_param_parse(const iir_param *row, const char *text, double *v, ii
 /* Writes v as text the way iir_param_parse reads it ("voronoi", "0.005", "true", "256"). */
 void iir_param_format(const iir_param *row, double v, char *buf, size_t n);
 
-/* The row's largest value, and its default, for a live session (live) or a command (not live). */
+/* The row's largest value for a live session (live) or a command (not live). */
 double iir_param_max(const iir_param *row, bool live);
-double iir_param_default(const iir_param *row, bool live);
 
 /* Rewrites err->msg's leading row name as `spelling` ("--sm-res", "params.sm_res"). */
 void iir_param_reword(iir_error *err, const iir_param *row, const char *spelling);

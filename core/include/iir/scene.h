@@ -26,6 +26,28 @@ typedef struct iir_material {
     iir_vec3 emission; /* emitted radiance Le (W/sr/m^2), >= 0 */
 } iir_material;
 
+/* Something of a scene that is not rendered, for warnings (the CLI prints them; the daemon can send
+ * them): a light or material by its name in the scene that no method renders (the loader's list,
+ * iir_scene.dropped, method "") or that one method leaves out (iir_method_dropped), and what
+ * happens to it. */
+typedef struct iir_dropped {
+    char method[16]; /* "" = no method renders it; else the method that leaves it out */
+    char kind[16];   /* "light" or "material" */
+    char name[64];   /* its name in the scene */
+    char what[192];  /* e.g. "a directional light (sun): ignored; ..." */
+} iir_dropped;
+
+/* Where a scene's camera comes from. Without one in the file or sidecar, iir_scene_open frames the
+ * scene (scene_frame.c): from inside when it is a closed room with its lights inside, else from
+ * outside looking at its centre (iir_scene_load alone always frames from outside). */
+typedef enum iir_camera_origin {
+    IIR_CAMERA_FILE,    /* the mesh file's (glTF) */
+    IIR_CAMERA_SIDECAR, /* the sidecar's "camera" */
+    IIR_CAMERA_BUILTIN, /* the built-in Cornell box's */
+    IIR_CAMERA_OUTSIDE, /* none given: from +z outside the bounds, looking at their centre */
+    IIR_CAMERA_INSIDE   /* none given: inside the closed room, looking along its longer side */
+} iir_camera_origin;
+
 typedef struct iir_scene {
     char name[128];    /* short name: "cornell_box", or the file's base name */
     char source[1024]; /* the file it came from; "" for the built-in box */
@@ -46,11 +68,16 @@ typedef struct iir_scene {
     iir_light *lights;
 
     iir_camera camera;
+    iir_camera_origin camera_origin;
+    float aspect; /* width / height the camera was framed for (glTF aspectRatio, sidecar
+                     camera.aspect, 1 for the Cornell box); 0 = not given */
     iir_vec3 bounds_min, bounds_max;
 
     uint32_t skipped_degenerate; /* triangles dropped at load: zero area or repeated vertices */
     uint32_t skipped_duplicate;  /* triangles dropped at load: same three positions as another */
     char *paths_json;            /* sidecar "paths" object as JSON text, or NULL */
+    uint32_t num_dropped;        /* lights and materials of the file that nothing renders */
+    iir_dropped *dropped;
 } iir_scene;
 
 /* Loads a scene from a file (.obj, .gltf, .glb, or a .scene.json sidecar naming one) or a folder
@@ -74,12 +101,23 @@ void iir_scene_destroy(iir_scene *scene);
 
 /* Opens a scene for rendering: NULL or "builtin" is the built-in Cornell box; anything else is
  * resolved as iir_scene_resolve does (a file or folder, else a bare name in scenes_dir) and loaded
- * as iir_scene_load does; then its ray tracer is built. The caller owns both outputs and frees them
- * with iir_rt_destroy, then iir_scene_destroy (the tracer refers to the scene). On error returns
- * the status of the step that failed with its message in err, and both outputs are NULL (nothing
- * is left allocated). */
+ * as iir_scene_load does; then its ray tracer is built, and a scene without a camera that is a
+ * closed room with its lights inside gets a camera inside it (IIR_CAMERA_INSIDE). The caller owns
+ * both outputs and frees them with iir_rt_destroy, then iir_scene_destroy (the tracer refers to the
+ * scene). On error returns the status of the step that failed with its message in err, and both
+ * outputs are NULL (nothing is left allocated). */
 iir_status iir_scene_open(const char *name_or_path, const char *scenes_dir, iir_scene **scene,
                           iir_rt **rt, iir_error *err);
+
+/* One line saying which camera the scene has and where it came from, e.g. "no camera in the scene:
+ * framed from inside (it is a closed room), at (0, 1, 2.4) looking at (0, 1, 0), fov_y 60". */
+void iir_scene_describe_camera(const iir_scene *scene, char *buf, size_t n);
+
+/* Why a view of the scene may render entirely black, as one clause for a warning ("the scene has
+ * no lights", "the camera may be inside geometry: ...", "no light reaches what the camera sees:
+ * ..."), found with a few hundred rays (scene_dark.c). */
+void iir_scene_explain_dark(const iir_scene *scene, const iir_rt *rt, const iir_light *lights,
+                            uint32_t num_lights, const iir_camera *camera, char *buf, size_t n);
 
 /* Human-readable one-line summary ("cornell_box: 32 triangles, 8 materials, 1 light, skipped 0
  * degenerate and 0 duplicate").

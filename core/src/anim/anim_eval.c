@@ -91,6 +91,10 @@ static iir_vec3 key_value(const iir_anim_key *k, unsigned mask)
         return iir_v3s(k->smooth);
     case IIR_AF_FOV:
         return iir_v3s(k->fov);
+    case IIR_AF_UP:
+        return k->up;
+    case IIR_AF_EXPOSURE:
+        return iir_v3s(k->stops);
     default:
         return k->direction;
     }
@@ -189,5 +193,14 @@ iir_camera iir_anim_camera(const iir_anim *a, const iir_camera *base, double t)
     eval_field(tr, IIR_AF_TARGET, t, &cam.target);
     iir_vec3 v;
     if (eval_field(tr, IIR_AF_FOV, t, &v)) cam.fov_y = iir_clampf(v.x, 1e-3f, 179.999f);
+    if (eval_field(tr, IIR_AF_UP, t, &v) && iir_length(v) > 1e-6f) cam.up = v; /* any length */
     return cam;
+}
+
+float iir_anim_exposure(const iir_anim *a, float base, double t)
+{
+    iir_vec3 v;
+    if (!a->exposure.present || !eval_field(&a->exposure, IIR_AF_EXPOSURE, clamp_time(a, t), &v))
+        return base;
+    return iir_clampf(v.x, -30.f, 30.f);
 }

@@ -17,6 +17,8 @@ enum {
     IIR_AF_SMOOTH = 1u << 4,
     IIR_AF_INTENSITY = 1u << 5,
     IIR_AF_FOV = 1u << 6,
+    IIR_AF_UP = 1u << 7,       /* camera */
+    IIR_AF_EXPOSURE = 1u << 8, /* the exposure track's "stops" */
 };
 
 typedef struct iir_anim_key {
@@ -27,7 +29,9 @@ typedef struct iir_anim_key {
     iir_vec3 direction; /* unit */
     iir_vec3 target;
     iir_vec3 intensity;
+    iir_vec3 up;             /* camera: up hint, as written */
     float cone, smooth, fov; /* degrees, as written */
+    float stops;             /* exposure */
 } iir_anim_key;
 
 typedef enum iir_anim_interp {
@@ -53,9 +57,10 @@ typedef struct iir_anim_track {
 } iir_anim_track;
 
 struct iir_anim {
-    char scene[129]; /* the scene the script was made for ("" when it names none) */
+    char scene[129];     /* the scene the script was made for ("" when it names none) */
+    char light_name[64]; /* the light the light track moves ("" when it names none) */
     double fps, duration;
-    iir_anim_track light, camera;
+    iir_anim_track light, camera, exposure;
 };
 
 #endif

@@ -14,11 +14,14 @@
 #define IIR_ANIM_MAX_BYTES (16u << 20)
 #define IIR_ANIM_PATH 160
 
+/* Which track is being parsed: each has its own key fields. */
+typedef enum anim_kind { KIND_LIGHT, KIND_CAMERA, KIND_EXPOSURE } anim_kind;
+
 typedef struct iir_anim_ctx {
     const char *src; /* prefix of messages */
     iir_error *err;
     double duration;
-    bool camera; /* parsing the camera track (fov_y instead of cone/smooth/intensity) */
+    anim_kind kind; /* the track being parsed */
 } iir_anim_ctx;
 
 static iir_status anim_fail(const iir_anim_ctx *c, iir_status st, const char *path, const char *fmt,
@@ -149,7 +152,7 @@ static iir_status parse_placement(const iir_anim_ctx *c, const cJSON *obj, const
     char p[IIR_ANIM_PATH];
     bool has_p, has_d = false, has_t;
     iir_status st = get_vec3(c, obj, path, "position", false, &k->position, &has_p);
-    if (st == IIR_OK && !c->camera)
+    if (st == IIR_OK && c->kind == KIND_LIGHT)
         st = get_vec3(c, obj, path, "direction", false, &k->direction, &has_d);
     if (st == IIR_OK) st = get_vec3(c, obj, path, "target", false, &k->target, &has_t);
     if (st != IIR_OK) return st;
@@ -167,19 +170,45 @@ static iir_status parse_placement(const iir_anim_ctx *c, const cJSON *obj, const
     return IIR_OK;
 }
 
-/* Light: cone_angle, smooth, intensity; camera: fov_y. */
+/* Camera: fov_y and up. */
+static iir_status parse_lens(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                             iir_anim_key *k)
+{
+    char p[IIR_ANIM_PATH];
+    bool has;
+    double v = 0.0;
+    iir_status st = get_ranged(c, obj, path, "fov_y", 0.0, true, 179.999, &v, &has);
+    k->fov = (float)v;
+    k->fields |= has ? IIR_AF_FOV : 0u;
+    if (st == IIR_OK) st = get_vec3(c, obj, path, "up", false, &k->up, &has);
+    k->fields |= has ? IIR_AF_UP : 0u;
+    path_join(p, path, "up");
+    if (st == IIR_OK && has && !(iir_length(k->up) > 1e-12f))
+        return anim_fail(c, IIR_ERR_INVALID, p, "must not be zero");
+    return st;
+}
+
+/* Exposure: stops, the range of iird render --exposure. */
+static iir_status parse_stops(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                              iir_anim_key *k)
+{
+    bool has;
+    double v = 0.0;
+    iir_status st = get_ranged(c, obj, path, "stops", -30.0, false, 30.0, &v, &has);
+    k->stops = (float)v;
+    k->fields |= has ? IIR_AF_EXPOSURE : 0u;
+    return st;
+}
+
+/* Light: cone_angle, smooth, intensity; camera: fov_y, up; exposure: stops. */
 static iir_status parse_optics(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                                iir_anim_key *k)
 {
     char p[IIR_ANIM_PATH];
     bool has;
     double v = 0.0;
-    if (c->camera) {
-        iir_status st = get_ranged(c, obj, path, "fov_y", 0.0, true, 179.999, &v, &has);
-        k->fov = (float)v;
-        k->fields |= has ? IIR_AF_FOV : 0u;
-        return st;
-    }
+    if (c->kind == KIND_CAMERA) return parse_lens(c, obj, path, k);
+    if (c->kind == KIND_EXPOSURE) return parse_stops(c, obj, path, k);
     iir_status st = get_ranged(c, obj, path, "cone_angle", 0.0, true, 90.0, &v, &has);
     k->cone = (float)v;
     k->fields |= has ? IIR_AF_CONE : 0u;
@@ -200,7 +229,11 @@ static iir_status parse_optics(const iir_anim_ctx *c, const cJSON *obj, const ch
 
 static const char *const LIGHT_KEY_FIELDS[] = {
     "t", "step", "position", "direction", "target", "cone_angle", "smooth", "intensity", NULL};
-static const char *const CAMERA_KEY_FIELDS[] = {"t", "step", "position", "target", "fov_y", NULL};
+static const char *const CAMERA_KEY_FIELDS[] = {"t",     "step", "position", "target",
+                                                "fov_y", "up",   NULL};
+static const char *const EXPOSURE_KEY_FIELDS[] = {"t", "step", "stops", NULL};
+static const char *const *const KEY_FIELDS[] = {LIGHT_KEY_FIELDS, CAMERA_KEY_FIELDS,
+                                                EXPOSURE_KEY_FIELDS};
 
 /* One keyframe; prev_t is the previous key's time (-inf for the first). */
 static iir_status parse_key(const iir_anim_ctx *c, const cJSON *obj, const char *path,
@@ -208,7 +241,7 @@ static iir_status parse_key(const iir_anim_ctx *c, const cJSON *obj, const char 
 {
     char p[IIR_ANIM_PATH];
     bool has;
-    iir_status st = check_fields(c, obj, path, c->camera ? CAMERA_KEY_FIELDS : LIGHT_KEY_FIELDS);
+    iir_status st = check_fields(c, obj, path, KEY_FIELDS[c->kind]);
     if (st == IIR_OK) st = get_ranged(c, obj, path, "t", 0.0, false, c->duration, &k->t, &has);
     if (st != IIR_OK) return st;
     path_join(p, path, "t");
@@ -220,7 +253,7 @@ static iir_status parse_key(const iir_anim_ctx *c, const cJSON *obj, const char 
     path_join(p, path, "step");
     if (step && !cJSON_IsBool(step)) return anim_fail(c, IIR_ERR_FORMAT, p, "must be true/false");
     k->step = cJSON_IsTrue(step);
-    st = parse_placement(c, obj, path, k);
+    st = c->kind == KIND_EXPOSURE ? IIR_OK : parse_placement(c, obj, path, k);
     return st == IIR_OK ? parse_optics(c, obj, path, k) : st;
 }
 
@@ -273,10 +306,10 @@ static const char *const LIGHT_ORBIT_FIELDS[] = {"center",    "radius", "turns",
                                                  "direction", "target", "cone_angle", "smooth",
                                                  "intensity", NULL};
 static const char *const CAMERA_ORBIT_FIELDS[] = {"center", "radius", "turns", "phase",
-                                                  "target", "fov_y",  NULL};
+                                                  "target", "fov_y",  "up",    NULL};
 static const char *const LIGHT_SWEEP_FIELDS[] = {"from",       "to",     "direction", "target",
                                                  "cone_angle", "smooth", "intensity", NULL};
-static const char *const CAMERA_SWEEP_FIELDS[] = {"from", "to", "target", "fov_y", NULL};
+static const char *const CAMERA_SWEEP_FIELDS[] = {"from", "to", "target", "fov_y", "up", NULL};
 
 /* A required vec3 member. */
 static iir_status need_vec3(const iir_anim_ctx *c, const cJSON *obj, const char *path,
@@ -320,8 +353,9 @@ static iir_status parse_sweep(const iir_anim_ctx *c, const cJSON *obj, const cha
 static iir_status parse_parametric(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                                    bool orbit, iir_anim_track *tr)
 {
-    const char *const *allowed = orbit ? (c->camera ? CAMERA_ORBIT_FIELDS : LIGHT_ORBIT_FIELDS)
-                                       : (c->camera ? CAMERA_SWEEP_FIELDS : LIGHT_SWEEP_FIELDS);
+    bool camera = c->kind == KIND_CAMERA;
+    const char *const *allowed = orbit ? (camera ? CAMERA_ORBIT_FIELDS : LIGHT_ORBIT_FIELDS)
+                                       : (camera ? CAMERA_SWEEP_FIELDS : LIGHT_SWEEP_FIELDS);
     iir_status st = check_fields(c, obj, path, allowed);
     if (st != IIR_OK) return st;
     tr->interp = IIR_ANIM_LINEAR;
@@ -333,22 +367,60 @@ static iir_status parse_parametric(const iir_anim_ctx *c, const cJSON *obj, cons
     return st == IIR_OK ? parse_optics(c, obj, path, &tr->keys[0]) : st;
 }
 
-static const char *const TRACK_FIELDS[] = {"interpolation", "keys", "orbit", "sweep", NULL};
+static const char *const LIGHT_TRACK_FIELDS[] = {"name",  "interpolation", "keys",
+                                                 "orbit", "sweep",         NULL};
+static const char *const CAMERA_TRACK_FIELDS[] = {"interpolation", "keys", "orbit", "sweep", NULL};
+static const char *const EXPOSURE_TRACK_FIELDS[] = {"interpolation", "keys", NULL};
+static const char *const *const TRACK_FIELDS[] = {LIGHT_TRACK_FIELDS, CAMERA_TRACK_FIELDS,
+                                                  EXPOSURE_TRACK_FIELDS};
+
+/* The light track's "name": the scene light it moves. */
+static iir_status parse_light_name(const iir_anim_ctx *c, const cJSON *obj, iir_anim *a)
+{
+    const cJSON *name = cJSON_GetObjectItemCaseSensitive(obj, "name");
+    if (!name) return IIR_OK;
+    if (!cJSON_IsString(name) || !name->valuestring[0] ||
+        strlen(name->valuestring) >= sizeof a->light_name)
+        return anim_fail(c, IIR_ERR_FORMAT, "light.name",
+                         "must be a light's name of 1 to %zu bytes", sizeof a->light_name - 1);
+    snprintf(a->light_name, sizeof a->light_name, "%s", name->valuestring);
+    return IIR_OK;
+}
+
+/* "exposure": a number is a constant, one key at t = 0. */
+static iir_status parse_constant_exposure(iir_anim_ctx *c, const cJSON *obj, iir_anim_track *tr)
+{
+    tr->present = true;
+    tr->num_keys = 1;
+    tr->keys = calloc(1, sizeof *tr->keys);
+    if (!tr->keys) return anim_fail(c, IIR_ERR_NOMEM, "exposure", "out of memory");
+    double v = obj->valuedouble;
+    if (!isfinite(v) || v < -30.0 || v > 30.0)
+        return anim_fail(c, IIR_ERR_INVALID, "exposure", "%g is outside [-30, 30] stops", v);
+    tr->keys[0].stops = (float)v;
+    tr->keys[0].fields = IIR_AF_EXPOSURE;
+    return IIR_OK;
+}
 
 static iir_status parse_track(iir_anim_ctx *c, const cJSON *obj, const char *name,
                               iir_anim_track *tr)
 {
     char p[IIR_ANIM_PATH];
     if (!obj) return IIR_OK;
-    c->camera = strcmp(name, "camera") == 0;
+    c->kind = !strcmp(name, "camera")     ? KIND_CAMERA
+              : !strcmp(name, "exposure") ? KIND_EXPOSURE
+                                          : KIND_LIGHT;
+    if (c->kind == KIND_EXPOSURE && cJSON_IsNumber(obj)) return parse_constant_exposure(c, obj, tr);
     tr->present = true;
-    iir_status st = check_fields(c, obj, name, TRACK_FIELDS);
+    iir_status st = check_fields(c, obj, name, TRACK_FIELDS[c->kind]);
     if (st != IIR_OK) return st;
     const cJSON *keys = cJSON_GetObjectItemCaseSensitive(obj, "keys");
     const cJSON *orbit = cJSON_GetObjectItemCaseSensitive(obj, "orbit");
     const cJSON *sweep = cJSON_GetObjectItemCaseSensitive(obj, "sweep");
     if ((keys != NULL) + (orbit != NULL) + (sweep != NULL) != 1)
-        return anim_fail(c, IIR_ERR_FORMAT, name, "needs exactly one of keys, orbit, sweep");
+        return anim_fail(c, IIR_ERR_FORMAT, name,
+                         c->kind == KIND_EXPOSURE ? "needs keys (or give a number)"
+                                                  : "needs exactly one of keys, orbit, sweep");
     if (keys) return parse_keys(c, obj, name, tr);
     path_join(p, name, "interpolation");
     if (cJSON_GetObjectItemCaseSensitive(obj, "interpolation"))
@@ -359,8 +431,8 @@ static iir_status parse_track(iir_anim_ctx *c, const cJSON *obj, const char *nam
 
 /* ======================== the script ======================== */
 
-static const char *const TOP_FIELDS[] = {"fps",         "duration", "light", "camera",
-                                         "description", "scene",    NULL};
+static const char *const TOP_FIELDS[] = {"fps",         "duration", "light",    "camera",
+                                         "description", "scene",    "exposure", NULL};
 
 static iir_status parse_root(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
 {
@@ -384,13 +456,18 @@ static iir_status parse_root(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
         st = parse_track(c, cJSON_GetObjectItemCaseSensitive(root, "light"), "light", &a->light);
     if (st == IIR_OK)
         st = parse_track(c, cJSON_GetObjectItemCaseSensitive(root, "camera"), "camera", &a->camera);
+    if (st == IIR_OK)
+        st = parse_track(c, cJSON_GetObjectItemCaseSensitive(root, "exposure"), "exposure",
+                         &a->exposure);
+    if (st == IIR_OK && a->light.present)
+        st = parse_light_name(c, cJSON_GetObjectItemCaseSensitive(root, "light"), a);
     return st;
 }
 
 iir_status iir_anim_parse(const char *json_text, const char *source_name, iir_anim **out,
                           iir_error *err)
 {
-    iir_anim_ctx c = {source_name ? source_name : "animation", err, 0.0, false};
+    iir_anim_ctx c = {source_name ? source_name : "animation", err, 0.0, KIND_LIGHT};
     *out = NULL;
     const char *end = NULL;
     cJSON *root = json_text ? cJSON_ParseWithOpts(json_text, &end, true) : NULL;
@@ -435,6 +512,7 @@ void iir_anim_destroy(iir_anim *a)
     if (!a) return;
     free(a->light.keys);
     free(a->camera.keys);
+    free(a->exposure.keys);
     free(a);
 }
 
@@ -474,4 +552,13 @@ bool iir_anim_has_light(const iir_anim *a)
 bool iir_anim_has_camera(const iir_anim *a)
 {
     return a->camera.present;
+}
+bool iir_anim_has_exposure(const iir_anim *a)
+{
+    return a->exposure.present;
+}
+
+const char *iir_anim_light_name(const iir_anim *a)
+{
+    return a->light_name;
 }

@@ -55,61 +55,17 @@ typedef struct iir_options {
 static const char *const WEIGHTS_CHOICES[] = {"uniform", "voronoi", NULL};
 
 static const iir_param IIR_ROWS[] = {
-    {"vpls",
-     IIR_PARAM_INT,
-     offsetof(iir_options, vpls),
-     256,
-     1,
-     16384,
-     {0, 4096},
-     NULL,
-     "VPLs",
-     "the VPL set's size N",
-     IIR_PARAM_RESTART},
-    {"kmin",
-     IIR_PARAM_INT,
-     offsetof(iir_options, kmin),
-     4,
-     0,
-     16384,
-     {0, 4096},
-     NULL,
-     "VPLs",
-     "VPLs replaced per frame at least (the crowded ones)",
-     IIR_PARAM_LIVE},
-    {"kmax",
-     IIR_PARAM_INT,
-     offsetof(iir_options, kmax),
-     8,
+    {"vpls", IIR_PARAM_INT, offsetof(iir_options, vpls), 256, 1, 16384, 4096, NULL, "VPLs",
+     "the VPL set's size N", IIR_PARAM_RESTART},
+    {"kmin", IIR_PARAM_INT, offsetof(iir_options, kmin), 4, 0, 16384, 4096, NULL, "VPLs",
+     "VPLs replaced per frame at least (the crowded ones)", IIR_PARAM_LIVE},
+    {"kmax", IIR_PARAM_INT, offsetof(iir_options, kmax), 8,
      1, /* the step inserts at least one VPL a frame */
-     16384,
-     {0, 4096},
-     NULL,
-     "VPLs",
-     "VPLs inserted per frame at most",
-     IIR_PARAM_LIVE},
-    {"weights",
-     IIR_PARAM_ENUM,
-     offsetof(iir_options, weights),
-     IIR_WEIGHTS_VORONOI,
-     0,
-     1,
-     {0, 0},
-     WEIGHTS_CHOICES,
-     "",
-     "VPL flux by Voronoi cell area or uniform (the paper's)",
-     IIR_PARAM_LIVE},
-    {"regen_threshold",
-     IIR_PARAM_FLOAT,
-     offsetof(iir_options, regen_threshold),
-     0.5,
-     1e-6,
-     1,
-     {0, 0},
-     NULL,
-     "",
-     "regenerate the whole set when more than this fraction of it dies",
-     IIR_PARAM_LIVE},
+     16384, 4096, NULL, "VPLs", "VPLs inserted per frame at most", IIR_PARAM_LIVE},
+    {"weights", IIR_PARAM_ENUM, offsetof(iir_options, weights), IIR_WEIGHTS_VORONOI, 0, 1, 0,
+     WEIGHTS_CHOICES, "", "VPL flux by Voronoi cell area or uniform (the paper's)", IIR_PARAM_LIVE},
+    {"regen_threshold", IIR_PARAM_FLOAT, offsetof(iir_options, regen_threshold), 0.5, 1e-6, 1, 0,
+     NULL, "", "regenerate the whole set when more than this fraction of it dies", IIR_PARAM_LIVE},
 };
 
 /* kmin <= kmax <= vpls, blaming the one the user gave (kmin, then kmax, when both or neither). */
@@ -223,6 +179,24 @@ static iir_status iir_m_supports(const iir_light *lights, uint32_t num_lights, i
                     "iir needs a spot light (its VPL domain is the spot's disk); these %u light(s) "
                     "have none",
                     num_lights);
+}
+
+/* iir's VPLs come from the first spot: every other light's indirect light, and the emitters', is
+ * left out (their direct light is rendered). Without a spot iir renders nothing (supports). */
+static uint32_t iir_m_dropped(const iir_scene *scene, const iir_light *lights, uint32_t num_lights,
+                              iir_dropped *out, uint32_t max)
+{
+    iir_view view = {lights, num_lights, scene->camera};
+    const iir_light *spot = first_spot(&view);
+    if (!spot) return 0;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < num_lights; i++)
+        if (&lights[i] != spot)
+            iir_dropped_add(out, max, &n, "iir", "light", lights[i].name,
+                            "a %s light: its indirect light is left out, as iir's VPLs come from "
+                            "the first spot, '%s', only (its direct light is rendered)",
+                            lights[i].type == IIR_LIGHT_SPOT ? "spot" : "point", spot->name);
+    return n + iir_dropped_emitters(scene, "iir", n < max ? out + n : NULL, n < max ? max - n : 0);
 }
 
 static void fill_counts(const iir_incr_stats *is, uint32_t maps, iir_vpl_counts *c)
@@ -489,4 +463,5 @@ const iir_method_ops iir_method_iir = {
     .update = iir_m_update,
     .supports = iir_m_supports,
     .memory = iir_m_memory,
+    .dropped = iir_m_dropped,
 };

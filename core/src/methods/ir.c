@@ -46,39 +46,12 @@ typedef struct ir_options {
 } ir_options;
 
 static const iir_param IR_ROWS[] = {
-    {"vpls",
-     IIR_PARAM_INT,
-     offsetof(ir_options, vpls),
-     256,
-     1,
-     16384,
-     {0, 4096},
-     NULL,
-     "paths",
-     "light paths per frame (each diffuse vertex a VPL)",
-     IIR_PARAM_RESTART},
-    {"bounces",
-     IIR_PARAM_INT,
-     offsetof(ir_options, bounces),
-     2,
-     1,
-     1000,
-     {0, 8},
-     NULL,
-     "",
-     "light bounces: 1 = direct only, 2 = one diffuse bounce",
-     IIR_PARAM_RESTART},
-    {"same_random",
-     IIR_PARAM_BOOL,
-     offsetof(ir_options, same_random),
-     0,
-     0,
-     1,
-     {0, 0},
-     NULL,
-     "",
-     "the same random numbers every frame (default: fresh ones)",
-     IIR_PARAM_RESTART},
+    {"vpls", IIR_PARAM_INT, offsetof(ir_options, vpls), 256, 1, 16384, 4096, NULL, "paths",
+     "light paths per frame (each diffuse vertex a VPL)", IIR_PARAM_RESTART},
+    {"bounces", IIR_PARAM_INT, offsetof(ir_options, bounces), 2, 1, 1000, 8, NULL, "",
+     "light bounces: 1 = direct only, 2 = one diffuse bounce", IIR_PARAM_RESTART},
+    {"same_random", IIR_PARAM_BOOL, offsetof(ir_options, same_random), 0, 0, 1, 0, NULL, "",
+     "the same random numbers every frame (default: fresh ones)", IIR_PARAM_RESTART},
 };
 static const iir_param_table IR_TABLE = {"ir: light paths", IR_ROWS,
                                          sizeof IR_ROWS / sizeof IR_ROWS[0], NULL};
@@ -365,6 +338,14 @@ static uint64_t ir_memory(const void *opts, int width, int height)
     return iir_vpl_memory(&o->vpl, n, width, height);
 }
 
+/* ir's light paths leave the punctual lights only: emitters' indirect light is left out. */
+static uint32_t ir_dropped(const iir_scene *scene, const iir_light *lights, uint32_t num_lights,
+                           iir_dropped *out, uint32_t max)
+{
+    (void)lights, (void)num_lights;
+    return iir_dropped_emitters(scene, "ir", out, max);
+}
+
 const iir_method_ops iir_method_ir = {
     .name = "ir",
     .summary = "instant radiosity: VPLs from light paths, regenerated every frame",
@@ -381,4 +362,5 @@ const iir_method_ops iir_method_ir = {
     .set_stop = ir_set_stop,
     .update = ir_update,
     .memory = ir_memory,
+    .dropped = ir_dropped,
 };

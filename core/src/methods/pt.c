@@ -1,8 +1,9 @@
 /* pt.c -- the reference path tracer (method "pt"): next-event estimation with MIS for area
  * lights, Russian roulette, a maximum bounce count, deterministic seeds, OpenMP over tiles, and
  * progressive refinement (more samples into the same frame). Parameters: spp and bounces (below),
- * seed, jitter, refine_passes (converged once render + refines put refine_passes x spp samples in
- * the image; a refine call still adds its samples after that, so a caller can reach any count).
+ * seed, jitter, refine_passes: render + refines of spp samples each are converged once the image
+ * holds refine_passes samples per pixel, or one frame's spp when that is more (pt_converged_spp);
+ * a refine call still adds its samples after that, so a caller can reach any count.
  *
  * Bounces count reflections: a light path light -> x_k -> ... -> x_1 -> camera has k of them, so
  * bounces = 1 is direct light only and bounces = 2 adds one diffuse bounce. Emitters seen directly
@@ -30,28 +31,10 @@ typedef struct pt_options {
 } pt_options;
 
 static const iir_param PT_ROWS[] = {
-    {"spp",
-     IIR_PARAM_INT,
-     offsetof(pt_options, spp),
-     16,
-     1,
-     1 << 20,
-     {1, 64},
-     NULL,
-     "samples",
-     "samples per pixel per frame (and per refinement pass)",
-     IIR_PARAM_LIVE},
-    {"bounces",
-     IIR_PARAM_INT,
-     offsetof(pt_options, bounces),
-     2,
-     1,
-     1000,
-     {0, 8},
-     NULL,
-     "",
-     "light bounces: 1 = direct only, 2 = one diffuse bounce",
-     IIR_PARAM_LIVE},
+    {"spp", IIR_PARAM_INT, offsetof(pt_options, spp), 1, 1, 1 << 20, 64, NULL, "samples",
+     "samples per pixel per frame and per refinement pass", IIR_PARAM_LIVE},
+    {"bounces", IIR_PARAM_INT, offsetof(pt_options, bounces), 2, 1, 1000, 8, NULL, "",
+     "light bounces: 1 = direct only, 2 = one diffuse bounce", IIR_PARAM_LIVE},
 };
 static const iir_param_table PT_TABLE = {"pt: path tracing", PT_ROWS,
                                          sizeof PT_ROWS / sizeof PT_ROWS[0], NULL};
@@ -68,6 +51,19 @@ typedef struct pt_state {
     iir_stop_fn stop; /* a live session's: polled per tile */
     void *stop_ctx;
 } pt_state;
+
+/* Samples per pixel of a converged frame: refine_passes of them, rounded up to whole passes of
+ * spp (so at least one frame's spp). */
+static uint64_t pt_converged_spp(const pt_options *o)
+{
+    uint64_t spp = (uint64_t)o->spp, want = (uint64_t)o->common.refine_passes;
+    return (want + spp - 1) / spp * spp;
+}
+
+static uint64_t pt_converged_at(const void *opts)
+{
+    return pt_converged_spp(opts);
+}
 
 static float power_heuristic(float pdf_a, float pdf_b)
 {
@@ -207,7 +203,7 @@ static iir_status accumulate(pt_state *pt, int spp, iir_frame_stats *stats, iir_
     stats->phase_ms[IIR_PHASE_TRACE] = iir_now_ms() - t0;
     stats->total_ms = stats->phase_ms[IIR_PHASE_TRACE];
     stats->samples_per_pixel = pt->spp_done;
-    stats->converged = pt->spp_done >= (uint64_t)pt->params.common.refine_passes * (uint64_t)spp;
+    stats->converged = pt->spp_done >= pt_converged_spp(&pt->params);
     return IIR_OK;
 }
 
@@ -307,4 +303,5 @@ const iir_method_ops iir_method_pt = {
     .set_stop = pt_set_stop,
     .update = pt_update,
     .memory = pt_memory,
+    .converged_at = pt_converged_at,
 };

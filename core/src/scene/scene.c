@@ -13,6 +13,7 @@
 
 #define SIDECAR_EXT ".scene.json"
 #define PATH_MAX_LEN 1024
+#define MAX_BASE_DEPTH 8 /* sidecars based on sidecars: a longer chain is taken for a cycle */
 
 static const char *const MESH_EXTS[] = {".obj", ".gltf", ".glb", NULL};
 
@@ -28,6 +29,7 @@ void iir_scene_destroy(iir_scene *scene)
     free(scene->areas);
     free(scene->material_list);
     free(scene->lights);
+    free(scene->dropped);
     free(scene->paths_json);
     free(scene);
 }
@@ -287,12 +289,70 @@ static iir_status build(iir_scene_builder *b, const char *mesh, iir_sidecar *sc,
     return st;
 }
 
-static iir_status load_sidecar(const char *path, iir_scene **out, iir_error *err)
+static iir_status load_path(const char *path, int depth, iir_scene **out, iir_error *err);
+
+/* The scene a sidecar's "base" names: the built-in box, or the folder of that name beside the
+ * sidecar's own folder (a saved scene SCENES/NAME/NAME.scene.json names SCENES/BASE). */
+static iir_status load_base(const iir_sidecar *sc, int depth, iir_scene **out, iir_error *err)
+{
+    if (!strcmp(sc->base, "builtin")) {
+        *out = iir_scene_create_cornell_box();
+        return *out ? IIR_OK : iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", sc->path);
+    }
+    if (depth >= MAX_BASE_DEPTH)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "%s: base: '%s' starts a chain of more than %d scenes based on each "
+                        "other (a cycle?)",
+                        sc->path, sc->base, MAX_BASE_DEPTH);
+    const char *slash = strrchr(sc->path, '/');
+    int dir_len = slash ? (int)(slash - sc->path) : 1;
+    char path[PATH_MAX_LEN];
+    if (snprintf(path, sizeof path, "%.*s/../%s", dir_len, slash ? sc->path : ".", sc->base) >=
+        (int)sizeof path)
+        return iir_fail(err, IIR_ERR_INVALID, "%s: base: path is too long", sc->path);
+    struct stat sb;
+    if (stat(path, &sb) != 0)
+        return iir_fail(err, IIR_ERR_IO,
+                        "%s: base: no scene '%s' beside the sidecar's folder (%s: %s)", sc->path,
+                        sc->base, path, strerror(errno));
+    return load_path(path, depth + 1, out, err);
+}
+
+/* A sidecar with "base": that scene (geometry, materials, lights, camera; not its paths) takes the
+ * place of the mesh, then the sidecar applies as to a mesh. */
+static iir_status load_on_base(const char *path, iir_sidecar *sc, int depth, iir_scene **out,
+                               iir_error *err)
+{
+    iir_scene *base = NULL;
+    iir_status st = load_base(sc, depth, &base, err);
+    if (st != IIR_OK) return st;
+    iir_scene_builder b;
+    char name[128];
+    scene_name(path, name, sizeof name);
+    iir_builder_init(&b, name, path);
+    st = iir_builder_add_scene(&b, base, err);
+    if (st == IIR_OK) st = iir_sidecar_apply(sc, &b, err);
+    if (st == IIR_OK) st = iir_builder_finish(&b, out, err);
+    iir_builder_free(&b);
+    if (st == IIR_OK) {
+        (*out)->skipped_degenerate += base->skipped_degenerate;
+        (*out)->skipped_duplicate += base->skipped_duplicate;
+    }
+    iir_scene_destroy(base);
+    return st;
+}
+
+static iir_status load_sidecar(const char *path, int depth, iir_scene **out, iir_error *err)
 {
     iir_sidecar sc;
     iir_status st = iir_sidecar_parse(path, &sc, err);
     if (st != IIR_OK) return st;
     char mesh[PATH_MAX_LEN];
+    if (sc.base[0]) {
+        st = load_on_base(path, &sc, depth, out, err);
+        iir_sidecar_free(&sc);
+        return st;
+    }
     if (sc.file[0]) {
         snprintf(mesh, sizeof mesh, "%s", sc.file);
     } else if (!sibling_mesh(path, mesh, sizeof mesh)) {
@@ -325,6 +385,14 @@ static iir_status load_mesh(const char *path, iir_scene **out, iir_error *err)
     if (has_sidecar) {
         iir_status st = iir_sidecar_parse(sidecar, &sc, err);
         if (st != IIR_OK) return st;
+        if (sc.base[0]) {
+            st = iir_fail(err, IIR_ERR_INVALID,
+                          "%s: base: a sidecar based on another scene is loaded by itself, not "
+                          "applied to %s; load the sidecar",
+                          sidecar, path);
+            iir_sidecar_free(&sc);
+            return st;
+        }
         if (sc.file[0] && !same_file(sc.file, path)) {
             st = iir_fail(err, IIR_ERR_INVALID,
                           "%s: file names %s, but the sidecar sits next to "
@@ -341,7 +409,7 @@ static iir_status load_mesh(const char *path, iir_scene **out, iir_error *err)
     return st;
 }
 
-iir_status iir_scene_load(const char *path, iir_scene **out, iir_error *err)
+static iir_status load_path(const char *path, int depth, iir_scene **out, iir_error *err)
 {
     *out = NULL;
     if (!path || !*path) return iir_fail(err, IIR_ERR_INVALID, "no scene path given");
@@ -354,6 +422,11 @@ iir_status iir_scene_load(const char *path, iir_scene **out, iir_error *err)
         if (s != IIR_OK) return s;
         path = file;
     }
-    if (ends_with(path, SIDECAR_EXT, false)) return load_sidecar(path, out, err);
+    if (ends_with(path, SIDECAR_EXT, false)) return load_sidecar(path, depth, out, err);
     return load_mesh(path, out, err);
+}
+
+iir_status iir_scene_load(const char *path, iir_scene **out, iir_error *err)
+{
+    return load_path(path, 0, out, err);
 }

@@ -16,11 +16,14 @@
  * down its node's -z with +y up (the spec's rule; assimp's own pose fields are ignored for glTF).
  * KHR_lights_punctual intensity (candela for point/spot) times colour is taken as I0 in W/sr,
  * without a photometric conversion; a spot's outer cone angle is our cone half-angle and
- * (outer - inner) our smooth edge. Directional and area lights are ignored.
+ * (outer - inner) our smooth edge. Directional, area and ambient lights are ignored, and so are
+ * colour textures, transparency and metal; each such light and material is noted by name in the
+ * scene (iir_scene.dropped) for the commands' warnings.
  *
  * assimp's C API keeps the last error message in one process-wide string, so imports run under a
  * mutex (the only shared state here; it guards the library, not ours). */
 #include "scene_build.h"
+#include "scene_objtext.h"
 
 #include <assimp/cimport.h>
 #include <assimp/config.h>
@@ -182,7 +185,14 @@ static iir_status import_scene(const char *path, const struct aiScene **out, iir
                                    aiComponent_COLORS | aiComponent_TEXCOORDS |
                                    aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
                                    aiComponent_TEXTURES);
-    iir_status st = IIR_OK;
+    size_t plen = strlen(path);
+    iir_status st =
+        plen > 4 && !strcasecmp(path + plen - 4, ".obj") ? iir_objtext_check(path, err) : IIR_OK;
+    if (st != IIR_OK) {
+        aiReleasePropertyStore(props);
+        *out = NULL;
+        return st;
+    }
     pthread_mutex_lock(&assimp_lock);
     const struct aiScene *s = aiImportFileExWithProperties(
         path, aiProcess_Triangulate | aiProcess_RemoveComponent, NULL, props);
@@ -240,6 +250,26 @@ static iir_material convert_material(const struct aiMaterial *mat, unsigned inde
     return m;
 }
 
+/* Notes what a material has that iir does not render (iir_scene.dropped): a colour texture,
+ * transparency, metal. Specular colours (OBJ Ks, which exporters write by default) are not noted:
+ * every surface is diffuse (docs/scene-format.md, section 3). */
+static void note_material(iir_scene_builder *b, const struct aiMaterial *mat, const char *name)
+{
+    float f = 0.f;
+    if (aiGetMaterialTextureCount(mat, aiTextureType_DIFFUSE) +
+        aiGetMaterialTextureCount(mat, aiTextureType_BASE_COLOR))
+        iir_builder_drop(b, "material", name, "a colour texture: ignored; its flat colour is used");
+    if (aiGetMaterialFloat(mat, AI_MATKEY_OPACITY, &f) == aiReturn_SUCCESS && f < 0.999f)
+        iir_builder_drop(b, "material", name, "transparency (opacity %g): rendered opaque",
+                         (double)f);
+    if (aiGetMaterialFloat(mat, AI_MATKEY_TRANSMISSION_FACTOR, &f) == aiReturn_SUCCESS && f > 0.f)
+        iir_builder_drop(b, "material", name, "transmission %g: rendered opaque", (double)f);
+    if (aiGetMaterialFloat(mat, AI_MATKEY_METALLIC_FACTOR, &f) == aiReturn_SUCCESS && f > 0.f)
+        iir_builder_drop(b, "material", name,
+                         "metallic %g: rendered as a diffuse surface of its base colour",
+                         (double)f);
+}
+
 typedef struct loader {
     const char *path;
     const struct aiScene *s;
@@ -257,6 +287,7 @@ static iir_status use_material(loader *L, unsigned i, uint32_t *out, iir_error *
         iir_material m = convert_material(L->s->mMaterials[i], i);
         iir_status st = iir_builder_add_material(L->b, &m, &L->material_map[i], err);
         if (st != IIR_OK) return st;
+        note_material(L->b, L->s->mMaterials[i], m.name);
     }
     *out = L->material_map[i];
     return IIR_OK;
@@ -352,14 +383,37 @@ static iir_light convert_light(const loader *L, const struct aiLight *al, const 
     return l;
 }
 
-/* Point and spot lights that a node places; others (directional, area, unplaced) are skipped. */
+/* What happens to a light of type t that iir does not render; NULL for point and spot. */
+static const char *unrendered_light(enum aiLightSourceType t)
+{
+    switch (t) {
+    case aiLightSource_POINT:
+    case aiLightSource_SPOT:
+        return NULL;
+    case aiLightSource_DIRECTIONAL:
+        return "a directional light (sun): ignored; only spot and point lights are rendered";
+    case aiLightSource_AREA:
+        return "an area light: ignored; give its emitter an emissive material instead";
+    case aiLightSource_AMBIENT:
+        return "an ambient light: ignored";
+    default:
+        return "a light of a type iir does not know: ignored";
+    }
+}
+
+/* Point and spot lights that a node places; the others (directional, area, ambient, unplaced)
+ * are skipped and noted (iir_scene.dropped). */
 static iir_status add_lights(loader *L, iir_error *err)
 {
     for (unsigned i = 0; i < L->s->mNumLights; i++) {
         const struct aiLight *al = L->s->mLights[i];
-        if (al->mType != aiLightSource_POINT && al->mType != aiLightSource_SPOT) continue;
+        const char *why = unrendered_light(al->mType);
         const struct aiNode *node = find_node(L->s->mRootNode, al->mName.data);
-        if (!node) continue;
+        if (!why && !node) why = "placed by no node of the scene: ignored";
+        if (why) {
+            iir_builder_drop(L->b, "light", al->mName.data, "%s", why);
+            continue;
+        }
         mat4 M = node_world(node);
         iir_light l = convert_light(L, al, &M);
         iir_error e;
@@ -403,6 +457,7 @@ static void set_camera(loader *L)
         cam.up = iir_normalize(mat4_vector(&M, u));
         cam.fov_y = camera_fov_y(L, ac);
         iir_builder_set_camera(L->b, &cam);
+        iir_builder_set_camera_origin(L->b, IIR_CAMERA_FILE, ac->mAspect > 0.f ? ac->mAspect : 0.f);
         return;
     }
 }

@@ -4,6 +4,8 @@
 #include "scene_build.h"
 
 #include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -63,12 +65,15 @@ void iir_builder_free(iir_scene_builder *b)
     free(b->tri_materials);
     free(b->materials);
     free(b->lights);
+    free(b->dropped);
     free(b->paths_json);
     b->positions = NULL;
     b->indices = b->tri_materials = NULL;
     b->materials = NULL;
     b->lights = NULL;
+    b->dropped = NULL;
     b->paths_json = NULL;
+    b->num_dropped = b->cap_dropped = 0;
     b->num_vertices = b->cap_vertices = 0;
     b->num_triangles = b->cap_triangles = 0;
     b->num_materials = b->cap_materials = 0;
@@ -167,15 +172,69 @@ iir_status iir_builder_add_light(iir_scene_builder *b, const iir_light *light, i
     return IIR_OK;
 }
 
+iir_status iir_builder_add_scene(iir_scene_builder *b, const iir_scene *scene, iir_error *err)
+{
+    uint32_t v0 = b->num_vertices, m0 = b->num_materials;
+    iir_status st = iir_builder_reserve(b, scene->num_vertices, scene->num_triangles, err);
+    for (uint32_t i = 0; st == IIR_OK && i < scene->num_materials; i++)
+        st = iir_builder_add_material(b, &scene->material_list[i], NULL, err);
+    for (uint32_t i = 0; st == IIR_OK && i < scene->num_vertices; i++)
+        st = iir_builder_add_vertex(b, scene->positions[i], NULL, err);
+    for (uint32_t i = 0; st == IIR_OK && i < scene->num_triangles; i++) {
+        const uint32_t *t = scene->indices + 3 * (size_t)i;
+        st = iir_builder_add_triangle(b, v0 + t[0], v0 + t[1], v0 + t[2], m0 + scene->materials[i],
+                                      err);
+    }
+    for (uint32_t i = 0; st == IIR_OK && i < scene->num_lights; i++)
+        st = iir_builder_add_light(b, &scene->lights[i], err);
+    for (uint32_t i = 0; st == IIR_OK && i < scene->num_dropped; i++)
+        if (!scene->dropped[i].method[0])
+            iir_builder_drop(b, scene->dropped[i].kind, scene->dropped[i].name, "%s",
+                             scene->dropped[i].what);
+    if (st == IIR_OK) {
+        iir_builder_set_camera(b, &scene->camera);
+        iir_builder_set_camera_origin(b, scene->camera_origin, scene->aspect);
+    }
+    return st;
+}
+
 void iir_builder_clear_lights(iir_scene_builder *b)
 {
     b->num_lights = 0;
+    uint32_t kept = 0;
+    for (uint32_t i = 0; i < b->num_dropped; i++)
+        if (strcmp(b->dropped[i].kind, "light") != 0) b->dropped[kept++] = b->dropped[i];
+    b->num_dropped = kept;
 }
 
 void iir_builder_set_camera(iir_scene_builder *b, const iir_camera *cam)
 {
     b->camera = *cam;
     b->has_camera = true;
+    b->camera_origin = IIR_CAMERA_FILE;
+    b->aspect = 0.f;
+}
+
+void iir_builder_set_camera_origin(iir_scene_builder *b, iir_camera_origin origin, float aspect)
+{
+    b->camera_origin = origin;
+    b->aspect = aspect;
+}
+
+void iir_builder_drop(iir_scene_builder *b, const char *kind, const char *name, const char *fmt,
+                      ...)
+{
+    if (!grow((void **)&b->dropped, &b->cap_dropped, (uint64_t)b->num_dropped + 1,
+              sizeof(iir_dropped)))
+        return;
+    iir_dropped *d = &b->dropped[b->num_dropped++];
+    memset(d, 0, sizeof *d);
+    iir_scene_strcpy(d->kind, sizeof d->kind, kind);
+    iir_scene_strcpy(d->name, sizeof d->name, name);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(d->what, sizeof d->what, fmt, ap);
+    va_end(ap);
 }
 
 void iir_builder_scale(iir_scene_builder *b, float s)
@@ -362,11 +421,16 @@ static void move_into_scene(iir_scene_builder *b, iir_scene *s)
     s->num_lights = b->num_lights;
     s->lights = b->lights;
     s->camera = b->camera;
+    s->camera_origin = b->camera_origin;
+    s->aspect = b->aspect;
+    s->num_dropped = b->num_dropped;
+    s->dropped = b->dropped;
     s->paths_json = b->paths_json;
     b->positions = NULL;
     b->indices = b->tri_materials = NULL;
     b->materials = NULL;
     b->lights = NULL;
+    b->dropped = NULL;
     b->paths_json = NULL;
     iir_builder_free(b);
 }
@@ -418,6 +482,7 @@ iir_status iir_builder_finish(iir_scene_builder *b, iir_scene **out, iir_error *
             return st;
         }
         iir_builder_set_camera(b, &cam);
+        iir_builder_set_camera_origin(b, IIR_CAMERA_OUTSIDE, 0.f);
     }
     s->bounds_min = bb.lo;
     s->bounds_max = bb.hi;

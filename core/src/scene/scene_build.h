@@ -47,6 +47,11 @@ typedef struct iir_scene_builder {
 
     iir_camera camera;
     bool has_camera;
+    iir_camera_origin camera_origin;
+    float aspect; /* the camera's width / height; 0 = not given */
+
+    iir_dropped *dropped; /* what the file has and nothing renders; moved into the scene */
+    uint32_t num_dropped, cap_dropped;
 
     char *paths_json; /* owned; moved into the scene */
 } iir_scene_builder;
@@ -84,10 +89,23 @@ int64_t iir_builder_find_material(const iir_scene_builder *b, const char *name);
 /* Appends a punctual light after iir_light_validate(); its message is prefixed with the source. */
 iir_status iir_builder_add_light(iir_scene_builder *b, const iir_light *light, iir_error *err);
 
-/* Drops every light added so far (sidecar lights replace file lights). */
+/* Drops every light added so far and the notes on lights (sidecar lights replace file lights). */
 void iir_builder_clear_lights(iir_scene_builder *b);
 
+/* Sets the camera (origin IIR_CAMERA_FILE, aspect not given). */
 void iir_builder_set_camera(iir_scene_builder *b, const iir_camera *cam);
+/* Says where the camera set last comes from and its width / height (0 = not given). */
+void iir_builder_set_camera_origin(iir_scene_builder *b, iir_camera_origin origin, float aspect);
+
+/* Notes a light or material of the file that nothing renders (kind "light" or "material", what
+ * happens to it, printf-style); out of memory only loses the note. iir_builder_clear_lights
+ * forgets the light notes (the sidecar's lights replace the file's). */
+void iir_builder_drop(iir_scene_builder *b, const char *kind, const char *name, const char *fmt,
+                      ...) __attribute__((format(printf, 4, 5)));
+
+/* Appends a loaded scene's vertices, triangles (same order), materials and lights, and sets its
+ * camera: a sidecar's "base" scene becomes the mesh the sidecar applies to. Not its paths. */
+iir_status iir_builder_add_scene(iir_scene_builder *b, const iir_scene *scene, iir_error *err);
 
 /* Multiplies vertex positions, light positions and the camera's position and target by s > 0
  * (a unit scale). Directions, angles and intensities are unchanged. */
@@ -99,6 +117,10 @@ void iir_builder_scale(iir_scene_builder *b, float s);
  * On success *out owns all arrays and the builder is left empty; on error (no triangles left,
  * bad camera, no memory) *out is NULL and the builder still owns its data. */
 iir_status iir_builder_finish(iir_scene_builder *b, iir_scene **out, iir_error *err);
+
+/* scene_frame.c: a scene whose camera the builder made (IIR_CAMERA_OUTSIDE) gets one inside it
+ * when it is a closed room with its lights inside (IIR_CAMERA_INSIDE); needs its ray tracer. */
+void iir_scene_frame(iir_scene *s, const iir_rt *rt);
 
 /* ======================== the sources ======================== */
 
@@ -118,9 +140,12 @@ typedef struct iir_sidecar_material {
 typedef struct iir_sidecar {
     char path[1024]; /* the sidecar file itself */
     char file[1024]; /* the mesh it names, joined with the sidecar's folder; "" if it names none */
+    char base[128];  /* the scene it is based on (a bare name: "builtin" or a sibling folder of the
+                        sidecar's folder); "" if none. Exclusive with file. */
     float unit_scale;
     bool has_camera;
     iir_camera camera;
+    float aspect;    /* camera.aspect; 0 when absent (the file camera's is then kept) */
     bool has_lights; /* a "lights" array was given (possibly empty: no lights at all) */
     uint32_t num_lights;
     iir_light *lights;

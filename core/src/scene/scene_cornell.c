@@ -136,6 +136,7 @@ iir_scene *iir_scene_create_cornell_box(void)
     if (st == IIR_OK) st = iir_builder_add_light(&b, &spot, NULL);
     if (st == IIR_OK) {
         iir_builder_set_camera(&b, &cam);
+        iir_builder_set_camera_origin(&b, IIR_CAMERA_BUILTIN, 1.f);
         st = iir_builder_finish(&b, &scene, NULL);
     }
     iir_builder_free(&b);

@@ -1,10 +1,11 @@
 /* scene_open.c -- opening a scene for rendering: from what a user typed (or a resolved path) to a
- * loaded scene and its ray tracer, with nothing left behind on failure; not loading files
- * (scene.c) or building the BVH (rt.c). */
+ * loaded scene and its ray tracer (and a camera inside a closed room that has none, scene_frame.c),
+ * with nothing left behind on failure; not loading files (scene.c) or building the BVH (rt.c). */
 #include <string.h>
 
 #include "iir/rt.h"
 #include "iir/scene.h"
+#include "scene_build.h"
 
 /* The scene alone: the built-in box, or the resolved and loaded file. */
 static iir_status open_scene(const char *name_or_path, const char *scenes_dir, iir_scene **scene,
@@ -28,6 +29,7 @@ iir_status iir_scene_open(const char *name_or_path, const char *scenes_dir, iir_
     *rt = NULL;
     iir_status st = open_scene(name_or_path, scenes_dir, scene, err);
     if (st == IIR_OK) st = iir_rt_create(*scene, rt, err);
+    if (st == IIR_OK) iir_scene_frame(*scene, *rt);
     if (st != IIR_OK) {
         iir_rt_destroy(*rt);
         iir_scene_destroy(*scene);

@@ -186,6 +186,25 @@ static iir_status parse_file(const ctx *c, const cJSON *item, iir_sidecar *sc)
     return IIR_OK;
 }
 
+/* "base": a scene this one is based on, as a bare name ("builtin", or a folder beside the
+ * sidecar's own folder): letters, digits, '_', '-', '.', not starting with '.'. */
+static iir_status parse_base(const ctx *c, const cJSON *item, iir_sidecar *sc)
+{
+    iir_status st = get_string(c, item, "base", sc->base, sizeof sc->base);
+    if (st != IIR_OK) return st;
+    bool ok = sc->base[0] != '.' && !strstr(sc->base, "..");
+    for (const char *p = sc->base; *p && ok; p++)
+        ok = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') ||
+             *p == '_' || *p == '-' || *p == '.';
+    if (!ok)
+        return field_error(c, IIR_ERR_INVALID, "base",
+                           "'%s' must be a scene's bare name (letters, digits, '_', '-', '.'; no "
+                           "'..', not starting with '.')",
+                           sc->base);
+    if (sc->file[0]) return field_error(c, IIR_ERR_INVALID, "base", "give file or base, not both");
+    return IIR_OK;
+}
+
 static iir_status parse_unit_scale(const ctx *c, const cJSON *item, iir_sidecar *sc)
 {
     double s = 0.0;
@@ -209,6 +228,19 @@ static iir_status parse_fov(const ctx *c, const member *m, float *fov_y)
     return st;
 }
 
+/* camera.aspect (width / height); 0 when absent (iir_sidecar_apply then keeps the file's). */
+static iir_status parse_aspect(const ctx *c, const member *m, float *aspect)
+{
+    *aspect = 0.f;
+    if (!m->item) return IIR_OK;
+    double a = 0.0;
+    iir_status st = get_number(c, m->item, m->field, 0.0, 100.0, &a);
+    if (st == IIR_OK && !(a >= 0.01))
+        return field_error(c, IIR_ERR_INVALID, m->field, "%g is outside [0.01, 100]", a);
+    *aspect = (float)a;
+    return st;
+}
+
 static iir_status check_view(const ctx *c, const iir_camera *cam)
 {
     iir_vec3 view = iir_sub(cam->target, cam->position);
@@ -221,10 +253,11 @@ static iir_status check_view(const ctx *c, const iir_camera *cam)
 
 static iir_status parse_camera(const ctx *c, const cJSON *obj, iir_sidecar *sc)
 {
-    static const char *const fields[] = {"position", "target", "up", "fov_y", NULL};
+    static const char *const fields[] = {"position", "target", "up", "fov_y", "aspect", NULL};
     if (!cJSON_IsObject(obj)) return field_error(c, IIR_ERR_FORMAT, "camera", "must be an object");
     member pos = get_member(obj, "camera", "position"), tgt = get_member(obj, "camera", "target");
     member up = get_member(obj, "camera", "up"), fov = get_member(obj, "camera", "fov_y");
+    member aspect = get_member(obj, "camera", "aspect");
     iir_camera *cam = &sc->camera;
     cam->up = iir_v3(0.f, 1.f, 0.f);
     iir_status st = check_fields(c, obj, "camera", fields);
@@ -234,6 +267,7 @@ static iir_status parse_camera(const ctx *c, const cJSON *obj, iir_sidecar *sc)
     if (st == IIR_OK) st = get_position(c, tgt.item, tgt.field, &cam->target);
     if (st == IIR_OK && up.item) st = get_direction(c, up.item, up.field, &cam->up);
     if (st == IIR_OK) st = parse_fov(c, &fov, &cam->fov_y);
+    if (st == IIR_OK) st = parse_aspect(c, &aspect, &sc->aspect);
     if (st == IIR_OK) st = check_view(c, cam);
     sc->has_camera = st == IIR_OK;
     return st;
@@ -402,14 +436,16 @@ static iir_status parse_paths(const ctx *c, const cJSON *obj, iir_sidecar *sc)
 
 static iir_status parse_root(const ctx *c, const cJSON *root, iir_sidecar *sc)
 {
-    static const char *const fields[] = {"file",      "unit_scale", "camera", "lights",
-                                         "materials", "paths",      NULL};
+    static const char *const fields[] = {"file",   "base",      "unit_scale", "camera",
+                                         "lights", "materials", "paths",      NULL};
     if (!cJSON_IsObject(root))
         return iir_fail(c->err, IIR_ERR_FORMAT, "%s: the top level must be a JSON object", c->path);
     iir_status st = check_fields(c, root, "", fields);
     const cJSON *it;
     if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "file")))
         st = parse_file(c, it, sc);
+    if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "base")))
+        st = parse_base(c, it, sc);
     if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "unit_scale")))
         st = parse_unit_scale(c, it, sc);
     if (st == IIR_OK && (it = cJSON_GetObjectItemCaseSensitive(root, "camera")))
@@ -564,10 +600,12 @@ static iir_status apply_camera(const iir_sidecar *sc, iir_scene_builder *b, iir_
 {
     iir_camera cam = sc->camera;
     if (cam.fov_y == 0.f) cam.fov_y = b->has_camera ? b->camera.fov_y : 45.f;
+    float aspect = sc->aspect > 0.f ? sc->aspect : b->has_camera ? b->aspect : 0.f;
     iir_error e;
     if (iir_camera_validate(&cam, &e) != IIR_OK)
         return iir_fail(err, e.status, "%s: camera: %s", sc->path, e.msg);
     iir_builder_set_camera(b, &cam);
+    iir_builder_set_camera_origin(b, IIR_CAMERA_SIDECAR, aspect);
     return IIR_OK;
 }
 

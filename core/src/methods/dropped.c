@@ -1,0 +1,56 @@
+/* dropped.c -- what the methods leave out of a scene, as the named entries of iir_method_dropped
+ * (method.h): the scene's own notes (lights and materials nothing renders) and each method's (ir:
+ * the indirect light of emissive materials; iir: that too, and every light's but the first spot's).
+ * Not the loader's notes (scene_assimp.c makes them). */
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "iir/scene.h"
+#include "method_internal.h"
+
+void iir_dropped_add(iir_dropped *out, uint32_t max, uint32_t *n, const char *method,
+                     const char *kind, const char *name, const char *fmt, ...)
+{
+    if (*n < max) {
+        iir_dropped *d = &out[*n];
+        memset(d, 0, sizeof *d);
+        snprintf(d->method, sizeof d->method, "%s", method);
+        snprintf(d->kind, sizeof d->kind, "%s", kind);
+        snprintf(d->name, sizeof d->name, "%s", name);
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(d->what, sizeof d->what, fmt, ap);
+        va_end(ap);
+    }
+    (*n)++;
+}
+
+uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dropped *out,
+                              uint32_t max)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < scene->num_materials; i++) {
+        const iir_material *m = &scene->material_list[i];
+        if (iir_is_black(m->emission)) continue;
+        iir_dropped_add(out, max, &n, method, "material", m->name,
+                        "emits light: its indirect light is left out, as %s's VPLs come from "
+                        "punctual lights only (its direct light is rendered)",
+                        method);
+    }
+    return n;
+}
+
+uint32_t iir_method_dropped(const char *name, const iir_scene *scene, const iir_light *lights,
+                            uint32_t num_lights, iir_dropped *out, uint32_t max)
+{
+    const iir_method_ops *ops = iir_method_ops_of(name);
+    if (!ops) return 0;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < scene->num_dropped; i++, n++)
+        if (n < max) out[n] = scene->dropped[i];
+    if (ops->dropped)
+        n += ops->dropped(scene, lights, num_lights, n < max ? out + n : NULL,
+                          n < max ? max - n : 0);
+    return n;
+}

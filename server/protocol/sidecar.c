@@ -1,0 +1,95 @@
+/* sidecar.c -- `save`: a session's lights and camera as a scene sidecar (docs/scene-format.md,
+ * section 5) based on the scene it shows ("base"), and the `save` reply that carries it. Not
+ * writing the file or checking the name against the scenes directory (serve/scene_save.c).
+ *
+ * Numbers are written as the shortest decimals that read back as the same floats, so a sidecar
+ * loads the camera and lights the session rendered (angles go through degrees: within an ulp). */
+#include "protocol_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+static cJSON *camera_json(const iir_camera *c, float aspect)
+{
+    cJSON *o = cJSON_CreateObject();
+    bool ok =
+        o && iird_json_add_vec3(o, "position", c->position) &&
+        iird_json_add_vec3(o, "target", c->target) && iird_json_add_vec3(o, "up", c->up) &&
+        iird_json_add_float(o, "fov_y", c->fov_y) &&
+        (!(aspect > 0.f) || iird_json_add_float(o, "aspect", fminf(fmaxf(aspect, .01f), 100.f)));
+    if (ok) return o;
+    cJSON_Delete(o);
+    return NULL;
+}
+
+/* The spot-only fields: axis, up hint, cone and edge in degrees (within the sidecar's ranges). */
+static bool spot_json(cJSON *o, const iir_light *L)
+{
+    float cone = fminf(iir_degrees(L->cone_angle), 90.f);
+    float smooth = fminf(fmaxf(iir_degrees(L->smooth), 0.f), cone);
+    return iird_json_add_vec3(o, "direction", L->direction) && iird_json_add_vec3(o, "up", L->up) &&
+           iird_json_add_float(o, "cone_angle", cone) && iird_json_add_float(o, "smooth", smooth);
+}
+
+static cJSON *light_json(const iir_light *L)
+{
+    cJSON *o = cJSON_CreateObject();
+    bool spot = L->type == IIR_LIGHT_SPOT;
+    bool ok = o && cJSON_AddStringToObject(o, "type", spot ? "spot" : "point") &&
+              (!L->name[0] || cJSON_AddStringToObject(o, "name", L->name)) &&
+              iird_json_add_vec3(o, "position", L->position) && (!spot || spot_json(o, L)) &&
+              iird_json_add_vec3(o, "intensity", L->intensity);
+    if (ok) return o;
+    cJSON_Delete(o);
+    return NULL;
+}
+
+/* {"base", "camera", "lights"}; NULL on out-of-memory. */
+static cJSON *sidecar_json(const iird_sidecar_view *v)
+{
+    cJSON *o = cJSON_CreateObject(), *lights = NULL, *camera = camera_json(v->camera, v->aspect);
+    bool ok = o && camera && cJSON_AddStringToObject(o, "base", v->base);
+    if (ok) ok = cJSON_AddItemToObject(o, "camera", camera);
+    if (!ok) cJSON_Delete(camera);
+    ok = ok && (lights = cJSON_AddArrayToObject(o, "lights"));
+    for (uint32_t i = 0; ok && i < v->num_lights; i++) {
+        cJSON *l = light_json(&v->lights[i]);
+        ok = l && cJSON_AddItemToArray(lights, l);
+        if (!ok) cJSON_Delete(l);
+    }
+    if (ok) return o;
+    cJSON_Delete(o);
+    return NULL;
+}
+
+char *iird_sidecar_text(const iird_sidecar_view *v)
+{
+    cJSON *o = sidecar_json(v);
+    char *text = o ? cJSON_Print(o) : NULL;
+    cJSON_Delete(o);
+    return text;
+}
+
+static bool add_names(cJSON *o, const char *const *scenes)
+{
+    cJSON *a = cJSON_AddArrayToObject(o, "scenes");
+    for (const char *const *n = scenes; a && n && *n; n++)
+        if (!cJSON_AddItemToArray(a, cJSON_CreateString(*n))) return false;
+    return a != NULL;
+}
+
+char *iird_json_save(const iird_sidecar_view *v, int64_t seq, const char *name,
+                     const char *const *scenes)
+{
+    cJSON *o = cJSON_CreateObject(), *sidecar = sidecar_json(v);
+    bool ok = o && sidecar && cJSON_AddStringToObject(o, "type", "save") &&
+              (seq < 0 || iird_json_add_num(o, "seq", (double)seq)) &&
+              (!name || (cJSON_AddStringToObject(o, "name", name) && add_names(o, scenes)));
+    if (ok) ok = cJSON_AddItemToObject(o, "sidecar", sidecar);
+    if (!ok) {
+        if (!o || !cJSON_GetObjectItemCaseSensitive(o, "sidecar")) cJSON_Delete(sidecar);
+        cJSON_Delete(o);
+        return NULL;
+    }
+    return iird_json_finish(o);
+}
