@@ -181,6 +181,11 @@ export function makeScenes(SRC, { conference = false } = {}) {
     const scenes = {
         point_box: [{ type: 'point', name: 'bulb', position: [0, 1.5, 0], intensity: 1.5 }],
         dark_box: [],
+        // iir's VPLs come from the spot only: the point light's indirect light is a state.notes entry
+        two_lights: [
+            { type: 'spot', name: 'spot', position: [0, 1.9, 0], direction: [0, -1, 0], cone_angle: 60, intensity: [4, 3, 1] },
+            { type: 'point', name: 'bulb', position: [0.5, 1.5, 0], intensity: 1.5 },
+        ],
     };
     for (const [name, lights] of Object.entries(scenes)) {
         const d = path.join(dir, name);

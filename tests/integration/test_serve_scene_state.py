@@ -5,6 +5,7 @@ scene; a startup scene given as a path outside the scenes directory is in `welco
 picked again after switching away; a scene without lights says its spot is made up.
 Usage: test_serve_scene_state.py IIRD SOURCE_DIR"""
 
+import json
 import os
 import shutil
 
@@ -98,6 +99,26 @@ class StartupSceneTest(DaemonTest):
             self.assertEqual(f.generation, st["generation"])
         finally:
             await c.close()
+
+    async def test_notes_name_what_the_method_leaves_out(self):
+        two = os.path.join(self.tmp, "two_lights")
+        shutil.copytree(self.dark, two)
+        with open(os.path.join(two, "two_lights.scene.json"), "w") as f:
+            json.dump({"file": "CornellBox-Original.obj", "materials": {"light": {"emission": 0}},
+                       "lights": [{"type": "spot", "name": "spot", "position": [0, 1.9, 0], "direction": [0, -1, 0],
+                                   "cone_angle": 60, "intensity": [4, 3, 1]},
+                                  {"type": "point", "name": "bulb", "position": [0.5, 1.5, 0], "intensity": 1.5}]}, f)
+        d = Daemon(*FAST_ARGS, two)
+        try:
+            c = await Client.connect(d)
+            notes = c.welcome["state"]["notes"]
+            self.assertEqual([(n["method"], n["kind"], n["name"]) for n in notes], [("iir", "light", "bulb")], notes)
+            self.assertIn("indirect", notes[0]["what"])
+            _, st = await c.request({"type": "params", "method": "pt"}, "state")
+            self.assertEqual(st["notes"], [], "pt renders every light")
+            await c.close()
+        finally:
+            stop_class_daemon(d)
 
     async def test_a_scene_without_lights_says_its_spot_is_made_up(self):
         d = Daemon(*FAST_ARGS, self.dark)

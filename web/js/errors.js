@@ -13,6 +13,7 @@ const LABELS = {
     snapshot: 'snapshot',
     record: 'recording',
     save: 'save',
+    notes: 'not rendered',
     hello: 'session',
     other: 'server',
 };
@@ -24,11 +25,12 @@ export class ErrorBanners {
         this.banners = new Map(); // kind -> {el, seq}
     }
 
-    // text: what to show; seq: the seq of the request it answers (0 when none).
-    show(kind, text, seq = 0) {
+    // text: what to show; seq: the seq of the request it answers (0 when none); note: a notice (what
+    // the method leaves out of the scene), not a refusal.
+    show(kind, text, seq = 0, note = false) {
         this.dismiss(kind);
         const el = document.createElement('div');
-        el.className = 'error';
+        el.className = note ? 'error note' : 'error';
         el.dataset.kind = kind;
         el.setAttribute('role', 'alert');
         const label = document.createElement('b');

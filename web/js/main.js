@@ -52,6 +52,7 @@ const app = {
     inputSeq: 0, // seq of the newest input (light, camera, params, scene) sent
     snapshot: null, // the `snapshot` text reply waiting for its binary message
     afterScene: null, // after a reconnect: sends the page's light and camera once its scene is back
+    notesText: '', // the notice of what the method leaves out, as shown (showNotes)
 };
 
 const clone = (x) => JSON.parse(JSON.stringify(x));
@@ -251,6 +252,7 @@ function onWelcome(w, newSession) {
     switcher.welcome(w, newSession);
     const first = !app.welcomed || app.resync;
     if (first) app.state = clone(w.state);
+    if (first) showNotes(w.state.notes);
     app.welcomed = true;
     app.resync = false;
     panel.setWelcome({ ...w, state: app.state });
@@ -324,8 +326,19 @@ function settled(msg) {
 // A state after params/scene/hello, or after a light move the daemon kept inside the scene. Our
 // light and camera stay when we sent newer ones since (a kept-inside light moves by the difference
 // between the position sent and the position used).
+// What the method leaves out of the scene (state.notes: a sun iir ignores, a second light's indirect
+// light...): one notice, shown again only when the list changes (a dismissed one stays away).
+function showNotes(notes) {
+    const text = (notes || []).map((n) => `${n.kind} '${n.name}': ${n.what}`).join(' · ');
+    if (text === app.notesText) return;
+    app.notesText = text;
+    if (text) errors.show('notes', text, 0, true);
+    else errors.dismiss('notes');
+}
+
 function onState(msg) {
     const req = settled(msg);
+    showNotes(msg.notes);
     const s = app.state;
     const fresh = msg.seq === undefined;
     const changed = Object.keys(msg.params).filter((k) => msg.params[k] !== s.params[k]);
