@@ -185,9 +185,7 @@ static iir_status import_scene(const char *path, const struct aiScene **out, iir
                                    aiComponent_COLORS | aiComponent_TEXCOORDS |
                                    aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
                                    aiComponent_TEXTURES);
-    size_t plen = strlen(path);
-    iir_status st =
-        plen > 4 && !strcasecmp(path + plen - 4, ".obj") ? iir_objtext_check(path, err) : IIR_OK;
+    iir_status st = iir_objtext_check(path, err);
     if (st != IIR_OK) {
         aiReleasePropertyStore(props);
         *out = NULL;

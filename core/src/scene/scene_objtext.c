@@ -1,7 +1,10 @@
-/* scene_objtext.c -- an OBJ and the MTL files it names must be text before assimp reads them:
- * Debian's assimp 5.2 reads past the end of an MTL line that holds NUL bytes and crashes (found
- * by tests/fuzz/fuzz_scene; the input is kept in tests/fuzz/scene/). Text formats never hold NUL,
- * so such a file is refused with its name and the byte's offset. Not parsing OBJ. */
+/* scene_objtext.c -- a mesh file that is not binary glTF, and the MTL files it names, must be text
+ * before assimp reads them: Debian's assimp 5.2 reads past the end of an MTL line that holds NUL
+ * bytes and crashes (found by tests/fuzz/fuzz_scene; the inputs are kept in tests/fuzz/scene/).
+ * assimp picks its importer by content as well as by extension (OBJ text named .gltf is read as
+ * OBJ), so every file but a binary glTF (magic "glTF") is checked. Text formats (OBJ, MTL, glTF's
+ * JSON) never hold NUL, so such a file is refused with its name and the byte's offset. Not parsing
+ * OBJ. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,8 +29,8 @@ static iir_status refuse_nul(const char *path, const char *buf, size_t len, iir_
 {
     const char *nul = memchr(buf, '\0', len);
     if (!nul) return IIR_OK;
-    return iir_fail(err, IIR_ERR_FORMAT, "%s: byte %zu is NUL: not a text %s file", path,
-                    (size_t)(nul - buf), strstr(path, ".mtl") ? "MTL" : "OBJ");
+    return iir_fail(err, IIR_ERR_FORMAT, "%s: byte %zu is NUL: not a text file (OBJ, MTL, glTF)",
+                    path, (size_t)(nul - buf));
 }
 
 /* Checks every file named on one `mtllib` line (names relative to dir, space-separated). */
@@ -54,6 +57,7 @@ iir_status iir_objtext_check(const char *obj_path, iir_error *err)
     size_t len = 0;
     char *obj = read_all(obj_path, &len);
     if (!obj) return IIR_OK;
+    if (len >= 4 && !memcmp(obj, "glTF", 4)) return free(obj), IIR_OK; /* binary glTF */
     iir_status st = refuse_nul(obj_path, obj, len, err);
     char dir[4096];
     const char *slash = strrchr(obj_path, '/');
