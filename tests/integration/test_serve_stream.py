@@ -293,7 +293,13 @@ class StreamTest(DaemonTest):
             f = await c.wait_frame(min_seq=seq)
             self.assertEqual(f.width, 320)
             # only the encoding changed: the frame is re-encoded, flagged, and its stats say no render
-            # happened and the VPL set is the one shown before (issue 16)
+            # happened and the VPL set is the one shown before (issue 16). Refinement off: a quality
+            # change that stops a refinement pass renders the frame afresh (the pass left the image
+            # half done).
+            seq, _ = await c.request({"type": "params", "refine": False}, "state")
+            await c.wait_frame(min_seq=seq)
+            seq, _ = await c.request({"type": "params", "quality": 40}, "state")
+            f = await c.wait_frame(min_seq=seq)
             self.assertTrue(f.flags & 4, f"a quality/exposure change re-encodes: flags {f.flags:#x}")
             s = await c.wait_for(lambda m: isinstance(m, dict) and m.get("type") == "stats" and m.get("frame") == f.id,
                                  what="the re-encoded frame's stats")
