@@ -133,6 +133,13 @@ class RecordReplayTest(DaemonTest):
             # the first frame is not the last: the recording did move things
             mean, _ = image_diff(Image.open(os.path.join(out, frames[0])), Image.open(os.path.join(out, frames[-1])))
             self.assertGreater(mean, 5.0, "the first and last frames differ")
+            shots = os.environ.get("IIR_RECORD_SHOTS")  # a picture for a note: snapshots | offline frames
+            if shots:
+                sheet = Image.new("RGB", (2 * w + 8, 2 * h + 8), (40, 40, 40))
+                for row, (name, want) in enumerate(((frames[0], first), (frames[-1], last))):
+                    sheet.paste(want.convert("RGB"), (0, row * (h + 8)))
+                    sheet.paste(Image.open(os.path.join(out, name)).convert("RGB"), (w + 8, row * (h + 8)))
+                sheet.save(shots)
 
     async def send(self, c, m):
         seq = c.next_seq()
