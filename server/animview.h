@@ -10,14 +10,15 @@
 #include "iir/method.h"
 #include "iir/scene.h"
 
-/* The index of the scene's first spot light, the one a script's light track moves. On a scene
- * without a spot returns IIR_ERR_INVALID naming the scene and leaves *spot unchanged. */
-iir_status iird_find_spot(const iir_scene *scene, uint32_t *spot, iir_error *err);
+/* The light a script's light track moves, as the daemon's sessions move it
+ * (iir_scene_moved_light): the first spot, else the first light, else (scene->num_lights) the spot
+ * made up for a scene without lights, so that a recording replays on the scene it was made on. */
+uint32_t iird_moved_light(const iir_scene *scene);
 
 /* The view of script frame f: the scene's lights copied into `lights` (room for
- * scene->num_lights; the returned view points into it) with lights[spot] moved by the script,
- * and the scene's camera moved by the script. A spot index outside the scene's lights moves no
- * light (a camera-only script on a scene without a spot). */
+ * scene->num_lights + 1; the returned view points into it) with lights[spot] moved by the script,
+ * plus the made-up spot when spot is scene->num_lights, and the scene's camera moved by the
+ * script. */
 iir_view iird_anim_view(const iir_anim *a, const iir_scene *scene, uint32_t spot, iir_light *lights,
                         int f);
 

@@ -139,7 +139,7 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     const char *scene = iird_anim_scene_arg(o->scene, o->anim, named, sizeof named);
     if (st == IIR_OK) st = iir_scene_open(scene, scenes, &b->scene, &b->rt, err);
     if (st == IIR_OK) iird_note_camera("bench", b->scene);
-    if (st == IIR_OK) st = iird_find_spot(b->scene, &b->spot, err);
+    if (st == IIR_OK) b->spot = iird_moved_light(b->scene);
     if (st == IIR_OK && o->anim)
         st = iird_resolve_anim(b->scene, scenes, o->anim, &b->anim, b->path_label,
                                sizeof b->path_label, err);
@@ -149,7 +149,7 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     if (st != IIR_OK) return st;
     iird_warn_dropped("bench", o->methods, b->scene, b->scene->lights, b->scene->num_lights);
     b->scene_hash = iird_bench_scene_hash(b->scene);
-    b->lights = malloc(sizeof(iir_light) * b->scene->num_lights);
+    b->lights = malloc(sizeof(iir_light) * (b->scene->num_lights + 1)); /* + a made-up spot */
     b->rows = calloc((size_t)b->frames * (size_t)b->num_runs, sizeof(iird_bench_row));
     if (!b->lights || !b->rows) return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
     return IIR_OK;
@@ -159,10 +159,12 @@ iir_view iird_bench_view(iird_bench *b, int i)
 {
     int f = b->first + i;
     if (b->anim) return iird_anim_view(b->anim, b->scene, b->spot, b->lights, f);
-    memcpy(b->lights, b->scene->lights, sizeof(iir_light) * b->scene->num_lights);
-    b->lights[b->spot] =
-        iird_orbit_light(b->scene, b->rt, &b->scene->lights[b->spot], f, b->path_frames);
-    iir_view v = {b->lights, b->scene->num_lights, b->scene->camera};
+    uint32_t n = b->scene->num_lights;
+    if (n) memcpy(b->lights, b->scene->lights, sizeof(iir_light) * n);
+    iir_light base;
+    iir_scene_moved_light(b->scene, &base); /* the made-up spot when b->spot == n */
+    b->lights[b->spot] = iird_orbit_light(b->scene, b->rt, &base, f, b->path_frames);
+    iir_view v = {b->lights, b->spot == n ? n + 1 : n, b->scene->camera};
     return v;
 }
 

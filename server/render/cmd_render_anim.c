@@ -104,7 +104,7 @@ typedef struct anim_job {
     iir_rt *rt;
     iir_anim *anim;
     char script[4096]; /* what --anim loaded, for messages */
-    uint32_t spot;     /* the light the script moves; UINT32_MAX: none */
+    uint32_t spot;     /* the light the script moves (animview.h: num_lights = the made-up spot) */
     iir_light *lights; /* the current frame's lights */
     int count;         /* frames of the script */
     int first, end;    /* this run: frames [first, end) */
@@ -176,12 +176,10 @@ static iir_status set_range(anim_job *j, iir_error *err)
     return IIR_OK;
 }
 
-/* The spot the script moves; a script without a light track works on a scene without one. */
-static iir_status set_spot(anim_job *j, iir_error *err)
+/* The light the script moves, as a session moves it (animview.h). */
+static void set_spot(anim_job *j)
 {
-    iir_status st = iird_find_spot(j->scene, &j->spot, err);
-    if (st != IIR_OK && !iir_anim_has_light(j->anim)) j->spot = UINT32_MAX, st = IIR_OK;
-    return st;
+    j->spot = iird_moved_light(j->scene);
 }
 
 /* Without --size: the pixels of a 512x512 still's height, as wide as the scene camera's aspect
@@ -219,7 +217,7 @@ static iir_status load(anim_job *j, iir_error *err)
     if (st == IIR_OK) iird_warn_anim_scene("render", j->anim, scene, j->scene);
     if (st == IIR_OK) iird_note_camera("render", j->scene);
     if (st == IIR_OK) st = set_range(j, err);
-    if (st == IIR_OK) st = set_spot(j, err);
+    if (st == IIR_OK) set_spot(j);
     if (st == IIR_OK) st = iird_prepare_dir(o->out, "--out", err);
     if (st == IIR_OK && o->video) st = iird_prepare_parent(o->video, "--video", err);
     if (st == IIR_OK && !(j->lights = malloc(sizeof(iir_light) * (j->scene->num_lights + 1))))

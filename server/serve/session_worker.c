@@ -68,21 +68,9 @@ static void wait_ms_locked(iird_session *s, double ms)
 
 iir_light iird_session_light_for(const iir_scene *scene, int *index)
 {
-    for (uint32_t i = 0; i < scene->num_lights; i++)
-        if (scene->lights[i].type == IIR_LIGHT_SPOT) return *index = (int)i, scene->lights[i];
-    if (scene->num_lights > 0) return *index = 0, scene->lights[0];
-    /* no light: a white spot just under the middle of the ceiling, aimed down */
-    iir_vec3 lo = scene->bounds_min, hi = scene->bounds_max, ext = iir_sub(hi, lo);
-    float diag = iir_length(ext);
-    iir_light l = {.type = IIR_LIGHT_SPOT,
-                   .name = "spot",
-                   .position =
-                       iir_v3(lo.x + 0.5f * ext.x, hi.y - 0.02f * diag, lo.z + 0.5f * ext.z),
-                   .direction = iir_v3(0, -1, 0),
-                   .up = iir_v3(0, 0, 1),
-                   .cone_angle = (float)(60.0 * M_PI / 180.0),
-                   .intensity = iir_scale(iir_v3(1, 1, 1), diag * diag)};
-    *index = -1;
+    iir_light l;
+    uint32_t i = iir_scene_moved_light(scene, &l);
+    *index = i < scene->num_lights ? (int)i : -1;
     return l;
 }
 

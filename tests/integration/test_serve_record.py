@@ -4,16 +4,18 @@ script naming the old scene) and goes on recording on the new scene, its first k
 reset to (issue 15, finding 8); a recording replays what the browser showed (issue 16): a session that
 moves the light and the camera and changes the exposure is recorded, the script rendered with `iird
 render --anim` at the session's size, and its first and last frames match the session's PNG snapshots
-at the start and the stop. Usage: test_serve_record.py IIRD SOURCE_DIR"""
+at the start and the stop; also on a scene without lights, whose made-up spot the script moves offline
+too. Usage: test_serve_record.py IIRD SOURCE_DIR"""
 
 import asyncio
 import json
 import os
+import shutil
 import subprocess
 import tempfile
 
 import iirserve
-from iirserve import Client, DaemonTest
+from iirserve import Client, Daemon, DaemonTest, FAST_ARGS, stop_class_daemon
 
 # pt at a fixed sample count, no refinement: the session's frame and an offline frame of the same
 # light, camera and settings are the same estimate (pt's samples depend on the seed and the pixel
@@ -78,6 +80,27 @@ async def settled_snapshot(c, seq, generation):
 class RecordReplayTest(DaemonTest):
     async def test_replay_matches_snapshots(self):
         c = await Client.connect(self.daemon)
+        await self.replay(c)
+
+    async def test_replay_on_a_scene_without_lights(self):
+        """The made-up spot (state.default_light) is the light the script moves offline too."""
+        with tempfile.TemporaryDirectory(dir=os.environ.get("IIR_TEST_TMP")) as scenes:
+            room = os.path.join(scenes, "dark_room")
+            os.makedirs(room)
+            box = os.path.join(iirserve.SRC, "scenes", "cornell_box")
+            for f in ("CornellBox-Original.obj", "CornellBox-Original.mtl"):
+                shutil.copy(os.path.join(box, f), room)
+            d = Daemon(*FAST_ARGS, "--scenes", scenes, "dark_room", scenes=False)
+            try:
+                c = await Client.connect(d)
+                self.assertTrue(c.welcome["state"]["default_light"], "dark_room has no light of its own")
+                await self.replay(c, scenes)
+            finally:
+                stop_class_daemon(d)
+
+    async def replay(self, c, scenes_dir=None):
+        """Records c's session moving light, camera and exposure, renders the script offline and
+        compares its first and last frames with the session's snapshots; closes c."""
         try:
             await c.wait_frame()
             seq, st = await c.request({"type": "params", **PT, "exposure": 0}, "state")
@@ -117,6 +140,8 @@ class RecordReplayTest(DaemonTest):
                 json.dump(script, f)
             out = os.path.join(tmp, "frames")
             cmd = [iirserve.IIRD, "render", "--anim", path, "--out", out, "--size", f"{w}x{h}", *PT_ARGS]
+            if scenes_dir:
+                cmd += ["--scenes", scenes_dir]
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=240)
             self.assertEqual(p.returncode, 0, f"{' '.join(cmd)}:\n{p.stdout}\n{p.stderr}")
             frames = sorted(n for n in os.listdir(out) if n.endswith(".png"))

@@ -41,6 +41,13 @@ typedef struct iir_light {
  * direction, a cone angle outside (0, 90] degrees or a smooth edge wider than the cone. */
 iir_status iir_light_validate(const iir_light *light, iir_error *err);
 
+/* The light a user moves in scene (the daemon's session light, an animation script's light track):
+ * the first spot, else the first light; for a scene without lights a white spot made up just under
+ * the middle of the scene's top, aimed down (60 degree half-angle, intensity the bounds' diagonal
+ * squared, name "spot"). Writes it to *out; returns its index in scene->lights, or
+ * scene->num_lights for the made-up spot. */
+uint32_t iir_scene_moved_light(const struct iir_scene *scene, iir_light *out);
+
 /* Total emitted flux (W, RGB). */
 iir_vec3 iir_light_flux(const iir_light *light);
 

@@ -2,6 +2,11 @@
  * sampling. Not the light set (lightset.c) and not VPLs. */
 #include "iir/light.h"
 
+#include <math.h>
+#include <stdio.h>
+
+#include "iir/scene.h"
+
 #include "sampling.h"
 
 static bool finite_nonneg(iir_vec3 c)
@@ -123,4 +128,22 @@ iir_light_ray iir_light_sample_emission(const iir_light *l, iir_vec2 u)
     float rho = sqrtf(s.x * s.x + s.y * s.y);
     r.beta = iir_scale(l->intensity, IIR_PI * R * R * iir_spot_falloff(l, rho));
     return r;
+}
+
+uint32_t iir_scene_moved_light(const iir_scene *scene, iir_light *out)
+{
+    for (uint32_t i = 0; i < scene->num_lights; i++)
+        if (scene->lights[i].type == IIR_LIGHT_SPOT) return *out = scene->lights[i], i;
+    if (scene->num_lights > 0) return *out = scene->lights[0], 0;
+    iir_vec3 lo = scene->bounds_min, ext = iir_sub(scene->bounds_max, lo);
+    float diag = iir_length(ext);
+    *out = (iir_light){.type = IIR_LIGHT_SPOT,
+                       .position = iir_v3(lo.x + 0.5f * ext.x, scene->bounds_max.y - 0.02f * diag,
+                                          lo.z + 0.5f * ext.z),
+                       .direction = iir_v3(0, -1, 0),
+                       .up = iir_v3(0, 0, 1),
+                       .cone_angle = (float)(60.0 * M_PI / 180.0),
+                       .intensity = iir_scale(iir_v3(1, 1, 1), diag * diag)};
+    snprintf(out->name, sizeof out->name, "spot");
+    return scene->num_lights;
 }
