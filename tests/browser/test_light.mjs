@@ -8,7 +8,9 @@
 //  3. the arrows change a straight-down spot: → tilts its aim right on screen (+x), ↑ away from the
 //     camera (up the image), and the image changes; the help overlay says so;
 //  4. dark_box: the note says the scene has no light and iird placed the spot, and the gizmo is drawn
-//     in the made-up light's colour where it projects.
+//     in the made-up light's colour where it projects;
+//  5. a light out of view (the camera dollied in under it) gets an arrow at the frame's edge pointing
+//     at it.
 // Screenshots: browser_light_wall.png, browser_light_default.png in the working directory.
 //
 // Usage (as ctest runs it): node tests/browser/test_light.mjs IIRD SOURCE_DIR
@@ -148,6 +150,29 @@ async function main() {
     await page.selectOption('#scene', 'builtin');
     await H.waitFor(page, () => window.iir.state.scene === 'builtin' && !window.iir.switching);
     check(!(await note.isVisible()), 'the note goes on a scene with its own light');
+
+    // 5. a light out of view: the camera dollies in (shift-wheel) until the spot under the ceiling
+    //    leaves the frame; an arrow at the frame's top edge points at it, labelled
+    await H.settle(page, 1);
+    const frame = await page.locator('#frame').boundingBox();
+    await page.mouse.move(frame.x + frame.width / 2, frame.y + frame.height / 2);
+    await page.keyboard.down('Shift');
+    for (let i = 0; i < 12; i++) {
+        await page.mouse.wheel(0, -100);
+        await H.sleep(60);
+    }
+    await page.keyboard.up('Shift');
+    await H.settle(page, 1);
+    const out = await page.evaluate(() => window.iir.gizmo);
+    const f5 = await page.evaluate(() => window.iir.lastFrame);
+    const s5 = await model(page);
+    const proj = H.project(s5.camera, f5.width, f5.height, s5.light.position);
+    log(`dollied in: camera ${s5.camera.position.map((x) => x.toFixed(2))}, light projects to ${proj ? `(${proj.x.toFixed(0)}, ${proj.y.toFixed(0)})` : 'behind'}; gizmo ${JSON.stringify(out)}`);
+    check(!proj || proj.y < 0, 'the light is out of the frame (above its top edge)');
+    const marks = await H.overlayPixelsNear(page, out.x, out.y, 10, SCENE_LIGHT);
+    check(out.offscreen && !out.visible && out.y < 0.1 * f5.height && marks >= GIZMO_MIN_PIXELS,
+        `an arrow at the frame's top edge points at it: (${out.x.toFixed(0)}, ${out.y.toFixed(0)}), ${marks} pixels of its colour`);
+    await page.screenshot({ path: path.resolve('browser_light_offscreen.png') });
 
     check(page.problems.length === 0, `no console errors${page.problems.length ? `:\n  ${page.problems.join('\n  ')}` : ''}`);
     await daemon.stop();

@@ -41,8 +41,57 @@ function rim(L, h, n) {
     return { c, pts };
 }
 
+// Where a light out of view is marked: the point of the frame's edge (inset by `inset` frame pixels)
+// in the light's direction on screen from the centre, {x, y, dx, dy (unit, outwards), behind}.
+export function edgeMark(cam, width, height, p, inset) {
+    const { f, r, u } = v.cameraBasis(cam);
+    const d = v.sub(p, cam.position);
+    let dx = v.dot(d, r) / (width / height);
+    let dy = -v.dot(d, u);
+    const len = Math.hypot(dx, dy) || 1;
+    dx /= len;
+    dy /= len;
+    const hw = width / 2 - inset;
+    const hh = height / 2 - inset;
+    const t = Math.min(Math.abs(dx) > 1e-9 ? hw / Math.abs(dx) : Infinity, Math.abs(dy) > 1e-9 ? hh / Math.abs(dy) : Infinity);
+    return { x: width / 2 + dx * t, y: height / 2 + dy * t, dx, dy, behind: !(v.dot(d, f) > NEAR) };
+}
+
+// A light outside the frame or behind the camera: an arrow at the frame's edge pointing towards it,
+// labelled. Returns {x, y, visible: false, offscreen: true, behind} in frame pixels.
+function drawEdgeMark(o, g, sx, sy, dpr, colour) {
+    const m = edgeMark(g.camera, g.width, g.height, g.light.position, 16 * dpr / Math.min(sx, sy));
+    const x = m.x * sx;
+    const y = m.y * sy;
+    const s = 9 * dpr;
+    o.save();
+    o.beginPath();
+    o.moveTo(x + m.dx * s, y + m.dy * s);
+    o.lineTo(x - m.dx * s - m.dy * s * 0.7, y - m.dy * s + m.dx * s * 0.7);
+    o.lineTo(x - m.dx * s + m.dy * s * 0.7, y - m.dy * s - m.dx * s * 0.7);
+    o.closePath();
+    o.fillStyle = colour;
+    o.fill();
+    o.lineWidth = 1.5 * dpr;
+    o.strokeStyle = 'rgba(0,0,0,0.8)';
+    o.stroke();
+    const label = m.behind ? 'light (behind the camera)' : 'light (out of view)';
+    o.font = `${11 * dpr}px system-ui, sans-serif`;
+    o.textAlign = m.dx > 0.3 ? 'right' : m.dx < -0.3 ? 'left' : 'center';
+    const ty = y - m.dy * 16 * dpr + (m.dy < 0 ? 10 * dpr : 0);
+    const tx = x - m.dx * 16 * dpr;
+    o.lineWidth = 3 * dpr;
+    o.strokeStyle = 'rgba(0,0,0,0.75)';
+    o.strokeText(label, tx, ty);
+    o.fillStyle = colour;
+    o.fillText(label, tx, ty);
+    o.restore();
+    return { x: m.x, y: m.y, visible: false, offscreen: true, behind: m.behind };
+}
+
 // g: {light, camera, madeUp, width, height} (frame size in pixels); sx, sy: overlay pixels per frame
-// pixel. Returns where the light's position is drawn, in frame pixels: {x, y, visible}.
+// pixel. Returns where the light's position is drawn, in frame pixels: {x, y, visible}; a light out
+// of view gets an arrow at the frame's edge instead ({x, y} the arrow's, visible false, offscreen).
 export function drawGizmo(o, g, sx, sy, dpr) {
     const { light: L, camera: cam, width, height } = g;
     const P = (p) => {
@@ -50,8 +99,9 @@ export function drawGizmo(o, g, sx, sy, dpr) {
         return q && [q.x * sx, q.y * sy];
     };
     const apex = P(L.position);
-    if (!apex) return { x: NaN, y: NaN, visible: false };
     const colour = g.madeUp ? COLORS.madeUp : COLORS.scene;
+    const inside = apex && apex[0] >= 0 && apex[1] >= 0 && apex[0] <= width * sx && apex[1] <= height * sy;
+    if (!inside) return drawEdgeMark(o, g, sx, sy, dpr, colour);
     o.save();
     o.lineWidth = 1.5 * dpr;
     o.strokeStyle = colour;
