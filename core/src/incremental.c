@@ -1,4 +1,4 @@
-/* incremental.c -- the incremental instant radiosity step: owns a spot light's VPL set across
+/* incremental.c -- the incremental instant radiosity step: owns a light's VPL set across
  * frames (creation, validation, deletion, insertion, weights, and the VPLs' lifetime including
  * releasing their shadow maps), the points each frame removed (for drawing the domain) and fresh
  * sets sampled apart from the live one (for refinement); not rendering the maps and not shading.
@@ -6,56 +6,55 @@
  * Design. The set is an array sorted by ascending id (ids only grow, new VPLs are appended,
  * removals compact in place), so the triangulation's by-id answers (cell areas by ascending id)
  * line up with the array without a map, and a VPL is found by binary search. Next to it lives a
- * double-precision copy of every disk point (what the triangulation gets). A frame is the phases
- * of DESIGN section 5 as visible blocks in iir_incr_update: reproject, validate, (regenerate),
- * triangulate, delete, insert, weigh. Every choice the header documents is made here: null samples
- * keep their world direction and are re-cast, new samples stay a margin inside the disk edge, a
- * birth and a validation use the same facing predicate so a still light never invalidates its own
- * VPLs. All buffers are sized for max(N, count) and reused across frames. */
+ * double-precision copy of every domain point (what the triangulation gets). The light's domain
+ * (light_domain.h: the cosine or glTF spot's disk, the point light's sphere, the sun's disk) maps
+ * points to rays and back; domain_sites.h triangulates them, whatever the shape. A frame is the
+ * phases of DESIGN section 5 as visible blocks in iir_incr_update: reproject, validate,
+ * (regenerate), triangulate, delete, insert, weigh. Every choice the header documents is made here:
+ * null samples keep their world direction and are re-cast, new samples stay a margin inside the
+ * disk edge, a birth and a validation use the same facing predicate so a still light never
+ * invalidates its own VPLs. All buffers are sized for max(N, count) and reused across frames. */
 #include "iir/incremental.h"
 
 #include <assert.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "iir/light_domain.h"
 #include "iir/rng.h"
 #include "iir/scene.h"
-#include "iir/tri.h"
-#include "sampling.h"
-#include "surface.h"
 #include "iir/timer.h"
+#include "lights/domain_sites.h"
+#include "surface.h"
 
 struct iir_incr {
     const iir_scene *scene;
     const iir_rt *rt;
     iir_incr_params params;
-    iir_tri *tri;         /* the disk points of the current set, ids as vertex info */
+    iir_sites sites;      /* the domain points of the current set, ids as vertex info */
     iir_vpl *vpls;        /* [count], ascending id */
-    double *xy;           /* [2 cap]: vpls[i]'s disk point in double, xy[2i], xy[2i + 1] */
+    double *xy;           /* [3 cap]: vpls[i]'s domain point in double, xy[3i .. 3i + 2] */
     uint32_t *ids;        /* [cap] scratch: ids for the triangulation */
     double *areas;        /* [cap] scratch: clipped cell areas */
     unsigned char *alive; /* [cap] scratch: VPLs kept by the phase running */
-    double *removed;      /* [2 cap]: disk points of the VPLs the last update removed */
+    double *removed;      /* [3 cap]: domain points of the VPLs the last update removed */
     uint32_t num_removed; /* <= the count before that update <= cap */
     uint32_t count, cap;  /* cap >= max(N, count) */
     uint32_t next_id;     /* the id of the next VPL created */
     uint32_t frame;       /* updates so far: the birth of the VPLs made now */
     uint32_t generations; /* Hammersley sets made so far: the scramble's stream */
+    iir_domain_map map;   /* the last update's domain: another one regenerates the set */
+    uint32_t reached;     /* the largest count since the last regeneration, at most N */
 };
 
-/* The light's pose for one frame. */
-typedef struct pose {
-    const iir_light *spot;
-    iir_vec3 p;
-    iir_frame fr;
-    double R;
-} pose;
+/* The light's pose for one frame: its domain. */
+typedef iir_light_domain pose;
 
 /* What one ray from the light found: a VPL-to-be or a null sample. */
 typedef struct sample {
     bool null_sample;
     iir_vec3 x, n, albedo; /* VPL: position, normal on the light's side, albedo */
-    iir_vec3 w;            /* the ray's unit direction */
+    iir_vec3 o, w;         /* the ray's origin and unit direction */
 } sample;
 
 /* ==== parameters ============================================================================= */
@@ -110,7 +109,7 @@ static iir_status reserve(iir_incr *inc, uint32_t cap, iir_error *err)
     if (cap <= inc->cap) return IIR_OK;
     iir_vpl *v = realloc(inc->vpls, cap * sizeof *v);
     if (v) inc->vpls = v;
-    double *xy = realloc(inc->xy, 2 * (size_t)cap * sizeof *xy);
+    double *xy = realloc(inc->xy, 3 * (size_t)cap * sizeof *xy);
     if (xy) inc->xy = xy;
     uint32_t *ids = realloc(inc->ids, cap * sizeof *ids);
     if (ids) inc->ids = ids;
@@ -118,7 +117,7 @@ static iir_status reserve(iir_incr *inc, uint32_t cap, iir_error *err)
     if (areas) inc->areas = areas;
     unsigned char *alive = realloc(inc->alive, cap);
     if (alive) inc->alive = alive;
-    double *removed = realloc(inc->removed, 2 * (size_t)cap * sizeof *removed);
+    double *removed = realloc(inc->removed, 3 * (size_t)cap * sizeof *removed);
     if (removed) inc->removed = removed;
     if (!v || !xy || !ids || !areas || !alive || !removed)
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory for %u VPLs", cap);
@@ -150,7 +149,7 @@ void iir_incr_destroy(iir_incr *inc)
 {
     if (!inc) return;
     for (uint32_t i = 0; i < inc->count; i++) iir_smap_release(&inc->vpls[i].smap);
-    iir_tri_destroy(inc->tri);
+    iir_sites_free(&inc->sites);
     free(inc->vpls);
     free(inc->xy);
     free(inc->ids);
@@ -181,52 +180,42 @@ iir_vpl *iir_incr_vpls(iir_incr *inc, uint32_t *n)
 
 const struct iir_tri *iir_incr_tri(const iir_incr *inc)
 {
-    return inc->tri;
+    return inc->sites.shape == IIR_DOMAIN_DISK ? inc->sites.tri : NULL;
 }
 
-/* ==== the disk domain ======================================================================== */
-
-/* Disk point of the direction d (any length > 0) from the light: s = (w.r, w.u), w = d / |d|, in
- * double. Returns whether d is strictly inside the cone: w.f > 0 and |s| < R. */
-static bool disk_of(const pose *ps, iir_vec3 d, double s[2])
+const struct iir_stri *iir_incr_stri(const iir_incr *inc)
 {
-    double dx = d.x, dy = d.y, dz = d.z;
-    double len = sqrt(dx * dx + dy * dy + dz * dz);
-    if (!(len > 0.0)) {
-        s[0] = s[1] = 0.0;
-        return false;
-    }
-    const iir_frame *fr = &ps->fr;
-    s[0] = (dx * fr->r.x + dy * fr->r.y + dz * fr->r.z) / len;
-    s[1] = (dx * fr->u.x + dy * fr->u.y + dz * fr->u.z) / len;
-    double wf = dx * fr->f.x + dy * fr->f.y + dz * fr->f.z;
-    return wf > 0.0 && s[0] * s[0] + s[1] * s[1] < ps->R * ps->R;
+    return inc->sites.shape == IIR_DOMAIN_SPHERE ? inc->sites.stri : NULL;
 }
 
-/* The world direction (x - p for a VPL, the ray's direction for a null sample) that places v. */
-static iir_vec3 direction_of(const pose *ps, const iir_vpl *v)
+/* ==== the domain ============================================================================= */
+
+/* v's domain point for this frame's pose (a null sample's from its kept direction or anchor);
+ * true when strictly inside. */
+static bool locate(const pose *ps, const iir_vpl *v, double s[3])
 {
-    return v->null_sample ? v->normal : iir_sub(v->position, ps->p);
+    return v->null_sample ? iir_domain_locate_null(ps, v->position, v->normal, s)
+                          : iir_domain_locate(ps, v->position, s);
 }
 
-/* A VPL faces the light when its normal points towards p. Birth and validation both use this. */
-static bool faces_light(const pose *ps, iir_vec3 x, iir_vec3 n)
+static void set_disk(iir_vpl *v, const double s[3])
 {
-    return iir_dot(n, iir_sub(ps->p, x)) > 0.f;
+    v->disk = iir_v2((float)s[0], (float)s[1]);
 }
 
 /* ==== rays =================================================================================== */
 
-/* One closest-hit ray from the light along unit w: a VPL on a reflecting surface facing the
- * light, or a null sample (miss, emitter, grazing hit). */
-static sample trace_sample(const iir_incr *inc, const pose *ps, iir_vec3 w, iir_raystats *rays)
+/* One closest-hit ray from o along unit w: a VPL on a reflecting surface facing the light, or a
+ * null sample (miss, emitter, grazing hit). */
+static sample trace_sample(const iir_incr *inc, const pose *ps, iir_vec3 o, iir_vec3 w,
+                           iir_raystats *rays)
 {
-    sample sm = {.null_sample = true, .w = w};
-    iir_ray ray = iir_make_ray(ps->p, w, 0.f, INFINITY);
+    sample sm = {.null_sample = true, .o = o, .w = w};
+    iir_ray ray = iir_make_ray(o, w, 0.f, INFINITY);
     iir_hit hit;
     if (!iir_rt_intersect(inc->rt, &ray, &hit, rays, IIR_RAYS_VPL)) return sm;
     iir_surface sf = iir_surface_at(inc->scene, &hit, iir_neg(w));
-    if (!iir_is_black(sf.mat->emission) || !faces_light(ps, sf.p, sf.ns)) return sm;
+    if (!iir_is_black(sf.mat->emission) || !iir_domain_faces(ps, sf.p, sf.ns)) return sm;
     sm.null_sample = false;
     sm.x = sf.p;
     sm.n = sf.ns;
@@ -234,14 +223,23 @@ static sample trace_sample(const iir_incr *inc, const pose *ps, iir_vec3 w, iir_
     return sm;
 }
 
+/* The ray for domain point s, traced. */
+static sample trace_point(const iir_incr *inc, const pose *ps, const double s[3],
+                          iir_raystats *rays)
+{
+    iir_vec3 o, w;
+    iir_domain_ray(ps, s, &o, &w);
+    return trace_sample(inc, ps, o, w, rays);
+}
+
 /* Whether the segment from the light to x is free (one occlusion ray, stopping short of x). */
 static bool unoccluded(const iir_incr *inc, const pose *ps, iir_vec3 x, iir_raystats *rays)
 {
-    iir_vec3 d = iir_sub(x, ps->p);
+    iir_vec3 o = iir_domain_origin(ps, x), d = iir_sub(x, o);
     float len = iir_length(d);
     float tfar = 1.f - iir_rt_epsilon(inc->rt) / len;
     if (!(tfar > 0.f)) return true; /* x is within epsilon of the light: nothing between */
-    iir_ray ray = iir_make_ray(ps->p, d, 0.f, tfar);
+    iir_ray ray = iir_make_ray(o, d, 0.f, tfar);
     return !iir_rt_occluded(inc->rt, &ray, rays, IIR_RAYS_VPL);
 }
 
@@ -263,23 +261,19 @@ static uint32_t index_of(const iir_incr *inc, uint32_t id)
 }
 
 /* Keeps the VPLs with alive[i] set, in order; releases the others' maps and, when `record`,
- * appends their disk points to the removed list. Returns how many went. */
+ * appends their domain points to the removed list. Returns how many went. */
 static uint32_t compact(iir_incr *inc, bool record)
 {
     uint32_t kept = 0;
     for (uint32_t i = 0; i < inc->count; i++) {
         if (!inc->alive[i]) {
             iir_smap_release(&inc->vpls[i].smap);
-            if (record && inc->num_removed < inc->cap) {
-                inc->removed[2 * inc->num_removed] = inc->xy[2 * i];
-                inc->removed[2 * inc->num_removed + 1] = inc->xy[2 * i + 1];
-                inc->num_removed++;
-            }
+            if (record && inc->num_removed < inc->cap)
+                memcpy(&inc->removed[3 * inc->num_removed++], &inc->xy[3 * i], 3 * sizeof(double));
             continue;
         }
         inc->vpls[kept] = inc->vpls[i];
-        inc->xy[2 * kept] = inc->xy[2 * i];
-        inc->xy[2 * kept + 1] = inc->xy[2 * i + 1];
+        memmove(&inc->xy[3 * kept], &inc->xy[3 * i], 3 * sizeof(double));
         kept++;
     }
     uint32_t gone = inc->count - kept;
@@ -287,24 +281,25 @@ static uint32_t compact(iir_incr *inc, bool record)
     return gone;
 }
 
-/* Writes the VPL for sample sm into *v and its disk point into s (id 0): a VPL at the reprojection
- * of its position, or a null sample at that of its direction (also when the position fell outside
- * the cone). Returns false when even that is not strictly inside. */
-static bool make_vpl(const pose *ps, const sample *sm, uint32_t birth, iir_vpl *v, double s[2])
+/* Writes the VPL for sample sm into *v and its domain point into s (id 0): a VPL at the
+ * reprojection of its position, or a null sample at that of its ray (also when the position fell
+ * outside the domain). Returns false when even that is not strictly inside. */
+static bool make_vpl(const pose *ps, const sample *sm, uint32_t birth, iir_vpl *v, double s[3])
 {
     memset(v, 0, sizeof *v);
     v->birth = birth;
-    if (!sm->null_sample && disk_of(ps, iir_sub(sm->x, ps->p), s)) {
+    if (!sm->null_sample && iir_domain_locate(ps, sm->x, s)) {
         v->position = sm->x;
         v->albedo = sm->albedo;
         iir_vpl_set_normal(v, sm->n);
     } else {
+        iir_vec3 dir;
         v->null_sample = true;
-        v->position = ps->p;
-        iir_vpl_set_normal(v, sm->w);
-        if (!disk_of(ps, sm->w, s)) return false;
+        iir_domain_null_pose(ps, sm->o, sm->w, &v->position, &dir);
+        iir_vpl_set_normal(v, dir);
+        if (!locate(ps, v, s)) return false;
     }
-    v->disk = iir_v2((float)s[0], (float)s[1]);
+    set_disk(v, s);
     return true;
 }
 
@@ -313,7 +308,7 @@ static bool make_vpl(const pose *ps, const sample *sm, uint32_t birth, iir_vpl *
 static bool stage(iir_incr *inc, const pose *ps, const sample *sm)
 {
     assert(inc->count < inc->cap);
-    return make_vpl(ps, sm, inc->frame, &inc->vpls[inc->count], &inc->xy[2 * inc->count]);
+    return make_vpl(ps, sm, inc->frame, &inc->vpls[inc->count], &inc->xy[3 * inc->count]);
 }
 
 /* Makes the staged VPL part of the set and gives it the next id. */
@@ -325,30 +320,33 @@ static void commit(iir_incr *inc)
 
 /* ==== the phases ============================================================================= */
 
-/* REPROJECT: every disk point from the world position (direction) for the new frame; alive[i]
- * says whether it is strictly inside the cone. */
+/* REPROJECT: every domain point from the world position (null samples: the kept ray) for the new
+ * frame; alive[i] says whether it is strictly inside the domain. */
 static void phase_reproject(iir_incr *inc, const pose *ps)
 {
     for (uint32_t i = 0; i < inc->count; i++) {
         iir_vpl *v = &inc->vpls[i];
-        double *s = &inc->xy[2 * i];
-        inc->alive[i] = disk_of(ps, direction_of(ps, v), s);
-        v->disk = iir_v2((float)s[0], (float)s[1]);
+        double *s = &inc->xy[3 * i];
+        inc->alive[i] = locate(ps, v, s);
+        set_disk(v, s);
     }
 }
 
-/* VALIDATE: inside the cone (from REPROJECT), facing the light and unoccluded; a null sample
+/* VALIDATE: inside the domain (from REPROJECT), facing the light and unoccluded; a null sample
  * stays while its ray would still give a null sample. Returns how many died. */
 static uint32_t phase_validate(iir_incr *inc, const pose *ps, iir_raystats *rays)
 {
     for (uint32_t i = 0; i < inc->count; i++) {
         if (!inc->alive[i]) continue;
         const iir_vpl *v = &inc->vpls[i];
-        if (v->null_sample)
-            inc->alive[i] = trace_sample(inc, ps, v->normal, rays).null_sample;
-        else
-            inc->alive[i] =
-                faces_light(ps, v->position, v->normal) && unoccluded(inc, ps, v->position, rays);
+        if (v->null_sample) {
+            iir_vec3 o, w;
+            iir_domain_null_ray(ps, v->position, v->normal, &o, &w);
+            inc->alive[i] = trace_sample(inc, ps, o, w, rays).null_sample;
+        } else {
+            inc->alive[i] = iir_domain_faces(ps, v->position, v->normal) &&
+                            unoccluded(inc, ps, v->position, rays);
+        }
     }
     return compact(inc, true);
 }
@@ -368,13 +366,14 @@ static bool ids_exhausted(const iir_incr *inc)
     return inc->next_id > UINT32_MAX - inc->params.target - inc->params.k_max;
 }
 
-/* The direction of point i of n of a regeneration's Hammersley set rotated by o: concentric map
- * to the disk, shrunk by the edge margin. */
-static iir_vec3 regen_dir(const pose *ps, uint32_t i, uint32_t n, const double o[2])
+/* The traced ray of point i of n of a regeneration's Hammersley set rotated by o: mapped onto the
+ * domain by area (a disk's shrunk by the edge margin). */
+static sample regen_sample(const iir_incr *inc, const pose *ps, uint32_t i, uint32_t n,
+                           const double o[2], iir_raystats *rays)
 {
-    float scale = (float)(ps->R * (1.0 - IIR_INCR_EDGE_MARGIN));
-    iir_vec2 d = iir_sample_uniform_disk_concentric(hammersley(i, n, o));
-    return iir_normalize(iir_spot_disk_to_dir(&ps->fr, iir_v2(d.x * scale, d.y * scale)));
+    double s[3];
+    iir_domain_sample(ps, hammersley(i, n, o), IIR_INCR_EDGE_MARGIN, s);
+    return trace_point(inc, ps, s, rays);
 }
 
 /* REGENERATE: discards the whole set and makes N new VPLs from a scrambled Hammersley set, one
@@ -388,7 +387,7 @@ static uint32_t regenerate(iir_incr *inc, const pose *ps, iir_raystats *rays)
     double o[2] = {iir_rng_uniform(&rng), iir_rng_uniform(&rng)};
     uint32_t n = inc->params.target, made = 0;
     for (uint32_t i = 0; i < n; i++) {
-        sample sm = trace_sample(inc, ps, regen_dir(ps, i, n, o), rays);
+        sample sm = regen_sample(inc, ps, i, n, o, rays);
         if (!stage(inc, ps, &sm)) continue;
         commit(inc);
         made++;
@@ -403,33 +402,28 @@ static iir_status tri_fail(iir_tri_status ts, const char *what, iir_error *err)
                     iir_tri_status_name(ts));
 }
 
-/* TRIANGULATE: rebuilds the triangulation of all disk points (a new handle when R changed).
- * VPLs that coincide with an older one are dropped (recorded as removed when `record`: they were
- * in the set before this frame); *dropped gets how many. */
+/* TRIANGULATE: rebuilds the triangulation of all domain points (a new handle when the shape or a
+ * disk's R changed). VPLs that coincide with an older one are dropped (recorded as removed when
+ * `record`: they were in the set before this frame); *dropped gets how many. */
 static iir_status phase_triangulate(iir_incr *inc, const pose *ps, bool record, uint32_t *dropped,
                                     iir_error *err)
 {
     *dropped = 0;
-    if (!inc->tri || iir_tri_radius(inc->tri) != ps->R) {
-        iir_tri_destroy(inc->tri);
-        inc->tri = iir_tri_create(ps->R);
-        if (!inc->tri)
-            return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the triangulation");
-    }
+    if (iir_sites_fit(&inc->sites, ps) != IIR_TRI_OK)
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the triangulation");
     for (uint32_t i = 0; i < inc->count; i++) inc->ids[i] = inc->vpls[i].id;
-    iir_tri_status ts = iir_tri_build(inc->tri, inc->xy, inc->ids, inc->count);
+    iir_tri_status ts = iir_sites_build(&inc->sites, inc->xy, inc->ids, inc->count);
     if (ts == IIR_TRI_OK) return IIR_OK;
     if (ts != IIR_TRI_DUPLICATE_POINT) return tri_fail(ts, "building", err);
-    for (uint32_t i = 0; i < inc->count; i++) {
-        double xy[2];
-        inc->alive[i] = iir_tri_position(inc->tri, inc->vpls[i].id, xy) == IIR_TRI_OK;
-    }
+    for (uint32_t i = 0; i < inc->count; i++)
+        inc->alive[i] = (unsigned char)iir_sites_has(&inc->sites, inc->vpls[i].id);
     *dropped = compact(inc, record);
     return IIR_OK;
 }
 
 /* DELETE: while fewer than k_min replacements so far (`replaced` died already) or above N, remove
- * the denser endpoint of the shortest Delaunay edge. Returns the status; *deleted gets how many. */
+ * the denser endpoint of the shortest Delaunay edge (geodesic on the sphere). Returns the status;
+ * *deleted gets how many. */
 static iir_status phase_delete(iir_incr *inc, uint32_t replaced, uint32_t *deleted, iir_error *err)
 {
     const iir_incr_params *p = &inc->params;
@@ -438,9 +432,9 @@ static iir_status phase_delete(iir_incr *inc, uint32_t replaced, uint32_t *delet
     *deleted = 0;
     while (replaced + *deleted < p->k_min || n > p->target) {
         uint32_t id;
-        iir_tri_status ts = iir_tri_shortest_edge(inc->tri, &id, NULL, NULL);
+        iir_tri_status ts = iir_sites_shortest_edge(&inc->sites, &id);
         if (ts == IIR_TRI_TOO_FEW) break;
-        if (ts == IIR_TRI_OK) ts = iir_tri_remove(inc->tri, id);
+        if (ts == IIR_TRI_OK) ts = iir_sites_remove(&inc->sites, id);
         if (ts != IIR_TRI_OK) {
             compact(inc, true);
             return tri_fail(ts, "deleting", err);
@@ -453,30 +447,22 @@ static iir_status phase_delete(iir_incr *inc, uint32_t replaced, uint32_t *delet
     return IIR_OK;
 }
 
-/* The largest empty circle's centre, pulled to at most R (1 - margin) from the disk's centre. */
-static iir_vec2 insertion_point(const double c[2], double R)
-{
-    double r = sqrt(c[0] * c[0] + c[1] * c[1]), rmax = R * (1.0 - IIR_INCR_EDGE_MARGIN);
-    double k = r > rmax ? rmax / r : 1.0;
-    return iir_v2((float)(c[0] * k), (float)(c[1] * k));
-}
-
 /* INSERT: while below N and below `limit` insertions, a ray towards the largest empty circle's
- * centre; the VPL or null sample it gives joins the triangulation before the next circle. */
+ * (cap's) centre, pulled a margin inside a disk's edge; the VPL or null sample it gives joins the
+ * triangulation before the next circle. */
 static iir_status phase_insert(iir_incr *inc, const pose *ps, uint32_t limit, uint32_t *inserted,
                                iir_raystats *rays, iir_error *err)
 {
     *inserted = 0;
     while (inc->count < inc->params.target && *inserted < limit) {
-        double c[2], radius;
-        iir_tri_status ts = iir_tri_largest_empty_circle(inc->tri, c, &radius);
+        double c[3], s[3];
+        iir_tri_status ts = iir_sites_largest_empty(&inc->sites, c);
         if (ts == IIR_TRI_TOO_FEW) break; /* an empty set: only when a regeneration found nothing */
         if (ts != IIR_TRI_OK) return tri_fail(ts, "finding the largest empty circle", err);
-        iir_vec2 s = insertion_point(c, ps->R);
-        sample sm = trace_sample(inc, ps, iir_normalize(iir_spot_disk_to_dir(&ps->fr, s)), rays);
+        iir_domain_pull_inside(ps, c, IIR_INCR_EDGE_MARGIN, s);
+        sample sm = trace_point(inc, ps, s, rays);
         if (!stage(inc, ps, &sm)) break; /* only for a cone too narrow for float directions */
-        const double *xy = &inc->xy[2 * inc->count];
-        ts = iir_tri_insert(inc->tri, xy[0], xy[1], inc->next_id);
+        ts = iir_sites_insert(&inc->sites, &inc->xy[3 * inc->count], inc->next_id);
         if (ts == IIR_TRI_DUPLICATE_POINT || ts == IIR_TRI_OUTSIDE) break; /* saturated */
         if (ts != IIR_TRI_OK) return tri_fail(ts, "inserting", err);
         commit(inc);
@@ -485,41 +471,40 @@ static iir_status phase_insert(iir_incr *inc, const pose *ps, uint32_t limit, ui
     return IIR_OK;
 }
 
-/* WEIGH: Phi_i = I0 rho_i A_i falloff(|s_i|); A_i the clipped Voronoi cell or pi R^2 / count. */
-static iir_status phase_weigh(iir_incr *inc, const pose *ps, iir_error *err)
+/* Phi = I rho A profile(s): the flux a VPL carries for a cell of area A at domain point s (I is
+ * I0 or E; 0 for a null sample). */
+static iir_vec3 cell_flux(const pose *ps, const iir_vpl *v, double A, const double s[3])
+{
+    if (v->null_sample) return iir_v3s(0.f);
+    float k = (float)A * iir_domain_profile(ps, s);
+    return iir_scale(iir_mul(ps->light->intensity, v->albedo), k);
+}
+
+/* WEIGH: Phi_i = I rho_i A_i profile(s_i); A_i the clipped Voronoi cell or the domain's area /
+ * count. *flux_in gets the luminance of sum I A_i profile(s_i) over the VPLs (null samples
+ * excluded): the flux the light sends onto reflecting surfaces. */
+static iir_status phase_weigh(iir_incr *inc, const pose *ps, double *flux_in, iir_error *err)
 {
     bool voronoi = inc->params.weights == IIR_WEIGHTS_VORONOI;
     if (voronoi) {
         size_t n = 0;
-        iir_tri_status ts = iir_tri_cell_areas(inc->tri, inc->ids, inc->areas, inc->cap, &n);
+        iir_tri_status ts = iir_sites_cell_areas(&inc->sites, inc->ids, inc->areas, inc->cap, &n);
         if (ts != IIR_TRI_OK) return tri_fail(ts, "computing cell areas", err);
         assert(n == inc->count);
     }
-    double uniform = M_PI * ps->R * ps->R / (inc->count ? inc->count : 1);
+    double uniform = ps->area / (inc->count ? inc->count : 1);
     for (uint32_t i = 0; i < inc->count; i++) {
         iir_vpl *v = &inc->vpls[i];
         assert(!voronoi || inc->ids[i] == v->id);
         double A = voronoi ? inc->areas[i] : uniform;
-        float rho =
-            (float)sqrt(inc->xy[2 * i] * inc->xy[2 * i] + inc->xy[2 * i + 1] * inc->xy[2 * i + 1]);
-        float k = (float)A * iir_spot_falloff(ps->spot, rho);
-        v->flux =
-            v->null_sample ? iir_v3s(0.f) : iir_scale(iir_mul(ps->spot->intensity, v->albedo), k);
+        v->flux = cell_flux(ps, v, A, &inc->xy[3 * i]);
+        if (!v->null_sample) *flux_in += A * iir_domain_profile(ps, &inc->xy[3 * i]);
         assert(iir_is_finite3(v->flux) && v->flux.x >= 0.f && v->flux.y >= 0.f && v->flux.z >= 0.f);
     }
     return IIR_OK;
 }
 
 /* ==== one frame ============================================================================== */
-
-static iir_status check_spot(const iir_light *spot, iir_error *err)
-{
-    if (spot->type != IIR_LIGHT_SPOT)
-        return iir_fail(err, IIR_ERR_INVALID,
-                        "incremental step: light '%s' has type point; the VPL domain needs a spot",
-                        spot->name[0] ? spot->name : "(unnamed)");
-    return iir_light_validate(spot, err);
-}
 
 static uint32_t count_null_samples(const iir_incr *inc)
 {
@@ -536,15 +521,15 @@ static void lap(iir_incr_stats *st, iir_incr_phase ph, double *t)
     *t = now;
 }
 
-iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats *out,
+iir_status iir_incr_update(iir_incr *inc, const iir_light *light, iir_incr_stats *out,
                            iir_error *err)
 {
-    iir_status status = check_spot(spot, err);
+    pose ps;
+    iir_status status = iir_light_domain_make(light, &ps, err);
     if (status != IIR_OK) return status;
     iir_incr_stats st;
     memset(&st, 0, sizeof st);
     iir_vpl_counts *c = &st.vpl;
-    pose ps = {spot, spot->position, iir_spot_frame(spot), (double)iir_spot_radius(spot)};
     const iir_incr_params *p = &inc->params;
     uint32_t count_prev = inc->count, dropped = 0, limit = p->k_max;
     double t0 = iir_now_ms(), t = t0;
@@ -564,8 +549,9 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
      * the target (a raised target alone fills gradually), when nothing is left, or when the ids
      * run out */
     double thr = (double)p->regen_threshold;
-    bool dwindled = c->invalidated > 0 && (double)inc->count < (1.0 - thr) * (double)p->target;
-    bool regen = inc->count == 0 || ids_exhausted(inc) || dwindled ||
+    uint32_t full = inc->reached < p->target ? inc->reached : p->target;
+    bool dwindled = c->invalidated > 0 && (double)inc->count < (1.0 - thr) * (double)full;
+    bool regen = inc->count == 0 || ids_exhausted(inc) || dwindled || ps.map != inc->map ||
                  (double)c->invalidated > thr * count_prev;
     if (regen) {
         st.initial = inc->frame == 0;
@@ -594,7 +580,8 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
     lap(&st, IIR_INCR_INSERT, &t);
 
     /* 6. weigh */
-    if (status == IIR_OK) status = phase_weigh(inc, &ps, err);
+    if (status == IIR_OK) status = phase_weigh(inc, &ps, &st.flux_in, err);
+    st.flux_in *= iir_luminance(light->intensity);
     lap(&st, IIR_INCR_WEIGH, &t);
 
     c->count = inc->count;
@@ -602,38 +589,38 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats 
     st.total_ms = iir_now_ms() - t0;
     assert(count_prev - c->invalidated - c->deleted + c->inserted == c->count);
     inc->frame++;
+    inc->map = ps.map;
+    if (regen || inc->count > inc->reached) inc->reached = inc->count;
     if (out) *out = st;
     return status;
 }
 
 /* ==== refinement and drawing ================================================================= */
 
-iir_status iir_incr_sample_set(const iir_incr *inc, const iir_light *spot, uint64_t stream,
+iir_status iir_incr_sample_set(const iir_incr *inc, const iir_light *light, uint64_t stream,
                                iir_vpl *out, uint32_t cap, uint32_t *n, iir_raystats *rays,
                                iir_error *err)
 {
     *n = 0;
-    iir_status status = check_spot(spot, err);
+    pose ps;
+    iir_status status = iir_light_domain_make(light, &ps, err);
     if (status != IIR_OK) return status;
     uint32_t N = inc->params.target, made = 0;
     if (cap < N)
         return iir_fail(err, IIR_ERR_INVALID,
                         "incremental step: a sample set needs room for %u VPLs, got %u", N, cap);
-    pose ps = {spot, spot->position, iir_spot_frame(spot), (double)iir_spot_radius(spot)};
     iir_rng rng = iir_rng_make(iir_hash3(inc->params.seed, 0x5a3b1e, 0), stream);
     double o[2] = {iir_rng_uniform(&rng), iir_rng_uniform(&rng)};
     uint32_t birth = inc->frame ? inc->frame - 1 : 0;
     for (uint32_t i = 0; i < N; i++) {
-        sample sm = trace_sample(inc, &ps, regen_dir(&ps, i, N, o), rays);
-        double s[2];
+        sample sm = regen_sample(inc, &ps, i, N, o, rays);
+        double s[3];
         iir_vpl *v = &out[made];
         if (!make_vpl(&ps, &sm, birth, v, s)) continue;
         v->id = made++;
-        /* I0 rho falloff now, times the cell area A once the count is known */
-        float k = iir_spot_falloff(spot, (float)sqrt(s[0] * s[0] + s[1] * s[1]));
-        v->flux = v->null_sample ? iir_v3s(0.f) : iir_scale(iir_mul(spot->intensity, v->albedo), k);
+        v->flux = cell_flux(&ps, v, 1.0, s); /* times the cell area once the count is known */
     }
-    float A = (float)(M_PI * ps.R * ps.R / (made ? made : 1));
+    float A = (float)(ps.area / (made ? made : 1));
     for (uint32_t i = 0; i < made; i++) out[i].flux = iir_scale(out[i].flux, A);
     *n = made;
     return IIR_OK;

@@ -48,6 +48,10 @@ static uint64_t hash_light(uint64_t h, const iir_light *l)
     h = HASH(h, l->up);
     h = HASH(h, l->cone_angle);
     h = HASH(h, l->smooth);
+    int32_t profile = (int32_t)l->profile;
+    h = HASH(h, profile);
+    h = HASH(h, l->inner_angle);
+    h = HASH(h, l->radius);
     return HASH(h, l->intensity);
 }
 

@@ -93,6 +93,7 @@ bool iird_apply_light(const iird_msg_light *m, iir_light *light, iird_proto_erro
     if (m->has & (1u << IIRD_L_CONE)) {
         L.cone_angle = fminf(iir_radians(m->cone_angle_deg), IIR_PI * 0.5f);
         L.smooth = fminf(fmaxf(L.smooth, 0.f), L.cone_angle);
+        L.inner_angle = fminf(fmaxf(L.inner_angle, 0.f), L.cone_angle);
     }
     if (m->has & (1u << IIRD_L_INTENSITY))
         L.intensity =

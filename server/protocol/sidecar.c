@@ -22,22 +22,38 @@ static cJSON *camera_json(const iir_camera *c, float aspect)
     return NULL;
 }
 
-/* The spot-only fields: axis, up hint, cone and edge in degrees (within the sidecar's ranges). */
+/* The spots' fields: axis, up hint, cone and, by profile, the smooth edge or the inner cone, in
+ * degrees (within the sidecar's ranges). */
 static bool spot_json(cJSON *o, const iir_light *L)
 {
     float cone = fminf(iir_degrees(L->cone_angle), 90.f);
-    float smooth = fminf(fmaxf(iir_degrees(L->smooth), 0.f), cone);
+    bool gltf = L->profile == IIR_SPOT_GLTF;
+    float edge = fminf(fmaxf(iir_degrees(gltf ? L->inner_angle : L->smooth), 0.f), cone);
     return iird_json_add_vec3(o, "direction", L->direction) && iird_json_add_vec3(o, "up", L->up) &&
-           iird_json_add_float(o, "cone_angle", cone) && iird_json_add_float(o, "smooth", smooth);
+           iird_json_add_float(o, "cone_angle", cone) &&
+           iird_json_add_float(o, gltf ? "inner_angle" : "smooth", edge);
+}
+
+/* A sun's: the way its light travels and the up hint (its disk is refitted on load). */
+static bool sun_json(cJSON *o, const iir_light *L)
+{
+    return iird_json_add_vec3(o, "direction", L->direction) && iird_json_add_vec3(o, "up", L->up);
+}
+
+/* The light's kind-specific fields: a point's position, a spot's position and cone, a sun's
+ * direction. */
+static bool kind_json(cJSON *o, const iir_light *L)
+{
+    if (L->type == IIR_LIGHT_SUN) return sun_json(o, L);
+    if (!iird_json_add_vec3(o, "position", L->position)) return false;
+    return L->type != IIR_LIGHT_SPOT || spot_json(o, L);
 }
 
 static cJSON *light_json(const iir_light *L)
 {
     cJSON *o = cJSON_CreateObject();
-    bool spot = L->type == IIR_LIGHT_SPOT;
-    bool ok = o && cJSON_AddStringToObject(o, "type", spot ? "spot" : "point") &&
-              (!L->name[0] || cJSON_AddStringToObject(o, "name", L->name)) &&
-              iird_json_add_vec3(o, "position", L->position) && (!spot || spot_json(o, L)) &&
+    bool ok = o && cJSON_AddStringToObject(o, "type", iir_light_kind(L)) &&
+              (!L->name[0] || cJSON_AddStringToObject(o, "name", L->name)) && kind_json(o, L) &&
               iird_json_add_vec3(o, "intensity", L->intensity);
     if (ok) return o;
     cJSON_Delete(o);

@@ -123,8 +123,15 @@ static bool on_hello(iird_session *s, const iird_msg *m, iird_proto_error *err)
  * there. True when the position changed from what was asked. */
 static bool keep_inside_locked(const iird_session *s, const iird_msg_light *m, iir_light *light)
 {
-    if (!(m->has & (1u << IIRD_L_POSITION))) return false;
     const iird_scene_entry *sc = s->scene;
+    if (light->type == IIR_LIGHT_SUN) { /* a sun only turns: its disk stays the scene's */
+        iir_vec3 asked = light->position;
+        iir_light_fit_sun(light, sc->scene);
+        return (m->has & (1u << IIRD_L_POSITION)) &&
+               (asked.x != light->position.x || asked.y != light->position.y ||
+                asked.z != light->position.z);
+    }
+    if (!(m->has & (1u << IIRD_L_POSITION))) return false;
     iir_vec3 p = iir_light_move_inside(sc->scene, sc->rt, s->light.position, light->position);
     if (p.x == light->position.x && p.y == light->position.y && p.z == light->position.z)
         return false;

@@ -1,9 +1,11 @@
-/* test_light.c -- spot and point lights: the disk-domain mapping (round trip, cosine
- * distribution), flux against numeric integration of the intensity, emission sampling, and
- * validation of nonsense lights. */
+/* test_light.c -- spot, glTF spot, point and sun lights: the disk-domain mappings (round trip,
+ * cosine distribution; the equal-area cap map's round trip and area), glTF's profile, flux against
+ * numeric integration of the intensity, emission sampling (mean beta = flux), fitting a sun to
+ * the scene, the light set's sun sample, and validation of nonsense lights. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -11,6 +13,7 @@
 
 #include "iir/light.h"
 #include "iir/rng.h"
+#include "iir/scene.h"
 
 static iir_light make_spot(float alpha_deg, float smooth_deg)
 {
@@ -182,6 +185,332 @@ static void test_validation(void **state)
     assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
 }
 
+/* ---- the glTF spot ---- */
+
+static iir_light make_gltf_spot(float outer_deg, float inner_deg)
+{
+    iir_light l = make_spot(outer_deg, 0.f);
+    snprintf(l.name, sizeof l.name, "gspot");
+    l.profile = IIR_SPOT_GLTF;
+    l.inner_angle = iir_radians(inner_deg);
+    return l;
+}
+
+/* glTF's t^2 in double precision, straight from the specification. */
+static double gltf_t2(double cos_theta, double outer, double inner)
+{
+    double co = cos(outer), t = (cos_theta - co) / fmax(1e-3, cos(inner) - co);
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return t * t;
+}
+
+/* Disk -> direction -> disk for the equal-area map, w.f = 1 - |s|^2 / 2, and the map preserves
+ * area: a polar cell [rho0, rho1] x [phi0, phi1] of the disk becomes a band of solid angle
+ * (phi1 - phi0) (cos theta0 - cos theta1), equal to its area (phi1 - phi0) (rho1^2 - rho0^2) / 2.
+ */
+static void test_cap_map(void **state)
+{
+    (void)state;
+    iir_light l = make_gltf_spot(70.f, 10.f);
+    iir_frame fr = iir_spot_frame(&l);
+    iir_rng rng = iir_rng_make(11, 0);
+    for (int i = 0; i < 10000; i++) {
+        float r = 2.f * sqrtf(iir_rng_uniform(&rng)), phi = 2.f * IIR_PI * iir_rng_uniform(&rng);
+        iir_vec2 s = iir_v2(r * cosf(phi), r * sinf(phi));
+        iir_vec3 w = iir_cap_disk_to_dir(&fr, s);
+        assert_true(fabsf(iir_length(w) - 1.f) < 1e-5f);
+        assert_true(fabsf(iir_dot(w, fr.f) - (1.f - 0.5f * r * r)) < 1e-5f);
+        if (r < 1.9f) { /* near the antipode, 1 + w.f loses the azimuth */
+            iir_vec2 back = iir_cap_dir_to_disk(&fr, w);
+            assert_true(fabsf(back.x - s.x) < 1e-4f && fabsf(back.y - s.y) < 1e-4f);
+        }
+        iir_vec3 d = iir_normalize(iir_v3(iir_rng_uniform(&rng) - .5f, iir_rng_uniform(&rng) - .5f,
+                                          iir_rng_uniform(&rng) - .5f));
+        iir_vec3 d2 = iir_cap_disk_to_dir(&fr, iir_cap_dir_to_disk(&fr, d));
+        if (iir_dot(d, fr.f) > -0.99f) assert_true(iir_length(iir_sub(d, d2)) < 1e-3f);
+    }
+    /* the cone's edge is the disk's rim */
+    float R = iir_gltf_spot_radius(&l);
+    iir_vec3 rim = iir_cap_disk_to_dir(&fr, iir_v2(R, 0.f));
+    assert_true(fabsf(iir_dot(rim, fr.f) - cosf(l.cone_angle)) < 1e-5f);
+    /* area: bands of the disk against the solid angle of their images */
+    enum { NR = 16 };
+    for (int i = 0; i < NR; i++) {
+        float rho0 = 2.f * i / NR, rho1 = 2.f * (i + 1) / NR;
+        double c0 = iir_dot(iir_cap_disk_to_dir(&fr, iir_v2(0.f, rho0)), fr.f);
+        double c1 = iir_dot(iir_cap_disk_to_dir(&fr, iir_v2(0.f, rho1)), fr.f);
+        double omega = 2.0 * IIR_PI * (c0 - c1), area = IIR_PI * (rho1 * rho1 - rho0 * rho0);
+        assert_true(fabs(omega - area) < 1e-5 * fmax(area, 1e-3));
+        /* the azimuth is kept: a quarter of the band is a quarter of its solid angle */
+        iir_vec3 q = iir_cap_disk_to_dir(&fr, iir_v2(0.5f * (rho0 + rho1), 0.f));
+        assert_true(iir_dot(q, fr.u) == 0.f || fabsf(iir_dot(q, fr.u)) < 1e-6f);
+    }
+}
+
+/* Uniform points on the equal-area disk are uniform in solid angle: cos(theta) is uniform on
+ * [cos alpha, 1]. Kolmogorov-Smirnov at the 1% level. */
+static void test_cap_map_uniform_solid_angle(void **state)
+{
+    (void)state;
+    enum { N = 20000 };
+    iir_light l = make_gltf_spot(60.f, 0.f);
+    iir_frame fr = iir_spot_frame(&l);
+    float R = iir_gltf_spot_radius(&l), ca = cosf(l.cone_angle);
+    float *u = malloc(sizeof(float) * N);
+    iir_rng rng = iir_rng_make(4321, 2);
+    for (int i = 0; i < N; i++) {
+        float x, y;
+        do {
+            x = 2.f * iir_rng_uniform(&rng) - 1.f;
+            y = 2.f * iir_rng_uniform(&rng) - 1.f;
+        } while (x * x + y * y >= 1.f);
+        iir_vec3 w = iir_cap_disk_to_dir(&fr, iir_v2(R * x, R * y));
+        u[i] = (iir_dot(w, fr.f) - ca) / (1.f - ca);
+    }
+    qsort(u, N, sizeof(float), cmp_float);
+    double d = 0;
+    for (int i = 0; i < N; i++)
+        d = fmax(d, fmax(fabs(u[i] - (double)i / N), fabs((double)(i + 1) / N - u[i])));
+    assert_true(d < 1.63 / sqrt((double)N));
+    free(u);
+}
+
+/* I(w) = I0 t^2: I0 inside the inner cone (no cosine lobe), 0 outside the outer one. */
+static void test_gltf_spot_profile(void **state)
+{
+    (void)state;
+    iir_light l = make_gltf_spot(40.f, 20.f);
+    iir_frame fr = iir_spot_frame(&l);
+    iir_light_eval e = iir_light_prepare(&l);
+    assert_true(fabsf(e.cos_outer - cosf(l.cone_angle)) < 1e-7f);
+    for (int i = 0; i <= 100; i++) {
+        double th = iir_radians(60.f) * i / 100.0;
+        iir_vec3 w = iir_frame_to_world(&fr, iir_v3((float)sin(th), 0.f, (float)cos(th)));
+        float I = iir_light_intensity(&l, w).x;
+        double expect = l.intensity.x * gltf_t2(cos(th), l.cone_angle, l.inner_angle);
+        assert_true(fabs(I - expect) < 2e-4 * l.intensity.x);
+        assert_true(fabsf(iir_gltf_spot_attenuation(&e, (float)cos(th)) - I / l.intensity.x) <
+                    1e-5f);
+        if (th < l.inner_angle - 1e-3) assert_true(I == l.intensity.x);
+        if (th > l.cone_angle + 1e-3) assert_true(I == 0.f);
+    }
+    /* behind the light: nothing */
+    assert_true(iir_is_black(iir_light_intensity(&l, iir_neg(fr.f))));
+    assert_string_equal(iir_light_kind(&l), "gltf_spot");
+}
+
+/* Flux by a fine 1D quadrature of the (axially symmetric) intensity: 2 pi int I sin dtheta. */
+static double integrate_axial(const iir_light *l)
+{
+    enum { N = 400000 };
+    iir_frame fr = iir_spot_frame(l);
+    double sum = 0, dt = 0.5 * IIR_PI / N;
+    for (int i = 0; i < N; i++) {
+        double th = (i + 0.5) * dt;
+        iir_vec3 w = iir_frame_to_world(&fr, iir_v3((float)sin(th), 0.f, (float)cos(th)));
+        sum += iir_light_intensity(l, w).x * sin(th) * dt;
+    }
+    return 2 * IIR_PI * sum;
+}
+
+/* The same in double precision from the specification's formula alone: 2 pi I0 int t^2 dcos. */
+static double gltf_flux_exact(const iir_light *l)
+{
+    enum { N = 400000 };
+    double co = cos(l->cone_angle), sum = 0, dc = (1 - co) / N;
+    for (int i = 0; i < N; i++) sum += gltf_t2(co + (i + 0.5) * dc, l->cone_angle, l->inner_angle);
+    return 2 * IIR_PI * l->intensity.x * sum * dc;
+}
+
+static void test_gltf_spot_flux(void **state)
+{
+    (void)state;
+    /* outer, inner: no ramp, a wide ramp, a ramp narrower than 1e-3 in cos (the clamp), a tiny
+     * cone, the hemisphere */
+    const float cases[][2] = {{45, 45}, {45, 0},  {30, 20}, {60, 59.99f}, {3, 2},
+                              {90, 0},  {90, 90}, {89, 10}, {1.5f, 0}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        iir_light l = make_gltf_spot(cases[k][0], cases[k][1]);
+        double phi = iir_light_flux(&l).x, exact = gltf_flux_exact(&l);
+        double num = integrate_axial(&l), sph = integrate_intensity(&l).x;
+        print_message("gltf spot %g/%g: flux %.6g, exact %.6g, 1D %.6g, sphere %.6g\n",
+                      (double)cases[k][0], (double)cases[k][1], phi, exact, num, sph);
+        assert_true(fabs(phi - exact) < 1e-4 * exact);
+        /* iir_light_intensity in float resolves 1 - cos(theta) to ~1e-7: 1e-4 of a 3 degree cap */
+        assert_true(fabs(phi - num) < (cases[k][0] >= 10.f ? 1e-4 : 1e-3) * num);
+        if (cases[k][0] >= 30.f) assert_true(fabs(phi - sph) < 5e-3 * num);
+        assert_true(fabsf(iir_light_flux(&l).y / (float)phi - 0.5f) < 1e-6f);
+        /* inner = outer: I0 times the cone's solid angle, less the ramp of width 1e-3 in cos
+         * that the specification's max(1e-3, ...) leaves (t^2 over it keeps a third) */
+        if (cases[k][0] == cases[k][1])
+            assert_true(fabs(phi - l.intensity.x * 2 * IIR_PI *
+                                       (1 - cos(l.cone_angle) - 2.0 / 3.0 * 1e-3)) < 1e-5 * phi);
+    }
+}
+
+/* Emission samples of a glTF spot: in the cone, beta = I(dir) 2 pi (1 - cos outer), mean = flux;
+ * and their directions follow I: the flux inside the inner cone is I0 2 pi (1 - cos inner). */
+static void test_gltf_emission_sampling(void **state)
+{
+    (void)state;
+    iir_light l = make_gltf_spot(50.f, 25.f);
+    iir_frame fr = iir_spot_frame(&l);
+    iir_rng rng = iir_rng_make(77, 3);
+    double sum = 0, inner = 0, cap = 2 * IIR_PI * (1 - cos(l.cone_angle));
+    enum { N = 400000 };
+    for (int i = 0; i < N; i++) {
+        iir_light_ray r = iir_light_sample_emission(&l, iir_rng_uniform2(&rng));
+        float c = iir_dot(r.dir, fr.f);
+        assert_true(c >= cosf(l.cone_angle) - 1e-5f);
+        assert_true(fabs(r.beta.x - iir_light_intensity(&l, r.dir).x * cap) < 1e-3 * cap);
+        assert_true(iir_length(iir_sub(r.origin, l.position)) == 0.f);
+        sum += r.beta.x;
+        if (c > cosf(l.inner_angle)) inner += r.beta.x;
+    }
+    double phi = iir_light_flux(&l).x,
+           phi_in = l.intensity.x * 2 * IIR_PI * (1 - cos(l.inner_angle));
+    print_message("gltf emission: mean %.5g flux %.5g; inner %.5g expected %.5g\n", sum / N, phi,
+                  inner / N, phi_in);
+    assert_true(fabs(sum / N - phi) < 0.005 * phi);
+    assert_true(fabs(inner / N - phi_in) < 0.01 * phi_in);
+}
+
+/* ---- the sun ---- */
+
+static iir_light make_sun(void)
+{
+    iir_light l = {.type = IIR_LIGHT_SUN, .name = "sun"};
+    l.direction = iir_normalize(iir_v3(0.3f, -1.f, 0.2f));
+    l.up = iir_v3(0, 1, 0);
+    l.intensity = iir_v3(3.f, 2.f, 1.f);
+    iir_scene sc;
+    memset(&sc, 0, sizeof sc);
+    sc.bounds_min = iir_v3(-1.f, 0.f, -2.f);
+    sc.bounds_max = iir_v3(1.f, 2.f, 2.f);
+    iir_light_fit_sun(&l, &sc);
+    return l;
+}
+
+static void test_sun_fit_and_flux(void **state)
+{
+    (void)state;
+    iir_light l = make_sun();
+    iir_error err = {0};
+    assert_int_equal(iir_light_validate(&l, &err), IIR_OK);
+    assert_true(iir_length(iir_sub(l.position, iir_v3(0, 1, 0))) < 1e-6f);
+    float r = 0.5f * 1.001f * sqrtf(4.f + 4.f + 16.f);
+    assert_true(fabsf(l.radius - r) < 1e-5f);
+    assert_true(fabsf(iir_light_flux(&l).x - 3.f * IIR_PI * r * r) < 1e-4f);
+    assert_true(iir_is_black(iir_light_intensity(&l, iir_neg(l.direction))));
+    assert_string_equal(iir_light_kind(&l), "sun");
+    /* other lights are left alone; a point scene still gets a disk of at least 1e-3 */
+    iir_light spot = make_spot(30.f, 0.f), before = spot;
+    iir_scene sc;
+    memset(&sc, 0, sizeof sc);
+    iir_light_fit_sun(&spot, &sc);
+    assert_memory_equal(&spot, &before, sizeof spot);
+    iir_light_fit_sun(&l, &sc);
+    assert_true(l.radius == 1e-3f);
+}
+
+/* Sun emission: origins uniform on its disk, on the plane `radius` behind the centre, all along
+ * `direction`, each carrying E pi r^2: the mean is the flux and the origins' spread is the disk's.
+ */
+static void test_sun_emission_sampling(void **state)
+{
+    (void)state;
+    iir_light l = make_sun();
+    iir_frame fr = iir_spot_frame(&l);
+    iir_rng rng = iir_rng_make(5, 5);
+    enum { N = 100000 };
+    double sum = 0, m2 = 0, mx = 0, my = 0;
+    for (int i = 0; i < N; i++) {
+        iir_light_ray r = iir_light_sample_emission(&l, iir_rng_uniform2(&rng));
+        assert_true(iir_length(iir_sub(r.dir, fr.f)) < 1e-6f);
+        iir_vec3 d = iir_sub(r.origin, l.position);
+        assert_true(fabsf(iir_dot(d, fr.f) + l.radius) < 1e-4f * l.radius);
+        float x = iir_dot(d, fr.r) / l.radius, y = iir_dot(d, fr.u) / l.radius;
+        assert_true(x * x + y * y <= 1.f + 1e-4f);
+        sum += r.beta.x;
+        mx += x, my += y, m2 += x * x + y * y;
+    }
+    double phi = iir_light_flux(&l).x;
+    assert_true(fabs(sum / N - phi) < 1e-4 * phi);
+    assert_true(fabs(mx / N) < 0.01 && fabs(my / N) < 0.01);
+    assert_true(fabs(m2 / N - 0.5) < 0.01); /* E|s|^2 = 1/2 on the unit disk */
+}
+
+/* The light set's sample of a sun: from -direction, at no finite distance, Li = E, pdf the pmf. */
+static void test_lightset_sun(void **state)
+{
+    (void)state;
+    iir_scene sc;
+    memset(&sc, 0, sizeof sc);
+    iir_light lights[2] = {make_sun(), make_spot(30.f, 0.f)};
+    lights[0].direction = iir_v3(0.f, -2.f, 0.f); /* not unit: wi is */
+    iir_lightset *set = iir_lightset_create(&sc, lights, 2);
+    assert_non_null(set);
+    double f0 = iir_luminance(iir_light_flux(&lights[0]));
+    double f1 = iir_luminance(iir_light_flux(&lights[1]));
+    iir_light_sample ls = iir_lightset_sample(set, iir_v3(0.5f, 0.f, 0.f), 0.f, iir_v2(0.5f, 0.5f));
+    assert_true(ls.is_delta);
+    assert_true(isinf(ls.dist) && ls.dist > 0.f);
+    assert_true(iir_length(iir_sub(ls.wi, iir_v3(0, 1, 0))) < 1e-6f);
+    assert_true(iir_length(iir_sub(ls.Li, lights[0].intensity)) < 1e-6f);
+    assert_true(fabs(ls.pdf - f0 / (f0 + f1)) < 1e-5);
+    iir_lightset_destroy(set);
+}
+
+static void test_gltf_and_sun_validation(void **state)
+{
+    (void)state;
+    iir_error err = {0};
+    iir_light l = make_gltf_spot(40.f, 40.f);
+    assert_int_equal(iir_light_validate(&l, &err), IIR_OK);
+    l = make_gltf_spot(40.f, 41.f);
+    assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "inner angle"));
+    assert_non_null(strstr(err.msg, "gspot"));
+    l = make_gltf_spot(40.f, 10.f);
+    l.inner_angle = -0.1f;
+    assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+    l.inner_angle = NAN;
+    assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+    l = make_gltf_spot(100.f, 10.f);
+    assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "cone angle"));
+    l = make_gltf_spot(40.f, 10.f);
+    l.profile = (iir_spot_profile)7;
+    assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "profile"));
+
+    iir_light sun = make_sun();
+    sun.cone_angle = 0.f; /* a sun has no cone */
+    assert_int_equal(iir_light_validate(&sun, &err), IIR_OK);
+    sun.radius = 0.f;
+    assert_int_equal(iir_light_validate(&sun, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "radius"));
+    sun.radius = INFINITY;
+    assert_int_equal(iir_light_validate(&sun, &err), IIR_ERR_INVALID);
+    sun.radius = NAN;
+    assert_int_equal(iir_light_validate(&sun, &err), IIR_ERR_INVALID);
+    sun = make_sun();
+    sun.direction = iir_v3s(0.f);
+    assert_int_equal(iir_light_validate(&sun, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "direction"));
+    sun = make_sun();
+    sun.intensity.x = -1.f;
+    assert_int_equal(iir_light_validate(&sun, &err), IIR_ERR_INVALID);
+    sun = make_sun();
+    sun.type = (iir_light_type)9;
+    assert_int_equal(iir_light_validate(&sun, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "type"));
+
+    iir_light point = {.type = IIR_LIGHT_POINT}, cos_spot = make_spot(30.f, 0.f);
+    assert_string_equal(iir_light_kind(&point), "point");
+    assert_string_equal(iir_light_kind(&cos_spot), "spot");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -191,6 +520,15 @@ int main(void)
         cmocka_unit_test(test_point_flux),
         cmocka_unit_test(test_emission_sampling),
         cmocka_unit_test(test_validation),
+        cmocka_unit_test(test_cap_map),
+        cmocka_unit_test(test_cap_map_uniform_solid_angle),
+        cmocka_unit_test(test_gltf_spot_profile),
+        cmocka_unit_test(test_gltf_spot_flux),
+        cmocka_unit_test(test_gltf_emission_sampling),
+        cmocka_unit_test(test_sun_fit_and_flux),
+        cmocka_unit_test(test_sun_emission_sampling),
+        cmocka_unit_test(test_lightset_sun),
+        cmocka_unit_test(test_gltf_and_sun_validation),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

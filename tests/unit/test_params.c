@@ -224,7 +224,7 @@ static void test_set_params_keeps_vpls(void **state)
     iir_method_destroy(m);
 }
 
-/* What params accept renders (issue 15, finding 6): iir refuses lights without a spot up front, and
+/* What params accept renders (issue 15, finding 6): iir refuses a view without lights up front, and
  * kmax 0 (the incremental step needs at least one insertion) is out of range. */
 static void test_accepted_renders(void **state)
 {
@@ -233,8 +233,9 @@ static void test_accepted_renders(void **state)
     iir_light point = {.type = IIR_LIGHT_POINT, .name = "bulb", .intensity = {1, 1, 1}};
     iir_light spot = point;
     spot.type = IIR_LIGHT_SPOT;
-    assert_int_equal(iir_method_supports("iir", &point, 1, &err), IIR_ERR_UNSUPPORTED);
-    assert_non_null(strstr(err.msg, "spot"));
+    assert_int_equal(iir_method_supports("iir", &point, 1, &err), IIR_OK); /* its sphere */
+    assert_int_equal(iir_method_supports("iir", &point, 0, &err), IIR_ERR_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "spot, point or sun"));
     assert_int_equal(iir_method_supports("iir", (iir_light[]){point, spot}, 2, &err), IIR_OK);
     assert_int_equal(iir_method_supports("pt", &point, 1, &err), IIR_OK);
     assert_int_equal(iir_method_supports("nope", &point, 1, &err), IIR_ERR_INVALID);

@@ -1,6 +1,7 @@
 /* test_scene.c -- scenes: the built-in Cornell box and its shipped twin, OBJ/MTL and glTF loading
- * (materials, KHR_lights_punctual, cameras), the JSON sidecar, degenerate triangles, resolving
- * names, the camera frame, and every refusal (each must name the file and the problem). */
+ * (materials, KHR_lights_punctual spot, point and directional lights, cameras), the JSON sidecar
+ * (its spot, gltf_spot, point and sun lights), degenerate triangles, resolving names, the camera
+ * frame, and every refusal (each must name the file and the problem). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -334,16 +335,20 @@ static void test_degenerate_triangles(void **state)
 /* ======================== glTF 2.0 ======================== */
 
 /* A 2x2 floor quad (facing +y, material "glow": base colour and emissive factor), a spot light
- * on a rotated node under a translated parent (world position (1, 2, 0), aimed down), a point
- * light, and a camera at (0, 1, 5) looking down -z with yfov 0.8 rad and aspect 1.5. */
+ * on a rotated node under a translated parent (world position (1, 2, 0), aimed down, inner 0.4
+ * and outer 0.6 rad), a point light, a directional light on a node turned -45 degrees about x
+ * (shining along (0, -1, -1) / sqrt 2), and a camera at (0, 1, 5) looking down -z with yfov
+ * 0.8 rad and aspect 1.5. */
 static const char *const GLTF =
     "{\"asset\": {\"version\": \"2.0\"},\n"
     " \"extensionsUsed\": [\"KHR_lights_punctual\"],\n"
     " \"extensions\": {\"KHR_lights_punctual\": {\"lights\": [\n"
     "   {\"type\": \"spot\", \"name\": \"key\", \"color\": [1, 0.5, 0.25], \"intensity\": 10,\n"
     "    \"spot\": {\"innerConeAngle\": 0.4, \"outerConeAngle\": 0.6}},\n"
-    "   {\"type\": \"point\", \"name\": \"fill\", \"color\": [1, 1, 1], \"intensity\": 2}]}},\n"
-    " \"scene\": 0, \"scenes\": [{\"nodes\": [0, 1, 3, 4]}],\n"
+    "   {\"type\": \"point\", \"name\": \"fill\", \"color\": [1, 1, 1], \"intensity\": 2},\n"
+    "   {\"type\": \"directional\", \"name\": \"sky\", \"color\": [1, 0.9, 0.8], \"intensity\": "
+    "3}]}},\n"
+    " \"scene\": 0, \"scenes\": [{\"nodes\": [0, 1, 3, 4, 5]}],\n"
     " \"nodes\": [\n"
     "   {\"mesh\": 0, \"name\": \"floor\"},\n"
     "   {\"name\": \"rig\", \"translation\": [1, 0, 0], \"children\": [2]},\n"
@@ -352,7 +357,10 @@ static const char *const GLTF =
     "    \"extensions\": {\"KHR_lights_punctual\": {\"light\": 0}}},\n"
     "   {\"name\": \"cam\", \"translation\": [0, 1, 5], \"camera\": 0},\n"
     "   {\"name\": \"fillnode\", \"translation\": [0, 1.5, 0.5],\n"
-    "    \"extensions\": {\"KHR_lights_punctual\": {\"light\": 1}}}],\n"
+    "    \"extensions\": {\"KHR_lights_punctual\": {\"light\": 1}}},\n"
+    "   {\"name\": \"sunnode\", \"translation\": [5, 5, 5],\n"
+    "    \"rotation\": [-0.38268343, 0, 0, 0.92387953],\n"
+    "    \"extensions\": {\"KHR_lights_punctual\": {\"light\": 2}}}],\n"
     " \"cameras\": [{\"type\": \"perspective\",\n"
     "   \"perspective\": {\"yfov\": 0.8, \"aspectRatio\": 1.5, \"znear\": 0.1}}],\n"
     " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"indices\": 1,\n"
@@ -389,7 +397,7 @@ static void test_gltf_lights_and_camera(void **state)
     assert_vec_near(s->material_list[0].albedo, iir_v3(0.8f, 0.2f, 0.1f), 1e-6f);
     assert_vec_near(s->material_list[0].emission, iir_v3(1.f, 2.f, 3.f), 1e-6f);
 
-    assert_int_equal(s->num_lights, 2);
+    assert_int_equal(s->num_lights, 3);
     const iir_light *spot = find_light(s, "keynode"), *point = find_light(s, "fillnode");
     assert_non_null(spot);
     assert_non_null(point);
@@ -398,8 +406,10 @@ static void test_gltf_lights_and_camera(void **state)
     assert_int_equal(spot->type, IIR_LIGHT_SPOT);
     assert_vec_near(spot->position, iir_v3(1.f, 2.f, 0.f), 1e-5f);
     assert_vec_near(spot->direction, iir_v3(0.f, -1.f, 0.f), 1e-5f);
+    assert_int_equal(spot->profile, IIR_SPOT_GLTF); /* glTF's own profile, no cosine lobe */
     assert_true(near(spot->cone_angle, 0.6f, 1e-6f));
-    assert_true(near(spot->smooth, 0.2f, 1e-6f));
+    assert_true(near(spot->inner_angle, 0.4f, 1e-6f));
+    assert_true(spot->smooth == 0.f);
     assert_vec_near(spot->intensity, iir_v3(10.f, 5.f, 2.5f), 1e-5f);
     assert_int_equal(point->type, IIR_LIGHT_POINT);
     assert_vec_near(point->position, iir_v3(0.f, 1.5f, 0.5f), 1e-6f);
@@ -420,6 +430,56 @@ static void replace_once(const char *text, const char *from, const char *to, cha
     const char *at = strstr(text, from);
     assert_non_null(at);
     snprintf(out, n, "%.*s%s%s", (int)(at - text), text, to, at + strlen(from));
+}
+
+/* The directional light is a sun: its direction is the node's -z, its intensity colour times
+ * intensity (as W/m^2), its disk the scene's bounding sphere (the node's translation is ignored),
+ * and nothing notes it as dropped. */
+static void test_gltf_sun(void **state)
+{
+    (void)state;
+    char path[1024];
+    write_file("sunlit.gltf", GLTF, path, sizeof path);
+    iir_scene *s = load_ok(path);
+    const iir_light *sun = find_light(s, "sunnode");
+    assert_non_null(sun);
+    iir_error err;
+    assert_int_equal(iir_light_validate(sun, &err), IIR_OK);
+    assert_int_equal(sun->type, IIR_LIGHT_SUN);
+    assert_string_equal(iir_light_kind(sun), "sun");
+    assert_vec_near(sun->direction, iir_v3(0.f, -0.70710678f, -0.70710678f), 1e-5f);
+    assert_vec_near(sun->intensity, iir_v3(3.f, 2.7f, 2.4f), 1e-5f);
+    /* the floor quad [-1, 1] x {0} x [-1, 1]: centre 0, radius 1.001 sqrt(2) */
+    assert_vec_near(sun->position, iir_v3(0.f, 0.f, 0.f), 1e-6f);
+    assert_true(near(sun->radius, 1.001f * sqrtf(2.f), 1e-5f));
+    for (uint32_t i = 0; i < s->num_dropped; i++)
+        assert_string_not_equal(s->dropped[i].kind, "light");
+    iir_scene_destroy(s);
+}
+
+/* A glTF spot without angles gets the specification's defaults (outer pi/4, inner 0); an inner
+ * cone wider than the outer one is clamped to it. */
+static void test_gltf_spot_defaults(void **state)
+{
+    (void)state;
+    static char text[8192];
+    char path[1024];
+    replace_once(GLTF, "\"spot\": {\"innerConeAngle\": 0.4, \"outerConeAngle\": 0.6}",
+                 "\"spot\": {}", text, sizeof text);
+    write_file("defspot.gltf", text, path, sizeof path);
+    iir_scene *s = load_ok(path);
+    const iir_light *spot = find_light(s, "keynode");
+    assert_non_null(spot);
+    assert_int_equal(spot->profile, IIR_SPOT_GLTF);
+    assert_true(near(spot->cone_angle, 0.25f * IIR_PI, 1e-6f));
+    assert_true(spot->inner_angle == 0.f);
+    iir_scene_destroy(s);
+    replace_once(GLTF, "\"innerConeAngle\": 0.4", "\"innerConeAngle\": 0.9", text, sizeof text);
+    write_file("widein.gltf", text, path, sizeof path);
+    s = load_ok(path);
+    spot = find_light(s, "keynode");
+    assert_true(near(spot->inner_angle, 0.6f, 1e-6f) && near(spot->cone_angle, 0.6f, 1e-6f));
+    iir_scene_destroy(s);
 }
 
 /* A glTF spot wider than a hemisphere is refused, naming the file and the light. */
@@ -552,6 +612,51 @@ static void test_sidecar_applied(void **state)
     iir_scene_destroy(s);
 }
 
+/* The sidecar's "gltf_spot" (cone_angle = glTF's outer angle, inner_angle) and "sun" (direction,
+ * up, intensity as irradiance; its disk fitted to the scene). */
+static void test_sidecar_gltf_spot_and_sun(void **state)
+{
+    (void)state;
+    char sc[1024];
+    write_sidecar(
+        "newkinds.scene.json",
+        "{\"file\": \"box.obj\", \"lights\": [\n"
+        " {\"type\": \"gltf_spot\", \"name\": \"g\", \"position\": [0.5, 0.5, 2],\n"
+        "  \"target\": [0.5, 0.5, 0], \"up\": [1, 0, 0], \"cone_angle\": 40,\n"
+        "  \"inner_angle\": 15, \"intensity\": [1, 2, 3]},\n"
+        " {\"type\": \"gltf_spot\", \"position\": [0, 0, 1], \"direction\": [0, 0, -1],\n"
+        "  \"cone_angle\": 10, \"intensity\": 1},\n"
+        " {\"type\": \"sun\", \"name\": \"sky\", \"direction\": [0, -2, -2], \"up\": [0, 0, 1],\n"
+        "  \"intensity\": 4}]}",
+        sc, sizeof sc);
+    iir_scene *s = load_ok(sc);
+    assert_int_equal(s->num_lights, 3);
+    iir_error err;
+    for (uint32_t i = 0; i < 3; i++) assert_int_equal(iir_light_validate(&s->lights[i], &err), 0);
+    const iir_light *g = &s->lights[0], *g2 = &s->lights[1], *sun = &s->lights[2];
+    assert_int_equal(g->type, IIR_LIGHT_SPOT);
+    assert_int_equal(g->profile, IIR_SPOT_GLTF);
+    assert_string_equal(iir_light_kind(g), "gltf_spot");
+    assert_vec_near(g->position, iir_v3(0.5f, 0.5f, 2.f), 0.f);
+    assert_vec_near(g->direction, iir_v3(0, 0, -1), 1e-6f);
+    assert_vec_near(g->up, iir_v3(1, 0, 0), 0.f);
+    assert_true(near(g->cone_angle, iir_radians(40.f), 1e-6f));
+    assert_true(near(g->inner_angle, iir_radians(15.f), 1e-6f));
+    assert_true(g->smooth == 0.f);
+    assert_vec_near(g->intensity, iir_v3(1, 2, 3), 0.f);
+    assert_int_equal(g2->profile, IIR_SPOT_GLTF);
+    assert_true(g2->inner_angle == 0.f); /* default */
+    assert_string_equal(sun->name, "sky");
+    assert_int_equal(sun->type, IIR_LIGHT_SUN);
+    assert_vec_near(sun->direction, iir_v3(0.f, -0.70710678f, -0.70710678f), 1e-6f);
+    assert_vec_near(sun->up, iir_v3(0, 0, 1), 0.f);
+    assert_vec_near(sun->intensity, iir_v3s(4.f), 0.f);
+    /* box.obj is the unit square at z = 0 */
+    assert_vec_near(sun->position, iir_v3(0.5f, 0.5f, 0.f), 1e-6f);
+    assert_true(near(sun->radius, 0.5f * 1.001f * sqrtf(2.f), 1e-6f));
+    iir_scene_destroy(s);
+}
+
 /* A folder with one mesh loads it; with a sidecar named after the folder, that. */
 static void test_folder(void **state)
 {
@@ -637,7 +742,41 @@ static void test_sidecar_bad_values(void **state)
          "\"cone_angle\": 30}]",
          "lights[0].cone_angle", "only spot"},
         {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"intensity\": 1}]",
-         "lights[0].type", "\"spot\" or \"point\""},
+         "lights[0].type", "\"spot\", \"gltf_spot\", \"point\" or \"sun\""},
+        {"\"lights\": [{\"type\": \"gltf_spot\", \"position\": [0, 1, 0], \"direction\": [0, -1, "
+         "0], "
+         "\"cone_angle\": 30, \"smooth\": 5, \"intensity\": 1}]",
+         "lights[0].smooth", "no smooth edge"},
+        {"\"lights\": [{\"type\": \"gltf_spot\", \"position\": [0, 1, 0], \"direction\": [0, -1, "
+         "0], "
+         "\"cone_angle\": 30, \"inner_angle\": 31, \"intensity\": 1}]",
+         "lights[0].inner_angle", "outside [0, 30]"},
+        {"\"lights\": [{\"type\": \"gltf_spot\", \"position\": [0, 1, 0], \"direction\": [0, -1, "
+         "0], "
+         "\"inner_angle\": 10, \"intensity\": 1}]",
+         "lights[0].cone_angle", "required"},
+        {"\"lights\": [{\"type\": \"spot\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"cone_angle\": 30, \"inner_angle\": 10, \"intensity\": 1}]",
+         "lights[0].inner_angle", "only glTF spots"},
+        {"\"lights\": [{\"type\": \"point\", \"position\": [0, 1, 0], \"inner_angle\": 10, "
+         "\"intensity\": 1}]",
+         "lights[0].inner_angle", "only glTF spots"},
+        {"\"lights\": [{\"type\": \"sun\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"intensity\": 1}]",
+         "lights[0].position", "a sun has no position"},
+        {"\"lights\": [{\"type\": \"sun\", \"target\": [0, 0, 0], \"intensity\": 1}]",
+         "lights[0].target", "\"direction\""},
+        {"\"lights\": [{\"type\": \"sun\", \"direction\": [0, -1, 0], \"cone_angle\": 30, "
+         "\"intensity\": 1}]",
+         "lights[0].cone_angle", "a sun has no cone"},
+        {"\"lights\": [{\"type\": \"sun\", \"direction\": [0, -1, 0], \"inner_angle\": 3, "
+         "\"intensity\": 1}]",
+         "lights[0].inner_angle", "a sun has no cone"},
+        {"\"lights\": [{\"type\": \"sun\", \"intensity\": 1}]", "lights[0].direction", "required"},
+        {"\"lights\": [{\"type\": \"sun\", \"direction\": [0, 0, 0], \"intensity\": 1}]",
+         "lights[0].direction", "zero"},
+        {"\"lights\": [{\"type\": \"sun\", \"direction\": [0, -1, 0], \"intensity\": -2}]",
+         "lights[0].intensity", "outside"},
         {"\"camera\": {\"position\": [0, 1, 2], \"target\": [0, 1, 2]}", "camera.target",
          "equals camera.position"},
         {"\"camera\": {\"position\": [0, 1, 2], \"target\": [0, 1, 0], \"fov_y\": 0}",
@@ -843,6 +982,8 @@ int main(void)
         cmocka_unit_test(test_degenerate_triangles),
         cmocka_unit_test(test_gltf_lights_and_camera),
         cmocka_unit_test(test_gltf_bad_light),
+        cmocka_unit_test(test_gltf_sun),
+        cmocka_unit_test(test_gltf_spot_defaults),
         cmocka_unit_test(test_missing_file),
         cmocka_unit_test(test_unreadable_file),
         cmocka_unit_test(test_unknown_format),
@@ -853,6 +994,7 @@ int main(void)
         cmocka_unit_test(test_sidecar_malformed),
         cmocka_unit_test(test_sidecar_unknown_field),
         cmocka_unit_test(test_sidecar_bad_values),
+        cmocka_unit_test(test_sidecar_gltf_spot_and_sun),
         cmocka_unit_test(test_sidecar_file_escapes),
         cmocka_unit_test(test_resolve),
         cmocka_unit_test(test_open),

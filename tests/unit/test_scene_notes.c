@@ -270,23 +270,22 @@ static void test_gltf_aspect_and_dropped(void **state)
     if (iir_scene_open(path, NULL, &s, &rt, &err) != IIR_OK) fail_msg("%s", err.msg);
     assert_int_equal(s->camera_origin, IIR_CAMERA_FILE);
     assert_true(s->aspect == 1.5f);
-    assert_int_equal(s->num_lights, 2); /* key and fill */
+    assert_int_equal(s->num_lights, 3); /* key, fill and the sun */
 
     /* the loader's notes: every method gets them, with method "" */
     iir_dropped d[16];
     uint32_t n = iir_method_dropped("pt", s, s->lights, s->num_lights, d, 16);
     assert_int_equal(n, s->num_dropped);
-    assert_true(find(d, n, "", "sunnode", "directional") >= 0);
+    assert_true(find(d, n, "", "sunnode", "") < 0); /* a sun now */
     assert_true(find(d, n, "", "paint", "texture") >= 0);
     assert_true(find(d, n, "", "steel", "metallic 1") >= 0);
     assert_true(find(d, n, "", "floor", "") < 0);
     assert_true(find(d, n, NULL, "fillnode", "") < 0); /* pt renders the point light */
 
-    /* iir's VPLs come from the first spot: the point light's indirect light is left out */
+    /* iir keeps VPLs for every light: nothing of the lights is left out */
     uint32_t k = iir_method_dropped("iir", s, s->lights, s->num_lights, d, 16);
-    assert_int_equal(k, n + 1);
-    assert_true(find(d, k, "iir", "fillnode", "indirect light") >= 0);
-    assert_true(find(d, k, "iir", "fillnode", "'keynode'") >= 0);
+    assert_int_equal(k, n);
+    assert_true(find(d, k, "iir", "fillnode", "") < 0);
     /* ir renders every punctual light's indirect light */
     assert_int_equal(iir_method_dropped("ir", s, s->lights, s->num_lights, d, 16), n);
     /* a short buffer gets what fits, the count says how many there are */

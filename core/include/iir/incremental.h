@@ -1,38 +1,45 @@
 /* incremental.h -- the incremental instant radiosity step (DESIGN.md section 5): a set of VPLs for
- * one spot light that is kept across frames, validated, thinned and refilled on the spot's disk
- * domain, and weighted so that it carries the light's flux. Not shadow maps (shadowmap.h) and not
+ * one light that is kept across frames, validated, thinned and refilled on the light's domain
+ * (light_domain.h: a cosine or glTF spot's disk, a point light's sphere, the sun's disk), and
+ * weighted so that it carries the light's flux. Not shadow maps (shadowmap.h) and not
  * shading (render.h); the caller renders a map for every VPL whose smap.res is 0.
  *
+ * The text below says "the disk" and "circle"; on a point light's sphere read the sphere, geodesic
+ * lengths and spherical caps, and no edge margin. p is the light's position, or for the sun the
+ * point of its plane behind x (iir_domain_origin).
+ *
  * ONE FRAME (iir_incr_update), phase by phase, with the choices this implementation makes:
- *   REPROJECT   Every VPL's disk point is recomputed from its world position x for the new frame
- *               (p; r, u, f): w = (x - p) / |x - p|, s = (w.r, w.u) (in double precision). A null
- *               sample has no position; it keeps the unit world direction w of the ray that escaped
- *               (or hit an emitter) -- a point at infinity -- and is reprojected the same way.
- *   VALIDATE    A VPL stays when (a) it is inside the cone: w.f > 0 and |s| < R, strictly,
- *               R = iir_spot_radius; (b) it faces the light: normal . (p - x) > 0; (c) the segment
- *               p -> x is unoccluded: one occlusion ray (IIR_RAYS_VPL) from p with dir = x - p,
- *               tnear 0, tfar = 1 - iir_rt_epsilon / |x - p|.
- *               A null sample stays when (a) holds for its direction and a closest-hit ray from p
- *               along w would again give a null sample (a miss, an emitter, or a grazing hit); it
- *               is dropped when that ray now finds a reflecting surface (the light moved), so the
- *               hole is refilled by a real VPL. Dropped VPLs' maps are released.
+ *   REPROJECT   Every VPL's domain point is recomputed from its world position x for the new
+ *               frame (iir_domain_locate, in double precision; for a cosine spot (p; r, u, f):
+ *               w = (x - p) / |x - p|, s = (w.r, w.u)). A null sample has no surface; it keeps the
+ *               unit world direction w of the ray that escaped (or hit an emitter) -- a point at
+ *               infinity -- or, for the sun, the point where that ray left the sun's sphere, and is
+ *               reprojected from that (iir_domain_locate_null).
+ *   VALIDATE    A VPL stays when (a) it is strictly inside the domain (for a spot: in front of it,
+ *               w.f > 0, and |s| < R); (b) it faces the light: normal . (p - x) > 0; (c) the
+ *               segment p -> x is unoccluded: one occlusion ray (IIR_RAYS_VPL) from p with
+ *               dir = x - p, tnear 0, tfar = 1 - iir_rt_epsilon / |x - p|.
+ *               A null sample stays when (a) holds for it and a closest-hit ray from p along w
+ *               (iir_domain_null_ray) would again give a null sample (a miss, an emitter, or a
+ *               grazing hit); it is dropped when that ray now finds a reflecting surface (the light
+ *               moved), so the hole is refilled by a real VPL. Dropped VPLs' maps are released.
  *   REGENERATE  When more than regen_threshold of the previous set died in VALIDATE (invalidated >
  *               regen_threshold * count_prev), when VPLs died this frame and the survivors are
  *               fewer than (1 - regen_threshold) * N (deaths spread over frames that k_max
- *               insertions a frame could not refill; a raised N alone fills gradually), when the
- *               set is empty (always so on the first update), or
- *               when the ids run out (see THE SET), the survivors are discarded too
- *               (counted as `deleted`) and N new VPLs are made from the Hammersley set
+ *               insertions a frame could not refill) -- N here is the smaller of N and the
+ *               largest count since the last regeneration, so a raised N fills gradually --, when
+ * the set is empty (always so on the first update), when the light is of another kind than at the
+ * last update (another domain), or when the ids run out (see THE SET), the survivors are discarded
+ * too (counted as `deleted`) and N new VPLs are made from the Hammersley set
  *               ((i / N + o1) mod 1, (phi_2(i) + o2) mod 1), i < N, Cranley-Patterson rotated by
  *               offsets o drawn from (seed, number of regenerations so far), mapped to the disk by
- *               the concentric map and shrunk by (1 - IIR_INCR_EDGE_MARGIN). Each gets one
- *               closest-hit ray. `regenerated` is 1, except on the first update (`initial` is 1).
- *               Such a frame skips DELETE.
- *   TRIANGULATE The Delaunay triangulation of all disk points is rebuilt (iir_tri_build, ids as
- *               vertex info). A VPL whose disk point coincides exactly with an older one's is
- *               dropped and counted in `invalidated` (it is not in `valid`).
- *   DELETE      While invalidated + deleted < k_min, or count > N: remove the endpoint of the
- *               shortest Delaunay edge in the denser neighbourhood (ties: the younger, larger id;
+ *               the concentric map and shrunk by (1 - IIR_INCR_EDGE_MARGIN) (the sphere: the
+ *               uniform map). Each gets one closest-hit ray. `regenerated` is 1, except on the
+ * first update (`initial` is 1). Such a frame skips DELETE. TRIANGULATE The Delaunay triangulation
+ * of all domain points is rebuilt (iir_tri_build or iir_stri_build, ids as vertex info). A VPL
+ * whose domain point coincides exactly with an older one's is dropped and counted in `invalidated`
+ * (it is not in `valid`). DELETE      While invalidated + deleted < k_min, or count > N: remove the
+ * endpoint of the shortest Delaunay edge in the denser neighbourhood (ties: the younger, larger id;
  *               see tri.h), updating the triangulation. Stops at one remaining site. So, with
  *               v = valid: deleted = min(max(k_min - invalidated, v - N, 0), max(v, 1) - 1).
  *   INSERT      While count < N and inserted < k_max (after a regeneration: while count < N): take
@@ -40,25 +47,25 @@
  *               R (1 - IIR_INCR_EDGE_MARGIN) so that float directions stay strictly inside the
  *               cone, cast one closest-hit ray from p along its direction. A hit on a non-emissive
  *               surface whose normal, flipped to the light's side, faces p becomes a VPL
- *               (position from barycentrics, that normal, the material's albedo, its disk point
- *               the reprojection of that position). A miss, an emitter, a grazing hit, or a hit
- *               whose reprojection rounding put outside the cone becomes a null sample
- *               (direction w, albedo and flux 0). It joins the triangulation before the next
- *               circle is chosen. If its point is not strictly inside the disk or is already
- *               taken (only when the domain is saturated), insertion stops for this frame.
- *   WEIGH       Phi_i = I0 * rho_i * A_i * falloff(|s_i|) per RGB channel, which is
- *               Phi_light * rho_i * A_i / (pi R^2) with Phi_light = pi I0 R^2 (the hard-edge
- *               flux) times the smooth edge's falloff at s_i (iir_spot_falloff). A_i is the
- *               Voronoi cell clipped to the disk (IIR_WEIGHTS_VORONOI; the A_i tile the disk) or
- *               pi R^2 / count, count including null samples (IIR_WEIGHTS_UNIFORM). Null samples
- *               have flux 0. Recomputed for every VPL every frame.
+ *               (position from barycentrics, that normal, the material's albedo, its domain
+ *               point the reprojection of that position). A miss, an emitter, a grazing hit, or a
+ * hit whose reprojection rounding put outside the cone becomes a null sample (direction w, albedo
+ * and flux 0). It joins the triangulation before the next circle is chosen. If its point is not
+ * strictly inside the disk or is already taken (only when the domain is saturated), insertion stops
+ * for this frame. WEIGH       Phi_i = I * rho_i * A_i * profile(s_i) per RGB channel: I the light's
+ * intensity (I0, or the sun's E), profile its flux per unit domain area (iir_domain_profile; for a
+ * cosine spot the smooth edge's falloff, so this is Phi_light * rho_i * A_i / (pi R^2) with
+ * Phi_light = pi I0 R^2). A_i is the Voronoi cell clipped to the domain (IIR_WEIGHTS_VORONOI; the
+ * A_i tile it) or the domain's area / count, count including null samples (IIR_WEIGHTS_UNIFORM).
+ * Null samples have flux 0. Recomputed for every VPL every frame.
  *
  * THE SET. iir_incr_vpls returns the VPLs sorted by ascending id. Ids start at 0 and increase by
  * one per VPL ever created for the life of the iir_incr (regenerations included); an id is never
  * reused -- except that after 2^32 - N - k_max VPLs a regeneration restarts them at 0 (every
  * older VPL is gone by then). `birth` is the index of the update that created the VPL (the first
- * update is 0). For a null sample, `position` is the light's position at its birth, `normal` (and
- * `frame`) the unit world direction of its ray, `albedo` and `flux` 0; it needs no shadow map.
+ * update is 0). For a null sample, `position` is the light's position at its birth (the sun: where
+ * its ray left the sun's sphere), `normal` (and `frame`) the unit world direction of its ray,
+ * `albedo` and `flux` 0; it needs no shadow map. `disk` is the domain point's x and y.
  *
  * STATS. count_prev - invalidated - deleted + inserted == count, on every frame. `valid` is the
  * number that survived VALIDATE (and TRIANGULATE), before DELETE or a regeneration.
@@ -84,6 +91,7 @@ extern "C" {
 
 struct iir_scene;
 struct iir_tri;
+struct iir_stri;
 
 #define IIR_INCR_MAX_TARGET 16384u
 /* New samples keep |s| <= R (1 - IIR_INCR_EDGE_MARGIN) so they stay strictly inside the cone when
@@ -127,6 +135,9 @@ typedef struct iir_incr_stats {
     uint32_t initial;   /* 1 on the first update: the set was created from nothing */
     double phase_ms[IIR_INCR_PHASE_COUNT], total_ms;
     iir_raystats rays; /* rays of this update (all IIR_RAYS_VPL) */
+    double flux_in;    /* luminance (W) of the flux the light sends onto reflecting surfaces,
+                          estimated from the set: sum over VPLs of I A_i profile(s_i), albedo not
+                          applied (iir_vplsets splits budgets by it) */
 } iir_incr_stats;
 
 typedef struct iir_incr iir_incr;
@@ -139,11 +150,12 @@ iir_status iir_incr_create(const struct iir_scene *scene, const iir_rt *rt,
 /* Releases every VPL's shadow map and frees everything; NULL is a no-op. */
 void iir_incr_destroy(iir_incr *inc);
 
-/* One frame for the spot light's new pose (see ONE FRAME). st may be NULL; it is overwritten.
- * IIR_ERR_INVALID for a non-spot light or one that fails iir_light_validate: nothing changes.
+/* One frame for the light's new pose (see ONE FRAME). st may be NULL; it is overwritten.
+ * IIR_ERR_INVALID for a light that fails iir_light_validate: nothing changes. A light of another
+ * kind than the last update's (another domain) regenerates the set.
  * IIR_ERR_NOMEM / IIR_ERR_INTERNAL (libiirtri failed): the set stays consistent -- every VPL is
  * still owned and valid for this pose -- but this frame's step may be incomplete. */
-iir_status iir_incr_update(iir_incr *inc, const iir_light *spot, iir_incr_stats *st,
+iir_status iir_incr_update(iir_incr *inc, const iir_light *light, iir_incr_stats *st,
                            iir_error *err);
 
 /* The current set (null samples included, flagged), sorted by ascending id; *n gets its size.
@@ -165,24 +177,28 @@ iir_incr_params iir_incr_get_params(const iir_incr *inc);
  * next update/destroy; read it only with tri.h's const functions. */
 const struct iir_tri *iir_incr_tri(const iir_incr *inc);
 
-/* For drawing the domain: the disk points (x y interleaved, disk units of the last update's pose,
- * so outside the disk for VPLs that left the cone) of the VPLs the last update removed --
- * invalidated, then deleted (a regeneration's discarded survivors included); *n gets their
- * number, invalidated + deleted of that update. Valid until the next update/destroy. */
+/* The same for a point light's sphere (stri.h); NULL before the first update or for a disk. */
+const struct iir_stri *iir_incr_stri(const iir_incr *inc);
+
+/* For drawing the domain: the domain points (x y z interleaved, stride 3; z = 0 on a disk; in
+ * domain units of the last update's pose, so outside the disk for VPLs that left the cone) of the
+ * VPLs the last update removed -- invalidated, then deleted (a regeneration's discarded survivors
+ * included); *n gets their number, invalidated + deleted of that update. Valid until the next
+ * update/destroy. */
 const double *iir_incr_removed(const iir_incr *inc, uint32_t *n);
 
 /* Updates so far; the VPLs the last update created have birth == iir_incr_updates - 1. */
 uint32_t iir_incr_updates(const iir_incr *inc);
 
 /* For progressive refinement: a fresh VPL set independent of the live one, made as a
- * regeneration makes it -- N points of a Hammersley set on the spot's disk, rotated by offsets
+ * regeneration makes it -- N points of a Hammersley set on the light's domain, rotated by offsets
  * from (seed, stream) (a family of streams apart from the regenerations' own), one closest-hit
  * ray each -- and weighted uniformly, Phi_i = I0 rho_i falloff(|s_i|) pi R^2 / count (the rotated
  * set is uniform on the disk, so this is unbiased). Written to out[0 .. *n) with ids 0 .. *n - 1,
  * birth iir_incr_updates - 1, no shadow maps; *n <= N (a point off the disk is skipped, as in a
  * regeneration). The live set, its triangulation and its counters are not touched; rays are
- * added to *rays (may be NULL). IIR_ERR_INVALID for a bad spot or cap < N. */
-iir_status iir_incr_sample_set(const iir_incr *inc, const iir_light *spot, uint64_t stream,
+ * added to *rays (may be NULL). IIR_ERR_INVALID for a bad light or cap < N. */
+iir_status iir_incr_sample_set(const iir_incr *inc, const iir_light *light, uint64_t stream,
                                iir_vpl *out, uint32_t cap, uint32_t *n, iir_raystats *rays,
                                iir_error *err);
 

@@ -1,12 +1,27 @@
-/* light.h -- punctual lights (spot with a cosine lobe inside a cone, isotropic point), the spot's
- * disk domain (DESIGN section 5), and the light set that samples punctual lights and emissive
- * triangles (quad area lights) for next-event estimation. Not VPLs.
+/* light.h -- delta lights (spot with a cosine lobe or glTF's profile inside a cone, isotropic
+ * point, the sun), the maps from their directions to the disks of their VPL domains
+ * (light_domain.h), and the light set that samples delta lights and emissive triangles (quad area
+ * lights) for next-event estimation. Not VPLs.
  *
- * Spot: frame (p; r, u, f), half-angle alpha in (0, 90] degrees, I(w) = I0 cos(theta) inside the
- * cone, optionally faded to zero over an edge of `smooth` radians just inside the cone. The disk
- * domain has radius R = sin(alpha); direction w maps to s = (w.r, w.u) and back with
- * w = s.x r + s.y u + sqrt(1 - |s|^2) f. Uniform density on the disk is exactly the cosine lobe,
- * so disk area is proportional to emitted flux: Phi = pi I0 R^2 (hard edge). */
+ * Cosine spot (profile IIR_SPOT_COSINE, iir's own): frame (p; r, u, f), half-angle alpha in
+ * (0, 90] degrees, I(w) = I0 cos(theta) inside the cone, optionally faded to zero over an edge of
+ * `smooth` radians just inside the cone. Its disk has radius R = sin(alpha); direction w maps to
+ * s = (w.r, w.u) and back with w = s.x r + s.y u + sqrt(1 - |s|^2) f. Uniform density on the disk
+ * is exactly the cosine lobe, so disk area is proportional to emitted flux: Phi = pi I0 R^2.
+ *
+ * glTF spot (profile IIR_SPOT_GLTF, KHR_lights_punctual): cone_angle is glTF's outerConeAngle,
+ * inner_angle its innerConeAngle, and I(w) = I0 t^2 with
+ * t = clamp((cos(theta) - cos(outer)) / max(1e-3, cos(inner) - cos(outer)), 0, 1) -- the
+ * specification's own formula: I0 inside the inner cone, no cosine lobe. Its disk is the cone's cap
+ * under Lambert's azimuthal equal-area map, radius R = 2 sin(alpha / 2): s = w_perp
+ * sqrt(2 / (1 + w.f)), back w_perp = s sqrt(1 - |s|^2 / 4), w.f = 1 - |s|^2 / 2. Disk area equals
+ * solid angle, so a cell's flux is I(w) times its area.
+ *
+ * Sun (IIR_LIGHT_SUN): parallel rays along `direction`, `intensity` the irradiance E (W/m^2, RGB)
+ * on a surface facing it. It lights the scene through the disk of radius `radius` centred at
+ * `position`, perpendicular to the direction -- the scene's bounding sphere
+ * (iir_light_fit_sun); rays start on that disk's plane `radius` behind the centre. Its flux into
+ * the scene is Phi = E pi radius^2. */
 #ifndef IIR_LIGHT_H
 #define IIR_LIGHT_H
 
@@ -22,23 +37,30 @@ extern "C" {
 
 struct iir_scene;
 
-typedef enum iir_light_type { IIR_LIGHT_POINT, IIR_LIGHT_SPOT } iir_light_type;
+typedef enum iir_light_type { IIR_LIGHT_POINT, IIR_LIGHT_SPOT, IIR_LIGHT_SUN } iir_light_type;
+
+/* A spot's angular profile. */
+typedef enum iir_spot_profile { IIR_SPOT_COSINE, IIR_SPOT_GLTF } iir_spot_profile;
 
 typedef struct iir_light {
     iir_light_type type;
     char name[64];
-    iir_vec3 position;
-    iir_vec3 direction; /* spot: unit axis f */
-    iir_vec3 up;        /* spot: hint for the disk's u axis (default +y) */
-    float cone_angle;   /* spot: half-angle alpha, radians, (0, pi/2] */
-    float smooth;       /* spot: width of the fading edge, radians, [0, alpha] */
-    iir_vec3 intensity; /* W/sr, RGB: point: isotropic; spot: I0 on the axis */
+    iir_vec3 position;        /* sun: the centre of its disk (the scene's bounding sphere) */
+    iir_vec3 direction;       /* spot: unit axis f; sun: the direction its light travels */
+    iir_vec3 up;              /* spot, sun: hint for the disk's u axis (default +y) */
+    float cone_angle;         /* spot: half-angle alpha (glTF: outer), radians, (0, pi/2] */
+    float smooth;             /* cosine spot: width of the fading edge, radians, [0, alpha] */
+    iir_spot_profile profile; /* spot: IIR_SPOT_COSINE (the default) or IIR_SPOT_GLTF */
+    float inner_angle;        /* glTF spot: innerConeAngle, radians, [0, cone_angle] */
+    float radius;             /* sun: radius of its disk (> 0) */
+    iir_vec3 intensity; /* RGB: point: W/sr, isotropic; spot: I0 (W/sr) on the axis; sun: W/m^2 */
 } iir_light;
 
 /* ---- description and validity ---- */
 
 /* IIR_ERR_INVALID naming the light and the field for NaN/Inf, negative intensity, a zero
- * direction, a cone angle outside (0, 90] degrees or a smooth edge wider than the cone. */
+ * direction, a cone angle outside (0, 90] degrees, a smooth edge wider than the cone, a glTF inner
+ * angle outside [0, cone angle], or a sun without a disk (radius not finite and > 0). */
 iir_status iir_light_validate(const iir_light *light, iir_error *err);
 
 /* The light a user moves in scene (the daemon's session light, an animation script's light track):
@@ -48,11 +70,20 @@ iir_status iir_light_validate(const iir_light *light, iir_error *err);
  * scene->num_lights for the made-up spot. */
 uint32_t iir_scene_moved_light(const struct iir_scene *scene, iir_light *out);
 
-/* Total emitted flux (W, RGB). */
+/* Gives a sun the disk that covers the scene: position = the centre of the scene's bounds,
+ * radius = half their diagonal (times 1.001, at least 1e-3). Other lights are left as they are.
+ * Every code path that makes or moves a sun calls it (scene loading, the daemon's light moves,
+ * animation tracks). */
+void iir_light_fit_sun(iir_light *light, const struct iir_scene *scene);
+
+/* Short name of the light's kind: "point", "spot", "gltf_spot" or "sun" (the sidecar's type). */
+const char *iir_light_kind(const iir_light *light);
+
+/* Total emitted flux (W, RGB); a sun's is what crosses its disk, E pi radius^2. */
 iir_vec3 iir_light_flux(const iir_light *light);
 
 /* Radiant intensity (W/sr) emitted towards the unit world direction w (pointing away from the
- * light). */
+ * light). A sun has none (0): use its irradiance, `intensity`, along `direction`. */
 iir_vec3 iir_light_intensity(const iir_light *light, iir_vec3 w);
 
 /* A light prepared for evaluating many directions: the spot's frame and disk radii are computed
@@ -60,7 +91,8 @@ iir_vec3 iir_light_intensity(const iir_light *light, iir_vec3 w);
 typedef struct iir_light_eval {
     const iir_light *light;
     iir_frame frame;
-    float R, R_in; /* disk radius sin(alpha) and where the smooth edge starts */
+    float R, R_in; /* cosine spot: disk radius sin(alpha), where the smooth edge starts */
+    float cos_outer, t_scale; /* glTF spot: cos(outer), 1 / max(1e-3, cos(inner) - cos(outer)) */
 } iir_light_eval;
 
 iir_light_eval iir_light_prepare(const iir_light *light);
@@ -87,6 +119,31 @@ static inline iir_vec3 iir_spot_disk_to_dir(const iir_frame *fr, iir_vec2 s)
     return iir_add(iir_add(iir_scale(fr->r, s.x), iir_scale(fr->u, s.y)), iir_scale(fr->f, z));
 }
 
+/* ---- the glTF spot's equal-area disk (Lambert azimuthal) ---- */
+
+static inline float iir_gltf_spot_radius(const iir_light *spot)
+{
+    return 2.f * sinf(0.5f * spot->cone_angle);
+}
+
+/* Equal-area disk coordinates of unit direction w (|s| <= 2; <= R inside the cone). */
+static inline iir_vec2 iir_cap_dir_to_disk(const iir_frame *fr, iir_vec3 w)
+{
+    float k = iir_safe_sqrt(2.f / fmaxf(1.f + iir_dot(w, fr->f), 1e-30f));
+    return iir_v2(k * iir_dot(w, fr->r), k * iir_dot(w, fr->u));
+}
+
+/* Unit direction for equal-area disk point s (|s| <= 2). */
+static inline iir_vec3 iir_cap_disk_to_dir(const iir_frame *fr, iir_vec2 s)
+{
+    float rho2 = s.x * s.x + s.y * s.y, k = iir_safe_sqrt(1.f - 0.25f * rho2);
+    return iir_add(iir_add(iir_scale(fr->r, k * s.x), iir_scale(fr->u, k * s.y)),
+                   iir_scale(fr->f, 1.f - 0.5f * rho2));
+}
+
+/* glTF's angular attenuation t^2 at cos(theta) (see the top of this file), for a prepared light. */
+float iir_gltf_spot_attenuation(const iir_light_eval *e, float cos_theta);
+
 /* Fraction of I0 cos(theta) emitted at disk radius rho (1 inside, smoothstep across the edge, 0
  * outside). */
 float iir_spot_falloff(const iir_light *spot, float rho);
@@ -98,7 +155,9 @@ typedef struct iir_light_ray {
     iir_vec3 beta; /* flux carried by this sample: Le cos / pdf, so E[beta] = Phi */
 } iir_light_ray;
 
-/* Spot: uniform on the disk (the cosine lobe); point: uniform on the sphere. u in [0,1)^2. */
+/* Cosine spot: uniform on its disk (the cosine lobe); glTF spot: uniform on its equal-area disk
+ * (uniform in solid angle over the cone); point: uniform on the sphere; sun: origin uniform on its
+ * disk (on the plane `radius` behind the centre), direction `direction`. u in [0,1)^2. */
 iir_light_ray iir_light_sample_emission(const iir_light *light, iir_vec2 u);
 
 /* ---- the light set: punctual lights + emissive triangles, for next-event estimation ---- */
@@ -117,8 +176,8 @@ bool iir_lightset_has_area_lights(const iir_lightset *set);
 
 typedef struct iir_light_sample {
     iir_vec3 wi;   /* unit direction from the shading point to the light */
-    float dist;    /* distance to the sampled point */
-    iir_vec3 Li;   /* incident radiance (area) or I/d^2 (punctual), not divided by pdf */
+    float dist;    /* distance to the sampled point; INFINITY for a sun */
+    iir_vec3 Li;   /* radiance (area), I/d^2 (point, spot) or E (sun), not divided by pdf */
     float pdf;     /* solid-angle pdf (area) or the pmf of choosing a punctual light */
     bool is_delta; /* punctual: no MIS */
 } iir_light_sample;

@@ -1,5 +1,6 @@
 /* anim_eval.c -- evaluating a parsed animation script: the light and the camera at time t (key
- * lookup, linear / Catmull-Rom / step interpolation, orbit and sweep paths); not parsing.
+ * lookup, linear / Catmull-Rom / step interpolation, orbit and sweep paths); not parsing. A sun
+ * keeps its disk: a track turns it, never moves it.
  *
  * Every field is its own curve through the keys that give it; a key without the field does not
  * pin it. Catmull-Rom is the time-parameterised (non-uniform) one: a cubic Hermite segment whose
@@ -165,6 +166,16 @@ static iir_vec3 eval_aim(const iir_anim *a, const iir_light *base, iir_vec3 pos,
     return aim_at(iir_v3s(0.f), r, s.u < 0.5 ? v[1] : v[2]);
 }
 
+/* A sun is not moved in space: the track's position only aims it (a target seen from there), and
+ * its disk stays the one base was fitted with (iir_light_fit_sun: the scene's bounding sphere,
+ * which no light move changes). */
+static void keep_sun_disk(iir_light *L, const iir_light *base)
+{
+    if (L->type != IIR_LIGHT_SUN) return;
+    L->position = base->position;
+    L->radius = base->radius;
+}
+
 iir_light iir_anim_light(const iir_anim *a, const iir_light *base, double t)
 {
     iir_light L = *base;
@@ -173,11 +184,13 @@ iir_light iir_anim_light(const iir_anim *a, const iir_light *base, double t)
     t = clamp_time(a, t);
     L.position = eval_position(a, tr, base->position, t);
     L.direction = eval_aim(a, base, L.position, t);
+    keep_sun_disk(&L, base);
     iir_vec3 v;
     if (eval_field(tr, IIR_AF_CONE, t, &v))
         L.cone_angle = iir_radians(iir_clampf(v.x, 1e-3f, 90.f));
     if (eval_field(tr, IIR_AF_SMOOTH, t, &v)) L.smooth = iir_radians(fmaxf(v.x, 0.f));
     L.smooth = fminf(L.smooth, L.cone_angle);
+    L.inner_angle = fminf(L.inner_angle, L.cone_angle); /* a glTF spot's inner cone */
     if (eval_field(tr, IIR_AF_INTENSITY, t, &v))
         L.intensity = iir_v3(fmaxf(v.x, 0.f), fmaxf(v.y, 0.f), fmaxf(v.z, 0.f));
     return L;

@@ -1,5 +1,6 @@
-/* light.c -- punctual lights: validity, intensity, flux, the spot's disk domain and emission
- * sampling. Not the light set (lightset.c) and not VPLs. */
+/* light.c -- delta lights (cosine spot, glTF spot, point, sun): validity, kind, intensity, flux,
+ * the spots' disk maps' radii and falloff, emission sampling, and fitting a sun to the scene. Not
+ * the light set (lightset.c) and not VPLs. */
 #include "iir/light.h"
 
 #include <math.h>
@@ -14,17 +15,10 @@ static bool finite_nonneg(iir_vec3 c)
     return iir_is_finite3(c) && c.x >= 0.f && c.y >= 0.f && c.z >= 0.f;
 }
 
-iir_status iir_light_validate(const iir_light *l, iir_error *err)
+/* ======================== validity and kind ======================== */
+
+static iir_status validate_spot(const iir_light *l, const char *name, iir_error *err)
 {
-    const char *name = l->name[0] ? l->name : "(unnamed)";
-    if (!iir_is_finite3(l->position))
-        return iir_fail(err, IIR_ERR_INVALID, "light '%s': position is not finite", name);
-    if (!finite_nonneg(l->intensity))
-        return iir_fail(err, IIR_ERR_INVALID,
-                        "light '%s': intensity must be finite and non-negative", name);
-    if (l->type == IIR_LIGHT_POINT) return IIR_OK;
-    if (!iir_is_finite3(l->direction) || iir_length(l->direction) < 1e-6f)
-        return iir_fail(err, IIR_ERR_INVALID, "light '%s': direction is zero or not finite", name);
     if (!(l->cone_angle > 0.f && l->cone_angle <= IIR_PI * 0.5f + 1e-6f))
         return iir_fail(err, IIR_ERR_INVALID,
                         "light '%s': cone angle %g degrees is outside (0, 90]", name,
@@ -33,9 +27,61 @@ iir_status iir_light_validate(const iir_light *l, iir_error *err)
         return iir_fail(err, IIR_ERR_INVALID,
                         "light '%s': smooth edge %g degrees must be in [0, cone angle]", name,
                         (double)iir_degrees(l->smooth));
+    if (l->profile != IIR_SPOT_COSINE && l->profile != IIR_SPOT_GLTF)
+        return iir_fail(err, IIR_ERR_INVALID, "light '%s': unknown spot profile %d", name,
+                        (int)l->profile);
+    if (l->profile == IIR_SPOT_GLTF && !(l->inner_angle >= 0.f && l->inner_angle <= l->cone_angle))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "light '%s': inner angle %g degrees must be in [0, cone angle %g]", name,
+                        (double)iir_degrees(l->inner_angle), (double)iir_degrees(l->cone_angle));
     return IIR_OK;
 }
 
+iir_status iir_light_validate(const iir_light *l, iir_error *err)
+{
+    const char *name = l->name[0] ? l->name : "(unnamed)";
+    if (l->type != IIR_LIGHT_POINT && l->type != IIR_LIGHT_SPOT && l->type != IIR_LIGHT_SUN)
+        return iir_fail(err, IIR_ERR_INVALID, "light '%s': unknown type %d", name, (int)l->type);
+    if (!iir_is_finite3(l->position))
+        return iir_fail(err, IIR_ERR_INVALID, "light '%s': position is not finite", name);
+    if (!finite_nonneg(l->intensity))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "light '%s': intensity must be finite and non-negative", name);
+    if (l->type == IIR_LIGHT_POINT) return IIR_OK;
+    if (!iir_is_finite3(l->direction) || iir_length(l->direction) < 1e-6f)
+        return iir_fail(err, IIR_ERR_INVALID, "light '%s': direction is zero or not finite", name);
+    if (l->type == IIR_LIGHT_SPOT) return validate_spot(l, name, err);
+    if (!(isfinite(l->radius) && l->radius > 0.f))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "light '%s': a sun needs a disk radius > 0 (iir_light_fit_sun), got %g",
+                        name, (double)l->radius);
+    return IIR_OK;
+}
+
+const char *iir_light_kind(const iir_light *l)
+{
+    switch (l->type) {
+    case IIR_LIGHT_POINT:
+        return "point";
+    case IIR_LIGHT_SPOT:
+        return l->profile == IIR_SPOT_GLTF ? "gltf_spot" : "spot";
+    case IIR_LIGHT_SUN:
+        return "sun";
+    }
+    return "unknown";
+}
+
+void iir_light_fit_sun(iir_light *l, const iir_scene *scene)
+{
+    if (l->type != IIR_LIGHT_SUN) return;
+    iir_vec3 lo = scene->bounds_min, hi = scene->bounds_max;
+    l->position = iir_scale(iir_add(lo, hi), 0.5f);
+    l->radius = fmaxf(1e-3f, 0.5f * 1.001f * iir_length(iir_sub(hi, lo)));
+}
+
+/* ======================== the spots' disks ======================== */
+
+/* The spot's frame, and the sun's (the sun's disk is spanned by r and u as a spot's is). */
 iir_frame iir_spot_frame(const iir_light *spot)
 {
     iir_vec3 up = iir_length_sq(spot->up) > 0.f ? spot->up : iir_v3(0, 1, 0);
@@ -61,6 +107,14 @@ float iir_spot_falloff(const iir_light *spot, float rho)
     return falloff(iir_spot_radius(spot), smooth_edge_start(spot), rho);
 }
 
+float iir_gltf_spot_attenuation(const iir_light_eval *e, float cos_theta)
+{
+    float t = iir_clampf((cos_theta - e->cos_outer) * e->t_scale, 0.f, 1.f);
+    return t * t;
+}
+
+/* ======================== flux and intensity ======================== */
+
 /* Phi = I0 * integral over the disk of falloff(rho) dA (the cosine lobe is uniform on the disk). */
 static float spot_flux_factor(const iir_light *spot)
 {
@@ -75,17 +129,38 @@ static float spot_flux_factor(const iir_light *spot)
     return (float)(2.0 * IIR_PI * sum);
 }
 
+/* Phi = I0 2 pi integral_{cos outer}^{1} t(c)^2 dc in closed form, for the prepared light's own
+ * (float) cos_outer a and width w = 1 / t_scale: t rises linearly over [a, a + w], then is 1. */
+static float gltf_flux_factor(const iir_light *spot)
+{
+    iir_light_eval e = iir_light_prepare(spot);
+    double a = e.cos_outer, w = 1.0 / (double)e.t_scale, top = fmin(1.0, a + w);
+    double ramp = (top - a) * (top - a) * (top - a) / (3.0 * w * w);
+    return (float)(2.0 * IIR_PI * (ramp + (1.0 - top)));
+}
+
 iir_vec3 iir_light_flux(const iir_light *l)
 {
-    if (l->type == IIR_LIGHT_POINT) return iir_scale(l->intensity, 4.f * IIR_PI);
-    return iir_scale(l->intensity, spot_flux_factor(l));
+    switch (l->type) {
+    case IIR_LIGHT_POINT:
+        return iir_scale(l->intensity, 4.f * IIR_PI);
+    case IIR_LIGHT_SUN:
+        return iir_scale(l->intensity, IIR_PI * l->radius * l->radius);
+    default:
+        return iir_scale(l->intensity,
+                         l->profile == IIR_SPOT_GLTF ? gltf_flux_factor(l) : spot_flux_factor(l));
+    }
 }
 
 iir_light_eval iir_light_prepare(const iir_light *l)
 {
     iir_light_eval e = {.light = l};
-    if (l->type == IIR_LIGHT_SPOT) {
-        e.frame = iir_spot_frame(l);
+    if (l->type != IIR_LIGHT_SPOT) return e;
+    e.frame = iir_spot_frame(l);
+    if (l->profile == IIR_SPOT_GLTF) {
+        e.cos_outer = cosf(l->cone_angle);
+        e.t_scale = 1.f / fmaxf(1e-3f, cosf(l->inner_angle) - e.cos_outer);
+    } else {
         e.R = iir_spot_radius(l);
         e.R_in = smooth_edge_start(l);
     }
@@ -96,8 +171,11 @@ iir_vec3 iir_light_eval_intensity(const iir_light_eval *e, iir_vec3 w)
 {
     const iir_light *l = e->light;
     if (l->type == IIR_LIGHT_POINT) return l->intensity;
+    if (l->type == IIR_LIGHT_SUN) return iir_v3s(0.f);
     float cos_theta = iir_dot(w, e->frame.f);
     if (cos_theta <= 0.f) return iir_v3s(0.f);
+    if (l->profile == IIR_SPOT_GLTF)
+        return iir_scale(l->intensity, iir_gltf_spot_attenuation(e, cos_theta));
     iir_vec2 s = iir_spot_dir_to_disk(&e->frame, w);
     float rho = sqrtf(s.x * s.x + s.y * s.y);
     return iir_scale(l->intensity, cos_theta * falloff(e->R, e->R_in, rho));
@@ -109,26 +187,60 @@ iir_vec3 iir_light_intensity(const iir_light *l, iir_vec3 w)
     return iir_light_eval_intensity(&e, w);
 }
 
-iir_light_ray iir_light_sample_emission(const iir_light *l, iir_vec2 u)
+/* ======================== emission sampling ======================== */
+
+/* Uniform on the disk of radius R is the cosine lobe: pdf(w) = cos / (pi R^2), so
+ * beta = I0 cos falloff / pdf = pi R^2 I0 falloff. */
+static iir_light_ray sample_cosine_spot(const iir_light *l, iir_vec2 u)
 {
-    iir_light_ray r;
-    r.origin = l->position;
-    if (l->type == IIR_LIGHT_POINT) {
-        r.dir = iir_sample_uniform_sphere(u);
-        r.beta = iir_scale(l->intensity, 4.f * IIR_PI);
-        return r;
-    }
-    /* Uniform on the disk of radius R is the cosine lobe: pdf(w) = cos / (pi R^2), so
-     * beta = I0 cos falloff / pdf = pi R^2 I0 falloff. */
     iir_frame fr = iir_spot_frame(l);
     float R = iir_spot_radius(l);
     iir_vec2 d = iir_sample_uniform_disk_concentric(u);
     iir_vec2 s = iir_v2(d.x * R, d.y * R);
-    r.dir = iir_spot_disk_to_dir(&fr, s);
     float rho = sqrtf(s.x * s.x + s.y * s.y);
-    r.beta = iir_scale(l->intensity, IIR_PI * R * R * iir_spot_falloff(l, rho));
+    iir_light_ray r = {l->position, iir_spot_disk_to_dir(&fr, s),
+                       iir_scale(l->intensity, IIR_PI * R * R * iir_spot_falloff(l, rho))};
     return r;
 }
+
+/* Uniform on the equal-area disk of radius R is uniform in solid angle over the cone:
+ * pdf(w) = 1 / (pi R^2) = 1 / (2 pi (1 - cos outer)), so beta = I0 t^2 pi R^2. */
+static iir_light_ray sample_gltf_spot(const iir_light *l, iir_vec2 u)
+{
+    iir_light_eval e = iir_light_prepare(l);
+    float R = iir_gltf_spot_radius(l);
+    iir_vec2 d = iir_sample_uniform_disk_concentric(u);
+    iir_vec2 s = iir_v2(d.x * R, d.y * R);
+    float cos_theta = 1.f - 0.5f * (s.x * s.x + s.y * s.y);
+    float k = IIR_PI * R * R * iir_gltf_spot_attenuation(&e, cos_theta);
+    iir_light_ray r = {l->position, iir_cap_disk_to_dir(&e.frame, s), iir_scale(l->intensity, k)};
+    return r;
+}
+
+/* Origin uniform on the sun's disk, moved `radius` back along its direction: pdf = 1 / (pi r^2)
+ * per unit area, so beta = E pi r^2. */
+static iir_light_ray sample_sun(const iir_light *l, iir_vec2 u)
+{
+    iir_frame fr = iir_spot_frame(l);
+    iir_vec2 d = iir_sample_uniform_disk_concentric(u);
+    iir_vec3 o = iir_madd(l->position, fr.r, d.x * l->radius);
+    o = iir_madd(o, fr.u, d.y * l->radius);
+    iir_light_ray r = {iir_madd(o, fr.f, -l->radius), fr.f,
+                       iir_scale(l->intensity, IIR_PI * l->radius * l->radius)};
+    return r;
+}
+
+iir_light_ray iir_light_sample_emission(const iir_light *l, iir_vec2 u)
+{
+    if (l->type == IIR_LIGHT_SUN) return sample_sun(l, u);
+    if (l->type == IIR_LIGHT_SPOT)
+        return l->profile == IIR_SPOT_GLTF ? sample_gltf_spot(l, u) : sample_cosine_spot(l, u);
+    iir_light_ray r = {l->position, iir_sample_uniform_sphere(u),
+                       iir_scale(l->intensity, 4.f * IIR_PI)};
+    return r;
+}
+
+/* ======================== the light a user moves ======================== */
 
 uint32_t iir_scene_moved_light(const iir_scene *scene, iir_light *out)
 {

@@ -1,8 +1,9 @@
-/* lightset.c -- the lights next-event estimation chooses from: punctual lights and emissive
- * triangles, picked in proportion to their flux (luminance). Not the lights' own radiometry
- * (light.c). */
+/* lightset.c -- the lights next-event estimation chooses from: delta lights (point, spots, suns)
+ * and emissive triangles, picked in proportion to their flux (luminance; a sun's is what crosses
+ * its disk). Not the lights' own radiometry (light.c). */
 #include "iir/light.h"
 
+#include <math.h>
 #include <stdlib.h>
 
 #include "iir/scene.h"
@@ -115,9 +116,23 @@ static uint32_t pick_entry(const iir_lightset *set, float u)
     return lo;
 }
 
+/* A sun: parallel light from -direction at no finite distance; Li is its irradiance E (a delta
+ * in direction, so f Li cos / pmf is the estimate). */
+static iir_light_sample sample_sun(const iir_light *l, float pmf)
+{
+    iir_light_sample ls = {0};
+    ls.wi = iir_neg(iir_normalize(l->direction));
+    ls.dist = INFINITY;
+    ls.Li = l->intensity;
+    ls.pdf = pmf;
+    ls.is_delta = true;
+    return ls;
+}
+
 static iir_light_sample sample_punctual(const iir_light *l, iir_vec3 x, float pmf)
 {
     iir_light_sample ls = {0};
+    if (l->type == IIR_LIGHT_SUN) return sample_sun(l, pmf);
     iir_vec3 d = iir_sub(l->position, x);
     float dist2 = iir_length_sq(d);
     if (dist2 <= 0.f) return ls;

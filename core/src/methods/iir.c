@@ -1,15 +1,17 @@
 /* iir.c -- incremental instant radiosity, method "iir" (Laine et al. 2007): the VPL set lives
- * across frames. Each frame runs the incremental step (core/src/incremental.c) for the first spot
- * light of the view, renders shadow maps only for the VPLs born this frame (a map lives as long as
- * its VPL: the scene is static), and shades with the shared VPL renderer. One bounce by
- * construction. Parameters: the incremental step's (table below), the VPL shading's
- * (vpl_options.c) and every method's. Direct light comes from every light of the view.
+ * across frames. Each frame runs the incremental step (core/src/incremental.c) for every light of
+ * the view, each on its own domain with its share of the budget (vplsets.h), renders shadow maps
+ * only for the VPLs born this frame (a map lives as long as its VPL: the scene is static), and
+ * shades with the shared VPL renderer. One bounce by construction. Parameters: the incremental
+ * step's (table below), the VPL shading's (vpl_options.c) and every method's. Direct light comes
+ * from every light of the view.
  *
  * Refinement (refine.h; refine_passes, jitter, interleave, clamp): sweep 0 shades the live
  * set, sweep s >= 1 a fresh set sampled as a regeneration would (iir_incr_sample_set, stream
  * (frame, s)) into a buffer of this file, so the live set is exactly as before when frames resume.
- * The domain (iir_method_domain) is drawn from the step's triangulation on demand into buffers of
- * this file that grow with the set and are reused. */
+ * The domain (iir_method_domain) of the light a user moves (the first spot, else the first light)
+ * is drawn from its set's triangulation on demand into buffers of this file that grow with the set
+ * and are reused; site ids are that set's own. */
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,6 +22,7 @@
 #include "iir/scene.h"
 #include "iir/shadowmap.h"
 #include "iir/tri.h"
+#include "iir/vplsets.h"
 #include "method_internal.h"
 #include "iir/timer.h"
 
@@ -94,12 +97,13 @@ typedef struct iir_state {
     const iir_rt *rt;
     iir_options params;
     iir_renderer *renderer;
-    iir_incr *incr;
+    iir_vplsets *sets;
     uint32_t frame;
     iir_refine *refine;
-    iir_light spot; /* the spot of the frame being refined */
-    iir_vpl *fresh; /* [params.vpls]: refinement's fresh sets */
-    uint32_t fresh_n;
+    iir_light lights[IIR_VPLSETS_MAX_LIGHTS]; /* the lights of the frame being refined */
+    uint32_t num_lights, drawn;               /* their number; the light whose domain is drawn */
+    iir_vpl *fresh;                           /* [fresh_cap]: refinement's fresh sets */
+    uint32_t fresh_n, fresh_cap;
     uint32_t refine_frame; /* the frame being refined: the fresh sets' stream */
     domain_bufs dom;
     iir_stop_fn stop; /* a live session's: frames and passes end early when it says so */
@@ -122,7 +126,7 @@ static void iir_m_destroy(void *state)
     if (!s) return;
     iir_renderer_destroy(s->renderer);
     iir_refine_destroy(s->refine);
-    iir_incr_destroy(s->incr);
+    iir_vplsets_destroy(s->sets);
     free(s->fresh);
     free_domain(&s->dom);
     free(s);
@@ -150,11 +154,10 @@ static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const v
     s->rt = rt;
     s->params = *params;
     iir_incr_params ip = incr_params(params);
-    iir_status st = iir_incr_create(scene, rt, &ip, &s->incr, err);
+    iir_status st = iir_vplsets_create(scene, rt, &ip, &s->sets, err);
     s->renderer = st == IIR_OK ? iir_renderer_create(scene, rt) : NULL;
     s->refine = st == IIR_OK ? iir_refine_create() : NULL;
-    s->fresh = st == IIR_OK ? malloc(sizeof(iir_vpl) * (size_t)params->vpls) : NULL;
-    if (st == IIR_OK && (!s->renderer || !s->refine || !s->fresh))
+    if (st == IIR_OK && (!s->renderer || !s->refine))
         st = iir_fail(err, IIR_ERR_NOMEM, "out of memory creating iir's renderer");
     if (st != IIR_OK) {
         iir_m_destroy(s);
@@ -164,38 +167,36 @@ static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const v
     return IIR_OK;
 }
 
-static const iir_light *first_spot(const iir_view *view)
+/* The light whose domain is drawn: the first spot, else the first light (iir_scene_moved_light's
+ * rule: the one a user moves). */
+static uint32_t drawn_light(const iir_light *lights, uint32_t n)
 {
-    for (uint32_t i = 0; i < view->num_lights; i++)
-        if (view->lights[i].type == IIR_LIGHT_SPOT) return &view->lights[i];
-    return NULL;
+    for (uint32_t i = 0; i < n; i++)
+        if (lights[i].type == IIR_LIGHT_SPOT) return i;
+    return 0;
 }
 
 static iir_status iir_m_supports(const iir_light *lights, uint32_t num_lights, iir_error *err)
 {
-    for (uint32_t i = 0; i < num_lights; i++)
-        if (lights[i].type == IIR_LIGHT_SPOT) return IIR_OK;
+    (void)lights;
+    if (num_lights > 0) return IIR_OK;
     return iir_fail(err, IIR_ERR_UNSUPPORTED,
-                    "iir needs a spot light (its VPL domain is the spot's disk); these %u light(s) "
-                    "have none",
-                    num_lights);
+                    "iir needs a spot, point or sun light to keep VPLs for (emissive triangles "
+                    "alone have no VPL domain yet); these lights are none");
 }
 
-/* iir's VPLs come from the first spot: every other light's indirect light, and the emitters', is
- * left out (their direct light is rendered). Without a spot iir renders nothing (supports). */
+/* Every light keeps VPLs (up to IIR_VPLSETS_MAX_LIGHTS); the emitters' indirect light is left out
+ * (their direct light is rendered). Without lights iir renders nothing (supports). */
 static uint32_t iir_m_dropped(const iir_scene *scene, const iir_light *lights, uint32_t num_lights,
                               iir_dropped *out, uint32_t max)
 {
-    iir_view view = {lights, num_lights, scene->camera};
-    const iir_light *spot = first_spot(&view);
-    if (!spot) return 0;
     uint32_t n = 0;
-    for (uint32_t i = 0; i < num_lights; i++)
-        if (&lights[i] != spot)
-            iir_dropped_add(out, max, &n, "iir", "light", lights[i].name,
-                            "a %s light: its indirect light is left out, as iir's VPLs come from "
-                            "the first spot, '%s', only (its direct light is rendered)",
-                            lights[i].type == IIR_LIGHT_SPOT ? "spot" : "point", spot->name);
+    for (uint32_t i = IIR_VPLSETS_MAX_LIGHTS; i < num_lights; i++)
+        iir_dropped_add(out, max, &n, "iir", "light", lights[i].name,
+                        "light %u: its indirect light is left out, as iir keeps VPLs for %u lights "
+                        "at most (its direct light is rendered)",
+                        i + 1, IIR_VPLSETS_MAX_LIGHTS);
+    if (num_lights == 0) return 0;
     return n + iir_dropped_emitters(scene, "iir", n < max ? out + n : NULL, n < max ? max - n : 0);
 }
 
@@ -203,6 +204,23 @@ static void fill_counts(const iir_incr_stats *is, uint32_t maps, iir_vpl_counts 
 {
     *c = is->vpl;
     c->shadowmaps = maps;
+}
+
+/* Shadow maps for every set's new VPLs, on the sets' own arrays (where maps live), until the stop
+ * hook says stop; returns how many were built. */
+static uint32_t build_maps(iir_state *s, iir_raystats *rays)
+{
+    if (s->params.vpl.visibility != IIR_VIS_SHADOWMAP) return 0;
+    uint32_t maps = 0;
+    for (uint32_t k = 0; k < iir_vplsets_lights(s->sets); k++) {
+        iir_incr *set = iir_vplsets_set(s->sets, k);
+        uint32_t n = 0;
+        iir_vpl *v = set ? iir_incr_vpls(set, &n) : NULL;
+        if (n)
+            maps += iir_smaps_build_until(v, n, s->rt, s->params.vpl.sm_res, rays, s->stop,
+                                          s->stop_ctx);
+    }
+    return maps;
 }
 
 static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out,
@@ -213,26 +231,24 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     s->dom.valid = false;
     iir_status st = iir_view_validate(view, err);
     if (st != IIR_OK) return st;
-    const iir_light *spot = first_spot(view);
-    if (!spot)
-        return iir_fail(err, IIR_ERR_UNSUPPORTED,
-                        "iir needs a spot light (its VPL domain is the spot's disk); this view has "
-                        "%u light(s) and no spot",
-                        view->num_lights);
+    if (view->num_lights == 0)
+        return iir_fail(
+            err, IIR_ERR_UNSUPPORTED,
+            "iir needs a spot, point or sun light to keep VPLs for; this view has none");
     double t0 = iir_now_ms();
     iir_incr_stats is;
-    st = iir_incr_update(s->incr, spot, &is, err);
+    uint32_t nl =
+        view->num_lights < IIR_VPLSETS_MAX_LIGHTS ? view->num_lights : IIR_VPLSETS_MAX_LIGHTS;
+    st = iir_vplsets_update(s->sets, view->lights, nl, &is, err);
     if (st != IIR_OK) return st;
     iir_raystats_add(&stats->rays, &is.rays);
     double t1 = iir_now_ms();
-    uint32_t n = 0, maps = 0;
-    iir_vpl *vpls = iir_incr_vpls(s->incr, &n);
-    if (s->params.vpl.visibility == IIR_VIS_SHADOWMAP)
-        maps = iir_smaps_build_until(vpls, n, s->rt, s->params.vpl.sm_res, &stats->rays, s->stop,
-                                     s->stop_ctx);
+    uint32_t maps = build_maps(s, &stats->rays);
     if (s->stop && s->stop(s->stop_ctx)) /* the maps not built are built by the next frame */
         return s->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double t2 = iir_now_ms();
+    uint32_t n = 0;
+    const iir_vpl *vpls = iir_vplsets_gather(s->sets, &n);
     iir_indirect_params ind = iir_vpl_indirect(&s->params.vpl);
     iir_render_timing rt;
     iir_render_input in = {.camera = &view->camera,
@@ -246,7 +262,9 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     if (st == IIR_OK)
         st = iir_refine_begin(s->refine, &view->camera, view->lights, view->num_lights, out->width,
                               out->height, &rp, err);
-    s->spot = *spot;
+    memcpy(s->lights, view->lights, nl * sizeof *s->lights);
+    s->num_lights = nl;
+    s->drawn = drawn_light(view->lights, nl);
     s->refine_frame = s->frame;
     stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
     stats->phase_ms[IIR_PHASE_SHADOWMAPS] = t2 - t1;
@@ -260,23 +278,46 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
 static const iir_vpl *iir_m_vpls(const void *state, uint32_t *n)
 {
     const iir_state *s = state;
-    return iir_incr_vpls(s->incr, n);
+    return iir_vplsets_gather(s->sets, n);
 }
 
 /* ---- refinement ---- */
 
-/* Sweep 0: the live set; sweep s: a fresh set sampled as a regeneration would. */
+/* Room in the fresh buffer for every set's target. */
+static iir_status fresh_room(iir_state *s, iir_error *err)
+{
+    uint32_t need = 0;
+    for (uint32_t k = 0; k < s->num_lights; k++) need += iir_vplsets_target(s->sets, k);
+    if (need <= s->fresh_cap) return IIR_OK;
+    iir_vpl *f = realloc(s->fresh, need * sizeof *f);
+    if (!f) return iir_fail(err, IIR_ERR_NOMEM, "out of memory for %u fresh VPLs", need);
+    s->fresh = f, s->fresh_cap = need;
+    return IIR_OK;
+}
+
+/* Sweep 0: the live sets; sweep s: for every light a fresh set sampled as a regeneration would,
+ * ids spread as the gathered array spreads them. */
 static iir_status refine_vpls(void *ctx, uint32_t sweep, const iir_vpl **vpls, uint32_t *n,
                               iir_raystats *st, iir_error *err)
 {
     iir_state *s = ctx;
     if (sweep == 0) {
-        *vpls = iir_incr_vpls(s->incr, n);
+        *vpls = iir_vplsets_gather(s->sets, n);
         return IIR_OK;
     }
     uint64_t stream = ((uint64_t)s->refine_frame << 32) | sweep;
-    iir_status status = iir_incr_sample_set(s->incr, &s->spot, stream, s->fresh,
-                                            (uint32_t)s->params.vpls, &s->fresh_n, st, err);
+    iir_status status = fresh_room(s, err);
+    s->fresh_n = 0;
+    for (uint32_t k = 0; k < s->num_lights && status == IIR_OK; k++) {
+        iir_incr *set = iir_vplsets_set(s->sets, k);
+        if (!set) continue;
+        uint32_t m = 0;
+        iir_vpl *out = s->fresh + s->fresh_n;
+        status = iir_incr_sample_set(set, &s->lights[k], stream, out, s->fresh_cap - s->fresh_n, &m,
+                                     st, err);
+        for (uint32_t j = 0; j < m; j++) out[j].id = out[j].id * s->num_lights + k;
+        s->fresh_n += m;
+    }
     *vpls = s->fresh;
     *n = s->fresh_n;
     return status;
@@ -320,14 +361,14 @@ static uint32_t site_index(const iir_domain_site *sites, uint32_t n, uint32_t id
     return lo < n && sites[lo].id == id ? lo : UINT32_MAX;
 }
 
-static bool domain_sites(iir_state *s, float inv_r, domain_bufs *b)
+static bool domain_sites(iir_incr *set, float inv_r, domain_bufs *b)
 {
     uint32_t n = 0;
-    const iir_vpl *v = iir_incr_vpls(s->incr, &n);
+    const iir_vpl *v = iir_incr_vpls(set, &n);
     if (!grow((void **)&b->sites, &b->sites_cap, n, sizeof *b->sites) ||
         !grow((void **)&b->cell_start, &b->cell_start_cap, (size_t)n + 1, sizeof *b->cell_start))
         return false;
-    uint32_t born = iir_incr_updates(s->incr) - 1;
+    uint32_t born = iir_incr_updates(set) - 1;
     for (uint32_t i = 0; i < n; i++)
         b->sites[i] = (iir_domain_site){v[i].disk.x * inv_r, v[i].disk.y * inv_r, v[i].id,
                                         (uint8_t)((v[i].birth == born ? IIR_SITE_NEW : 0) |
@@ -381,29 +422,31 @@ static bool domain_removed(const iir_incr *inc, float inv_r, domain_bufs *b)
     const double *xy = iir_incr_removed(inc, &n);
     if (!grow((void **)&b->removed, &b->removed_cap, n, sizeof *b->removed)) return false;
     for (uint32_t i = 0; i < n; i++) {
-        b->removed[i][0] = (float)(xy[2 * i] * inv_r);
-        b->removed[i][1] = (float)(xy[2 * i + 1] * inv_r);
+        b->removed[i][0] = (float)(xy[3 * i] * inv_r);
+        b->removed[i][1] = (float)(xy[3 * i + 1] * inv_r);
     }
     b->d.num_removed = n;
     return true;
 }
 
+/* The domain of the light a user moves (drawn_light), with its own set's ids. */
 static bool build_domain(iir_state *s, domain_bufs *b)
 {
-    const iir_tri *tri = iir_incr_tri(s->incr);
+    iir_incr *set = iir_vplsets_set(s->sets, s->drawn);
+    const iir_tri *tri = set ? iir_incr_tri(set) : NULL;
     if (!tri || iir_tri_radius(tri) <= 0.0) return false;
     float inv_r = (float)(1.0 / iir_tri_radius(tri));
     memset(&b->d, 0, sizeof b->d);
     /* a non-NULL polygon buffer, so that tri.h answers IIR_TRI_CAPACITY, not a size query */
     if (!grow((void **)&b->xy, &b->xy_cap, 2 * 64, sizeof *b->xy)) return false;
-    if (!domain_sites(s, inv_r, b) || !domain_edges(tri, b)) return false;
+    if (!domain_sites(set, inv_r, b) || !domain_edges(tri, b)) return false;
     size_t total = 0;
     for (uint32_t k = 0; k < b->d.num_sites; k++) {
         b->cell_start[k] = (uint32_t)total;
         if (!domain_cell(tri, k, inv_r, b, &total)) return false;
     }
     b->cell_start[b->d.num_sites] = (uint32_t)total;
-    if (!domain_removed(s->incr, inv_r, b)) return false;
+    if (!domain_removed(set, inv_r, b)) return false;
     b->d.sites = b->sites;
     b->d.edges = (const uint32_t(*)[2])b->pairs;
     b->d.cell_start = b->cell_start;
@@ -435,7 +478,7 @@ static void iir_m_update(void *state, const void *opts)
     s->params = *(const iir_options *)opts;
     iir_incr_params ip = incr_params(&s->params);
     iir_error err;
-    iir_incr_set_params(s->incr, &ip, &err); /* same N: cannot fail once bound */
+    iir_vplsets_set_params(s->sets, &ip, &err); /* same N: cannot fail once bound */
 }
 
 /* The set, its Voronoi weights' triangulation (~200 B a site) and refinement's fresh sets. */

@@ -5,9 +5,10 @@
  * rendered each frame: this is the baseline the incremental method must beat.
  * Parameters: its own table below, the VPL shading's (vpl_options.c) and every method's.
  *
- * The first two dimensions of path i (the point on the spot's disk) are the Halton point i in
- * bases 2 and 3, rotated by a per-frame offset (Cranley-Patterson): the same offset every frame
- * when same_random is set, a new one every frame otherwise. Later dimensions come from PCG streams.
+ * The first two dimensions of path i (the point on the spot's disk, the point light's sphere or
+ * the sun's disk of origins: iir_light_sample_emission) are the Halton point i in bases 2 and 3,
+ * rotated by a per-frame offset (Cranley-Patterson): the same offset every frame when same_random
+ * is set, a new one every frame otherwise. Later dimensions come from PCG streams.
  *
  * Refinement (refine.h; refine_passes, jitter, interleave, clamp): sweep 0 shades the frame's
  * own paths, sweep s >= 1 a second list of N paths traced with the frame seed hashed with s (new

@@ -1,9 +1,9 @@
-/* render_direct.c -- emission and direct light at the G-buffer's pixels: every punctual light by
- * one shadow ray per pixel, emissive triangles by one seeded light-set sample per pixel; not
- * indirect light.
+/* render_direct.c -- emission and direct light at the G-buffer's pixels: every delta light (point,
+ * spots, sun) by one shadow ray per pixel (a sun's goes to infinity), emissive triangles by one
+ * seeded light-set sample per pixel; not indirect light.
  *
  * Agrees in expectation with `pt --bounces 1`: pt picks one light by flux per sample, this sums
- * every punctual light; pt weights area-light samples by MIS against BSDF sampling, this uses the
+ * every delta light; pt weights area-light samples by MIS against BSDF sampling, this uses the
  * light sample alone (weight 1), which is unbiased by itself. Shadow rays go out as 8-wide packets
  * over 4x2 pixel blocks (neighbouring pixels, one light: coherent rays). Threads: OpenMP over
  * tiles, each writing only its own pixels of the frame; ray counters per thread, summed once. */
@@ -53,10 +53,28 @@ static void resolve(const iir_renderer *r, block *b, iir_raystats *st)
         if (b->rays.valid[k] && !occluded[k]) b->L[k] = iir_add(b->L[k], b->pending[k]);
 }
 
-/* Lane k's unshadowed f I(-wi) cos / d^2 for the prepared punctual light e, and its shadow ray. */
+/* Lane k's unshadowed f E cos for a sun (irradiance E from -direction), and its shadow ray to
+ * infinity. */
+static void sun_lane(const iir_renderer *r, const iir_light *l, block *b, int k)
+{
+    const iir_gbuffer *gb = &r->gb;
+    iir_vec3 p = gb->position[b->index[k]], n = gb->normal[b->index[k]];
+    iir_vec3 wi = iir_neg(iir_normalize(l->direction));
+    float cos_theta = iir_dot(n, wi);
+    if (cos_theta <= 0.f || iir_is_black(l->intensity)) return;
+    b->pending[k] = iir_scale(iir_mul(b->f[k], l->intensity), cos_theta);
+    set_lane(&b->rays, k, iir_madd(p, n, r->eps), wi, INFINITY);
+}
+
+/* Lane k's unshadowed f I(-wi) cos / d^2 for the prepared light e (point, cosine or glTF spot;
+ * a sun goes to sun_lane), and its shadow ray. */
 static void punctual_lane(const iir_renderer *r, const iir_light_eval *e, block *b, int k)
 {
     const iir_light *l = e->light;
+    if (l->type == IIR_LIGHT_SUN) {
+        sun_lane(r, l, b, k);
+        return;
+    }
     const iir_gbuffer *gb = &r->gb;
     iir_vec3 p = gb->position[b->index[k]], n = gb->normal[b->index[k]];
     iir_vec3 d = iir_sub(l->position, p);

@@ -14,9 +14,10 @@
  *
  * Conventions (docs/scene-format.md): a glTF light or camera sits at its node's origin looking
  * down its node's -z with +y up (the spec's rule; assimp's own pose fields are ignored for glTF).
- * KHR_lights_punctual intensity (candela for point/spot) times colour is taken as I0 in W/sr,
- * without a photometric conversion; a spot's outer cone angle is our cone half-angle and
- * (outer - inner) our smooth edge. Directional, area and ambient lights are ignored, and so are
+ * KHR_lights_punctual intensity (candela for point/spot, lux for directional) times colour is
+ * taken as I0 in W/sr (a directional light's: as its irradiance E in W/m^2), without a
+ * photometric conversion; a spot keeps glTF's own profile (IIR_SPOT_GLTF: outer and inner cone
+ * angles), a directional light becomes a sun. Area and ambient lights are ignored, and so are
  * colour textures, transparency and metal; each such light and material is noted by name in the
  * scene (iir_scene.dropped) for the commands' warnings.
  *
@@ -362,34 +363,49 @@ static void light_local_pose(const loader *L, const struct aiLight *al, iir_vec3
     }
 }
 
+/* iir's type for an assimp light that add_lights keeps (area and ambient ones it drops). */
+static iir_light_type light_type(enum aiLightSourceType t)
+{
+    return t == aiLightSource_SPOT          ? IIR_LIGHT_SPOT
+           : t == aiLightSource_DIRECTIONAL ? IIR_LIGHT_SUN
+                                            : IIR_LIGHT_POINT;
+}
+
+/* A spot with glTF's profile: assimp gives glTF's half-angles as they are (outerConeAngle,
+ * default pi/4; innerConeAngle, default 0). A sun gets a placeholder disk that
+ * iir_builder_finish refits to the scene's bounds (iir_light_fit_sun). */
 static iir_light convert_light(const loader *L, const struct aiLight *al, const mat4 *M)
 {
     iir_light l;
     memset(&l, 0, sizeof l);
-    l.type = al->mType == aiLightSource_SPOT ? IIR_LIGHT_SPOT : IIR_LIGHT_POINT;
+    l.type = light_type(al->mType);
     iir_scene_strcpy(l.name, sizeof l.name, al->mName.data);
     iir_vec3 p, d, u;
     light_local_pose(L, al, &p, &d, &u);
-    l.position = mat4_point(M, p);
+    l.position = l.type == IIR_LIGHT_SUN ? iir_v3s(0.f) : mat4_point(M, p);
     l.intensity = iir_v3(al->mColorDiffuse.r, al->mColorDiffuse.g, al->mColorDiffuse.b);
-    if (l.type == IIR_LIGHT_SPOT) {
+    if (l.type != IIR_LIGHT_POINT) {
         l.direction = iir_normalize(mat4_vector(M, d));
         l.up = iir_normalize(mat4_vector(M, u));
-        l.cone_angle = al->mAngleOuterCone;
-        l.smooth = iir_clampf(al->mAngleOuterCone - al->mAngleInnerCone, 0.f, l.cone_angle);
     }
+    if (l.type == IIR_LIGHT_SPOT) {
+        l.profile = IIR_SPOT_GLTF;
+        l.cone_angle = al->mAngleOuterCone;
+        l.inner_angle = iir_clampf(al->mAngleInnerCone, 0.f, l.cone_angle);
+    }
+    if (l.type == IIR_LIGHT_SUN) l.radius = 1.f;
     return l;
 }
 
-/* What happens to a light of type t that iir does not render; NULL for point and spot. */
+/* What happens to a light of type t that iir does not render; NULL for point, spot and
+ * directional. */
 static const char *unrendered_light(enum aiLightSourceType t)
 {
     switch (t) {
     case aiLightSource_POINT:
     case aiLightSource_SPOT:
-        return NULL;
     case aiLightSource_DIRECTIONAL:
-        return "a directional light (sun): ignored; only spot and point lights are rendered";
+        return NULL;
     case aiLightSource_AREA:
         return "an area light: ignored; give its emitter an emissive material instead";
     case aiLightSource_AMBIENT:
@@ -399,7 +415,7 @@ static const char *unrendered_light(enum aiLightSourceType t)
     }
 }
 
-/* Point and spot lights that a node places; the others (directional, area, ambient, unplaced)
+/* Point, spot and directional lights that a node places; the others (area, ambient, unplaced)
  * are skipped and noted (iir_scene.dropped). */
 static iir_status add_lights(loader *L, iir_error *err)
 {

@@ -489,6 +489,7 @@ iir_status iir_builder_finish(iir_scene_builder *b, iir_scene **out, iir_error *
     s->skipped_degenerate = total - kept;
     s->skipped_duplicate = kept - unique;
     move_into_scene(b, s);
+    for (uint32_t i = 0; i < s->num_lights; i++) iir_light_fit_sun(&s->lights[i], s);
     *out = s;
     return IIR_OK;
 }

@@ -19,7 +19,7 @@
 
 #define MAX_SIDECAR_BYTES (16L << 20)
 #define MAX_COORD 1e6     /* positions, targets, directions: |x| <= this (world units) */
-#define MAX_INTENSITY 1e9 /* W/sr, and emission in W/sr/m^2 */
+#define MAX_INTENSITY 1e9 /* W/sr (a sun's: W/m^2), and emission in W/sr/m^2 */
 
 /* Where errors go: the sidecar's path and the caller's error. */
 typedef struct ctx {
@@ -291,76 +291,140 @@ static iir_status parse_spot_axis(const ctx *c, const cJSON *obj, const char *wh
     return IIR_OK;
 }
 
-/* cone_angle (required) and smooth (default 0), degrees in the file, radians in l. */
+/* cone_angle (required) and, for a cosine spot, smooth (default 0) or, for a glTF spot,
+ * inner_angle (default 0): degrees in the file, radians in l. */
 static iir_status parse_cone(const ctx *c, const cJSON *obj, const char *where, iir_light *l)
 {
-    member cone = get_member(obj, where, "cone_angle"), sm = get_member(obj, where, "smooth");
-    double alpha = 0.0, smooth = 0.0;
+    bool gltf = l->profile == IIR_SPOT_GLTF;
+    member cone = get_member(obj, where, "cone_angle");
+    member edge = get_member(obj, where, gltf ? "inner_angle" : "smooth");
+    double alpha = 0.0, e = 0.0;
     iir_status st = required(c, &cone, " for a spot light");
     if (st == IIR_OK) st = get_number(c, cone.item, cone.field, -360.0, 360.0, &alpha);
     if (st == IIR_OK && !(alpha > 0.0 && alpha <= 90.0))
         return field_error(c, IIR_ERR_INVALID, cone.field, "%g degrees is outside (0, 90]", alpha);
-    if (st == IIR_OK && sm.item) st = get_number(c, sm.item, sm.field, 0.0, alpha, &smooth);
+    if (st == IIR_OK && edge.item) st = get_number(c, edge.item, edge.field, 0.0, alpha, &e);
     l->cone_angle = iir_radians((float)alpha);
-    l->smooth = fminf(iir_radians((float)smooth), l->cone_angle);
+    float edge_angle = fminf(iir_radians((float)e), l->cone_angle);
+    if (gltf)
+        l->inner_angle = edge_angle;
+    else
+        l->smooth = edge_angle;
     return st;
 }
 
-/* The spot-only fields: axis, up (default +y), cone. */
+/* An error on the first of the NULL-terminated `names` that obj has: `why`. */
+static iir_status forbid(const ctx *c, const cJSON *obj, const char *where,
+                         const char *const *names, const char *why)
+{
+    for (; *names; names++) {
+        member m = get_member(obj, where, *names);
+        if (m.item) return field_error(c, IIR_ERR_INVALID, m.field, "%s", why);
+    }
+    return IIR_OK;
+}
+
+/* The spots' fields: axis, up (default +y), cone, and the edge of the other profile refused. */
 static iir_status parse_spot(const ctx *c, const cJSON *obj, const char *where, iir_light *l)
 {
+    static const char *const smooth[] = {"smooth", NULL}, *const inner[] = {"inner_angle", NULL};
+    bool gltf = l->profile == IIR_SPOT_GLTF;
+    iir_status st = gltf ? forbid(c, obj, where, smooth,
+                                  "a glTF spot has no smooth edge: its profile fades from "
+                                  "inner_angle to cone_angle")
+                         : forbid(c, obj, where, inner,
+                                  "only glTF spots (type \"gltf_spot\") have this field; a "
+                                  "spot's edge is \"smooth\"");
     member up = get_member(obj, where, "up");
     l->up = iir_v3(0.f, 1.f, 0.f);
-    iir_status st = parse_spot_axis(c, obj, where, l);
+    if (st == IIR_OK) st = parse_spot_axis(c, obj, where, l);
     if (st == IIR_OK && up.item) st = get_direction(c, up.item, up.field, &l->up);
     if (st == IIR_OK) st = parse_cone(c, obj, where, l);
     return st;
 }
 
+/* A sun's fields: direction (required), up (default +y); no position, target or cone. Its disk
+ * is a placeholder until iir_builder_finish fits it to the scene (iir_light_fit_sun). */
+static iir_status parse_sun(const ctx *c, const cJSON *obj, const char *where, iir_light *l)
+{
+    static const char *const pos[] = {"position", NULL}, *const tgt[] = {"target", NULL};
+    static const char *const cone[] = {"cone_angle", "smooth", "inner_angle", NULL};
+    member dir = get_member(obj, where, "direction"), up = get_member(obj, where, "up");
+    l->up = iir_v3(0.f, 1.f, 0.f);
+    l->radius = 1.f;
+    iir_status st = forbid(c, obj, where, pos,
+                           "a sun has no position: its parallel light covers the whole scene");
+    if (st == IIR_OK)
+        st = forbid(c, obj, where, tgt, "a sun is aimed by \"direction\", not at a target");
+    if (st == IIR_OK) st = forbid(c, obj, where, cone, "a sun has no cone");
+    if (st == IIR_OK) st = required(c, &dir, " for a sun (the way its light travels)");
+    if (st == IIR_OK) st = get_direction(c, dir.item, dir.field, &l->direction);
+    if (st == IIR_OK && up.item) st = get_direction(c, up.item, up.field, &l->up);
+    if (st == IIR_OK) l->direction = iir_normalize(l->direction);
+    return st;
+}
+
 static iir_status point_has_no(const ctx *c, const cJSON *obj, const char *where)
 {
-    static const char *const spot_only[] = {"target", "direction", "up", "cone_angle", "smooth"};
-    for (size_t i = 0; i < sizeof spot_only / sizeof *spot_only; i++) {
-        member m = get_member(obj, where, spot_only[i]);
-        if (m.item)
-            return field_error(c, IIR_ERR_INVALID, m.field, "only spot lights have this field");
-    }
-    return IIR_OK;
+    static const char *const spot_only[] = {"target",     "direction", "up",
+                                            "cone_angle", "smooth",    NULL};
+    static const char *const gltf_only[] = {"inner_angle", NULL};
+    iir_status st = forbid(c, obj, where, spot_only, "only spot lights have this field");
+    if (st == IIR_OK)
+        st = forbid(c, obj, where, gltf_only,
+                    "only glTF spots (type \"gltf_spot\") have this field");
+    return st;
 }
 
 static iir_status parse_light_type(const ctx *c, const member *m, iir_light *l)
 {
+    static const char *const names[] = {"spot", "point", "gltf_spot", "sun"};
     char type[16];
-    iir_status st = required(c, m, " (\"spot\" or \"point\")");
+    iir_status st = required(c, m, " (\"spot\", \"gltf_spot\", \"point\" or \"sun\")");
     if (st == IIR_OK) st = get_string(c, m->item, m->field, type, sizeof type);
-    if (st == IIR_OK && strcmp(type, "spot") != 0 && strcmp(type, "point") != 0)
+    if (st != IIR_OK) return st;
+    int k = 0;
+    while (k < 4 && strcmp(type, names[k]) != 0) k++;
+    if (k == 4)
         return field_error(c, IIR_ERR_INVALID, m->field,
-                           "must be \"spot\" or \"point\", got \"%s\"", type);
-    l->type = st == IIR_OK && strcmp(type, "spot") == 0 ? IIR_LIGHT_SPOT : IIR_LIGHT_POINT;
+                           "must be \"spot\", \"gltf_spot\", \"point\" or \"sun\", got \"%s\"",
+                           type);
+    l->type = k == 1 ? IIR_LIGHT_POINT : k == 3 ? IIR_LIGHT_SUN : IIR_LIGHT_SPOT;
+    l->profile = k == 2 ? IIR_SPOT_GLTF : IIR_SPOT_COSINE;
+    return IIR_OK;
+}
+
+/* The fields of one kind: a sun's instead of a position, a spot's or none (point) after it. */
+static iir_status parse_kind(const ctx *c, const cJSON *obj, const char *where, iir_light *l)
+{
+    if (l->type == IIR_LIGHT_SUN) return parse_sun(c, obj, where, l);
+    member pos = get_member(obj, where, "position");
+    iir_status st = required(c, &pos, "");
+    if (st == IIR_OK) st = get_position(c, pos.item, pos.field, &l->position);
+    if (st == IIR_OK)
+        st = l->type == IIR_LIGHT_SPOT ? parse_spot(c, obj, where, l) : point_has_no(c, obj, where);
     return st;
 }
 
 static iir_status parse_light(const ctx *c, const cJSON *obj, int index, iir_light *l)
 {
-    static const char *const fields[] = {"type", "name",       "position", "target",    "direction",
-                                         "up",   "cone_angle", "smooth",   "intensity", NULL};
+    static const char *const fields[] = {"type",        "name",      "position",   "target",
+                                         "direction",   "up",        "cone_angle", "smooth",
+                                         "inner_angle", "intensity", NULL};
     char where[32];
     snprintf(where, sizeof where, "lights[%d]", index);
     if (!cJSON_IsObject(obj)) return field_error(c, IIR_ERR_FORMAT, where, "must be an object");
     member type = get_member(obj, where, "type"), name = get_member(obj, where, "name");
-    member pos = get_member(obj, where, "position"), in = get_member(obj, where, "intensity");
+    member in = get_member(obj, where, "intensity");
     memset(l, 0, sizeof *l);
     snprintf(l->name, sizeof l->name, "light%d", index);
     iir_status st = check_fields(c, obj, where, fields);
     if (st == IIR_OK) st = parse_light_type(c, &type, l);
     if (st == IIR_OK && name.item)
         st = get_string(c, name.item, name.field, l->name, sizeof l->name);
-    if (st == IIR_OK) st = required(c, &pos, "");
-    if (st == IIR_OK) st = get_position(c, pos.item, pos.field, &l->position);
+    if (st == IIR_OK) st = parse_kind(c, obj, where, l);
     if (st == IIR_OK) st = required(c, &in, "");
     if (st == IIR_OK) st = get_color(c, in.item, in.field, MAX_INTENSITY, &l->intensity);
-    if (st == IIR_OK)
-        st = l->type == IIR_LIGHT_SPOT ? parse_spot(c, obj, where, l) : point_has_no(c, obj, where);
     iir_error e;
     if (st == IIR_OK && iir_light_validate(l, &e) != IIR_OK)
         return field_error(c, e.status, where, "%s", e.msg);

@@ -1,0 +1,39 @@
+/* domain_sites.h -- the triangulation of a VPL set's domain points, whichever the domain's shape:
+ * libiirtri's disk (tri.h) or sphere (stri.h) behind one set of calls, with points always three
+ * doubles (x, y, 0 on the disk). Private to the incremental step. Statuses are tri.h's. */
+#ifndef IIR_DOMAIN_SITES_H
+#define IIR_DOMAIN_SITES_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "iir/light_domain.h"
+#include "iir/tri.h"
+
+struct iir_stri;
+
+typedef struct iir_sites {
+    iir_domain_shape shape;
+    iir_tri *tri;          /* the disk's, radius R */
+    struct iir_stri *stri; /* the sphere's */
+    double *xy;            /* scratch: points repacked for the disk's build */
+    size_t xy_cap;
+} iir_sites;
+
+/* Makes *s fit the domain: keeps the triangulation when the shape (and, for a disk, the radius) is
+ * unchanged, else makes a new, empty one. IIR_TRI_NO_MEMORY when that fails. */
+iir_tri_status iir_sites_fit(iir_sites *s, const iir_light_domain *d);
+void iir_sites_free(iir_sites *s);
+
+iir_tri_status iir_sites_build(iir_sites *s, const double *xyz, const uint32_t *ids, size_t n);
+iir_tri_status iir_sites_insert(iir_sites *s, const double p[3], uint32_t id);
+iir_tri_status iir_sites_remove(iir_sites *s, uint32_t id);
+/* Whether the site with this id is in the set. */
+int iir_sites_has(const iir_sites *s, uint32_t id);
+iir_tri_status iir_sites_shortest_edge(const iir_sites *s, uint32_t *denser_id);
+/* The largest empty circle (disk) or cap (sphere): its centre. */
+iir_tri_status iir_sites_largest_empty(const iir_sites *s, double centre[3]);
+iir_tri_status iir_sites_cell_areas(const iir_sites *s, uint32_t *ids, double *areas, size_t cap,
+                                    size_t *n);
+
+#endif

@@ -1,0 +1,335 @@
+/* test_lights_pt.c -- the glTF spot and the sun against independent answers: pt's direct light on
+ * a diffuse plane with an occluder against the analytic radiance (glTF spot: rho/pi I0 t^2 cos /
+ * d^2, a bound the cosine lobe fails; sun: rho/pi E cos, shadows cast along parallel rays), and
+ * one-bounce ir with exact visibility and many VPLs against pt --bounces 2 in the Cornell box, with
+ * the bound test_methods uses. The glTF spot comes from a sidecar ("gltf_spot"), the sun is made
+ * here and fitted to the scene (iir_light_fit_sun). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "iir/light.h"
+#include "iir/method.h"
+#include "iir/render.h"
+#include "iir/rt.h"
+#include "iir/scene.h"
+#include "testutil.h"
+
+/* ---- the plane, its occluder and the analytic answer ---- */
+
+static const float RHO = 0.5f;
+static const iir_vec3 OCC_C = {0.45f, 0.5f, 0.3f}; /* occluder: a square at y = 0.5 */
+static const float OCC_H = 0.15f;                  /* its half size */
+static const iir_vec3 SPOT_P = {0.f, 1.f, 0.f};    /* the glTF spot, aimed straight down */
+static const float OUTER = 40.f, INNER = 20.f;     /* degrees */
+
+typedef struct loaded {
+    iir_scene *scene;
+    iir_rt *rt;
+} loaded;
+
+static bool in_occluder(iir_vec3 q)
+{
+    return fabsf(q.x - OCC_C.x) <= OCC_H && fabsf(q.z - OCC_C.z) <= OCC_H;
+}
+
+/* The plane y = 0 (20 x 20) and the occluder, grey, with a gltf_spot in the sidecar. */
+static loaded load_plane(void)
+{
+    const char *dir = iir_test_tmpdir("lights-pt-plane");
+    iir_test_write_file(dir, "plane.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
+    char path[1200];
+    snprintf(path, sizeof path, "%s/plane.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib plane.mtl\n");
+    iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 10), iir_v3(10, 0, 0));
+    iir_test_write_quad(f, "grey", OCC_C, iir_v3(0, 0, OCC_H), iir_v3(OCC_H, 0, 0));
+    fclose(f);
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"camera\": {\"position\": [0, 2.5, 0], \"target\": [0, 0, 0], \"up\": [0, 0, -1],"
+             " \"fov_y\": 90},"
+             " \"lights\": [{\"type\": \"gltf_spot\", \"name\": \"g\", \"position\": [%g, %g, %g],"
+             " \"direction\": [0, -1, 0], \"cone_angle\": %g, \"inner_angle\": %g,"
+             " \"intensity\": 1}]}",
+             (double)SPOT_P.x, (double)SPOT_P.y, (double)SPOT_P.z, (double)OUTER, (double)INNER);
+    iir_test_write_file(dir, "plane.scene.json", json);
+    loaded l = {0};
+    iir_error err = {0};
+    if (iir_test_load_obj(dir, "plane", &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
+    return l;
+}
+
+static void unload(loaded *l)
+{
+    iir_rt_destroy(l->rt);
+    iir_scene_destroy(l->scene);
+}
+
+/* glTF's t^2 in double precision, from the specification. */
+static double gltf_t2(double cos_theta)
+{
+    double co = cos(OUTER * IIR_PI / 180), ci = cos(INNER * IIR_PI / 180);
+    double t = (cos_theta - co) / fmax(1e-3, ci - co);
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return t * t;
+}
+
+/* The first surface a camera ray meets: the occluder's top or the plane (both face +y). */
+static iir_vec3 first_hit(iir_vec3 o, iir_vec3 d)
+{
+    iir_vec3 q = iir_madd(o, d, (OCC_C.y - o.y) / d.y);
+    return in_occluder(q) ? q : iir_madd(o, d, -o.y / d.y);
+}
+
+/* Whether the segment from p (on the plane) along wi for length t_max passes the occluder. */
+static bool shadowed(iir_vec3 p, iir_vec3 wi, double t_max)
+{
+    if (p.y >= OCC_C.y - 1e-6f || wi.y <= 0.f) return false;
+    double t = (OCC_C.y - p.y) / wi.y;
+    return t < t_max && in_occluder(iir_madd(p, wi, (float)t));
+}
+
+/* Radiance at p: `lobe` false for glTF's profile, true for a cosine lobe on top of it (what a
+ * wrong profile gives; the test must tell them apart). */
+static double spot_radiance(iir_vec3 p, bool lobe)
+{
+    iir_vec3 d = iir_sub(SPOT_P, p);
+    double dist = iir_length(d), cos_t = d.y / dist; /* at the light and at the surface */
+    if (cos_t <= 0 || shadowed(p, iir_scale(d, (float)(1 / dist)), dist)) return 0;
+    return RHO / IIR_PI * gltf_t2(cos_t) * (lobe ? cos_t : 1.0) * cos_t / (dist * dist);
+}
+
+static double sun_radiance(iir_vec3 p, iir_vec3 wi, double E)
+{
+    return wi.y <= 0.f || shadowed(p, wi, INFINITY) ? 0 : RHO / IIR_PI * E * wi.y;
+}
+
+typedef struct pixel_stat {
+    double mean, var;
+} pixel_stat;
+
+/* Mean and variance of the radiance over pixel (x, y) (pt box-filters with jittered samples), on
+ * SUB x SUB sub-pixels; kind 0 = glTF spot, 1 = the spot with a cosine lobe, 2 = sun. */
+static pixel_stat pixel_radiance(const iir_camera_frame *cf, int x, int y, int kind, iir_vec3 wi,
+                                 double E)
+{
+    enum { SUB = 32 };
+    double s = 0, s2 = 0;
+    for (int j = 0; j < SUB; j++)
+        for (int i = 0; i < SUB; i++) {
+            iir_vec3 d = iir_camera_dir(cf, x + (i + 0.5f) / SUB, y + (j + 0.5f) / SUB);
+            iir_vec3 p = first_hit(cf->origin, d);
+            double L = kind == 2 ? sun_radiance(p, wi, E) : spot_radiance(p, kind == 1);
+            s += L, s2 += L * L;
+        }
+    pixel_stat st = {s / (SUB * SUB), 0};
+    st.var = fmax(0.0, s2 / (SUB * SUB) - st.mean * st.mean);
+    return st;
+}
+
+static iir_image *render(const char *method, const iir_scene *scene, const iir_rt *rt,
+                         const iir_light *lights, uint32_t n, int w, int h, iir_params *p)
+{
+    iir_method *m = NULL;
+    iir_error err = {0};
+    iir_image *img = iir_image_create(w, h);
+    iir_frame_stats fs;
+    iir_view view = {lights, n, scene->camera};
+    if (iir_method_create(method, scene, rt, p, &m, &err) != IIR_OK) fail_msg("%s", err.msg);
+    if (iir_method_render(m, &view, img, &fs, &err) != IIR_OK) fail_msg("%s", err.msg);
+    iir_method_destroy(m);
+    return img;
+}
+
+enum { W = 64, H = 64, SPP = 256 };
+
+/* pt at SPP jittered samples per pixel estimates the pixel's mean with standard deviation
+ * sqrt(var / SPP) (a delta light: no other noise); the bound is 5 of those plus 0.5% of the
+ * brightest pixel (the sub-pixel rule's own error at edges). Returns the pixels over it. */
+static int count_bad(const iir_image *img, const iir_camera_frame *cf, int kind, iir_vec3 wi,
+                     double E, double L_max, bool report)
+{
+    int bad = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            pixel_stat ps = pixel_radiance(cf, x, y, kind, wi, E);
+            double got = img->pixels[y * W + x].y;
+            double tol = 0.005 * L_max + 5 * sqrt(ps.var / SPP);
+            if (fabs(got - ps.mean) <= tol) continue;
+            if (report && bad < 5)
+                print_message("pixel (%d,%d): %.6f, expected %.6f (tol %.2e)\n", x, y, got, ps.mean,
+                              tol);
+            bad++;
+        }
+    return bad;
+}
+
+/* ---- pt against the analytic answers ---- */
+
+static void test_gltf_spot_plane(void **state)
+{
+    (void)state;
+    loaded l = load_plane();
+    assert_int_equal(l.scene->num_lights, 1);
+    const iir_light *g = &l.scene->lights[0];
+    assert_int_equal(g->type, IIR_LIGHT_SPOT);
+    assert_int_equal(g->profile, IIR_SPOT_GLTF);
+    iir_params p = iir_params_default();
+    iir_test_set(&p, "spp", SPP);
+    iir_test_set(&p, "bounces", 1);
+    iir_test_set(&p, "seed", 9);
+    iir_image *img = render("pt", l.scene, l.rt, g, 1, W, H, &p);
+    iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
+    double L_max = RHO / IIR_PI * 1.0 / (SPOT_P.y * SPOT_P.y);
+    int bad = count_bad(img, &cf, 0, iir_v3s(0.f), 0, L_max, true);
+    int bad_lobe = count_bad(img, &cf, 1, iir_v3s(0.f), 0, L_max, false);
+    print_message("glTF spot over a plane: %d of %d pixels off glTF's profile, %d off a cosine "
+                  "lobe\n",
+                  bad, W * H, bad_lobe);
+    assert_int_equal(bad, 0);
+    assert_true(bad_lobe > 100); /* the bound tells the profiles apart */
+    iir_image_destroy(img);
+    unload(&l);
+}
+
+static void test_sun_plane(void **state)
+{
+    (void)state;
+    loaded l = load_plane();
+    iir_light sun = {.type = IIR_LIGHT_SUN, .name = "sun", .up = {0, 1, 0}};
+    sun.direction = iir_normalize(iir_v3(-0.8f, -1.f, 0.5f)); /* shadow beside the occluder */
+    sun.intensity = iir_v3s(2.f);
+    iir_light_fit_sun(&sun, l.scene);
+    iir_params p = iir_params_default();
+    iir_test_set(&p, "spp", SPP);
+    iir_test_set(&p, "bounces", 1);
+    iir_test_set(&p, "seed", 4);
+    iir_image *img = render("pt", l.scene, l.rt, &sun, 1, W, H, &p);
+    iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
+    iir_vec3 wi = iir_neg(sun.direction);
+    double L_max = RHO / IIR_PI * 2.0 * wi.y;
+    int bad = count_bad(img, &cf, 2, wi, 2.0, L_max, true);
+    int dark = 0;
+    for (int i = 0; i < W * H; i++) dark += img->pixels[i].y < 0.5 * L_max;
+    print_message("sun over a plane: %d pixels off, %d in shadow\n", bad, dark);
+    assert_int_equal(bad, 0);
+    assert_true(dark > 8); /* the occluder's shadow is in view */
+    iir_image_destroy(img);
+    unload(&l);
+}
+
+/* ---- ir against pt in the Cornell box ---- */
+
+/* Pixels whose 3x3 neighbourhood sees one plane (as test_methods.c). */
+static bool smooth_pixel(const iir_gbuffer *gb, int x, int y)
+{
+    if (x == 0 || y == 0 || x == gb->width - 1 || y == gb->height - 1) return false;
+    size_t c = (size_t)y * gb->width + x;
+    if (gb->prim[c] == IIR_NO_HIT) return false;
+    for (int dy = -1; dy <= 1; dy++)
+        for (int dx = -1; dx <= 1; dx++) {
+            size_t k = (size_t)(y + dy) * gb->width + (x + dx);
+            if (gb->prim[k] == IIR_NO_HIT || iir_dot(gb->normal[k], gb->normal[c]) < 0.999f)
+                return false;
+        }
+    return true;
+}
+
+/* One-bounce ir (exact visibility, no clamping, 16k paths) against pt --bounces 2 at 2048 spp,
+ * both through pixel centres (jitter off, so shadow edges fall on the same pixels): relMSE on
+ * smooth pixels below 5e-3 and means within 2%, as test_methods.c's test_ir_converges_to_pt. */
+static void check_ir_matches_pt(const iir_test_cornell *f, const iir_light *light)
+{
+    enum { CW = 40, CH = 40 };
+    iir_params p = iir_params_default();
+    iir_test_set(&p, "spp", 2048);
+    iir_test_set(&p, "bounces", 2);
+    iir_test_set(&p, "seed", 5);
+    iir_test_set(&p, "jitter", 0);
+    iir_image *ref = render("pt", f->scene, f->rt, light, 1, CW, CH, &p);
+    iir_test_set(&p, "vpls", 16384);
+    iir_test_set(&p, "visibility", 1);
+    iir_test_set(&p, "clamp", 0.f);
+    iir_test_set(&p, "interleave", 1);
+    iir_image *img = render("ir", f->scene, f->rt, light, 1, CW, CH, &p);
+
+    iir_renderer *r = iir_renderer_create(f->scene, f->rt);
+    iir_indirect_params ind = iir_indirect_params_default();
+    iir_render_timing t;
+    iir_image *direct = iir_image_create(CW, CH);
+    iir_error err = {0};
+    iir_render_input in = {&f->scene->camera, light, 1, NULL, 0, 1};
+    assert_int_equal(iir_renderer_frame(r, &in, &ind, direct, &t, NULL, &err), IIR_OK);
+    const iir_gbuffer *gb = iir_renderer_gbuffer(r);
+    double rel = 0, rel_direct = 0, sum_img = 0, sum_ref = 0;
+    int n = 0;
+    for (int y = 0; y < CH; y++)
+        for (int x = 0; x < CW; x++) {
+            if (!smooth_pixel(gb, x, y)) continue;
+            iir_vec3 a = *iir_image_at(img, x, y), b = *iir_image_at(ref, x, y);
+            double la = iir_luminance(a), lb = iir_luminance(b);
+            double ld = iir_luminance(*iir_image_at(direct, x, y));
+            rel += iir_sqr((float)(la - lb)) / (lb * lb + 0.01);
+            rel_direct += iir_sqr((float)(ld - lb)) / (lb * lb + 0.01);
+            sum_img += la, sum_ref += lb;
+            n++;
+        }
+    print_message("%s: ir vs pt relMSE %.2e on %d smooth pixels (direct only %.2e), means %.4f vs "
+                  "%.4f\n",
+                  iir_light_kind(light), rel / n, n, rel_direct / n, sum_img / n, sum_ref / n);
+    assert_true(n > CW * CH / 2);
+    assert_true(rel / n < 5e-3);
+    assert_true(rel_direct / n > 2e-2); /* the bound can tell a missing bounce */
+    assert_true(fabs(sum_img - sum_ref) < 0.02 * sum_ref);
+    iir_renderer_destroy(r);
+    iir_image_destroy(direct);
+    iir_image_destroy(ref);
+    iir_image_destroy(img);
+}
+
+static void test_ir_gltf_spot_cornell(void **state)
+{
+    const iir_test_cornell *f = *state;
+    iir_light g = f->scene->lights[0]; /* the box's spot, under the ceiling, aimed down */
+    snprintf(g.name, sizeof g.name, "gspot");
+    g.profile = IIR_SPOT_GLTF;
+    g.cone_angle = iir_radians(55.f);
+    g.inner_angle = iir_radians(25.f);
+    g.smooth = 0.f;
+    iir_error err = {0};
+    assert_int_equal(iir_light_validate(&g, &err), IIR_OK);
+    check_ir_matches_pt(f, &g);
+}
+
+/* A sun shining in through the box's open side (+z) onto the floor and the back wall. */
+static void test_ir_sun_cornell(void **state)
+{
+    const iir_test_cornell *f = *state;
+    iir_light sun = {.type = IIR_LIGHT_SUN, .name = "sun", .up = {0, 1, 0}};
+    sun.direction = iir_normalize(iir_v3(-0.35f, -0.6f, -1.f));
+    sun.intensity = iir_v3(6.f, 5.5f, 5.f);
+    iir_light_fit_sun(&sun, f->scene);
+    iir_error err = {0};
+    assert_int_equal(iir_light_validate(&sun, &err), IIR_OK);
+    check_ir_matches_pt(f, &sun);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_gltf_spot_plane),
+        cmocka_unit_test(test_sun_plane),
+        cmocka_unit_test_setup_teardown(test_ir_gltf_spot_cornell, iir_test_cornell_setup,
+                                        iir_test_cornell_teardown),
+        cmocka_unit_test_setup_teardown(test_ir_sun_cornell, iir_test_cornell_setup,
+                                        iir_test_cornell_teardown),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
