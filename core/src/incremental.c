@@ -55,6 +55,7 @@ typedef struct sample {
     bool null_sample;
     iir_vec3 x, n, albedo; /* VPL: position, normal on the light's side, albedo */
     iir_vec3 o, w;         /* the ray's origin and unit direction */
+    iir_vec2 q;            /* area light: the origin's light-local point on the emitter */
 } sample;
 
 /* ==== parameters ============================================================================= */
@@ -191,11 +192,20 @@ const struct iir_stri *iir_incr_stri(const iir_incr *inc)
 /* ==== the domain ============================================================================= */
 
 /* v's domain point for this frame's pose (a null sample's from its kept direction or anchor);
- * true when strictly inside. */
+ * true when strictly inside. ps is already at v's point of an area light's emitter. */
 static bool locate(const pose *ps, const iir_vpl *v, double s[3])
 {
     return v->null_sample ? iir_domain_locate_null(ps, v->position, v->normal, s)
                           : iir_domain_locate(ps, v->position, s);
+}
+
+/* The pose as v sees it: an area light's domain from v's own point of the emitter (copied to
+ * *at), any other light's as it is. */
+static const pose *pose_of(const pose *ps, const iir_vpl *v, pose *at)
+{
+    if (ps->map != IIR_MAP_AREA_DISK) return ps;
+    *at = iir_domain_at_emitter(ps, v->emit);
+    return at;
 }
 
 static void set_disk(iir_vpl *v, const double s[3])
@@ -223,13 +233,16 @@ static sample trace_sample(const iir_incr *inc, const pose *ps, iir_vec3 o, iir_
     return sm;
 }
 
-/* The ray for domain point s, traced. */
-static sample trace_point(const iir_incr *inc, const pose *ps, const double s[3],
+/* The ray for domain point s (from the emitter's point q of an area light), traced. */
+static sample trace_point(const iir_incr *inc, const pose *ps, const double s[3], iir_vec2 q,
                           iir_raystats *rays)
 {
     iir_vec3 o, w;
-    iir_domain_ray(ps, s, &o, &w);
-    return trace_sample(inc, ps, o, w, rays);
+    pose at = iir_domain_at_emitter(ps, q);
+    iir_domain_ray(&at, s, &o, &w);
+    sample sm = trace_sample(inc, &at, o, w, rays);
+    sm.q = q;
+    return sm;
 }
 
 /* Whether the segment from the light to x is free (one occlusion ray, stopping short of x). */
@@ -284,10 +297,13 @@ static uint32_t compact(iir_incr *inc, bool record)
 /* Writes the VPL for sample sm into *v and its domain point into s (id 0): a VPL at the
  * reprojection of its position, or a null sample at that of its ray (also when the position fell
  * outside the domain). Returns false when even that is not strictly inside. */
-static bool make_vpl(const pose *ps, const sample *sm, uint32_t birth, iir_vpl *v, double s[3])
+static bool make_vpl(const pose *light, const sample *sm, uint32_t birth, iir_vpl *v, double s[3])
 {
     memset(v, 0, sizeof *v);
     v->birth = birth;
+    v->emit = sm->q;
+    pose at;
+    const pose *ps = pose_of(light, v, &at);
     if (!sm->null_sample && iir_domain_locate(ps, sm->x, s)) {
         v->position = sm->x;
         v->albedo = sm->albedo;
@@ -327,18 +343,21 @@ static void phase_reproject(iir_incr *inc, const pose *ps)
     for (uint32_t i = 0; i < inc->count; i++) {
         iir_vpl *v = &inc->vpls[i];
         double *s = &inc->xy[3 * i];
-        inc->alive[i] = locate(ps, v, s);
+        pose at;
+        inc->alive[i] = locate(pose_of(ps, v, &at), v, s);
         set_disk(v, s);
     }
 }
 
 /* VALIDATE: inside the domain (from REPROJECT), facing the light and unoccluded; a null sample
  * stays while its ray would still give a null sample. Returns how many died. */
-static uint32_t phase_validate(iir_incr *inc, const pose *ps, iir_raystats *rays)
+static uint32_t phase_validate(iir_incr *inc, const pose *light, iir_raystats *rays)
 {
     for (uint32_t i = 0; i < inc->count; i++) {
         if (!inc->alive[i]) continue;
         const iir_vpl *v = &inc->vpls[i];
+        pose at;
+        const pose *ps = pose_of(light, v, &at);
         if (v->null_sample) {
             iir_vec3 o, w;
             iir_domain_null_ray(ps, v->position, v->normal, &o, &w);
@@ -367,13 +386,14 @@ static bool ids_exhausted(const iir_incr *inc)
 }
 
 /* The traced ray of point i of n of a regeneration's Hammersley set rotated by o: mapped onto the
- * domain by area (a disk's shrunk by the edge margin). */
+ * domain by area (a disk's shrunk by the edge margin); from the emitter's stratum k of an area
+ * light. */
 static sample regen_sample(const iir_incr *inc, const pose *ps, uint32_t i, uint32_t n,
-                           const double o[2], iir_raystats *rays)
+                           const double o[2], uint32_t k, iir_raystats *rays)
 {
     double s[3];
     iir_domain_sample(ps, hammersley(i, n, o), IIR_INCR_EDGE_MARGIN, s);
-    return trace_point(inc, ps, s, rays);
+    return trace_point(inc, ps, s, iir_domain_emitter_stratum(k), rays);
 }
 
 /* REGENERATE: discards the whole set and makes N new VPLs from a scrambled Hammersley set, one
@@ -387,7 +407,7 @@ static uint32_t regenerate(iir_incr *inc, const pose *ps, iir_raystats *rays)
     double o[2] = {iir_rng_uniform(&rng), iir_rng_uniform(&rng)};
     uint32_t n = inc->params.target, made = 0;
     for (uint32_t i = 0; i < n; i++) {
-        sample sm = regen_sample(inc, ps, i, n, o, rays);
+        sample sm = regen_sample(inc, ps, i, n, o, inc->next_id, rays);
         if (!stage(inc, ps, &sm)) continue;
         commit(inc);
         made++;
@@ -460,7 +480,7 @@ static iir_status phase_insert(iir_incr *inc, const pose *ps, uint32_t limit, ui
         if (ts == IIR_TRI_TOO_FEW) break; /* an empty set: only when a regeneration found nothing */
         if (ts != IIR_TRI_OK) return tri_fail(ts, "finding the largest empty circle", err);
         iir_domain_pull_inside(ps, c, IIR_INCR_EDGE_MARGIN, s);
-        sample sm = trace_point(inc, ps, s, rays);
+        sample sm = trace_point(inc, ps, s, iir_domain_emitter_stratum(inc->next_id), rays);
         if (!stage(inc, ps, &sm)) break; /* only for a cone too narrow for float directions */
         ts = iir_sites_insert(&inc->sites, &inc->xy[3 * inc->count], inc->next_id);
         if (ts == IIR_TRI_DUPLICATE_POINT || ts == IIR_TRI_OUTSIDE) break; /* saturated */
@@ -613,7 +633,7 @@ iir_status iir_incr_sample_set(const iir_incr *inc, const iir_light *light, uint
     double o[2] = {iir_rng_uniform(&rng), iir_rng_uniform(&rng)};
     uint32_t birth = inc->frame ? inc->frame - 1 : 0;
     for (uint32_t i = 0; i < N; i++) {
-        sample sm = regen_sample(inc, &ps, i, N, o, rays);
+        sample sm = regen_sample(inc, &ps, i, N, o, (uint32_t)(stream * 7919u) + i, rays);
         double s[3];
         iir_vpl *v = &out[made];
         if (!make_vpl(&ps, &sm, birth, v, s)) continue;

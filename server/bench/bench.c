@@ -1,6 +1,7 @@
-/* bench.c -- running one `iird bench`: the scene and its light path, the runs (each method once
- * per setting of the --sweep values it uses), and one run over the path with its scores and
- * memory. Not option parsing (cmd_bench.c), references (bench_refs.c) or outputs (bench_out.c). */
+/* bench.c -- running one `iird bench`: the scene and its light path (a script checked against the
+ * scene's lights), the runs (each method once per setting of the --sweep values it uses), and one
+ * run over the path with its scores and memory. Not option parsing (cmd_bench.c), references
+ * (bench_refs.c) or outputs (bench_out.c). */
 #include "bench.h"
 
 #include <math.h>
@@ -152,13 +153,24 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     b->lights = malloc(sizeof(iir_light) * (b->scene->num_lights + 1)); /* + a made-up spot */
     b->rows = calloc((size_t)b->frames * (size_t)b->num_runs, sizeof(iird_bench_row));
     if (!b->lights || !b->rows) return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
-    return IIR_OK;
+    if (!b->anim) return IIR_OK;
+    iir_view v = iird_anim_view(b->anim, b->scene, b->spot, b->lights, 0);
+    return iir_anim_check_lights(b->anim, v.lights, v.num_lights, b->spot, err);
+}
+
+/* Script frame f: the light track's light moved by iird_anim_view, the "lights" tracks' here. */
+static iir_view anim_view(iird_bench *b, int f)
+{
+    iir_view v = iird_anim_view(b->anim, b->scene, b->spot, b->lights, f);
+    iir_anim_lights(b->anim, b->lights, v.num_lights, UINT32_MAX, iir_anim_frame_time(b->anim, f),
+                    b->lights);
+    return v;
 }
 
 iir_view iird_bench_view(iird_bench *b, int i)
 {
     int f = b->first + i;
-    if (b->anim) return iird_anim_view(b->anim, b->scene, b->spot, b->lights, f);
+    if (b->anim) return anim_view(b, f);
     uint32_t n = b->scene->num_lights;
     if (n) memcpy(b->lights, b->scene->lights, sizeof(iir_light) * n);
     iir_light base;

@@ -76,7 +76,7 @@ typedef struct iird_bench {
     iir_scene *scene;
     iir_rt *rt;
     uint64_t scene_hash; /* FNV-1a 64 of the triangles and their materials */
-    uint32_t spot;       /* index of the scene light that moves */
+    uint32_t spot;       /* index of the light the light track (or the built-in orbit) moves */
     iir_anim *anim;      /* NULL: the built-in orbit */
     char path_label[4096];
     int first, frames; /* run frames first .. first + frames - 1 of the path */
@@ -98,7 +98,8 @@ typedef struct iird_bench {
 /* ---- bench.c: set-up and running ---- */
 
 /* Loads the scene and path, expands methods x sweeps into runs. IIR_ERR_INVALID naming the option
- * (--methods, --sweep, --frames) for bad requests. */
+ * (--methods, --sweep, --frames) for bad requests, or naming the script's field for light tracks
+ * the scene's lights do not fit (iir_anim_check_lights). */
 iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *err);
 /* Runs run r over every frame, scoring frames that have references. */
 iir_status iird_bench_run_one(iird_bench *b, int r, iir_error *err);
@@ -107,7 +108,8 @@ iir_status iird_bench_run_one(iird_bench *b, int r, iir_error *err);
  * by a finished run of the same method, else for pt scaled from the references rendered, else
  * current_ms (the current phase's measured ms per frame). < 0 when current_ms is unknown (< 0). */
 double iird_bench_after_s(const iird_bench *b, int current, double current_ms);
-/* The light and camera of run frame i (0-based within the range); lights live in b->lights. */
+/* The lights and camera of run frame i (0-based within the range): every light the script
+ * animates moved, the others as the scene has them; lights live in b->lights. */
 iir_view iird_bench_view(iird_bench *b, int i);
 /* Reference frames: the first two of the range, and every K-th after with its successor. */
 bool iird_bench_is_ref_frame(const iird_bench *b, int i);

@@ -101,13 +101,28 @@ extern const iir_param_table iird_stream_table;
 iird_settings iird_settings_default(void);
 
 /* Which optional fields a message carried: bit (1u << field enum) set when present. */
-enum { IIRD_L_POSITION, IIRD_L_DIRECTION, IIRD_L_TARGET, IIRD_L_CONE, IIRD_L_INTENSITY };
+enum {
+    IIRD_L_POSITION,
+    IIRD_L_DIRECTION,
+    IIRD_L_TARGET,
+    IIRD_L_CONE,
+    IIRD_L_INTENSITY,
+    IIRD_L_NAME,
+    IIRD_L_ON,
+    IIRD_L_INNER,
+    IIRD_L_SIZE
+};
 enum { IIRD_C_POSITION, IIRD_C_TARGET, IIRD_C_UP, IIRD_C_FOV };
 
+/* A light message: which light (name; the session's moved light without one), whether it is on,
+ * and the fields it changes. */
 typedef struct iird_msg_light {
     unsigned has;
+    char name[64]; /* as iir_light.name */
+    bool on;
     iir_vec3 position, direction, target;
-    float cone_angle_deg;
+    float cone_angle_deg, inner_angle_deg;
+    iir_vec2 size; /* area light: width, height */
     bool intensity_is_scalar;
     iir_vec3 intensity; /* RGB, or the scalar in .x */
 } iird_msg_light;
@@ -166,8 +181,12 @@ bool iird_parse_message(const char *text, size_t len, const iird_limits *limits,
                         iird_proto_error *err);
 
 /* Apply a message to the session's state, all or nothing: on false *err is filled (but for
- * err->seq, which is left as iird_parse_message set it) and the state is unchanged. Light:
- * target/direction/position combined, intensity scalar scaling, then iir_light_validate. Camera:
+ * err->seq, which is left as iird_parse_message set it) and the state is unchanged. Light: the
+ * fields its kind has (bad_field naming the light for another kind's: a cone for a spot,
+ * inner_angle for a glTF spot, size for an area light; a sun's position only with a target, which
+ * it then turns towards), target/direction/position combined, intensity scalar scaling, then
+ * iir_light_validate; `name` and `on` are the session's (which light, rendered black or not). A
+ * sun's position is left as asked: the caller fits it again (iir_light_fit_sun). Camera:
  * iir_camera_validate. Params: merged, the stream settings against the limits, every method
  * parameter against each method's row of its name (live maxima), then the session's method's
  * tables with their checks (kmin <= kmax <= vpls), blaming a field the message carried. */
@@ -185,12 +204,15 @@ bool iird_check_pick(const iird_msg *m, int width, int height, iird_proto_error 
 
 typedef struct iird_state_view {
     const char *scene;
-    const iir_light *light;
+    const iir_light *light; /* the light a `light` message without a name moves */
     const iir_camera *camera;
     const iird_settings *settings;
     uint32_t generation; /* bumped by every accepted scene switch and params change */
     bool default_light;  /* the scene has no light: the session's spot was made up */
     const struct iir_scene *scene_data; /* for `notes` (iir_method_dropped); NULL: none */
+    const iir_light *lights; /* every light of the session in the scene's order; NULL: `light` */
+    const bool *on;          /* [num_lights]: which are on; NULL: all */
+    uint32_t num_lights;
 } iird_state_view;
 
 char *iird_json_error(const iird_proto_error *e);

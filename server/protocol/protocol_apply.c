@@ -56,6 +56,16 @@ static iir_vec3 scale_intensity(iir_vec3 rgb, float s)
     return out;
 }
 
+static bool is_spot(const iir_light *L)
+{
+    return L->type == IIR_LIGHT_SPOT;
+}
+
+static bool is_gltf_spot(const iir_light *L)
+{
+    return is_spot(L) && L->profile == IIR_SPOT_GLTF;
+}
+
 /* The protocol field behind an iir_light_validate failure, and its code. */
 static const char *light_problem(const iir_light *L, iird_err *code)
 {
@@ -64,10 +74,47 @@ static const char *light_problem(const iir_light *L, iird_err *code)
     if (!iir_is_finite3(L->intensity) ||
         fminf(L->intensity.x, fminf(L->intensity.y, L->intensity.z)) < 0.f)
         return "light.intensity";
-    if (!(L->cone_angle > 0.f && L->cone_angle <= IIR_PI * 0.5f + 1e-6f)) return "light.cone_angle";
+    if (is_spot(L) && !(L->cone_angle > 0.f && L->cone_angle <= IIR_PI * 0.5f + 1e-6f))
+        return "light.cone_angle";
     *code = IIRD_E_BAD_FIELD;
     if (!iir_is_finite3(L->direction) || iir_length(L->direction) < 1e-6f) return "light.direction";
+    if (L->type == IIR_LIGHT_AREA) return "light.size";
+    if (is_gltf_spot(L) && !(L->inner_angle >= 0.f && L->inner_angle <= L->cone_angle))
+        return "light.inner_angle";
     return "light.cone_angle"; /* the smooth edge is wider than the cone */
+}
+
+/* bad_field on `field` unless the light has it (kind: what a light needs to have it). */
+static bool has_field(const iir_light *L, bool has, const char *field, const char *kind,
+                      iird_proto_error *err)
+{
+    if (has) return true;
+    return iird_proto_fail(err, IIRD_E_BAD_FIELD, field,
+                           "%s: light '%s' is a %s light; only %s have this field", field, L->name,
+                           iir_light_kind(L), kind);
+}
+
+/* The message's fields against the light's kind: a cone for spots, an inner cone for glTF spots,
+ * a size for area lights, and a sun's position only to aim it (with a target). */
+static bool fields_of_kind(const iird_msg_light *m, const iir_light *L, iird_proto_error *err)
+{
+    unsigned has = m->has;
+    if ((has & (1u << IIRD_L_CONE)) && !has_field(L, is_spot(L), "light.cone_angle", "spots", err))
+        return false;
+    if ((has & (1u << IIRD_L_INNER)) &&
+        !has_field(L, is_gltf_spot(L), "light.inner_angle", "glTF spots", err))
+        return false;
+    if ((has & (1u << IIRD_L_SIZE)) &&
+        !has_field(L, L->type == IIR_LIGHT_AREA, "light.size", "area lights", err))
+        return false;
+    if (L->type == IIR_LIGHT_SUN && (has & (1u << IIRD_L_POSITION)) &&
+        !(has & (1u << IIRD_L_TARGET)))
+        return iird_proto_fail(err, IIRD_E_BAD_FIELD, "light.position",
+                               "light.position: light '%s' is a sun: its light covers the whole "
+                               "scene from no position; turn it with direction, or with target "
+                               "(and position: the way from position to target)",
+                               L->name);
+    return true;
 }
 
 /* Aims L from its (new) position at target. */
@@ -82,19 +129,29 @@ static bool aim_at(iir_light *L, iir_vec3 target, iird_proto_error *err)
     return true;
 }
 
+/* The cone, inner cone and size fields onto L. A new cone narrows the edge and inner cone to fit
+ * in it; an inner cone given is taken as it is (validation refuses it when wider). */
+static void apply_shape(const iird_msg_light *m, iir_light *L)
+{
+    if (m->has & (1u << IIRD_L_CONE)) {
+        L->cone_angle = fminf(iir_radians(m->cone_angle_deg), IIR_PI * 0.5f);
+        L->smooth = fminf(fmaxf(L->smooth, 0.f), L->cone_angle);
+        L->inner_angle = fminf(fmaxf(L->inner_angle, 0.f), L->cone_angle);
+    }
+    if (m->has & (1u << IIRD_L_INNER)) L->inner_angle = iir_radians(m->inner_angle_deg);
+    if (m->has & (1u << IIRD_L_SIZE)) L->size = m->size;
+}
+
 bool iird_apply_light(const iird_msg_light *m, iir_light *light, iird_proto_error *err)
 {
     iir_light L = *light;
     iir_error e;
     iird_err code;
+    if (!fields_of_kind(m, &L, err)) return false;
     if (m->has & (1u << IIRD_L_POSITION)) L.position = m->position;
     if (m->has & (1u << IIRD_L_DIRECTION)) L.direction = iir_normalize(m->direction);
     if ((m->has & (1u << IIRD_L_TARGET)) && !aim_at(&L, m->target, err)) return false;
-    if (m->has & (1u << IIRD_L_CONE)) {
-        L.cone_angle = fminf(iir_radians(m->cone_angle_deg), IIR_PI * 0.5f);
-        L.smooth = fminf(fmaxf(L.smooth, 0.f), L.cone_angle);
-        L.inner_angle = fminf(fmaxf(L.inner_angle, 0.f), L.cone_angle);
-    }
+    apply_shape(m, &L);
     if (m->has & (1u << IIRD_L_INTENSITY))
         L.intensity =
             m->intensity_is_scalar ? scale_intensity(L.intensity, m->intensity.x) : m->intensity;

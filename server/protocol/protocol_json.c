@@ -129,15 +129,60 @@ char *iird_json_error(const iird_proto_error *e)
 
 /* ======================== state and welcome ======================== */
 
-static cJSON *light_json(const iir_light *L)
+static double degrees(float radians)
+{
+    return rounded((double)radians * (180.0 / 3.14159265358979323846), 1e4);
+}
+
+static bool add_vec2(cJSON *obj, const char *name, iir_vec2 v)
+{
+    cJSON *a = cJSON_CreateArray();
+    return add_item(obj, name, a) && iird_json_add_float(a, NULL, v.x) &&
+           iird_json_add_float(a, NULL, v.y);
+}
+
+/* The fields only some kinds have: a spot's cone, a glTF spot's inner cone, an area light's up
+ * hint (its frame: r = up x direction, u = direction x r) and size. */
+static bool add_kind_fields(cJSON *o, const iir_light *L)
+{
+    bool spot = L->type == IIR_LIGHT_SPOT, area = L->type == IIR_LIGHT_AREA;
+    return (!spot || iird_json_add_num(o, "cone_angle", degrees(L->cone_angle))) &&
+           (!spot || L->profile != IIR_SPOT_GLTF ||
+            iird_json_add_num(o, "inner_angle", degrees(L->inner_angle))) &&
+           (!area || iird_json_add_vec3(o, "up", L->up)) && (!area || add_vec2(o, "size", L->size));
+}
+
+/* One light: name, kind, on, its pose (a sun's position is the centre of its disk over the scene)
+ * and the fields of its kind, intensity (kept while it is off). */
+static cJSON *light_json(const iir_light *L, bool on)
 {
     cJSON *o = cJSON_CreateObject();
-    double deg = rounded((double)L->cone_angle * (180.0 / 3.14159265358979323846), 1e4);
-    bool ok = o && iird_json_add_vec3(o, "position", L->position) &&
-              iird_json_add_vec3(o, "direction", L->direction) &&
-              iird_json_add_num(o, "cone_angle", deg) &&
+    bool ok = o && add_str(o, "name", L->name) && add_str(o, "kind", iir_light_kind(L)) &&
+              add_bool(o, "on", on) && iird_json_add_vec3(o, "position", L->position) &&
+              iird_json_add_vec3(o, "direction", L->direction) && add_kind_fields(o, L) &&
               iird_json_add_vec3(o, "intensity", L->intensity);
     return keep_if(o, ok);
+}
+
+/* Every light of the session, in the scene's order (the view's `light` alone without a list). */
+static cJSON *lights_json(const iird_state_view *s)
+{
+    cJSON *a = cJSON_CreateArray();
+    bool ok = a != NULL;
+    uint32_t n = s->lights ? s->num_lights : 1;
+    for (uint32_t i = 0; ok && i < n; i++) {
+        const iir_light *L = s->lights ? &s->lights[i] : s->light;
+        ok = add_item(a, NULL, light_json(L, !s->lights || !s->on || s->on[i]));
+    }
+    return keep_if(a, ok);
+}
+
+/* Whether the moved light is on (it is one of s->lights, or the view has no list). */
+static bool moved_on(const iird_state_view *s)
+{
+    for (uint32_t i = 0; s->lights && s->on && i < s->num_lights; i++)
+        if (&s->lights[i] == s->light) return s->on[i];
+    return true;
 }
 
 static cJSON *camera_json(const iir_camera *C)
@@ -161,7 +206,6 @@ static cJSON *params_json(const iird_settings *s)
     return keep_if(o, ok);
 }
 
-/* Adds scene, light, camera and params to o. */
 /* What the method does not render of the scene (iir_method_dropped), for the client's notes. */
 static cJSON *notes_json(const iird_state_view *s)
 {
@@ -170,9 +214,9 @@ static cJSON *notes_json(const iird_state_view *s)
     enum { MAX_NOTES = 32 };
     iir_dropped d[MAX_NOTES];
     const iir_scene *sc = s->scene_data;
-    bool own = sc->num_lights > 0;
-    uint32_t n = iir_method_dropped(s->settings->method, sc, own ? sc->lights : s->light,
-                                    own ? sc->num_lights : 1, d, MAX_NOTES);
+    const iir_light *lights = s->lights ? s->lights : s->light;
+    uint32_t n = iir_method_dropped(s->settings->method, sc, lights, s->lights ? s->num_lights : 1,
+                                    d, MAX_NOTES);
     bool ok = true;
     for (uint32_t i = 0; ok && i < n && i < MAX_NOTES; i++) {
         cJSON *e = cJSON_CreateObject();
@@ -183,10 +227,12 @@ static cJSON *notes_json(const iird_state_view *s)
     return keep_if(a, ok);
 }
 
+/* Adds scene, generation, light, lights, default_light, camera, params and notes to o. */
 static bool add_state(cJSON *o, const iird_state_view *s)
 {
     return add_str(o, "scene", s->scene) && iird_json_add_num(o, "generation", s->generation) &&
-           add_item(o, "light", light_json(s->light)) &&
+           add_item(o, "light", light_json(s->light, moved_on(s))) &&
+           add_item(o, "lights", lights_json(s)) &&
            add_bool(o, "default_light", s->default_light) &&
            add_item(o, "camera", camera_json(s->camera)) &&
            add_item(o, "params", params_json(s->settings)) && add_item(o, "notes", notes_json(s));
@@ -329,7 +375,7 @@ char *iird_json_domain(uint32_t frame, const float (*vpl_px)[2], const uint8_t *
         double y = vpl_px ? rounded(vpl_px[i][1], 100.0) : -1.0;
         ok = add_item(vpls, NULL, tuple(x, y, vpl_flags ? vpl_flags[i] : 0, -1.0));
     }
-    ok = ok && (!dom || add_domain(o, dom));
+    ok = ok && (!dom || !dom->map || add_str(o, "map", dom->map)) && (!dom || add_domain(o, dom));
     return iird_json_finish(keep_if(o, ok));
 }
 

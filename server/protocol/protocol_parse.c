@@ -21,8 +21,9 @@ enum { MAX_FIELDS = 64 };
 
 static const char *const HELLO_FIELDS[] = {"protocol", "token", "client", NULL};
 /* same order as IIRD_L_* and IIRD_C_* */
-static const char *const LIGHT_FIELDS[] = {"position",   "direction", "target",
-                                           "cone_angle", "intensity", NULL};
+static const char *const LIGHT_FIELDS[] = {"position",  "direction", "target", "cone_angle",
+                                           "intensity", "name",      "on",     "inner_angle",
+                                           "size",      NULL};
 static const char *const CAMERA_FIELDS[] = {"position", "target", "up", "fov", NULL};
 /* "method", the stream settings, then every method parameter (each name once); built once. */
 static const char *PARAMS_FIELDS[MAX_FIELDS + 1];
@@ -132,18 +133,52 @@ static bool get_intensity(const iird_pctx *c, const cJSON *v, iird_msg_light *m)
     return true;
 }
 
+/* [width, height]: exactly 2 numbers, each in (0, IIRD_MAX_COORD]. */
+static bool get_size(const iird_pctx *c, const cJSON *v, iir_vec2 *out)
+{
+    iird_range r = {0.0, IIRD_MAX_COORD, true, false, NULL};
+    double e[2];
+    int n = cJSON_IsArray(v) ? cJSON_GetArraySize(v) : -1, i = 0;
+    if (n < 0)
+        return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, "light.size",
+                               "light.size must be an array of 2 numbers (width, height), got %s",
+                               iird_json_kind(v));
+    if (n != 2)
+        return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, "light.size",
+                               "light.size must be an array of 2 numbers (width, height), got %d "
+                               "elements",
+                               n);
+    for (const cJSON *x = v->child; x; x = x->next, i++)
+        if (!iird_get_number(c, x, i ? "size[1]" : "size[0]", r, &e[i])) return false;
+    *out = iir_v2((float)e[0], (float)e[1]);
+    return true;
+}
+
+/* The light a message addresses: name, and whether it is switched on or off. */
+static bool get_which(const iird_pctx *c, const cJSON *const *f, iird_msg_light *m)
+{
+    if (f[IIRD_L_NAME] && !iird_get_string(c, f[IIRD_L_NAME], "name", sizeof m->name - 1, m->name))
+        return false;
+    if (f[IIRD_L_NAME] && !m->name[0])
+        return iird_proto_fail(c->err, IIRD_E_BAD_FIELD, "light.name",
+                               "light.name must name one of the scene's lights (state.lights)");
+    return !f[IIRD_L_ON] || iird_get_bool(c, f[IIRD_L_ON], "on", &m->on);
+}
+
 static bool parse_light(const iird_pctx *c, const cJSON *const *f, const iird_limits *lim,
                         iird_msg *out)
 {
     (void)lim;
     iird_msg_light *m = &out->u.light;
     iird_range cone = {0.0, 90.0, true, false, "degrees"};
-    double deg = 0.0;
+    iird_range inner = {0.0, 90.0, false, false, "degrees"};
+    double deg = 0.0, inner_deg = 0.0;
     for (int i = 0; LIGHT_FIELDS[i]; i++) m->has |= f[i] ? 1u << i : 0u;
-    if (!m->has)
+    if (!(m->has & ~(1u << IIRD_L_NAME)))
         return iird_proto_fail(c->err, IIRD_E_BAD_FIELD, "light",
                                "a light message needs at least one of position, direction, "
-                               "target, cone_angle, intensity");
+                               "target, cone_angle, inner_angle, size, intensity, on");
+    if (!get_which(c, f, m)) return false;
     if (f[IIRD_L_POSITION] && !get_point(c, f[IIRD_L_POSITION], "position", &m->position))
         return false;
     if (f[IIRD_L_DIRECTION] && !get_dir(c, f[IIRD_L_DIRECTION], "direction", true, &m->direction))
@@ -155,7 +190,11 @@ static bool parse_light(const iird_pctx *c, const cJSON *const *f, const iird_li
                                "give one of them");
     if (f[IIRD_L_CONE] && !iird_get_number(c, f[IIRD_L_CONE], "cone_angle", cone, &deg))
         return false;
+    if (f[IIRD_L_INNER] && !iird_get_number(c, f[IIRD_L_INNER], "inner_angle", inner, &inner_deg))
+        return false;
     m->cone_angle_deg = (float)deg;
+    m->inner_angle_deg = (float)inner_deg;
+    if (f[IIRD_L_SIZE] && !get_size(c, f[IIRD_L_SIZE], &m->size)) return false;
     return !f[IIRD_L_INTENSITY] || get_intensity(c, f[IIRD_L_INTENSITY], m);
 }
 

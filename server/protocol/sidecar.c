@@ -40,12 +40,23 @@ static bool sun_json(cJSON *o, const iir_light *L)
     return iird_json_add_vec3(o, "direction", L->direction) && iird_json_add_vec3(o, "up", L->up);
 }
 
+/* An area light's: its normal, the up hint (its frame, as a spot's) and [width, height]. */
+static bool area_json(cJSON *o, const iir_light *L)
+{
+    if (!iird_json_add_vec3(o, "direction", L->direction) || !iird_json_add_vec3(o, "up", L->up))
+        return false;
+    cJSON *size = cJSON_AddArrayToObject(o, "size");
+    return size && iird_json_add_float(size, NULL, L->size.x) &&
+           iird_json_add_float(size, NULL, L->size.y);
+}
+
 /* The light's kind-specific fields: a point's position, a spot's position and cone, a sun's
- * direction. */
+ * direction, an area light's position, normal and size. */
 static bool kind_json(cJSON *o, const iir_light *L)
 {
     if (L->type == IIR_LIGHT_SUN) return sun_json(o, L);
     if (!iird_json_add_vec3(o, "position", L->position)) return false;
+    if (L->type == IIR_LIGHT_AREA) return area_json(o, L);
     return L->type != IIR_LIGHT_SPOT || spot_json(o, L);
 }
 

@@ -1,7 +1,8 @@
-/* cmd_render_anim.c -- `iird render --anim`: renders an animation script's frames in order with
- * one method instance (so coherence carries from frame to frame) into DIR/frame_NNNNN.<ext>, logs
- * them in DIR/render.json and optionally pipes them into an MP4. Not option parsing
- * (cmd_render.c), render.json (render_log.c) or the ffmpeg pipe (video.c).
+/* cmd_render_anim.c -- `iird render --anim`: checks an animation script against the scene's
+ * lights, renders its frames (every light it animates moved) in order with one method instance
+ * (so coherence carries from frame to frame) into DIR/frame_NNNNN.<ext>, logs them in
+ * DIR/render.json and optionally pipes them into an MP4. Not option parsing (cmd_render.c),
+ * render.json (render_log.c) or the ffmpeg pipe (video.c).
  *
  * Files are named by the frame's index in the script, so `--frames A:B` fills a gap. Every file
  * is written under a .part name and renamed, so an interrupted run leaves whole frames only.
@@ -104,7 +105,7 @@ typedef struct anim_job {
     iir_rt *rt;
     iir_anim *anim;
     char script[4096]; /* what --anim loaded, for messages */
-    uint32_t spot;     /* the light the script moves (animview.h: num_lights = the made-up spot) */
+    uint32_t spot; /* the light the light track moves (animview.h: num_lights = the made-up spot) */
     iir_light *lights; /* the current frame's lights */
     int count;         /* frames of the script */
     int first, end;    /* this run: frames [first, end) */
@@ -116,6 +117,16 @@ typedef struct anim_job {
     double start_ms, frames_start_ms, render_ms, last_log_ms;
     int black_frames, first_black; /* frames that came out entirely black */
 } anim_job;
+
+/* The view of script frame f: the scene's camera and lights, every light the script animates
+ * moved (the light track's by iird_anim_view, the "lights" tracks' here). */
+static iir_view frame_view(const anim_job *j, int f)
+{
+    iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, f);
+    iir_anim_lights(j->anim, j->lights, v.num_lights, UINT32_MAX, iir_anim_frame_time(j->anim, f),
+                    j->lights);
+    return v;
+}
 
 /* FNV-1a 64 over bytes. */
 static uint64_t fnv(uint64_t h, const void *data, size_t n)
@@ -139,25 +150,30 @@ static float frame_exposure(const anim_job *j, int f)
     return iir_anim_exposure(j->anim, j->o->exposure, iir_anim_frame_time(j->anim, f));
 }
 
-/* A hash of what the script does at every frame (the moved light, the camera and, when it sets
- * the frames' exposure, the exposure), so a resume with an edited script is refused while the
- * same script by another path is not. */
+static uint64_t hash_light(uint64_t h, const iir_light *l)
+{
+    h = fnv_vec(fnv_vec(fnv_vec(h, l->position), l->direction), l->intensity);
+    h = fnv(fnv(fnv_vec(h, l->up), &l->cone_angle, sizeof l->cone_angle), &l->smooth,
+            sizeof l->smooth);
+    return fnv(fnv(h, &l->inner_angle, sizeof l->inner_angle), &l->size, sizeof l->size);
+}
+
+/* A hash of what the script does at every frame (the lights, the camera and, when it sets the
+ * frames' exposure, the exposure), so a resume with an edited script is refused while the same
+ * script by another path is not. */
 static uint64_t script_hash(anim_job *j)
 {
     uint64_t h = fnv(0xcbf29ce484222325ull, &j->count, sizeof j->count);
     double fps = iir_anim_fps(j->anim);
     h = fnv(h, &fps, sizeof fps);
     for (int f = 0; f < j->count; f++) {
-        iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, f);
+        iir_view v = frame_view(j, f);
         h = fnv_vec(fnv_vec(h, v.camera.position), v.camera.target);
         h = fnv(fnv_vec(h, v.camera.up), &v.camera.fov_y, sizeof v.camera.fov_y);
         float exposure = frame_exposure(j, f);
         if (!j->o->exposure_given && iir_anim_has_exposure(j->anim))
             h = fnv(h, &exposure, sizeof exposure);
-        if (j->spot == UINT32_MAX) continue;
-        const iir_light *l = &v.lights[j->spot];
-        h = fnv_vec(fnv_vec(fnv_vec(h, l->position), l->direction), l->intensity);
-        h = fnv(fnv(h, &l->cone_angle, sizeof l->cone_angle), &l->smooth, sizeof l->smooth);
+        for (uint32_t i = 0; i < v.num_lights; i++) h = hash_light(h, &v.lights[i]);
     }
     return h;
 }
@@ -176,10 +192,15 @@ static iir_status set_range(anim_job *j, iir_error *err)
     return IIR_OK;
 }
 
-/* The light the script moves, as a session moves it (animview.h). */
-static void set_spot(anim_job *j)
+/* The light the light track moves, as a session moves it (animview.h), and the lights array;
+ * then the script's light tracks against the scene's lights. */
+static iir_status set_lights(anim_job *j, iir_error *err)
 {
     j->spot = iird_moved_light(j->scene);
+    if (!(j->lights = malloc(sizeof(iir_light) * (j->scene->num_lights + 1))))
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
+    iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, 0);
+    return iir_anim_check_lights(j->anim, v.lights, v.num_lights, j->spot, err);
 }
 
 /* Without --size: the pixels of a 512x512 still's height, as wide as the scene camera's aspect
@@ -217,11 +238,9 @@ static iir_status load(anim_job *j, iir_error *err)
     if (st == IIR_OK) iird_warn_anim_scene("render", j->anim, scene, j->scene);
     if (st == IIR_OK) iird_note_camera("render", j->scene);
     if (st == IIR_OK) st = set_range(j, err);
-    if (st == IIR_OK) set_spot(j);
+    if (st == IIR_OK) st = set_lights(j, err);
     if (st == IIR_OK) st = iird_prepare_dir(o->out, "--out", err);
     if (st == IIR_OK && o->video) st = iird_prepare_parent(o->video, "--video", err);
-    if (st == IIR_OK && !(j->lights = malloc(sizeof(iir_light) * (j->scene->num_lights + 1))))
-        st = iir_fail(err, IIR_ERR_NOMEM, "out of memory");
     if (st == IIR_OK)
         iird_warn_dropped("render", o->method, j->scene, j->scene->lights, j->scene->num_lights);
     return st;
@@ -269,7 +288,7 @@ static iir_status warm_up(anim_job *j, iir_error *err)
     iird_progress_start(&bar, "warm-up", j->first);
     iir_status st = IIR_OK;
     for (int f = 0; st == IIR_OK && f < j->first; f++) {
-        iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, f);
+        iir_view v = frame_view(j, f);
         iir_frame_stats fs = {0};
         st = iir_method_render(j->m, &v, small, &fs, err);
         iird_progress_update(&bar, f + 1);
@@ -341,7 +360,7 @@ static iir_status render_frames(anim_job *j, iir_error *err)
     iir_status st = IIR_OK;
     j->frames_start_ms = j->last_log_ms = iir_now_ms();
     for (int f = j->first; st == IIR_OK && f < j->end; f++) {
-        iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, f);
+        iir_view v = frame_view(j, f);
         iir_frame_stats fs = {0};
         st = iir_method_render(j->m, &v, j->img, &fs, err);
         if (st == IIR_OK) st = write_frame(j, f, &fs, err);
@@ -452,7 +471,7 @@ static void warn_black(anim_job *j)
     else
         snprintf(what, sizeof what, "%d of %d frames (first: frame %d) are", j->black_frames,
                  j->run.done, j->first_black);
-    iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, j->first_black);
+    iir_view v = frame_view(j, j->first_black);
     iird_warn_black("render", what, j->scene, j->rt, &v);
 }
 

@@ -9,6 +9,7 @@
 
 #include "budget.h"
 #include "iir/timer.h"
+#include "protocol/recording.h"
 #include "session_internal.h"
 
 /* ======================== buffers ======================== */
@@ -33,11 +34,12 @@ void iird_buf_free(byte_buf *b)
 
 /* ======================== life ======================== */
 
-static void init_state(iird_session *s, const iird_session_env *env)
+/* False when out of memory for the scene's lights. */
+static bool init_state(iird_session *s, const iird_session_env *env)
 {
     s->scene = env->startup;
     iird_scene_cache_ref(env->scenes, s->scene);
-    s->light = iird_session_light_for(s->scene->scene, &s->light_index);
+    if (!iird_lights_init(&s->lights, s->scene->scene)) return false;
     s->camera = s->scene->scene->camera;
     s->settings = env->defaults;
     s->version = 1;
@@ -46,6 +48,7 @@ static void init_state(iird_session *s, const iird_session_env *env)
     s->tokens = IIRD_RATE_BURST;
     s->tokens_ms = s->input_ms;
     s->rate_error_ms = -1e9;
+    return true;
 }
 
 iird_session *iird_session_create(const iird_session_env *env, uint32_t id, iir_error *err)
@@ -67,12 +70,13 @@ iird_session *iird_session_create(const iird_session_env *env, uint32_t id, iir_
     pthread_condattr_setclock(&attr, CLOCK_MONOTONIC);
     pthread_cond_init(&s->wake, &attr);
     pthread_condattr_destroy(&attr);
-    init_state(s, env);
+    bool lights = init_state(s, env);
     iird_sched_add(env->sched, &s->sched);
     s->sched_added = true;
     s->w.enc = iir_jpeg_encoder_create();
-    if (!s->w.enc) {
-        iir_fail(err, IIR_ERR_NOMEM, "out of memory for a JPEG encoder");
+    if (!s->w.enc || !lights) {
+        iir_fail(err, IIR_ERR_NOMEM, "out of memory for %s",
+                 lights ? "a JPEG encoder" : "the scene's lights");
         iird_session_destroy(s);
         return NULL;
     }
@@ -125,6 +129,7 @@ void iird_session_destroy(iird_session *s)
     free(s->rx);
     iird_recording_destroy(s->rec);
     iird_worker_free(&s->w); /* the method before the scene it renders */
+    iird_lights_free(&s->lights);
     iird_scene_cache_release(s->env->scenes, s->scene);
     iird_budget_release(s->env->budget, &s->reserved);
     iird_budget_release(s->env->budget, &s->snapshot_held);
@@ -204,17 +209,32 @@ iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_
     iird_recording *r = iird_recording_create(fps, s->scene->name);
     if (!r) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory"), NULL;
     s->rec_start_ms = iir_now_ms();
-    bool ok = iird_recording_add(r, 0.0, &s->light, err) &&
+    bool ok = iird_session_record_lights_locked(s, r, 0.0, err) &&
               iird_recording_add_camera(r, 0.0, &s->camera, err) &&
               iird_recording_add_exposure(r, 0.0, s->settings.exposure, err);
     if (!ok) iird_recording_destroy(r), r = NULL;
     return r;
 }
 
+bool iird_session_record_lights_locked(iird_session *s, iird_recording *r, double t,
+                                       iird_proto_error *err)
+{
+    return iird_recording_add_lights(r, t, iird_lights_shown(&s->lights), s->lights.n, err);
+}
+
 iird_state_view iird_state_view_locked(const iird_session *s)
 {
-    iird_state_view v = {s->scene->name, &s->light,          &s->camera,     &s->settings,
-                         s->generation,  s->light_index < 0, s->scene->scene};
+    const iird_lights *L = &s->lights;
+    iird_state_view v = {.scene = s->scene->name,
+                         .light = &L->v[L->moved],
+                         .camera = &s->camera,
+                         .settings = &s->settings,
+                         .generation = s->generation,
+                         .default_light = L->made_up,
+                         .scene_data = s->scene->scene,
+                         .lights = L->v,
+                         .on = L->on,
+                         .num_lights = L->n};
     return v;
 }
 
@@ -351,13 +371,15 @@ iird_write_result iird_session_write(iird_session *s, struct lws *wsi)
     return more ? IIRD_WRITE_MORE : IIRD_WRITE_IDLE;
 }
 
-void iird_session_alternatives(const iir_light *light, const char *except, char *out, size_t n)
+void iird_session_alternatives(const iir_light *lights, uint32_t num_lights, const char *except,
+                               char *out, size_t n)
 {
     const char *ok[16];
     int k = 0;
     iir_error err;
     for (const char *const *m = iir_method_names(); *m && k < 16; m++)
-        if (strcmp(*m, except) && iir_method_supports(*m, light, 1, &err) == IIR_OK) ok[k++] = *m;
+        if (strcmp(*m, except) && iir_method_supports(*m, lights, num_lights, &err) == IIR_OK)
+            ok[k++] = *m;
     size_t used = (size_t)snprintf(out, n, "%s", k ? " -- try " : "");
     for (int i = 0; i < k && used < n; i++)
         used += (size_t)snprintf(out + used, n - used, "%s%s",

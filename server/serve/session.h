@@ -1,4 +1,4 @@
-/* session.h -- one WebSocket client of `iird serve`: its state (light, camera, settings, scene),
+/* session.h -- one WebSocket client of `iird serve`: its state (lights, camera, settings, scene),
  * its render worker, and what it sends back. Not the lws context or the HTTP side (server.c).
  *
  * DESIGN. Two threads touch a session.

@@ -11,6 +11,7 @@
 #include "iir/method.h"
 #include "scheduler.h"
 #include "session.h"
+#include "session_lights.h"
 
 enum {
     IIRD_QUEUE_CAP = 64,       /* pending text/binary replies; oldest stats/domain dropped first */
@@ -63,7 +64,8 @@ typedef struct frame_slot {
 typedef struct render_job {
     uint64_t version;
     uint32_t generation;
-    iir_light light;
+    const iir_light *lights; /* [num_lights] as rendered (iird_lights_shown), in a worker buffer */
+    uint32_t num_lights;
     iir_camera camera;
     iird_settings settings;
     int64_t seq;
@@ -82,9 +84,9 @@ typedef struct worker_state {
     iir_image *img;
     iir_jpeg_encoder *enc;
     byte_buf back; /* the frame being built; swapped with the slot's on publish */
-    iir_light *lights;
-    uint32_t lights_cap;
-    render_job last; /* the last job rendered (version 0: none) */
+    iir_light *job_lights, *last_lights; /* the next job's lights and last's (swapped) */
+    uint32_t job_cap, last_cap;
+    render_job last; /* the last job rendered (version 0: none); its lights are last_lights */
     iir_frame_stats last_stats;
     iir_vpl_counts frame_vpl; /* the VPL set of the last interactive frame (refinement keeps it) */
     bool have_frame;          /* img holds last's frame */
@@ -109,8 +111,7 @@ struct iird_session {
 
     /* ---- guarded by lock ---- */
     const iird_scene_entry *scene; /* written by the worker (scene loads), read by both */
-    int light_index;               /* the scene light the session moves; -1: a made-up spot */
-    iir_light light;
+    iird_lights lights;            /* the scene's, moved and switched by `light` messages */
     iir_camera camera;
     iird_settings settings;
     _Atomic uint64_t version; /* bumped by every applied input; also read without the lock by
@@ -168,13 +169,18 @@ void iird_queue_locked(iird_session *s, out_msg msg);
 void iird_queue_error(iird_session *s, const iird_proto_error *e);
 /* The session's state as the protocol's JSON builders read it (lock held). */
 iird_state_view iird_state_view_locked(const iird_session *s);
-/* A new recording of the session's scene whose first keys (t = 0) are the current light, camera
+/* A new recording of the session's scene whose first keys (t = 0) are the current lights, camera
  * and exposure; NULL with err filled on out-of-memory. Lock held. */
 iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_proto_error *err);
+/* Adds the session's lights as rendered to recording r at t seconds; false with err filled as the
+ * recording's add functions do (r is then unchanged). Lock held. */
+bool iird_session_record_lights_locked(iird_session *s, iird_recording *r, double t,
+                                       iird_proto_error *err);
 
-/* " -- try ir or pt": the methods that can render light, other than `except`, as the end of an
- * `unsupported` message ("" when none can). */
-void iird_session_alternatives(const iir_light *light, const char *except, char *out, size_t n);
+/* " -- try ir or pt": the methods that can render these lights, other than `except`, as the end of
+ * an `unsupported` message ("" when none can). */
+void iird_session_alternatives(const iir_light *lights, uint32_t num_lights, const char *except,
+                               char *out, size_t n);
 
 /* ---- session_msg.c ---- */
 void iird_session_handle(iird_session *s, const char *text, size_t len);
@@ -182,8 +188,5 @@ void iird_session_handle(iird_session *s, const char *text, size_t len);
 /* ---- session_worker.c ---- */
 void *iird_session_worker(void *arg);
 void iird_worker_free(worker_state *w);
-/* The light a session starts with on scene: the first spot, else the first light, else a spot
- * under the scene's ceiling; *index is the scene light's index, or -1. */
-iir_light iird_session_light_for(const iir_scene *scene, int *index);
 
 #endif

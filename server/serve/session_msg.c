@@ -119,12 +119,14 @@ static bool on_hello(iird_session *s, const iird_msg *m, iird_proto_error *err)
 }
 
 /* A moved light stays in the scene (iir/light_move.h): the position is stopped short of the first
- * surface between the old and the new one, and a light aimed at a target is aimed at it again from
- * there. True when the position changed from what was asked. */
-static bool keep_inside_locked(const iird_session *s, const iird_msg_light *m, iir_light *light)
+ * surface between the old (`from`) and the new one, and a light aimed at a target is aimed at it
+ * again from there. A sun keeps its disk over the scene (it only turns). True when the position
+ * changed from what was asked. */
+static bool keep_inside_locked(const iird_session *s, const iird_msg_light *m, iir_vec3 from,
+                               iir_light *light)
 {
     const iird_scene_entry *sc = s->scene;
-    if (light->type == IIR_LIGHT_SUN) { /* a sun only turns: its disk stays the scene's */
+    if (light->type == IIR_LIGHT_SUN) {
         iir_vec3 asked = light->position;
         iir_light_fit_sun(light, sc->scene);
         return (m->has & (1u << IIRD_L_POSITION)) &&
@@ -132,7 +134,7 @@ static bool keep_inside_locked(const iird_session *s, const iird_msg_light *m, i
                 asked.z != light->position.z);
     }
     if (!(m->has & (1u << IIRD_L_POSITION))) return false;
-    iir_vec3 p = iir_light_move_inside(sc->scene, sc->rt, s->light.position, light->position);
+    iir_vec3 p = iir_light_move_inside(sc->scene, sc->rt, from, light->position);
     if (p.x == light->position.x && p.y == light->position.y && p.z == light->position.z)
         return false;
     light->position = p;
@@ -142,20 +144,50 @@ static bool keep_inside_locked(const iird_session *s, const iird_msg_light *m, i
     return true;
 }
 
+/* The light a message addresses: the one it names, else the moved one; -1 with err naming the
+ * scene's lights when no light has that name (the lock is held). */
+static int which_light_locked(const iird_session *s, const iird_msg_light *m, iird_proto_error *err)
+{
+    if (!(m->has & (1u << IIRD_L_NAME))) return (int)s->lights.moved;
+    int i = iird_lights_find(&s->lights, m->name);
+    if (i >= 0) return i;
+    char names[200];
+    iird_lights_names(&s->lights, names, sizeof names);
+    iird_proto_fail(err, IIRD_E_BAD_FIELD, "light.name",
+                    "light.name: scene %s has no light named '%s'; its lights: %s", s->scene->name,
+                    m->name, names);
+    return -1;
+}
+
+/* Light i becomes *light (on or off), recorded first when recording: a full recording refuses
+ * the whole message and nothing changes (the lock is held). */
+static bool set_light_locked(iird_session *s, int i, const iir_light *light, bool on,
+                             iird_proto_error *err)
+{
+    iir_light was = s->lights.v[i];
+    bool was_on = s->lights.on[i];
+    s->lights.v[i] = *light;
+    s->lights.on[i] = on;
+    if (!s->rec || iird_session_record_lights_locked(s, s->rec, rec_time_locked(s), err))
+        return true;
+    s->lights.v[i] = was;
+    s->lights.on[i] = was_on;
+    return false;
+}
+
 static bool on_light(iird_session *s, const iird_msg *m, iird_proto_error *err)
 {
+    const iird_msg_light *ml = &m->u.light;
     pthread_mutex_lock(&s->lock);
-    iir_light light = s->light;
-    bool ok = iird_apply_light(&m->u.light, &light, err);
-    bool moved = ok && keep_inside_locked(s, &m->u.light, &light);
-    /* Recorded before it is applied: a full recording refuses the whole message. */
-    if (ok && s->rec)
-        ok = iird_recording_add(s->rec, (iir_now_ms() - s->rec_start_ms) / 1e3, &light, err);
+    int i = which_light_locked(s, ml, err);
+    bool ok = i >= 0, moved = false;
+    iir_light light = ok ? s->lights.v[i] : (iir_light){0};
+    bool on = ok && ((ml->has & (1u << IIRD_L_ON)) ? ml->on : s->lights.on[i]);
+    ok = ok && iird_apply_light(ml, &light, err);
+    moved = ok && keep_inside_locked(s, ml, s->lights.v[i].position, &light);
+    ok = ok && set_light_locked(s, i, &light, on, err);
     char *json = NULL;
-    if (ok) {
-        s->light = light;
-        input_changed_locked(s, m->seq);
-    }
+    if (ok) input_changed_locked(s, m->seq);
     if (ok && moved) { /* the client learns the position used */
         iird_state_view v = iird_state_view_locked(s);
         json = iird_json_state(&v, m->seq);
@@ -171,7 +203,7 @@ static bool on_camera(iird_session *s, const iird_msg *m, iird_proto_error *err)
     pthread_mutex_lock(&s->lock);
     iir_camera camera = s->camera;
     bool ok = iird_apply_camera(&m->u.camera, &camera, err);
-    if (ok && s->rec) /* recorded before it is applied, as the light */
+    if (ok && s->rec) /* recorded first: a full recording refuses the whole message */
         ok = iird_recording_add_camera(s->rec, rec_time_locked(s), &camera, err);
     if (ok) {
         s->camera = camera;
@@ -187,9 +219,9 @@ static bool on_params(iird_session *s, const iird_msg *m, iird_proto_error *err)
     iird_settings settings = s->settings;
     bool ok = iird_apply_params(&m->u.params, &s->env->limits, &settings, err);
     iir_error e;
-    if (ok && iir_method_supports(settings.method, &s->light, 1, &e) != IIR_OK) {
+    if (ok && iir_method_supports(settings.method, s->lights.v, s->lights.n, &e) != IIR_OK) {
         char alt[96];
-        iird_session_alternatives(&s->light, settings.method, alt, sizeof alt);
+        iird_session_alternatives(s->lights.v, s->lights.n, settings.method, alt, sizeof alt);
         ok = iird_proto_fail(err, IIRD_E_UNSUPPORTED, "params.method", "scene %s: %s%s",
                              s->scene->name, e.msg, alt);
     }
@@ -330,22 +362,21 @@ typedef struct save_state {
     bool in_dir; /* the scene can be a sidecar's base */
     iir_camera camera;
     float aspect;
-    iir_light *lights; /* the session's light first, then the scene's others, as rendered */
+    iir_light *lights; /* the session's lights as rendered (one switched off black), in order */
     uint32_t num_lights;
 } save_state;
 
 static bool copy_save_state(iird_session *s, save_state *st)
 {
     pthread_mutex_lock(&s->lock);
-    const iir_scene *scene = s->scene->scene;
     snprintf(st->scene, sizeof st->scene, "%s", s->scene->name);
     st->in_dir = iird_scene_cache_in_dir(s->env->scenes, s->scene);
     st->camera = s->camera;
     st->aspect = (float)s->settings.width / (float)s->settings.height;
-    st->lights = malloc((scene->num_lights + 1) * sizeof *st->lights);
-    if (st->lights) st->lights[st->num_lights++] = s->light;
-    for (uint32_t i = 0; st->lights && i < scene->num_lights; i++)
-        if ((int)i != s->light_index) st->lights[st->num_lights++] = scene->lights[i];
+    st->lights = malloc(s->lights.n * sizeof *st->lights);
+    if (st->lights)
+        memcpy(st->lights, iird_lights_shown(&s->lights), s->lights.n * sizeof *st->lights);
+    if (st->lights) st->num_lights = s->lights.n;
     pthread_mutex_unlock(&s->lock);
     return st->lights != NULL;
 }

@@ -66,14 +66,6 @@ static void wait_ms_locked(iird_session *s, double ms)
     pthread_cond_timedwait(&s->wake, &s->lock, &ts);
 }
 
-iir_light iird_session_light_for(const iir_scene *scene, int *index)
-{
-    iir_light l;
-    uint32_t i = iir_scene_moved_light(scene, &l);
-    *index = i < scene->num_lights ? (int)i : -1;
-    return l;
-}
-
 void iird_worker_free(worker_state *w)
 {
     iir_method_destroy(w->method);
@@ -81,7 +73,8 @@ void iird_worker_free(worker_state *w)
     iir_image_destroy(w->img);
     iir_jpeg_encoder_destroy(w->enc);
     iird_buf_free(&w->back);
-    free(w->lights);
+    free(w->job_lights);
+    free(w->last_lights);
     free(w->vpl_px);
     free(w->vpl_flags);
 }
@@ -92,7 +85,8 @@ void iird_worker_free(worker_state *w)
 static bool same_view(const worker_state *w, const render_job *j)
 {
     const render_job *a = &w->last;
-    return w->have_frame && !memcmp(&a->light, &j->light, sizeof a->light) &&
+    return w->have_frame && a->num_lights == j->num_lights &&
+           !memcmp(a->lights, j->lights, j->num_lights * sizeof *j->lights) &&
            !memcmp(&a->camera, &j->camera, sizeof a->camera) &&
            a->settings.width == j->settings.width && a->settings.height == j->settings.height &&
            !strcmp(a->settings.method, j->settings.method) &&
@@ -148,27 +142,43 @@ static iir_status ensure_image(worker_state *w, int width, int height, iir_error
                   : iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %dx%d frame", width, height);
 }
 
-/* The view's lights: the session's light first (iir drives the first spot), then the scene's
- * others. */
-static iir_status build_view(worker_state *w, const render_job *j, const iird_scene_entry *sc,
-                             int light_index, iir_view *view, iir_error *err)
+/* The view: the job's lights (every light of the session, in the scene's order; one switched off
+ * black) and camera. */
+static void build_view(const render_job *j, iir_view *view)
 {
-    const iir_scene *scene = sc->scene;
-    uint32_t n = 1 + scene->num_lights - (light_index >= 0 ? 1 : 0);
-    if (n > w->lights_cap) {
-        iir_light *l = realloc(w->lights, n * sizeof *l);
-        if (!l) return iir_fail(err, IIR_ERR_NOMEM, "out of memory for %u lights", n);
-        w->lights = l;
-        w->lights_cap = n;
-    }
-    uint32_t k = 0;
-    w->lights[k++] = j->light;
-    for (uint32_t i = 0; i < scene->num_lights; i++)
-        if ((int)i != light_index) w->lights[k++] = scene->lights[i];
-    view->lights = w->lights;
-    view->num_lights = k;
+    view->lights = j->lights;
+    view->num_lights = j->num_lights;
     view->camera = j->camera;
-    return IIR_OK;
+}
+
+/* The session's lights as rendered, copied into the worker's job buffer for job j (lock held).
+ * False when out of memory for them. */
+static bool take_lights_locked(iird_session *s, render_job *j)
+{
+    worker_state *w = &s->w;
+    uint32_t n = s->lights.n;
+    if (n > w->job_cap) {
+        iir_light *l = realloc(w->job_lights, n * sizeof *l);
+        if (!l) return false;
+        w->job_lights = l;
+        w->job_cap = n;
+    }
+    memcpy(w->job_lights, iird_lights_shown(&s->lights), n * sizeof *w->job_lights);
+    j->lights = w->job_lights;
+    j->num_lights = n;
+    return true;
+}
+
+/* j becomes the last job; its lights' buffer becomes last's and last's old one the next job's. */
+static void keep_job(worker_state *w, const render_job *j)
+{
+    iir_light *spare = w->last_lights;
+    uint32_t spare_cap = w->last_cap;
+    w->last = *j;
+    w->last_lights = w->job_lights;
+    w->last_cap = w->job_cap;
+    w->job_lights = spare;
+    w->job_cap = spare_cap;
 }
 
 /* ======================== the domain message ======================== */
@@ -339,13 +349,13 @@ static iir_vpl_counts refined_vpl(const iir_vpl_counts *frame)
 }
 
 static iir_status render_frame(iird_session *s, const render_job *j, const iird_scene_entry *sc,
-                               int light_index, frame_info *f, iir_error *err)
+                               frame_info *f, iir_error *err)
 {
     worker_state *w = &s->w;
     iir_view view;
+    build_view(j, &view);
     iir_status st = ensure_method(s, j, sc, err);
     if (st == IIR_OK) st = ensure_image(w, j->settings.width, j->settings.height, err);
-    if (st == IIR_OK) st = build_view(w, j, sc, light_index, &view, err);
     w->refining = false;
     w->started_ms = iird_sched_used_ms(s->env->sched, &s->sched);
     double typical = 3.0 * w->last_stats.total_ms;
@@ -394,17 +404,31 @@ static void send_stale_domain(iird_session *s, const iird_scene_entry *sc)
 static void render_locked(iird_session *s)
 {
     worker_state *w = &s->w;
-    render_job j = {s->version,  s->generation, s->light,   s->camera,
-                    s->settings, s->seq,        s->input_ms};
+    render_job j = {.version = s->version,
+                    .generation = s->generation,
+                    .camera = s->camera,
+                    .settings = s->settings,
+                    .seq = s->seq,
+                    .input_ms = s->input_ms};
     const iird_scene_entry *sc = s->scene;
-    int light_index = s->light_index;
+    uint32_t num_lights = s->lights.n;
+    bool have_lights = take_lights_locked(s, &j);
     pthread_mutex_unlock(&s->lock);
 
     frame_info f = {0};
     iir_error err = {0};
     iir_status st = IIR_OK;
+    if (!have_lights) { /* reported, and not tried again until the next input */
+        w->last.version = j.version;
+        w->have_frame = false;
+        iir_fail(&err, IIR_ERR_NOMEM, "out of memory for %u lights", num_lights);
+        worker_error(s, IIRD_E_INTERNAL, j.seq, "rendering the frame", &err);
+        pthread_mutex_lock(&s->lock);
+        return;
+    }
     bool rendered = !same_view(w, &j);
-    w->last = j; /* before rendering: the stop hook compares the input version with it */
+    keep_job(w, &j); /* before rendering: the stop hook compares the input version with it */
+    j.lights = w->last_lights;
     omp_set_num_threads(iird_sched_enter(s->env->sched, &s->sched)); /* the frame, its JPEG */
     if (!rendered) { /* quality, exposure, refine or domain changed: no render, no VPL step */
         f = (frame_info){
@@ -414,7 +438,7 @@ static void render_locked(iird_session *s)
         f.stats.whole_sweeps = true;
         f.stats.vpl = refined_vpl(&w->frame_vpl);
     } else {
-        st = render_frame(s, &j, sc, light_index, &f, &err);
+        st = render_frame(s, &j, sc, &f, &err);
         w->last_stats = f.stats;
         w->frame_vpl = f.stats.vpl;
     }
@@ -562,7 +586,7 @@ static void snapshot_locked(iird_session *s)
 
 /* A scene switch while recording: the recording so far goes to the client as a `record` reply
  * (its script names the old scene) and a new one starts on the new scene, its first keys the reset
- * light, the new scene's camera and the exposure, so no script mixes scenes and no reset is lost.
+ * lights, the new scene's camera and the exposure, so no script mixes scenes and no reset is lost.
  * Lock held, after the swap. */
 static void record_scene_switch_locked(iird_session *s)
 {
@@ -580,8 +604,50 @@ static void record_scene_switch_locked(iird_session *s)
         iird_recording_destroy(s->rec), s->rec = NULL;
 }
 
+/* Whether the session's method renders scene `name`'s lights L; else its unsupported error is
+ * queued, naming the methods that would (unlocked). */
+static bool scene_supported(iird_session *s, const char *name, const iird_lights *L, int64_t seq)
+{
+    iir_error err = {0};
+    pthread_mutex_lock(&s->lock);
+    char method[sizeof s->settings.method];
+    memcpy(method, s->settings.method, sizeof method);
+    pthread_mutex_unlock(&s->lock);
+    if (iir_method_supports(method, L->v, L->n, &err) == IIR_OK) return true;
+    char what[300], alt[96];
+    iird_session_alternatives(L->v, L->n, method, alt, sizeof alt);
+    snprintf(err.msg + strlen(err.msg), sizeof err.msg - strlen(err.msg), "%s", alt);
+    snprintf(what, sizeof what, "scene %s with method %s", name, method);
+    worker_error(s, IIRD_E_UNSUPPORTED, seq, what, &err);
+    return false;
+}
+
+/* Scene e and its lights *L become the session's, with e's camera, answered by `state`; *L gets
+ * the old lights and the old scene is returned, both for the caller to free (lock held). */
+static const iird_scene_entry *swap_scene_locked(iird_session *s, const iird_scene_entry *e,
+                                                 iird_lights *L, int64_t seq)
+{
+    const iird_scene_entry *old = s->scene;
+    iird_lights gone = s->lights;
+    s->scene = e;
+    s->lights = *L;
+    *L = gone;
+    record_scene_switch_locked(s);
+    s->camera = e->scene->camera;
+    s->version++;
+    s->generation++;
+    if (seq != IIRD_NO_SEQ) s->seq = seq;
+    s->input_ms = iir_now_ms();
+    iird_state_view v = iird_state_view_locked(s);
+    char *json = iird_json_state(&v, seq);
+    iird_queue_text_locked(s, json, false);
+    free(json);
+    notify_locked(s);
+    return old;
+}
+
 /* Loads the requested scene (seconds for a large one, without the lock), then swaps it in and
- * resets the light and camera to the scene's own. */
+ * resets the lights and camera to the scene's own. */
 static void load_scene_locked(iird_session *s)
 {
     char name[sizeof s->scene_name];
@@ -592,25 +658,18 @@ static void load_scene_locked(iird_session *s)
 
     const iird_scene_entry *e = NULL;
     iir_error err = {0};
+    iird_lights L;
+    char what[160];
+    snprintf(what, sizeof what, "scene %s", name);
     if (iird_scene_cache_acquire(s->env->scenes, name, &e, &err) != IIR_OK) {
-        char what[160];
-        snprintf(what, sizeof what, "scene %s", name);
         worker_error(s, IIRD_E_SCENE_ERROR, seq, what, &err);
         pthread_mutex_lock(&s->lock);
         return;
     }
-    int index;
-    iir_light light = iird_session_light_for(e->scene, &index);
-    pthread_mutex_lock(&s->lock);
-    char method[sizeof s->settings.method];
-    memcpy(method, s->settings.method, sizeof method);
-    pthread_mutex_unlock(&s->lock);
-    if (iir_method_supports(method, &light, 1, &err) != IIR_OK) { /* keep the old scene */
-        char what[300], alt[96];
-        iird_session_alternatives(&light, method, alt, sizeof alt);
-        snprintf(err.msg + strlen(err.msg), sizeof err.msg - strlen(err.msg), "%s", alt);
-        snprintf(what, sizeof what, "scene %s with method %s", name, method);
-        worker_error(s, IIRD_E_UNSUPPORTED, seq, what, &err);
+    bool ok = iird_lights_init(&L, e->scene);
+    if (!ok) worker_error(s, IIRD_E_INTERNAL, seq, what, &(iir_error){.msg = "out of memory"});
+    if (!ok || !scene_supported(s, name, &L, seq)) { /* keep the old scene */
+        iird_lights_free(&L);
         iird_scene_cache_release(s->env->scenes, e);
         pthread_mutex_lock(&s->lock);
         return;
@@ -619,22 +678,9 @@ static void load_scene_locked(iird_session *s)
     s->w.method = NULL;
     s->w.have_frame = false;
     pthread_mutex_lock(&s->lock);
-    const iird_scene_entry *old = s->scene;
-    s->scene = e;
-    s->light = light;
-    s->light_index = index;
-    record_scene_switch_locked(s);
-    s->camera = e->scene->camera;
-    s->version++;
-    s->generation++;
-    if (seq != IIRD_NO_SEQ) s->seq = seq;
-    s->input_ms = iir_now_ms();
-    iird_state_view v = iird_state_view_locked(s);
-    char *json = iird_json_state(&v, seq);
-    iird_queue_text_locked(s, json, false);
-    notify_locked(s);
+    const iird_scene_entry *old = swap_scene_locked(s, e, &L, seq);
     pthread_mutex_unlock(&s->lock);
-    free(json);
+    iird_lights_free(&L);
     iird_scene_cache_release(s->env->scenes, old);
     pthread_mutex_lock(&s->lock);
 }

@@ -166,10 +166,11 @@ export async function startDaemon(IIRD, args, port = 0) {
     }
 }
 
-// A scenes folder for the tests: the shipped Cornell box, and two scenes on its geometry that the
-// shipped ones do not cover: point_box (one point light: iir cannot render it, ir and pt can) and
-// dark_box (no light at all: iird makes up a spot); with {conference: true} the shipped conference
-// room too (a scene that takes a while to load). Removed at exit.
+// A scenes folder for the tests: the shipped Cornell box, and scenes on its geometry that the
+// shipped ones do not cover: point_box (one point light), dark_box (no light at all: iird makes up a
+// spot), two_lights (a spot and a point light 'bulb') and glow_box (a spot, with the box's ceiling
+// lamp left emitting: a material whose indirect light iir leaves out); with {conference: true} the
+// shipped conference room too (a scene that takes a while to load). Removed at exit.
 export function makeScenes(SRC, { conference = false } = {}) {
     fs.mkdirSync(process.env.IIR_TEST_TMP || os.tmpdir(), { recursive: true });
     const dir = fs.mkdtempSync(path.join(process.env.IIR_TEST_TMP || os.tmpdir(), 'iird-scenes-'));
@@ -181,17 +182,20 @@ export function makeScenes(SRC, { conference = false } = {}) {
     const scenes = {
         point_box: [{ type: 'point', name: 'bulb', position: [0, 1.5, 0], intensity: 1.5 }],
         dark_box: [],
-        // iir's VPLs come from the spot only: the point light's indirect light is a state.notes entry
         two_lights: [
             { type: 'spot', name: 'spot', position: [0, 1.9, 0], direction: [0, -1, 0], cone_angle: 60, intensity: [4, 3, 1] },
             { type: 'point', name: 'bulb', position: [0.5, 1.5, 0], intensity: 1.5 },
+        ],
+        glow_box: [
+            { type: 'spot', name: 'spot', position: [0, 1.9, 0], direction: [0, -1, 0], cone_angle: 60, intensity: [4, 3, 1] },
         ],
     };
     for (const [name, lights] of Object.entries(scenes)) {
         const d = path.join(dir, name);
         fs.mkdirSync(d);
         for (const f of ['CornellBox-Original.obj', 'CornellBox-Original.mtl']) fs.copyFileSync(path.join(box, f), path.join(d, f));
-        const sidecar = { file: 'CornellBox-Original.obj', camera, lights, materials: { light: { emission: 0 } } };
+        const sidecar = { file: 'CornellBox-Original.obj', camera, lights };
+        if (name !== 'glow_box') sidecar.materials = { light: { emission: 0 } };
         fs.writeFileSync(path.join(d, `${name}.scene.json`), JSON.stringify(sidecar, null, 2));
     }
     return dir;
@@ -393,7 +397,8 @@ export function tone(rgb) {
 
 // Records, in the page, every message on the client's WebSocket with performance.now(): window.__wire
 // holds {t, socket (1, 2, ... per WebSocket the page opened), dir: 'out'|'in', type, seq, generation,
-// frame, position (a state's light)}. Call before loading the page.
+// frame, position (a state's light), name (a message's: the light a `light` message moves)}. Call
+// before loading the page.
 export async function recordWire(page) {
     await page.addInitScript(() => {
         const log = (window.__wire = []);
@@ -421,7 +426,7 @@ export async function recordWire(page) {
 
             send(data) {
                 const m = JSON.parse(data);
-                log.push({ t: performance.now(), socket: this.socket, dir: 'out', type: m.type, seq: m.seq });
+                log.push({ t: performance.now(), socket: this.socket, dir: 'out', type: m.type, seq: m.seq, name: m.name });
                 return super.send(data);
             }
         };

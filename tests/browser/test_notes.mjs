@@ -1,8 +1,8 @@
 // test_notes.mjs -- what the method leaves out of the scene is said, not silently dropped (issue 16),
-// against a real `iird serve` with two_lights (the Cornell box with a spot and a point light 'bulb'):
+// against a real `iird serve` with glow_box (the Cornell box with a spot and its ceiling lamp emitting):
 //  1. the built-in box under iir has no notice;
-//  2. two_lights under iir: a notice (not an error) names 'bulb' and says its indirect light is left
-//     out (state.notes); screenshot browser_notes.png;
+//  2. glow_box under iir: a notice (not an error) names the lamp's material 'light' and says its
+//     indirect light is left out (state.notes); screenshot browser_notes.png;
 //  3. pt renders every light: the notice goes; back on iir it comes again;
 //  4. it can be dismissed, and stays away while the notes do not change (an exposure change).
 //
@@ -31,12 +31,12 @@ async function main() {
 
     check((await notice(page)) === null, 'the built-in box under iir: no notice');
 
-    await page.selectOption('#scene', 'two_lights');
-    await H.waitFor(page, () => window.iir.state && window.iir.state.scene === 'two_lights' && !window.iir.switching);
+    await page.selectOption('#scene', 'glow_box');
+    await H.waitFor(page, () => window.iir.state && window.iir.state.scene === 'glow_box' && !window.iir.switching);
     await H.waitFor(page, () => !!document.querySelector('#errors [data-kind="notes"]'));
     const n = await notice(page);
     log(`notice: ${n && n.text}`);
-    check(n && n.note && /bulb/.test(n.text) && /indirect/.test(n.text), 'two_lights under iir: a notice names the point light whose indirect light iir leaves out');
+    check(n && n.note && /material 'light'/.test(n.text) && /indirect/.test(n.text), 'glow_box under iir: a notice names the emitting material whose indirect light iir leaves out');
     await page.screenshot({ path: path.resolve('browser_notes.png') });
 
     await page.selectOption('#param-method', 'pt');

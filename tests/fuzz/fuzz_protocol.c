@@ -63,7 +63,11 @@ static void apply(const iird_msg *m, const iird_limits *lim)
     }
     fuzz_note("applied message type %d", (int)m->type);
     /* the state reply the session sends after a change */
-    iird_state_view view = {"cornell_box", &light, &camera, &settings, 1, false, NULL};
+    iird_state_view view = {.scene = "cornell_box",
+                            .light = &light,
+                            .camera = &camera,
+                            .settings = &settings,
+                            .generation = 1};
     free(iird_json_state(&view, m->seq));
 }
 

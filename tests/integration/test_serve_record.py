@@ -5,7 +5,8 @@ reset to (issue 15, finding 8); a recording replays what the browser showed (iss
 moves the light and the camera and changes the exposure is recorded, the script rendered with `iird
 render --anim` at the session's size, and its first and last frames match the session's PNG snapshots
 at the start and the stop; also on a scene without lights, whose made-up spot the script moves offline
-too. Usage: test_serve_record.py IIRD SOURCE_DIR"""
+too, and on a scene with two lights, one moved, one switched off (issue 11: a script records every
+light, a "lights" track each). Usage: test_serve_record.py IIRD SOURCE_DIR"""
 
 import asyncio
 import json
@@ -47,9 +48,10 @@ class RecordSceneTest(DaemonTest):
             seq, r = await c.request({"type": "record", "action": "stop"}, "record")
             script = r["script"]
             self.assertEqual(script.get("scene"), "cornell_box", script)
-            key0 = script["light"]["keys"][0]
+            self.assertEqual([t["name"] for t in script["lights"]], ["spot"], script["lights"])
+            key0 = script["lights"][0]["keys"][0]
             self.assertEqual(key0.get("t"), 0)
-            for a, b in zip(key0["position"], st["light"]["position"]):
+            for a, b in zip(key0["position"], st["lights"][0]["position"]):
                 self.assertAlmostEqual(a, b, places=4, msg="the new recording starts at the reset light")
         finally:
             await c.close()
@@ -64,6 +66,22 @@ def image_diff(a, b):
     pa, pb = a.tobytes(), b.tobytes()
     diffs = [abs(x - y) for x, y in zip(pa, pb)]
     return sum(diffs) / len(diffs), sum(d > 8 for d in diffs) / len(diffs)
+
+
+def box_room(scenes, name, lights=None):
+    """A scene folder `name` in scenes: the Cornell box's mesh, with a sidecar giving these lights
+    (None: no sidecar, the mesh's lights: none)."""
+    room = os.path.join(scenes, name)
+    os.makedirs(room)
+    box = os.path.join(iirserve.SRC, "scenes", "cornell_box")
+    for f in ("CornellBox-Original.obj", "CornellBox-Original.mtl"):
+        shutil.copy(os.path.join(box, f), room)
+    if lights is not None:
+        with open(os.path.join(room, f"{name}.scene.json"), "w") as f:
+            json.dump({"file": "CornellBox-Original.obj", "materials": {"light": {"emission": 0}},
+                       "camera": {"position": [0, 1, 3.9], "target": [0, 1, 0], "up": [0, 1, 0], "fov_y": 39.3},
+                       "lights": lights}, f)
+    return room
 
 
 async def settled_snapshot(c, seq, generation):
@@ -85,11 +103,7 @@ class RecordReplayTest(DaemonTest):
     async def test_replay_on_a_scene_without_lights(self):
         """The made-up spot (state.default_light) is the light the script moves offline too."""
         with tempfile.TemporaryDirectory(dir=os.environ.get("IIR_TEST_TMP")) as scenes:
-            room = os.path.join(scenes, "dark_room")
-            os.makedirs(room)
-            box = os.path.join(iirserve.SRC, "scenes", "cornell_box")
-            for f in ("CornellBox-Original.obj", "CornellBox-Original.mtl"):
-                shutil.copy(os.path.join(box, f), room)
+            room = box_room(scenes, "dark_room")
             d = Daemon(*FAST_ARGS, "--scenes", scenes, "dark_room", scenes=False)
             try:
                 c = await Client.connect(d)
@@ -98,9 +112,37 @@ class RecordReplayTest(DaemonTest):
             finally:
                 stop_class_daemon(d)
 
-    async def replay(self, c, scenes_dir=None):
-        """Records c's session moving light, camera and exposure, renders the script offline and
-        compares its first and last frames with the session's snapshots; closes c."""
+    async def test_replay_several_lights(self):
+        """Two lights: the bulb moves and dims, the spot is switched off and its cone narrowed while
+        off; the script has a track for each (the spot's keys say when it is off) and replays to
+        the session's frames."""
+        with tempfile.TemporaryDirectory(dir=os.environ.get("IIR_TEST_TMP")) as scenes:
+            box_room(scenes, "two_room", [
+                {"type": "spot", "name": "spot", "position": [0, 1.9, 0], "direction": [0, -1, 0], "cone_angle": 60,
+                 "intensity": [4, 3, 1]},
+                {"type": "point", "name": "bulb", "position": [0.5, 1.2, 0.3], "intensity": 2}])
+            d = Daemon(*FAST_ARGS, "--scenes", scenes, "two_room", scenes=False)
+            moves = [
+                {"type": "light", "name": "bulb", "position": [-0.4, 1.0, 0.2]},
+                {"type": "light", "name": "spot", "on": False},
+                {"type": "camera", "position": [1.2, 1.1, 3.6], "target": [0, 1, 0]},
+                {"type": "light", "name": "spot", "cone_angle": 40},
+                {"type": "light", "name": "bulb", "intensity": 1.5, "position": [-0.3, 1.4, -0.2]},
+            ]
+            try:
+                c = await Client.connect(d)
+                script = await self.replay(c, scenes, moves, ["spot", "bulb"])
+            finally:
+                stop_class_daemon(d)
+            spot = script["lights"][0]["keys"]
+            said = [k["on"] for k in spot if "on" in k]  # given where it changes
+            self.assertEqual(said[-1:], [False], f"the spot ends off: {spot}")
+            self.assertIs(spot[0].get("on", True), True, spot[0])
+
+    async def replay(self, c, scenes_dir=None, moves=None, lights=("spot",)):
+        """Records c's session moving lights, camera and exposure, renders the script offline and
+        compares its first and last frames with the session's snapshots; closes c and returns the
+        script. lights: the names the script's light tracks must have."""
         try:
             await c.wait_frame()
             seq, st = await c.request({"type": "params", **PT, "exposure": 0}, "state")
@@ -109,7 +151,7 @@ class RecordReplayTest(DaemonTest):
             first = await settled_snapshot(c, seq, gen)
             await c.request({"type": "record", "action": "start", "fps": 5}, "record")
             # the light moves and turns, the camera orbits and comes closer, the exposure goes up
-            moves = [
+            moves = moves or [
                 {"type": "light", "position": [0.3, 1.7, 0.2], "direction": [-0.2, -1, -0.1]},
                 {"type": "camera", "position": [1.2, 1.1, 3.6], "target": [0, 1, 0]},
                 {"type": "light", "position": [-0.4, 1.6, -0.3], "target": [0.2, 0, 0.1], "cone_angle": 50},
@@ -129,11 +171,13 @@ class RecordReplayTest(DaemonTest):
         finally:
             await c.close()
         script = r["script"]
-        self.assertEqual(script["light"].get("name"), "spot", "the light track names its light")
-        for part in ("light", "camera", "exposure"):
+        for part in ("lights", "camera", "exposure"):
             self.assertIn(part, script, f"the script records the {part}")
-        self.assertEqual([k["stops"] for k in script["exposure"]["keys"]], [0, 1.5])
-        self.assertGreaterEqual(len(script["camera"]["keys"]), 3)
+        self.assertNotIn("light", script, "every light is a track of lights")
+        self.assertEqual([t.get("name") for t in script["lights"]], list(lights), "the tracks name their lights")
+        stops = [k["stops"] for k in script["exposure"]["keys"]]
+        self.assertEqual(stops, [0, 1.5] if any(m["type"] == "params" for m in moves) else [0])
+        self.assertGreaterEqual(len(script["camera"]["keys"]), 2)
         with tempfile.TemporaryDirectory(dir=os.environ.get("IIR_TEST_TMP")) as tmp:
             path = os.path.join(tmp, "recorded.json")
             with open(path, "w") as f:
@@ -165,6 +209,7 @@ class RecordReplayTest(DaemonTest):
                     sheet.paste(want.convert("RGB"), (0, row * (h + 8)))
                     sheet.paste(Image.open(os.path.join(out, name)).convert("RGB"), (w + 8, row * (h + 8)))
                 sheet.save(shots)
+        return script
 
     async def send(self, c, m):
         seq = c.next_seq()

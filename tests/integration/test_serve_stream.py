@@ -393,7 +393,10 @@ class StreamTest(DaemonTest):
             self.assertIsInstance(script, dict)
             self.assertEqual(script.get("fps"), 24)
             self.assertAlmostEqual(script.get("duration", -1), r["duration"], places=3)
-            keys = script.get("light", {}).get("keys")
+            tracks = script.get("lights")
+            self.assertIsInstance(tracks, list, "every light is a track of \"lights\"")
+            self.assertEqual([t.get("name") for t in tracks], [L["name"] for L in c.welcome["state"]["lights"]])
+            keys = tracks[0].get("keys")  # the moved light's (the box's only light)
             self.assertIsInstance(keys, list)
             self.assertEqual(len(keys), r["keyframes"])
             ts = [k.get("t") for k in keys]

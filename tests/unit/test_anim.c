@@ -1,7 +1,8 @@
 /* test_anim.c -- animation scripts: keys hit exactly, linear and Catmull-Rom interpolation (C1),
  * held fields, step keys, orbit and sweep paths, frame arithmetic, exposure tracks, the camera's up
- * and the light track's name, a recording's script, rejection of bad scripts with the field's path
- * in the message, and the shipped Cornell-box paths. */
+ * and the light track's name, several named light tracks (on/off, sun directions, glTF spots,
+ * area lights) and their check against a scene's lights, a recording's script, rejection of bad
+ * scripts with the field's path in the message, and the shipped Cornell-box paths. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -333,6 +334,190 @@ static void test_recorded_script(void **state)
     iir_anim_destroy(a);
 }
 
+/* ======================== several lights ======================== */
+
+/* A spot (the moved light), a point lamp, a sun, a glTF spot, an area light and a spare point. */
+static void scene_lights(iir_light L[6])
+{
+    L[0] = base_spot();
+    L[1] = (iir_light){.type = IIR_LIGHT_POINT, .name = "lamp"};
+    L[1].position = iir_v3(0.5f, 1.f, 0.f);
+    L[1].intensity = iir_v3s(2.f);
+    L[2] = (iir_light){.type = IIR_LIGHT_SUN, .name = "sun", .radius = 3.f};
+    L[2].position = iir_v3(0.f, 1.f, 0.f);
+    L[2].direction = iir_normalize(iir_v3(1.f, -1.f, 0.f));
+    L[2].up = iir_v3(0.f, 1.f, 0.f);
+    L[2].intensity = iir_v3s(5.f);
+    L[3] = base_spot();
+    snprintf(L[3].name, sizeof L[3].name, "gltf");
+    L[3].profile = IIR_SPOT_GLTF;
+    L[3].inner_angle = iir_radians(10.f);
+    L[4] = (iir_light){.type = IIR_LIGHT_AREA, .name = "panel", .size = {0.4f, 0.3f}};
+    L[4].position = iir_v3(0.f, 1.98f, 0.f);
+    L[4].direction = iir_v3(0.f, -1.f, 0.f);
+    L[4].up = iir_v3(0.f, 0.f, 1.f);
+    L[4].intensity = iir_v3s(10.f);
+    L[5] = L[1];
+    snprintf(L[5].name, sizeof L[5].name, "spare");
+}
+
+static const char SEVERAL[] =
+    "{\"duration\": 4, \"light\": {\"keys\": [{\"t\": 0, \"position\": [0, 1.5, 0]}]},"
+    "\"lights\": ["
+    "{\"name\": \"lamp\", \"interpolation\": \"linear\", \"keys\": ["
+    "  {\"t\": 0, \"position\": [0, 1, 0]}, {\"t\": 2, \"position\": [1, 1, 0], \"on\": false},"
+    "  {\"t\": 3, \"on\": true, \"intensity\": 4}]},"
+    "{\"name\": \"sun\", \"keys\": [{\"t\": 0, \"direction\": [1, -1, 0]},"
+    "  {\"t\": 4, \"direction\": [-1, -1, 0]}]},"
+    "{\"name\": \"gltf\", \"keys\": [{\"t\": 0, \"inner_angle\": 20, \"cone_angle\": 40},"
+    "  {\"t\": 4, \"inner_angle\": 60}]},"
+    "{\"name\": \"panel\", \"keys\": [{\"t\": 0, \"size\": [1, 2], \"up\": [1, 0, 0]},"
+    "  {\"t\": 2, \"size\": [3, 2], \"on\": false}]}]}";
+
+/* Named tracks move their lights (the light track the moved one), on/off steps at its keys (on
+ * before the first key that gives it), a sun turns but keeps its disk, a glTF spot's inner cone
+ * stays inside its cone, an area light resizes; unnamed lights keep their pose; in place works. */
+static void test_several_lights(void **state)
+{
+    (void)state;
+    iir_light L[6], out[6];
+    scene_lights(L);
+    iir_anim *a = parse_ok(SEVERAL);
+    assert_int_equal(iir_anim_num_light_tracks(a), 4);
+    assert_string_equal(iir_anim_light_track_name(a, 3), "panel");
+    assert_null(iir_anim_light_track_name(a, 4));
+    iir_error err = {0};
+    if (iir_anim_check_lights(a, L, 6, 0, &err) != IIR_OK) fail_msg("%s", err.msg);
+    iir_anim_lights(a, L, 6, 0, 1.0, out);
+    assert_near3(out[0].position, iir_v3(0, 1.5f, 0), 0.f);
+    assert_near3(out[1].position, iir_v3(0.5f, 1, 0), 1e-6f);
+    /* on (no key before gives "on"), at the first intensity key's value (held before it) */
+    assert_near3(out[1].intensity, iir_v3s(4.f), 0.f);
+    assert_near3(out[2].direction, iir_normalize(iir_v3(0.5f, -1.f, 0.f)), 1e-6f);
+    assert_near3(out[2].position, L[2].position, 0.f);
+    assert_float_equal(out[2].radius, 3.f, 0.f);
+    assert_float_equal(out[3].inner_angle, iir_radians(30.f), 1e-6f); /* 20 -> 60 over 4 s */
+    assert_float_equal(out[3].cone_angle, iir_radians(40.f), 1e-6f);
+    assert_float_equal(out[4].size.x, 2.f, 1e-6f);
+    assert_near3(out[4].up, iir_v3(1, 0, 0), 0.f);
+    assert_memory_equal(&out[5], &L[5], sizeof L[5]);
+    iir_anim_lights(a, L, 6, 0, 2.0, out); /* off from t = 2 */
+    assert_near3(out[1].intensity, iir_v3s(0.f), 0.f);
+    assert_near3(out[4].intensity, iir_v3s(0.f), 0.f);
+    assert_near3(out[1].position, iir_v3(1, 1, 0), 0.f);
+    iir_anim_lights(a, L, 6, 0, 2.999, out);
+    assert_near3(out[1].intensity, iir_v3s(0.f), 0.f);
+    iir_anim_lights(a, L, 6, 0, 3.0, out); /* back on, at the key's intensity */
+    assert_near3(out[1].intensity, iir_v3s(4.f), 0.f);
+    iir_anim_lights(a, L, 6, 0, 4.0, out);
+    assert_float_equal(out[3].inner_angle, out[3].cone_angle, 0.f); /* 60 > cone 40: clamped */
+    assert_near3(out[2].direction, iir_normalize(iir_v3(-1, -1, 0)), 1e-6f);
+    for (int i = 0; i < 4; i++)
+        if (iir_light_validate(&out[i], &err) != IIR_OK) fail_msg("light %d: %s", i, err.msg);
+    memcpy(out, L, sizeof out); /* in place */
+    iir_anim_lights(a, out, 6, 0, 4.0, out);
+    assert_near3(out[2].direction, iir_normalize(iir_v3(-1, -1, 0)), 1e-6f);
+    /* without a light track, a "lights" track may move the moved light */
+    iir_anim *b = parse_ok("{\"duration\": 1, \"lights\": [{\"name\": \"spot\", \"keys\": ["
+                           "{\"t\": 0, \"position\": [0.1, 1, 0]}]}]}");
+    assert_int_equal(iir_anim_check_lights(b, L, 6, 0, &err), IIR_OK);
+    iir_anim_lights(b, L, 6, 0, 0.5, out);
+    assert_near3(out[0].position, iir_v3(0.1f, 1, 0), 0.f);
+    iir_anim_destroy(b);
+    /* no light track moved: the light track is not applied */
+    iir_anim_lights(a, L, 6, 6, 1.0, out);
+    assert_memory_equal(&out[0], &L[0], sizeof L[0]);
+    iir_anim_destroy(a);
+}
+
+/* A sun's track aims it: an orbit with a target turns its direction towards the target (a day
+ * across the sky), never moving its disk; the light track may switch its light off too. */
+static void test_sun_paths(void **state)
+{
+    (void)state;
+    iir_light L[6], out[6];
+    scene_lights(L);
+    iir_anim *a = parse_ok(
+        "{\"duration\": 2, \"light\": {\"keys\": [{\"t\": 1, \"on\": false}]},"
+        "\"lights\": [{\"name\": \"sun\", \"orbit\": {\"center\": [0, 0, 0], \"radius\": 10,"
+        "\"turns\": 0.5, \"target\": [0, 0, 0]}}]}");
+    iir_error err = {0};
+    if (iir_anim_check_lights(a, L, 6, 0, &err) != IIR_OK) fail_msg("%s", err.msg);
+    iir_anim_lights(a, L, 6, 0, 0.0, out);
+    assert_near3(out[2].direction, iir_v3(-1, 0, 0), 1e-6f); /* from (10, 0, 0) to the origin */
+    assert_near3(out[0].intensity, L[0].intensity, 0.f);
+    iir_anim_lights(a, L, 6, 0, 1.0, out);
+    assert_near3(out[2].direction, iir_v3(0, 0, -1), 1e-5f); /* from (0, 0, 10) */
+    assert_near3(out[2].position, L[2].position, 0.f);
+    assert_near3(out[0].intensity, iir_v3s(0.f), 0.f);
+    iir_anim_destroy(a);
+}
+
+typedef struct check_case {
+    const char *json, *needle;
+} check_case;
+
+#define NAMED(name, k)                                                                             \
+    "{\"duration\": 5, \"lights\": [{\"name\": \"" name "\", \"keys\": [" k "]}]}"
+
+static const check_case CHECK_BAD[] = {
+    {NAMED("lmap", "{\"t\": 0}"),
+     "no light named 'lmap' (its lights: spot, lamp, sun, gltf, panel, "
+     "spare, lamp2)"},
+    {NAMED("twin", "{\"t\": 0}"), "several lights named 'twin'"},
+    {"{\"duration\": 5, \"light\": {\"keys\": [{\"t\": 0}]}, \"lights\": [{\"name\": \"spot\","
+     "\"keys\": [{\"t\": 0}]}]}",
+     "lights[0].name: 'spot' is the light the \"light\" track moves"},
+    {NAMED("lamp", "{\"t\": 0},{\"t\": 1, \"cone_angle\": 30}"),
+     "lights[0].keys[1].cone_angle: light 'lamp' is a point light"},
+    {NAMED("sun", "{\"t\": 0, \"cone_angle\": 30}"), "lights[0].keys[0].cone_angle"},
+    {NAMED("spot", "{\"t\": 0, \"inner_angle\": 30}"), "lights[0].keys[0].inner_angle"},
+    {NAMED("gltf", "{\"t\": 0, \"smooth\": 3}"), "lights[0].keys[0].smooth"},
+    {NAMED("spot", "{\"t\": 0, \"size\": [1, 1]}"), "lights[0].keys[0].size"},
+    {NAMED("sun", "{\"t\": 0, \"position\": [0, 5, 0]}"), "lights[0].keys[0]: 'sun' is a sun"},
+    {"{\"duration\": 5, \"lights\": [{\"name\": \"sun\", \"sweep\": {\"from\": [0, 5, 0],"
+     "\"to\": [1, 5, 0]}}]}",
+     "lights[0].sweep: 'sun' is a sun"},
+    {"{\"duration\": 5, \"light\": {\"keys\": [{\"t\": 0, \"size\": [1, 1]}]}}",
+     "light.keys[0].size: light 'spot' is a cosine spot"},
+};
+
+/* A script that does not fit the scene's lights is refused once they are known, with the
+ * script's name, the field's path and what would fit. */
+static void test_check_lights(void **state)
+{
+    (void)state;
+    iir_light L[8];
+    scene_lights(L);
+    L[6] = L[1];
+    snprintf(L[6].name, sizeof L[6].name, "lamp2");
+    L[7] = L[1];
+    snprintf(L[7].name, sizeof L[7].name, "twin");
+    iir_light twins[2] = {L[7], L[7]};
+    for (size_t i = 0; i < sizeof CHECK_BAD / sizeof CHECK_BAD[0]; i++) {
+        iir_anim *a = NULL;
+        iir_error err = {0};
+        if (iir_anim_parse(CHECK_BAD[i].json, "x.json", &a, &err) != IIR_OK)
+            fail_msg("case %zu: %s", i, err.msg);
+        bool two = strstr(CHECK_BAD[i].json, "twin") != NULL;
+        iir_status st = two ? iir_anim_check_lights(a, twins, 2, 2, &err)
+                            : iir_anim_check_lights(a, L, 7, 0, &err);
+        assert_int_equal(st, IIR_ERR_INVALID);
+        if (!strstr(err.msg, CHECK_BAD[i].needle) || strncmp(err.msg, "x.json: ", 8) != 0)
+            fail_msg("case %zu: message '%s' lacks '%s'", i, err.msg, CHECK_BAD[i].needle);
+        iir_anim_destroy(a);
+    }
+    /* a scene without lights: the made-up spot may be named; the list says there are none */
+    iir_anim *a = parse_ok(NAMED("spot", "{\"t\": 0, \"cone_angle\": 30}"));
+    iir_error err = {0};
+    assert_int_equal(iir_anim_check_lights(a, L, 1, 0, &err), IIR_OK);
+    iir_anim_destroy(a);
+    a = parse_ok(NAMED("lamp", "{\"t\": 0}"));
+    assert_int_equal(iir_anim_check_lights(a, NULL, 0, 0, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "(it has no lights)"));
+    iir_anim_destroy(a);
+}
+
 /* floor(duration * fps) + 1 frames at frame / fps, clamped. */
 static void test_frames(void **state)
 {
@@ -418,6 +603,22 @@ static const bad_case BAD[] = {
     {"{\"duration\": 5, \"exposure\": {\"orbit\": {\"center\": [0, 1, 0], \"radius\": 1}}}",
      "exposure.orbit"},
     {"{\"duration\": 5, \"exposure\": {}}", "exposure"},
+    {"{\"duration\": 5, \"lights\": {}}", "lights"},
+    {"{\"duration\": 5, \"lights\": [{\"keys\": [{\"t\": 0}]}]}", "lights[0].name"},
+    {"{\"duration\": 5, \"lights\": [{\"name\": \"a\", \"keys\": [{\"t\": 0}]},"
+     "{\"name\": \"a\", \"keys\": [{\"t\": 0}]}]}",
+     "lights[1].name"},
+    {"{\"duration\": 5, \"light\": {\"name\": \"a\", \"keys\": [{\"t\": 0}]},"
+     "\"lights\": [{\"name\": \"a\", \"keys\": [{\"t\": 0}]}]}",
+     "lights[0].name"},
+    {"{\"duration\": 5, \"lights\": [{\"name\": \"a\", \"keys\": [{\"t\": 0, \"on\": 1}]}]}",
+     "lights[0].keys[0].on"},
+    {"{\"duration\": 5, \"lights\": [{\"name\": \"a\", \"keys\": [{\"t\": 0, \"fov_y\": 1}]}]}",
+     "lights[0].keys[0].fov_y"},
+    {LK("{\"t\": 0, \"size\": [1, 0]}"), "light.keys[0].size"},
+    {LK("{\"t\": 0, \"size\": [1, 2, 3]}"), "light.keys[0].size"},
+    {LK("{\"t\": 0, \"cone_angle\": 30, \"inner_angle\": 40}"), "light.keys[0].inner_angle"},
+    {LK("{\"t\": 0, \"up\": [0, 0, 0]}"), "light.keys[0].up"},
     {"[1, 2]", "top level"},
     {"{\"duration\": 5,", "JSON"},
 };
@@ -616,6 +817,9 @@ int main(void)
         cmocka_unit_test(test_exposure),
         cmocka_unit_test(test_camera_up_and_light_name),
         cmocka_unit_test(test_recorded_script),
+        cmocka_unit_test(test_several_lights),
+        cmocka_unit_test(test_sun_paths),
+        cmocka_unit_test(test_check_lights),
     };
     const struct CMUnitTest scene_tests[] = {cmocka_unit_test(test_paths_mean_their_names)};
     int failed = cmocka_run_group_tests(tests, NULL, NULL);

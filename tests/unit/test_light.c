@@ -1,7 +1,9 @@
-/* test_light.c -- spot, glTF spot, point and sun lights: the disk-domain mappings (round trip,
- * cosine distribution; the equal-area cap map's round trip and area), glTF's profile, flux against
- * numeric integration of the intensity, emission sampling (mean beta = flux), fitting a sun to
- * the scene, the light set's sun sample, and validation of nonsense lights. */
+/* test_light.c -- spot, glTF spot, point, sun and area lights: the disk-domain mappings (round
+ * trip, cosine distribution; the equal-area cap map's round trip and area), glTF's profile, flux
+ * against numeric integration of the intensity, emission sampling (mean beta = flux), fitting a
+ * sun to the scene, the light set's sun sample, validation of nonsense lights; the area light's
+ * ray-rectangle test, its next-event samples against the closed-form irradiance of a rectangle on
+ * a parallel plane, and its MIS pdf (consistent with the samples, integrating to one). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -511,6 +513,244 @@ static void test_gltf_and_sun_validation(void **state)
     assert_string_equal(iir_light_kind(&cos_spot), "spot");
 }
 
+/* ---- the area light ---- */
+
+static iir_light make_area(void)
+{
+    iir_light l = {.type = IIR_LIGHT_AREA, .name = "panel"};
+    l.position = iir_v3(0.2f, 1.5f, -0.3f);
+    l.direction = iir_normalize(iir_v3(0.3f, -1.f, 0.2f));
+    l.up = iir_v3(0.f, 0.f, 1.f);
+    l.size = iir_v2(0.6f, 0.25f);
+    l.intensity = iir_v3(4.f, 3.f, 2.f);
+    return l;
+}
+
+/* Light-local coordinates of world point x on area light l (q in [-1/2, 1/2]^2 on it) and its
+ * height above the plane along f. */
+static iir_vec3 area_local(const iir_light *l, iir_vec3 x)
+{
+    iir_frame fr = iir_spot_frame(l);
+    iir_vec3 d = iir_sub(x, l->position);
+    return iir_v3(iir_dot(d, fr.r) / l->size.x, iir_dot(d, fr.u) / l->size.y, iir_dot(d, fr.f));
+}
+
+static void test_area_validation_flux_intensity(void **state)
+{
+    (void)state;
+    iir_error err = {0};
+    iir_light l = make_area();
+    assert_int_equal(iir_light_validate(&l, &err), IIR_OK);
+    assert_string_equal(iir_light_kind(&l), "area");
+    const float bad[] = {0.f, -1.f, NAN, INFINITY};
+    for (int k = 0; k < 4; k++) {
+        l = make_area();
+        l.size.y = bad[k];
+        assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+        assert_non_null(strstr(err.msg, "size"));
+        assert_non_null(strstr(err.msg, "panel"));
+        l = make_area();
+        l.size.x = bad[k];
+        assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+    }
+    l = make_area();
+    l.direction = iir_v3s(0.f);
+    assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "direction"));
+    l = make_area();
+    l.intensity.z = -1.f;
+    assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+
+    /* Phi = pi L w h, and the far-field lobe L w h cos integrates to it */
+    l = make_area();
+    float A = l.size.x * l.size.y;
+    iir_vec3 phi = iir_light_flux(&l), num = integrate_intensity(&l);
+    assert_true(fabsf(phi.x - IIR_PI * 4.f * A) < 1e-5f * phi.x);
+    assert_true(fabsf(phi.z - IIR_PI * 2.f * A) < 1e-5f * phi.z);
+    assert_true(fabsf(num.x - phi.x) < 5e-3f * phi.x);
+    iir_frame fr = iir_spot_frame(&l);
+    assert_true(fabsf(iir_light_intensity(&l, fr.f).y - 3.f * A) < 1e-5f);
+    iir_vec3 w60 = iir_add(iir_scale(fr.f, 0.5f), iir_scale(fr.r, sqrtf(0.75f)));
+    assert_true(fabsf(iir_light_intensity(&l, w60).y - 1.5f * A) < 1e-5f);
+    assert_true(iir_is_black(iir_light_intensity(&l, iir_neg(fr.f))));
+}
+
+/* Emission: origins uniform on the rectangle (E q = 0, E q^2 = 1/12), directions the cosine lobe
+ * about f (E cos = 2/3, E cos^2 = 1/2), beta = pi L w h, so the mean is the flux; the 2-D call's
+ * hashed origins are as uniform and uncorrelated with the directions. */
+static void check_area_emission(const iir_light *l, bool hashed)
+{
+    iir_frame fr = iir_spot_frame(l);
+    iir_rng rng = iir_rng_make(17, hashed);
+    enum { N = 200000 };
+    double m[2] = {0, 0}, m2[2] = {0, 0}, c1 = 0, c2 = 0, corr = 0, sum = 0;
+    for (int i = 0; i < N; i++) {
+        iir_vec2 u = iir_rng_uniform2(&rng);
+        iir_light_ray r = hashed ? iir_light_sample_emission(l, u)
+                                 : iir_light_sample_emission_from(l, u, iir_rng_uniform2(&rng));
+        iir_vec3 q = area_local(l, r.origin);
+        assert_true(fabsf(q.x) <= 0.5f + 1e-5f && fabsf(q.y) <= 0.5f + 1e-5f);
+        assert_true(fabsf(q.z) < 1e-5f);
+        float c = iir_dot(r.dir, fr.f);
+        assert_true(c >= 0.f && fabsf(iir_length(r.dir) - 1.f) < 1e-5f);
+        m[0] += q.x, m[1] += q.y, m2[0] += q.x * q.x, m2[1] += q.y * q.y;
+        c1 += c, c2 += c * c, corr += q.x * iir_dot(r.dir, fr.r);
+        sum += r.beta.x;
+    }
+    for (int k = 0; k < 2; k++) {
+        assert_true(fabs(m[k] / N) < 0.003);
+        assert_true(fabs(m2[k] / N - 1.0 / 12) < 0.002);
+    }
+    assert_true(fabs(c1 / N - 2.0 / 3) < 0.003 && fabs(c2 / N - 0.5) < 0.003);
+    assert_true(fabs(corr / N) < 0.003); /* E[q.x w.r] = 0 for independent origin and direction */
+    double phi = iir_light_flux(l).x;
+    assert_true(fabs(sum / N - phi) < 1e-5 * phi);
+}
+
+static void test_area_emission_sampling(void **state)
+{
+    (void)state;
+    iir_light l = make_area();
+    check_area_emission(&l, false);
+    check_area_emission(&l, true);
+    /* u_origin is the corner-to-corner map q = u_origin - 1/2 */
+    iir_frame fr = iir_spot_frame(&l);
+    iir_light_ray r = iir_light_sample_emission_from(&l, iir_v2(0.5f, 0.5f), iir_v2(0.f, 1.f));
+    iir_vec3 corner = iir_madd(iir_madd(l.position, fr.r, -0.3f), fr.u, 0.125f);
+    assert_true(iir_length(iir_sub(r.origin, corner)) < 1e-5f);
+    assert_true(iir_length(iir_sub(r.dir, fr.f)) < 1e-5f); /* the disk's centre is the normal */
+}
+
+/* Rays aimed at points of the rectangle's plane, inside and outside it, from both sides. */
+static void test_area_hit(void **state)
+{
+    (void)state;
+    iir_light l = make_area();
+    iir_frame fr = iir_spot_frame(&l);
+    iir_rng rng = iir_rng_make(3, 3);
+    int hits = 0;
+    for (int i = 0; i < 20000; i++) {
+        float qx = 1.4f * iir_rng_uniform(&rng) - 0.7f, qy = 1.4f * iir_rng_uniform(&rng) - 0.7f;
+        iir_vec3 x = iir_area_light_point(&l, &fr, iir_v2(qx, qy));
+        iir_vec3 w = iir_normalize(iir_v3(iir_rng_uniform(&rng) - .5f, iir_rng_uniform(&rng) - .5f,
+                                          iir_rng_uniform(&rng) - .5f));
+        float t0 = 0.1f + 3.f * iir_rng_uniform(&rng), len = 0.5f + iir_rng_uniform(&rng);
+        iir_vec3 d = iir_scale(w, len), o = iir_madd(x, d, -t0 / len);
+        float tmax = i % 4 == 0 ? 0.9f * t0 / len : INFINITY;
+        float t = iir_area_light_hit(&l, o, d, tmax);
+        bool inside = fabsf(qx) < 0.4999f && fabsf(qy)<0.4999f, outside = fabsf(qx)> 0.5001f ||
+                      fabsf(qy) > 0.5001f;
+        bool front = iir_dot(w, fr.f)<-1e-3f, behind = iir_dot(w, fr.f)> 1e-3f;
+        if (inside && front && i % 4) {
+            assert_true(fabsf(t * len - t0) < 1e-4f * (1.f + t0));
+            hits++;
+        }
+        if (outside || behind || i % 4 == 0) assert_true(isinf(t));
+    }
+    assert_true(hits > 2000);
+    /* parallel to the plane, and starting on its far side */
+    assert_true(isinf(iir_area_light_hit(&l, iir_madd(l.position, fr.f, 0.1f), fr.r, INFINITY)));
+    assert_true(
+        isinf(iir_area_light_hit(&l, iir_madd(l.position, fr.f, -0.1f), iir_neg(fr.f), 1.f)));
+    assert_true(fabsf(iir_area_light_hit(&l, iir_madd(l.position, fr.f, 0.1f), iir_neg(fr.f), 1.f) -
+                      0.1f) < 1e-5f);
+}
+
+/* The form factor from a point to a parallel rectangle [0, a] x [0, b] (a, b signed) at height c
+ * whose corner lies straight above it; F is odd in a and in b, so signed corners add up any
+ * rectangle in the plane. E = pi L F. */
+static double corner_form_factor(double a, double b, double c)
+{
+    double A = a / c, B = b / c, sa = sqrt(1 + A * A), sb = sqrt(1 + B * B);
+    return (A / sa * atan(B / sa) + B / sb * atan(A / sb)) / (2 * M_PI);
+}
+
+/* Irradiance at x from area light l when x lies on a plane parallel to it and faces it. */
+static double area_irradiance(const iir_light *l, iir_vec3 x, double L)
+{
+    iir_vec3 q = area_local(l, x);
+    double c = -q.z, x0 = (-0.5 - q.x) * l->size.x, x1 = (0.5 - q.x) * l->size.x;
+    double y0 = (-0.5 - q.y) * l->size.y, y1 = (0.5 - q.y) * l->size.y;
+    double F = corner_form_factor(x1, y1, c) - corner_form_factor(x0, y1, c) -
+               corner_form_factor(x1, y0, c) + corner_form_factor(x0, y0, c);
+    return M_PI * L * F;
+}
+
+/* NEE of an area light through the set: points on the rectangle, pdf d^2 / (A cos) times the pick
+ * probability, equal to what iir_lightset_hit_light reports for a BSDF ray to the same point; the
+ * estimate of the irradiance on a parallel plane matches the form factor; nothing from behind. */
+static void test_lightset_area(void **state)
+{
+    (void)state;
+    iir_scene sc;
+    memset(&sc, 0, sizeof sc);
+    iir_light lights[2] = {make_area(), make_spot(30.f, 0.f)};
+    iir_lightset *set = iir_lightset_create(&sc, lights, 2);
+    assert_non_null(set);
+    assert_true(iir_lightset_has_area_lights(set));
+    assert_int_equal(iir_lightset_num_lights(set), 2);
+    double f0 = iir_luminance(iir_light_flux(&lights[0]));
+    double pmf = f0 / (f0 + iir_luminance(iir_light_flux(&lights[1])));
+    iir_frame fr = iir_spot_frame(&lights[0]);
+    const iir_vec2 offsets[] = {{0.f, 0.f}, {0.4f, -0.2f}, {1.5f, 1.f}};
+    for (int k = 0; k < 3; k++) {
+        iir_vec3 x = iir_madd(iir_area_light_point(&lights[0], &fr, offsets[k]), fr.f, 0.7f);
+        iir_rng rng = iir_rng_make(11, (uint64_t)k);
+        enum { N = 100000 };
+        double E = 0;
+        for (int i = 0; i < N; i++) {
+            iir_light_sample ls = iir_lightset_sample(set, x, 0.f, iir_rng_uniform2(&rng));
+            assert_false(ls.is_delta);
+            assert_true(ls.pdf > 0.f);
+            assert_true(fabsf(area_local(&lights[0], iir_madd(x, ls.wi, ls.dist)).z) < 1e-4f);
+            iir_emitter_hit h = iir_lightset_hit_light(set, 0, x, ls.wi, INFINITY);
+            assert_true(fabsf(h.t - ls.dist) < 1e-4f * ls.dist);
+            assert_true(fabsf(h.pdf - ls.pdf) < 1e-3f * ls.pdf);
+            assert_true(fabs(ls.pdf / pmf - iir_area_light_pdf(&lights[0], ls.wi, ls.dist)) <
+                        1e-3f * ls.pdf / pmf);
+            E += ls.Li.x * iir_dot(ls.wi, iir_neg(fr.f)) / ls.pdf * pmf; /* one light's share */
+        }
+        double expect = area_irradiance(&lights[0], x, lights[0].intensity.x);
+        print_message("area light irradiance at offset %d: %.5f, form factor %.5f\n", k, E / N,
+                      expect);
+        assert_true(fabs(E / N - expect) < 0.01 * expect);
+    }
+    /* behind the light: no sample, and a BSDF ray from there meets nothing */
+    iir_vec3 back = iir_madd(lights[0].position, fr.f, -0.5f);
+    iir_light_sample ls = iir_lightset_sample(set, back, 0.f, iir_v2(0.3f, 0.6f));
+    assert_true(ls.pdf == 0.f);
+    assert_true(isinf(iir_lightset_hit_light(set, 0, back, fr.f, INFINITY).t));
+    assert_true(isinf(iir_lightset_hit_light(set, 1, back, fr.f, INFINITY).t)); /* a spot: never */
+    iir_lightset_destroy(set);
+}
+
+/* The MIS pdf is a density: over directions uniform on the sphere (pdf 1 / 4 pi), the mean of
+ * pdf / (1 / 4 pi) is 1, within 4 standard errors (and 2%). */
+static void test_area_pdf_integrates_to_one(void **state)
+{
+    (void)state;
+    iir_scene sc;
+    memset(&sc, 0, sizeof sc);
+    iir_light l = make_area();
+    iir_lightset *set = iir_lightset_create(&sc, &l, 1);
+    iir_frame fr = iir_spot_frame(&l);
+    iir_vec3 x = iir_madd(iir_area_light_point(&l, &fr, iir_v2(0.3f, 0.1f)), fr.f, 0.4f);
+    iir_rng rng = iir_rng_make(21, 0);
+    enum { N = 2000000 };
+    double sum = 0, sum2 = 0;
+    for (int i = 0; i < N; i++) {
+        iir_vec2 u = iir_rng_uniform2(&rng);
+        float z = 1.f - 2.f * u.x, r = sqrtf(fmaxf(0.f, 1.f - z * z)), ph = 2.f * IIR_PI * u.y;
+        iir_vec3 w = iir_v3(r * cosf(ph), r * sinf(ph), z);
+        double v = iir_lightset_hit_light(set, 0, x, w, INFINITY).pdf * 4.0 * M_PI;
+        sum += v, sum2 += v * v;
+    }
+    double mean = sum / N, se = sqrt((sum2 / N - mean * mean) / N);
+    print_message("area light: integral of the MIS pdf %.4f +- %.4f\n", mean, se);
+    assert_true(fabs(mean - 1.0) < 4 * se && fabs(mean - 1.0) < 0.02);
+    iir_lightset_destroy(set);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -529,6 +769,11 @@ int main(void)
         cmocka_unit_test(test_sun_emission_sampling),
         cmocka_unit_test(test_lightset_sun),
         cmocka_unit_test(test_gltf_and_sun_validation),
+        cmocka_unit_test(test_area_validation_flux_intensity),
+        cmocka_unit_test(test_area_emission_sampling),
+        cmocka_unit_test(test_area_hit),
+        cmocka_unit_test(test_lightset_area),
+        cmocka_unit_test(test_area_pdf_integrates_to_one),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

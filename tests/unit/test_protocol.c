@@ -19,6 +19,7 @@
 #include "iir/rng.h"
 #include "protocol.h"
 #include "protocol_internal.h"
+#include "recording.h"
 
 /* ======================== helpers ======================== */
 
@@ -791,6 +792,91 @@ static void test_recording_round_trip(void **state)
     cJSON_Delete(o);
 }
 
+/* A session's four lights: a cosine spot, a glTF spot, a point light and a sun. */
+static void four_lights(iir_light L[4])
+{
+    L[0] = spot();
+    L[1] = spot();
+    snprintf(L[1].name, sizeof L[1].name, "gltf");
+    L[1].profile = IIR_SPOT_GLTF;
+    L[1].smooth = 0.f;
+    L[1].inner_angle = iir_radians(15.f);
+    L[2] = (iir_light){.type = IIR_LIGHT_POINT, .name = "lamp", .intensity = {1.f, 1.f, 0.5f}};
+    L[2].position = iir_v3(0.4f, 1.f, 0.2f);
+    L[3] = (iir_light){.type = IIR_LIGHT_SUN, .name = "sun", .radius = 2.f};
+    L[3].position = iir_v3(0.f, 1.f, 0.f);
+    L[3].direction = iir_normalize(iir_v3(0.3f, -1.f, 0.1f));
+    L[3].up = iir_v3(0.f, 1.f, 0.f);
+    L[3].intensity = iir_v3s(3.f);
+}
+
+/* Every light recorded at once (iird_recording_add_lights) replays offline to the same lights:
+ * the script's "lights" tracks give each kind's fields, a light switched off (black) is off at
+ * its key and keeps the intensity it had, a sun keeps its disk; the lights cannot change within
+ * a recording; a recording of one light still works beside it (test above). */
+static void test_recording_lights(void **state)
+{
+    (void)state;
+    iird_recording *r = iird_recording_create(10, "builtin");
+    iird_proto_error e;
+    enum { N = 5 };
+    const double ts[N] = {0.0, 0.1, 0.2, 0.7, 0.8};
+    iir_light rec[N][4];
+    for (int i = 0; i < N; i++) {
+        four_lights(rec[i]);
+        rec[i][0].position.x = 0.1f * (float)i;
+        rec[i][1].inner_angle = iir_radians(5.f + 5.f * (float)i);
+        rec[i][2].position.y = 1.f - 0.1f * (float)i;
+        if (i == 2 || i == 3) rec[i][2].intensity = iir_v3s(0.f); /* the lamp off, then on */
+        rec[i][3].direction = iir_normalize(iir_v3(0.3f - 0.2f * (float)i, -1.f, 0.1f));
+        assert_true(iird_recording_add_lights(r, ts[i], rec[i], 4, &e));
+    }
+    char *script = iird_recording_script(r);
+    assert_non_null(strstr(script, "\"inner_angle\""));
+    assert_non_null(strstr(script, "\"on\":false"));
+    assert_null(strstr(script, "\"light\":")); /* no light track */
+    cJSON *o = reply_ok(iird_json_record_stop(r, 3), "record");
+    assert_int_equal(num(o, "keyframes"), N);
+    cJSON_Delete(o);
+    iir_anim *a = NULL;
+    iir_error ie;
+    if (iir_anim_parse(script, "rec", &a, &ie) != IIR_OK) fail_msg("%s\n%s", ie.msg, script);
+    iir_light base[4], got[4];
+    four_lights(base);
+    for (int k = 0; k < 3; k++) base[k].position = iir_v3(9, 9, 9);
+    if (iir_anim_check_lights(a, base, 4, 0, &ie) != IIR_OK) fail_msg("%s", ie.msg);
+    for (int i = 0; i < N; i++) {
+        iir_anim_lights(a, base, 4, 0, ts[i], got);
+        for (int k = 0; k < 4; k++) {
+            const iir_light *want = &rec[i][k];
+            assert_near3(got[k].position, k == 3 ? base[3].position : want->position, 1e-6f);
+            assert_near3(got[k].direction, want->direction, 1e-6f);
+            assert_near3(got[k].intensity, want->intensity, 1e-6f);
+            assert_float_equal(got[k].inner_angle, want->inner_angle, 1e-6f);
+            assert_float_equal(got[k].smooth, want->smooth, 1e-6f);
+            assert_int_equal(iir_light_validate(&got[k], &ie), IIR_OK);
+        }
+    }
+    /* between the off key and the next on key: off; before the off key: the lit intensity */
+    iir_anim_lights(a, base, 4, 0, 0.5, got);
+    assert_near3(got[2].intensity, iir_v3s(0.f), 0.f);
+    iir_anim_lights(a, base, 4, 0, 0.15, got);
+    assert_near3(got[2].intensity, rec[0][2].intensity, 1e-6f);
+    iir_anim_destroy(a);
+    free(script);
+    /* other lights: refused, the recording unchanged */
+    assert_false(iird_recording_add_lights(r, 1.0, rec[0], 3, &e));
+    assert_int_equal(e.code, IIRD_E_INTERNAL);
+    iir_light renamed[4];
+    four_lights(renamed);
+    snprintf(renamed[2].name, sizeof renamed[2].name, "other");
+    assert_false(iird_recording_add_lights(r, 1.0, renamed, 4, &e));
+    o = reply_ok(iird_json_record_stop(r, 4), "record");
+    assert_int_equal(num(o, "keyframes"), N);
+    cJSON_Delete(o);
+    iird_recording_destroy(r);
+}
+
 /* ======================== frames ======================== */
 
 static void test_frame_header(void **state)
@@ -854,7 +940,7 @@ static void test_json_replies(void **state)
     iir_error ie;
     assert_int_equal(
         iir_params_set(&s.params, iir_method_any_param("seed"), 9007199254740992.0, &ie), IIR_OK);
-    iird_state_view v = {"builtin", &L, &C, &s, 4, false, NULL};
+    iird_state_view v = {"builtin", &L, &C, &s, 4, false, NULL, NULL, NULL, 0};
     char *text = iird_json_state(&v, 3);
     assert_non_null(strstr(text, "\"fov\":39.3}"));
     assert_non_null(strstr(text, "\"cone_angle\":60,"));
@@ -901,7 +987,7 @@ static void test_json_replies(void **state)
     iird_msg m = parse_ok(text);
     iird_settings s2 = s;
     assert_true(iird_apply_params(&m.u.params, &LIM, &s2, &pe));
-    iird_state_view v2 = {"builtin", &L, &C, &s2, 4, false, NULL};
+    iird_state_view v2 = {"builtin", &L, &C, &s2, 4, false, NULL, NULL, NULL, 0};
     char *now = iird_json_state(&v2, IIRD_NO_SEQ);
     assert_string_equal(was, now);
     free(was);
@@ -1045,7 +1131,7 @@ static void test_json_domain(void **state)
     const float pts[8][2] = {{0, 0},    {0.25f, 0}, {0, -0.25f}, {1, 0},
                              {0.3f, 0}, {0, -1},    {0.1f, 0},   {0.123456789f, 0}};
     const float removed[1][2] = {{1.5f, 0.f}};
-    iir_domain dom = {3, sites, 3, edges, 3, starts, pts, 1, removed};
+    iir_domain dom = {3, sites, 3, edges, 3, starts, pts, 1, removed, "disk"};
     o = reply_ok(iird_json_domain(13, px, flags, 3, &dom), "domain");
     const cJSON *js = cJSON_GetObjectItemCaseSensitive(o, "sites");
     assert_int_equal(cJSON_GetArraySize(js), 3);
@@ -1199,14 +1285,23 @@ static void test_embedded_nul(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_envelope),     cmocka_unit_test(test_size_and_nesting),
-        cmocka_unit_test(test_type_and_seq), cmocka_unit_test(test_unknown_and_duplicate),
-        cmocka_unit_test(test_hello),        cmocka_unit_test(test_scene_pick_snapshot_record),
-        cmocka_unit_test(test_light_parse),  cmocka_unit_test(test_light_apply),
-        cmocka_unit_test(test_camera),       cmocka_unit_test(test_params_parse),
-        cmocka_unit_test(test_params_apply), cmocka_unit_test(test_recording_round_trip),
-        cmocka_unit_test(test_frame_header), cmocka_unit_test(test_json_replies),
-        cmocka_unit_test(test_json_domain),  cmocka_unit_test(test_fuzz),
+        cmocka_unit_test(test_envelope),
+        cmocka_unit_test(test_size_and_nesting),
+        cmocka_unit_test(test_type_and_seq),
+        cmocka_unit_test(test_unknown_and_duplicate),
+        cmocka_unit_test(test_hello),
+        cmocka_unit_test(test_scene_pick_snapshot_record),
+        cmocka_unit_test(test_light_parse),
+        cmocka_unit_test(test_light_apply),
+        cmocka_unit_test(test_camera),
+        cmocka_unit_test(test_params_parse),
+        cmocka_unit_test(test_params_apply),
+        cmocka_unit_test(test_recording_round_trip),
+        cmocka_unit_test(test_recording_lights),
+        cmocka_unit_test(test_frame_header),
+        cmocka_unit_test(test_json_replies),
+        cmocka_unit_test(test_json_domain),
+        cmocka_unit_test(test_fuzz),
         cmocka_unit_test(test_embedded_nul),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,7 +1,8 @@
 /* test_scene.c -- scenes: the built-in Cornell box and its shipped twin, OBJ/MTL and glTF loading
  * (materials, KHR_lights_punctual spot, point and directional lights, cameras), the JSON sidecar
- * (its spot, gltf_spot, point and sun lights), degenerate triangles, resolving names, the camera
- * frame, and every refusal (each must name the file and the problem). */
+ * (its spot, gltf_spot, point, sun and area lights, an area light taken from a material's
+ * rectangle), degenerate triangles, resolving names, the camera frame, and every refusal (each
+ * must name the file and the problem). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -741,8 +742,45 @@ static void test_sidecar_bad_values(void **state)
         {"\"lights\": [{\"type\": \"point\", \"position\": [0, 1, 0], \"intensity\": 1, "
          "\"cone_angle\": 30}]",
          "lights[0].cone_angle", "only spot"},
-        {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"intensity\": 1}]",
-         "lights[0].type", "\"spot\", \"gltf_spot\", \"point\" or \"sun\""},
+        {"\"lights\": [{\"type\": \"tube\", \"position\": [0, 1, 0], \"intensity\": 1}]",
+         "lights[0].type", "\"spot\", \"gltf_spot\", \"point\", \"sun\" or \"area\""},
+        {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"intensity\": 1}]",
+         "lights[0].size", "required"},
+        {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"size\": [1, 1], "
+         "\"intensity\": 1}]",
+         "lights[0]", "an area light needs exactly one of"},
+        {"\"lights\": [{\"type\": \"area\", \"direction\": [0, -1, 0], \"size\": [1, 1], "
+         "\"intensity\": 1}]",
+         "lights[0].position", "required"},
+        {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"size\": [1], \"intensity\": 1}]",
+         "lights[0].size", "2 numbers"},
+        {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"size\": [1, 0], \"intensity\": 1}]",
+         "lights[0].size[1]", "> 0"},
+        {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"size\": [-1, 1], \"intensity\": 1}]",
+         "lights[0].size[0]", "outside"},
+        {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"size\": [1, 1], \"cone_angle\": 30, \"intensity\": 1}]",
+         "lights[0].cone_angle", "an area light has no cone"},
+        {"\"lights\": [{\"type\": \"area\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"size\": [1, 1]}]",
+         "lights[0].intensity", "required"},
+        {"\"lights\": [{\"type\": \"area\", \"material\": \"glow\", \"size\": [1, 1]}]",
+         "lights[0].size", "from the material's triangles"},
+        {"\"lights\": [{\"type\": \"area\", \"material\": \"\"}]", "lights[0].material",
+         "non-empty"},
+        {"\"lights\": [{\"type\": \"point\", \"position\": [0, 1, 0], \"size\": [1, 1], "
+         "\"intensity\": 1}]",
+         "lights[0].size", "only area lights"},
+        {"\"lights\": [{\"type\": \"spot\", \"position\": [0, 1, 0], \"direction\": [0, -1, 0], "
+         "\"cone_angle\": 30, \"material\": \"glow\", \"intensity\": 1}]",
+         "lights[0].material", "only area lights"},
+        {"\"lights\": [{\"type\": \"sun\", \"direction\": [0, -1, 0], \"size\": [1, 1], "
+         "\"intensity\": 1}]",
+         "lights[0].size", "only area lights"},
         {"\"lights\": [{\"type\": \"gltf_spot\", \"position\": [0, 1, 0], \"direction\": [0, -1, "
          "0], "
          "\"cone_angle\": 30, \"smooth\": 5, \"intensity\": 1}]",
@@ -801,6 +839,151 @@ static void test_sidecar_bad_values(void **state)
         assert_load_fails(sc, "values.scene.json", cases[i].field);
         assert_load_fails(sc, cases[i].field, cases[i].problem);
     }
+}
+
+/* ======================== area lights ======================== */
+
+/* The sidecar's "area" light by its pose: centre, normal (target or direction), up, size. */
+static void test_sidecar_area(void **state)
+{
+    (void)state;
+    char sc[1024];
+    write_sidecar("area.scene.json",
+                  "{\"file\": \"box.obj\", \"lights\": [\n"
+                  " {\"type\": \"area\", \"name\": \"panel\", \"position\": [0.5, 0.5, 2],\n"
+                  "  \"target\": [0.5, 0.5, 0], \"up\": [1, 0, 0], \"size\": [0.4, 0.25],\n"
+                  "  \"intensity\": [1, 2, 3]},\n"
+                  " {\"type\": \"area\", \"position\": [0, 0, 1], \"direction\": [0, 0, -3],\n"
+                  "  \"size\": [1, 2], \"intensity\": 4}]}",
+                  sc, sizeof sc);
+    iir_scene *s = load_ok(sc);
+    assert_int_equal(s->num_lights, 2);
+    const iir_light *a = &s->lights[0], *b = &s->lights[1];
+    iir_error err;
+    assert_int_equal(iir_light_validate(a, &err), IIR_OK);
+    assert_int_equal(a->type, IIR_LIGHT_AREA);
+    assert_string_equal(iir_light_kind(a), "area");
+    assert_string_equal(a->name, "panel");
+    assert_vec_near(a->position, iir_v3(0.5f, 0.5f, 2.f), 0.f);
+    assert_vec_near(a->direction, iir_v3(0, 0, -1), 1e-6f);
+    assert_vec_near(a->up, iir_v3(1, 0, 0), 0.f);
+    assert_true(a->size.x == 0.4f && a->size.y == 0.25f);
+    assert_vec_near(a->intensity, iir_v3(1, 2, 3), 0.f);
+    assert_vec_near(b->direction, iir_v3(0, 0, -1), 1e-6f);
+    assert_vec_near(b->up, iir_v3(0, 1, 0), 0.f); /* the default */
+    assert_true(b->size.x == 1.f && b->size.y == 2.f);
+    assert_true(near(iir_light_flux(b).x, IIR_PI * 4.f * 2.f, 1e-5f));
+    assert_int_equal(s->num_triangles, 2); /* a light by its pose takes nothing from the mesh */
+    iir_scene_destroy(s);
+}
+
+/* lamp.obj: a grey floor (4 x 4 at y = 0) and a lamp (material "lamp", Ke 5 4 3): a 0.6 x 0.3
+ * rectangle centred at LAMP_C, facing down, its long side turned 30 degrees from x towards z, as
+ * 2 x 2 quads. Variants: 0 as said, 1 without one quad (an L), 2 with one quad raised 0.05, 3 with
+ * one quad wound the other way. */
+static const iir_vec3 LAMP_C = {0.3f, 1.9f, -0.2f};
+
+static iir_vec3 lamp_point(float s, float t)
+{
+    float c = cosf(iir_radians(30.f)), n = sinf(iir_radians(30.f));
+    iir_vec3 a = iir_v3(0.6f * c, 0.f, 0.6f * n), b = iir_v3(-0.3f * n, 0.f, 0.3f * c);
+    return iir_add(LAMP_C, iir_add(iir_scale(a, s - 0.5f), iir_scale(b, t - 0.5f)));
+}
+
+static void write_lamp(const char *name, int variant, char *out, size_t n)
+{
+    char path[1024], text[4096];
+    write_file("lamp.mtl", "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0.8 0.8 0.8\nKe 5 4 3\n",
+               path, sizeof path);
+    int len = snprintf(text, sizeof text,
+                       "mtllib lamp.mtl\nv -2 0 -2\nv -2 0 2\nv 2 0 2\nv 2 0 -2\nusemtl grey\n"
+                       "f 1 2 3 4\nusemtl lamp\n");
+    for (int q = 0; q < 4; q++) {
+        if (variant == 1 && q == 3) continue;
+        float s = 0.5f * (q % 2), t = 0.5f * (q / 2);
+        iir_vec3 v[4] = {lamp_point(s, t), lamp_point(s + .5f, t), lamp_point(s + .5f, t + .5f),
+                         lamp_point(s, t + .5f)};
+        for (int k = 0; k < 4; k++) {
+            float lift = variant == 2 && q == 3 ? 0.05f : 0.f;
+            len += snprintf(text + len, sizeof text - (size_t)len, "v %.9g %.9g %.9g\n",
+                            (double)v[k].x, (double)(v[k].y + lift), (double)v[k].z);
+        }
+        bool flip = variant == 3 && q == 3;
+        len += snprintf(text + len, sizeof text - (size_t)len, "%s\n",
+                        flip ? "f -1 -2 -3 -4" : "f -4 -3 -2 -1");
+    }
+    write_file(name, text, out, n);
+}
+
+/* An area light taken from the lamp's material: its pose, size and emission; the lamp's
+ * triangles leave the mesh and its material stops emitting. */
+static void test_sidecar_area_from_material(void **state)
+{
+    (void)state;
+    char obj[1024], sc[1024];
+    write_lamp("lamp.obj", 0, obj, sizeof obj);
+    write_file(
+        "lamp.scene.json",
+        "{\"lights\": [{\"type\": \"area\", \"material\": \"lamp\"},\n"
+        " {\"type\": \"area\", \"name\": \"dim\", \"material\": \"lamp\", \"intensity\": 1}]}",
+        sc, sizeof sc);
+    assert_load_fails(obj, "lights[1].material", "material 'lamp' has no triangles");
+    write_file("lamp.scene.json", "{\"lights\": [{\"type\": \"area\", \"material\": \"lamp\"}]}",
+               sc, sizeof sc);
+    iir_scene *s = load_ok(obj);
+    assert_int_equal(s->num_lights, 1);
+    const iir_light *l = &s->lights[0];
+    iir_error err;
+    assert_int_equal(iir_light_validate(l, &err), IIR_OK);
+    assert_int_equal(l->type, IIR_LIGHT_AREA);
+    assert_vec_near(l->position, LAMP_C, 1e-5f);
+    assert_vec_near(l->direction, iir_v3(0, -1, 0), 1e-6f);
+    assert_vec_near(l->up, iir_normalize(iir_sub(lamp_point(0.5f, 1.f), LAMP_C)), 1e-5f);
+    assert_true(near(l->size.x, 0.6f, 1e-5f) && near(l->size.y, 0.3f, 1e-5f));
+    assert_vec_near(l->intensity, iir_v3(5, 4, 3), 0.f);
+    /* its rectangle is the lamp's: the corners are where the mesh had them */
+    iir_frame fr = iir_spot_frame(l);
+    assert_vec_near(iir_area_light_point(l, &fr, iir_v2(0.5f, 0.5f)), lamp_point(1.f, 1.f), 1e-5f);
+    assert_vec_near(iir_area_light_point(l, &fr, iir_v2(-0.5f, 0.5f)), lamp_point(0.f, 1.f), 1e-5f);
+    assert_int_equal(s->num_triangles, 2);
+    assert_true(material_area(s, "lamp") == 0.f);
+    const iir_material *lamp = find_material(s, "lamp");
+    assert_true(!lamp || iir_is_black(lamp->emission));
+    assert_true(s->bounds_max.y < 1e-6f); /* the floor alone */
+    iir_scene_destroy(s);
+
+    /* a name and an intensity of its own */
+    write_file("lamp.scene.json",
+               "{\"lights\": [{\"type\": \"area\", \"name\": \"dim\", \"material\": \"lamp\", "
+               "\"intensity\": [1, 0.5, 0.25]}]}",
+               sc, sizeof sc);
+    s = load_ok(obj);
+    assert_string_equal(s->lights[0].name, "dim");
+    assert_vec_near(s->lights[0].intensity, iir_v3(1, 0.5f, 0.25f), 0.f);
+    iir_scene_destroy(s);
+}
+
+/* A material that is not one flat rectangle facing one way, or that the mesh lacks, is refused. */
+static void test_sidecar_area_material_refused(void **state)
+{
+    (void)state;
+    static const struct {
+        int variant;
+        const char *problem;
+    } cases[] = {
+        {1, "does not form one rectangle"}, {2, "is not flat"}, {3, "facing different ways"}};
+    char obj[1024], sc[1024];
+    write_file("badlamp.scene.json", "{\"lights\": [{\"type\": \"area\", \"material\": \"lamp\"}]}",
+               sc, sizeof sc);
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        write_lamp("badlamp.obj", cases[i].variant, obj, sizeof obj);
+        print_message("variant %d\n", cases[i].variant);
+        assert_load_fails(obj, "lights[0].material: material 'lamp'", cases[i].problem);
+    }
+    write_file("badlamp.scene.json",
+               "{\"lights\": [{\"type\": \"area\", \"material\": \"lammp\"}]}", sc, sizeof sc);
+    write_lamp("badlamp.obj", 0, obj, sizeof obj);
+    assert_load_fails(obj, "no material 'lammp'", "grey, lamp");
 }
 
 static void test_sidecar_file_escapes(void **state)
@@ -995,6 +1178,9 @@ int main(void)
         cmocka_unit_test(test_sidecar_unknown_field),
         cmocka_unit_test(test_sidecar_bad_values),
         cmocka_unit_test(test_sidecar_gltf_spot_and_sun),
+        cmocka_unit_test(test_sidecar_area),
+        cmocka_unit_test(test_sidecar_area_from_material),
+        cmocka_unit_test(test_sidecar_area_material_refused),
         cmocka_unit_test(test_sidecar_file_escapes),
         cmocka_unit_test(test_resolve),
         cmocka_unit_test(test_open),

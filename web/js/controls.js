@@ -1,13 +1,17 @@
 // controls.js -- mouse, wheel and keyboard on the image turned into light, camera and pick messages.
-// Moves change the page's model of the light and camera at once and mark the changed fields; one
-// light and one camera message with the newest values go out per animation frame (the server is
-// latest-wins anyway), and at most one pick is in flight at a time.
+// They move the selected light (main.js keeps which one; a click on another light's gizmo selects
+// it, N the next one). Moves change the page's model of the light and camera at once and mark the
+// changed fields; one light message (naming its light) and one camera message with the newest
+// values go out per animation frame (the server is latest-wins anyway), and at most one pick is in
+// flight at a time.
 //
 //   drag             aim the spot at the point under the cursor (pick, then light.target)
 //   shift-drag       move the light in the view plane        wheel        light along its axis
 //   right-drag       orbit the camera around its target      shift-wheel  camera dolly
 //   keys             see KEYS below (and the help overlay, index.html)
 //
+// A sun has no position: any left drag turns it (its arrow follows the cursor's motion) and the
+// moves that would carry it (shift-drag, wheel, WASD, QE) do nothing.
 // The arrows tilt the spot's aim across the screen (left/right/up/down as the user sees it), so they
 // change something for every spot, also one pointing straight down, where a yaw about the up axis
 // would change nothing; on a point light (no axis) they move the light in the view plane instead.
@@ -15,19 +19,21 @@
 
 import * as v from './vec.js';
 import { pick as pickMsg } from './protocol.js';
-import { isPoint } from './gizmo.js';
+import { isPoint, isSun } from './gizmo.js';
 
 const AIM_STEP_DEG = 2; // arrows; shift: x5
 const MOVE_STEP = 0.02; // WASD/QE, in units of the camera's distance to its target; shift: x5
 const ORBIT_DEG_PER_PX = 0.3;
 const ORBIT_STEP_DEG = 5; // IJKL
 const WHEEL_STEP = 0.04; // light along its axis per wheel notch (100 deltaY), camera distances
+const TURN_DEG_PER_PX = 0.25; // a sun turned by dragging
 const DOLLY = 1.1;
 const PICK_TIMEOUT_MS = 300; // a lost pick reply does not stall aiming
 
 export class Controls {
-    // stage: the element under the pointer; view: View; model: {light, camera} kept current by
-    // main.js; send: {light(fields), camera(fields), pick(msg) -> seq}; actions: keyboard actions.
+    // stage: the element under the pointer; view: View; model: {light (the selected one), camera}
+    // kept current by main.js; send: {light(fields), camera(fields), pick(msg) -> seq}; actions:
+    // keyboard actions and selectLight(index).
     constructor(stage, view, model, send, actions) {
         this.stage = stage;
         this.view = view;
@@ -35,8 +41,8 @@ export class Controls {
         this.send = send;
         this.actions = actions;
         this.enabled = false;
-        this.drag = null; // {mode: 'aim'|'move'|'orbit', x, y, id}
-        this.pendingLight = null;
+        this.drag = null; // {mode: 'aim'|'move'|'turn'|'orbit', x, y, id}
+        this.pendingLight = null; // {name, ...fields} of the newest moves of one light
         this.pendingCamera = null;
         this.pendingPick = null; // {x, y} in frame pixels
         this.pickInFlight = null; // {seq, t}
@@ -64,6 +70,8 @@ export class Controls {
         else if (e.button === 2) mode = 'orbit';
         if (!mode) return;
         e.preventDefault();
+        if (e.button === 0 && this.selectAt(e)) return;
+        if (mode !== 'orbit' && isSun(this.model.light)) mode = 'turn';
         this.stage.setPointerCapture(e.pointerId);
         this.drag = { mode, x: e.clientX, y: e.clientY, id: e.pointerId };
         this.stage.dataset.drag = mode;
@@ -79,6 +87,7 @@ export class Controls {
         d.y = e.clientY;
         if (d.mode === 'aim') this.aimAt(e);
         else if (d.mode === 'move') this.moveLightInView(dx, dy);
+        else if (d.mode === 'turn') this.aimBy(dx * TURN_DEG_PER_PX, -dy * TURN_DEG_PER_PX);
         else this.orbit(-dx * ORBIT_DEG_PER_PX, dy * ORBIT_DEG_PER_PX); // grab the scene
     }
 
@@ -88,6 +97,15 @@ export class Controls {
         this.drag = null;
         delete this.stage.dataset.drag;
         this.view.setMarker(null);
+    }
+
+    // A click on another light's gizmo selects that light (and starts no drag).
+    selectAt(e) {
+        const p = this.view.toFrame(e.clientX, e.clientY);
+        const i = this.view.gizmoNear(p.x, p.y);
+        if (i < 0 || this.view.gizmo && i === this.view.gizmo.selected) return false;
+        this.actions.selectLight(i);
+        return true;
     }
 
     aimAt(e) {
@@ -106,6 +124,7 @@ export class Controls {
             return;
         }
         const L = this.model.light;
+        if (isSun(L)) return; // the drag turned into a turn (selection changed meanwhile)
         L.direction = v.normalize(v.sub(msg.position, L.position), L.direction);
         this.queueLight({ target: msg.position });
     }
@@ -142,6 +161,7 @@ export class Controls {
 
     moveLight(delta) {
         const L = this.model.light;
+        if (isSun(L)) return; // its disk stays over the scene
         L.position = v.add(L.position, delta);
         this.queueLight({ position: L.position });
     }
@@ -188,8 +208,11 @@ export class Controls {
         this.queueCamera({ position: c.position });
     }
 
+    // fields for the selected light; moves of another light still waiting go out first.
     queueLight(fields) {
-        const p = (this.pendingLight = { ...this.pendingLight, ...fields });
+        const name = this.model.light.name;
+        if (this.pendingLight && this.pendingLight.name !== name) this.flushLight();
+        const p = (this.pendingLight = { ...this.pendingLight, ...fields, name });
         if ('target' in fields) delete p.direction; // direction and target exclude each other
         if ('direction' in fields) delete p.target;
         this.schedule();
@@ -215,15 +238,18 @@ export class Controls {
             if (seq >= 0) this.pickInFlight = { seq, t: now };
             this.pendingPick = null;
         }
-        if (this.pendingLight) {
-            this.send.light(roundFields(this.pendingLight));
-            this.pendingLight = null;
-        }
+        this.flushLight();
         if (this.pendingCamera) {
             this.send.camera(roundFields(this.pendingCamera));
             this.pendingCamera = null;
         }
         if (this.pendingPick) this.schedule();
+    }
+
+    flushLight() {
+        if (!this.pendingLight) return;
+        this.send.light(roundFields(this.pendingLight));
+        this.pendingLight = null;
     }
 
     // ---- keyboard ----
@@ -270,6 +296,7 @@ const KEYS = {
     r: (c) => c.actions.record(),
     v: (c) => c.actions.toggleVpls(),
     '0': (c) => c.actions.resetView(),
+    n: (c) => c.actions.nextLight(),
     '?': (c) => c.actions.help(),
     h: (c) => c.actions.help(),
     Escape: (c) => c.actions.help(false),

@@ -1,7 +1,9 @@
-// domain.js -- a live drawing of the spot light's disk domain from `domain` messages: the unit disk,
-// each VPL site's Voronoi cell clipped to it, the Delaunay edges, the sites (new ones and null
-// samples marked) and the sites removed by the frame shown. Drawing and its caption only; main.js
-// says which domain and which frame are shown.
+// domain.js -- a live drawing of a light's VPL domain from `domain` messages, drawn into the unit
+// disk (a spot's disk, a glTF spot's cap disk, a point light's sphere by an equal-area map, a sun's
+// disk: the message's `map` names it, and a line above the caption says it): the disk, each VPL site's Voronoi
+// cell clipped to it, the Delaunay edges, the sites (new ones and null samples marked) and the sites
+// removed by the frame shown. Drawing and its caption only; main.js says which domain and which
+// frame are shown, and of which light.
 //
 // One frame counter: the caption names the frame on screen (the server's frame id, as the image's
 // overlay and the stats panel do). A refinement pass keeps the set of the frame it refines, so its
@@ -24,13 +26,17 @@ const COLORS = {
 };
 
 export class DomainView {
-    constructor(canvas, caption) {
+    // canvas; caption: the line under it (which frame, the counts); what: the line naming the map and
+    // the light (empty without them).
+    constructor(canvas, caption, what) {
         this.canvas = canvas;
         this.caption = caption;
+        this.what = what;
         this.ctx = canvas.getContext('2d');
         this.domain = null;
         this.shown = null; // {frameId, pass, base}: the frame on screen; base: the interactive frame it refines
         this.note = 'waiting for the first frame'; // the caption when there is no drawing
+        this.of = ''; // which light the domain is of ("light 'key'"), '' to say nothing
         this.removedDrawn = 0; // crosses in the drawing (for tests)
         new ResizeObserver(() => this.resize()).observe(canvas);
         this.resize();
@@ -47,12 +53,20 @@ export class DomainView {
     }
 
     // domain: the `domain` message of the current method, or null; shown: the frame on screen
-    // {frameId, pass, base} or null; note: the caption without a drawing ("pt has no VPL domain").
-    update(domain, shown, note) {
+    // {frameId, pass, base} or null; note: the caption without a drawing ("pt has no VPL domain");
+    // of: which light it is of ("light 'key'"), '' when there is only one.
+    update(domain, shown, note, of = '') {
         this.domain = domain;
         this.shown = shown;
         this.note = note;
+        this.of = of;
         this.draw();
+    }
+
+    // "light 'key' · cap disk": what the drawing is ('' when the message names no map).
+    head() {
+        const d = this.domain;
+        return d && d.sites ? [this.of, d.map].filter(Boolean).join(' · ') : '';
     }
 
     draw() {
@@ -62,6 +76,10 @@ export class DomainView {
         c.clearRect(0, 0, S, S);
         this.removedDrawn = 0;
         const d = this.domain;
+        if (this.what) {
+            this.what.textContent = this.head();
+            this.what.hidden = !this.what.textContent;
+        }
         if (!d || !d.sites) {
             this.caption.textContent = this.note;
             return;

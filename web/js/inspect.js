@@ -6,8 +6,10 @@
 //   stats of the frame on screen), lastDomain, lastStats, methods (welcome.methods), connected,
 //   state (the page's model), generation (newest state's), switching (a switch awaits its state),
 //   inputSeq (newest input sent), latencyMs, errors (kind -> banner text), curtain ({mode, title,
-//   text}), greyed, gizmo (where the light is drawn, frame pixels), vplChart (the VPL chart's rows),
-//   domainRemovedDrawn (removed-site crosses in the domain drawing)
+//   text}), greyed, gizmo (where the selected light is drawn, frame pixels), gizmos (where each light
+//   is drawn: {name, x, y, visible, offscreen}), selected (index of the selected light in
+//   state.lights), vplChart (the VPL chart's rows), domainRemovedDrawn (removed-site crosses in the
+//   domain drawing)
 
 const clone = (x) => JSON.parse(JSON.stringify(x));
 
@@ -69,6 +71,12 @@ export function inspector({ app, gate, errors, curtain, view, charts, domainView
         },
         get gizmo() {
             return { ...view.gizmoAt };
+        },
+        get gizmos() {
+            return view.gizmosAt.map((g) => ({ ...g }));
+        },
+        get selected() {
+            return app.selected;
         },
         get vplChart() {
             return charts.vplRows(); // [t, count, kept, invalidated, inserted, deleted]

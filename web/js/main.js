@@ -1,10 +1,11 @@
-// main.js -- wiring: the page's model of the session (scene, light, camera, params), the connection,
+// main.js -- wiring: the page's model of the session (scene, lights, camera, params), the connection,
 // and the views that show it. Owns what happens on welcome (adopt the server's state the first
 // time, re-send ours after a reconnect), on state, stats, domain, pick, snapshot, record, save and
 // error: each reply is matched to the request it answers (requests.js), switches go through
 // switcher.js and the frame gate (gate.js), errors become banners of their request's kind
 // (errors.js), saves go to saving.js, and the stats and domain shown are those of the frame on
-// screen (one frame counter everywhere).
+// screen (one frame counter everywhere). Of the session's lights one is selected: the one the mouse
+// and the light controls move (at first the one the session moves by default, state.light).
 //
 // window.iir (inspect.js) is a read-only view of all this for tests and the console.
 
@@ -22,7 +23,7 @@ import { Curtain } from './curtain.js';
 import { Switcher } from './switcher.js';
 import { SaveControls } from './saving.js';
 import { inspector } from './inspect.js';
-import { isPoint } from './gizmo.js';
+import { kindOf } from './gizmo.js';
 import * as v from './vec.js';
 
 const $ = (sel) => document.querySelector(sel);
@@ -40,7 +41,9 @@ const app = {
     lastDomain: null,
     lastStats: null,
     connected: false,
-    state: null, // {scene, light, camera, params}: the page's model, what it re-sends after a reconnect
+    state: null, // {scene, lights, light, camera, params}: the page's model, what it re-sends after a
+    // reconnect; light is the entry of lights that a message without a name moves (linkLights)
+    selected: 0, // index into state.lights of the light the mouse moves
     welcomed: false, // a welcome was ever received (later welcomes are reconnects or re-syncs)
     resync: false, // adopt the next welcome's state instead of re-sending ours
     lastLightSeq: 0, // seq of the newest light message sent (a `state` older than it keeps our light)
@@ -64,7 +67,7 @@ const STATS_KEPT = 32;
 // ---- views ----
 
 const view = new View($('#viewport'));
-const domainView = new DomainView($('#domain'), $('#domain-caption'));
+const domainView = new DomainView($('#domain'), $('#domain-caption'), $('#domain-map'));
 const charts = new Charts($('#chart-phases').parentElement);
 const requests = new Requests();
 const errors = new ErrorBanners($('#errors'));
@@ -90,12 +93,48 @@ function send(msg, details = {}) {
     return seq;
 }
 
+// ---- the lights ----
+
+// state.light is the entry of state.lights it names (the same object), so that a move of either is
+// a move of both; an older server's state without lights gets a list of that one light.
+function linkLights(s) {
+    if (!s) return;
+    if (!Array.isArray(s.lights) || !s.lights.length) s.lights = s.light ? [s.light] : [];
+    const name = s.light && s.light.name;
+    s.light = s.lights.find((L) => L.name === name) || s.lights[0] || null;
+}
+
+function selectedLight() {
+    const s = app.state;
+    return s && s.lights ? s.lights[app.selected] || s.light : null;
+}
+
+// Selects light i (the mouse and the light controls move it from now on).
+function selectLight(i) {
+    const s = app.state;
+    if (!s || !s.lights || i < 0 || i >= s.lights.length) return;
+    app.selected = i;
+    panel.setLights(s.lights, i);
+    showGizmo();
+    showDomain();
+}
+
+// The selected light after a state (a new scene: the light it moves by default).
+function keepSelection(newScene) {
+    const s = app.state;
+    const moved = Math.max(0, s.lights.indexOf(s.light));
+    if (newScene || !(app.selected < s.lights.length)) app.selected = moved;
+}
+
 // The position sent is kept with the request: a `state` reply to it says where the daemon put the
-// light instead (kept inside the scene), and the model moves by the difference.
+// light instead (kept inside the scene), and the model moves by the difference. fields name the
+// light (name).
 function sendLight(fields) {
-    const seq = send(P.light(fields), fields.position ? { position: fields.position } : {});
+    const details = { name: fields.name };
+    if (fields.position) details.position = fields.position;
+    const seq = send(P.light(fields), details);
     if (seq > 0) app.lastLightSeq = seq;
-    panel.setLight(app.state.light);
+    panel.setLights(app.state.lights, app.selected);
     showGizmo();
     return seq;
 }
@@ -110,7 +149,9 @@ function sendCamera(fields) {
 
 function showGizmo() {
     const s = app.state;
-    view.setGizmo(s && s.light && s.camera ? { light: s.light, camera: s.camera, madeUp: !!s.default_light } : null);
+    view.setGizmo(s && s.lights && s.lights.length && s.camera
+        ? { lights: s.lights, selected: app.selected, camera: s.camera, madeUp: !!s.default_light }
+        : null);
 }
 
 // The model's params change only with the server's `state` reply (a refused edit changes nothing).
@@ -118,13 +159,37 @@ function sendParams(fields) {
     return switcher.params(fields);
 }
 
+// Fields of the selected light changed in the panel (or by the keys): the model first, then the
+// message naming it.
+function editLight(fields) {
+    const L = selectedLight();
+    if (!L) return;
+    if ('cone_angle' in fields) {
+        L.cone_angle = fields.cone_angle;
+        if (L.inner_angle > L.cone_angle) L.inner_angle = L.cone_angle;
+    }
+    if ('inner_angle' in fields) L.inner_angle = fields.inner_angle;
+    if ('size' in fields) L.size = fields.size;
+    if ('on' in fields) L.on = fields.on;
+    if ('intensity' in fields) {
+        // A number scales the colour so its largest channel equals it (as the server does).
+        const m = Math.max(...L.intensity);
+        const x = fields.intensity;
+        L.intensity = m > 0 ? L.intensity.map((c) => (c * x) / m) : [x, x, x];
+    }
+    sendLight({ name: L.name, ...fields });
+}
+
 const actions = {
     cone(delta) {
-        const L = app.state.light;
-        if (isPoint(L)) return; // a point light has no cone
-        L.cone_angle = Math.min(90, Math.max(1, Math.round(L.cone_angle + delta)));
-        sendLight({ cone_angle: L.cone_angle });
-        panel.setLight(L);
+        const L = selectedLight();
+        if (!L || !(kindOf(L) === 'spot' || kindOf(L) === 'gltf_spot')) return; // only spots have a cone
+        editLight({ cone_angle: Math.min(90, Math.max(1, Math.round(L.cone_angle + delta))) });
+    },
+    selectLight,
+    nextLight() {
+        const n = app.state && app.state.lights ? app.state.lights.length : 0;
+        if (n > 1) selectLight((app.selected + 1) % n);
     },
     // Key repeats add up before the state replies: the newest exposure asked for is the base.
     exposure(delta) {
@@ -149,7 +214,7 @@ const actions = {
 
 const controls = new Controls($('#stage'), view, {
     get light() {
-        return app.state.light;
+        return selectedLight();
     },
     get camera() {
         return app.state.camera;
@@ -159,16 +224,13 @@ const controls = new Controls($('#stage'), view, {
 const panel = new Panel($('#panel'), {
     scene: (name) => switcher.scene(name),
     params: sendParams,
-    light(fields) {
-        const L = app.state.light;
-        if ('cone_angle' in fields) L.cone_angle = fields.cone_angle;
-        if ('intensity' in fields) {
-            // A number scales the colour so its largest channel equals it (as the server does).
-            const m = Math.max(...L.intensity);
-            const x = fields.intensity;
-            L.intensity = m > 0 ? L.intensity.map((c) => (c * x) / m) : [x, x, x];
-        }
-        sendLight(fields);
+    light: editLight,
+    selectLight,
+    lightOn(i, on) {
+        const L = app.state.lights[i];
+        if (!L) return;
+        L.on = on;
+        sendLight({ name: L.name, on });
     },
     camera(fields) {
         Object.assign(app.state.camera, fields);
@@ -251,11 +313,16 @@ function onWelcome(w, newSession) {
     requests.take(w.seq); // the hello it answers
     switcher.welcome(w, newSession);
     const first = !app.welcomed || app.resync;
-    if (first) app.state = clone(w.state);
-    if (first) showNotes(w.state.notes);
+    if (first) {
+        const scene = app.state && app.state.scene;
+        app.state = clone(w.state);
+        linkLights(app.state);
+        keepSelection(scene !== app.state.scene);
+        showNotes(w.state.notes);
+    }
     app.welcomed = true;
     app.resync = false;
-    panel.setWelcome({ ...w, state: app.state });
+    panel.setWelcome({ ...w, state: app.state }, app.selected);
     saving.setLimits(w.limits);
     if (!first) resend(app.state, w.state);
     else if (!app.framesDrawn) curtain.loading(`waiting for the first frame…`, `${app.state.scene} with ${app.state.params.method}`);
@@ -275,11 +342,11 @@ function resend(mine, theirs) {
     if (Object.keys(diff).length) sendParams(diff);
     const lightAndCamera = () => {
         const s = app.state;
+        s.lights = keep.lights;
         s.light = keep.light;
+        linkLights(s);
         s.camera = keep.camera;
-        const L = keep.light;
-        sendLight(isPoint(L) ? { position: L.position, intensity: L.intensity }
-            : { position: L.position, direction: L.direction, cone_angle: L.cone_angle, intensity: L.intensity });
+        for (const L of keep.lights) sendLight(lightFields(L));
         const C = keep.camera;
         sendCamera({ position: C.position, target: C.target, up: C.up, fov: C.fov });
     };
@@ -287,6 +354,19 @@ function resend(mine, theirs) {
     if (keep.scene === theirs.scene) return lightAndCamera();
     app.afterScene = lightAndCamera;
     switcher.scene(keep.scene, theirs.scene);
+}
+
+// Every field of light L that a `light` message sets, for its kind (a sun: no position).
+function lightFields(L) {
+    const k = kindOf(L);
+    const f = { name: L.name, on: L.on !== false };
+    if (k !== 'sun') f.position = L.position;
+    if (k !== 'point') f.direction = L.direction;
+    if (k === 'spot' || k === 'gltf_spot') f.cone_angle = L.cone_angle;
+    if (k === 'gltf_spot') f.inner_angle = L.inner_angle;
+    if (k === 'area') f.size = L.size;
+    f.intensity = L.intensity;
+    return f;
 }
 
 function onMessage(msg) {
@@ -347,19 +427,16 @@ function onState(msg) {
         app.lastDomain = null; // the old method's or scene's VPLs mean nothing now
         view.setVpls(null);
     }
-    s.scene = msg.scene;
     s.params = msg.params;
     s.generation = msg.generation;
     s.default_light = !!msg.default_light;
     if (fresh || msg.seq >= app.exposureSeq) app.exposureAsked = null;
-    if (fresh || msg.seq >= app.lastLightSeq) s.light = msg.light;
-    else if (req && req.kind === 'light' && req.position) {
-        const moved = v.sub(msg.light.position, req.position);
-        s.light.position = v.add(s.light.position, moved);
-    }
+    const newScene = msg.scene !== s.scene;
+    takeLights(s, msg, req, fresh || msg.seq >= app.lastLightSeq);
+    keepSelection(newScene);
     if (fresh || msg.seq >= app.lastCameraSeq) s.camera = msg.camera;
     switcher.stated(msg, req, sameRender);
-    panel.setState(s);
+    panel.setState(s, app.selected);
     saving.sceneChanged();
     if (req && req.kind === 'scene' && app.afterScene) {
         const then = app.afterScene;
@@ -368,6 +445,23 @@ function onState(msg) {
     }
     showGizmo();
     showDomain();
+}
+
+// A state's lights into the model s: all of them when no newer light message was sent since (all),
+// else ours stay and a light kept inside the scene moves by the difference between the position
+// sent (req) and the position used.
+function takeLights(s, msg, req, all) {
+    const lights = msg.lights || (msg.light ? [msg.light] : []);
+    s.scene = msg.scene;
+    if (all) {
+        s.lights = lights;
+        s.light = msg.light;
+    } else if (req && req.kind === 'light' && req.position) {
+        const mine = s.lights.find((L) => L.name === req.name);
+        const theirs = lights.find((L) => L.name === req.name);
+        if (mine && theirs) mine.position = v.add(mine.position, v.sub(theirs.position, req.position));
+    }
+    linkLights(s);
 }
 
 function onStats(msg) {
@@ -400,7 +494,9 @@ function showDomain() {
     if (row && !hasVpls) note = `${m} has no VPL domain`;
     else if (s && s.params.domain === false) note = 'the domain drawing is off (Frame & stream: domain)';
     else if (app.noDisk.has(m)) note = `${m} has no disk domain: it makes a new VPL set every frame (its VPLs are the dots on the image)`;
-    domainView.update(hasVpls ? app.lastDomain : null, app.shown, note);
+    // the domain drawn is the light the session moves by default (state.light), as iir draws it
+    const of = s && s.lights && s.lights.length > 1 && s.light ? `light '${s.light.name}'` : '';
+    domainView.update(hasVpls ? app.lastDomain : null, app.shown, note, of);
 }
 
 // A `record` reply: start (recording), stop (the script), or a scene switch while recording (the

@@ -1,16 +1,20 @@
 // panel.js -- the side panel's forms and read-outs: scene and method pickers, the parameter form
 // built from the parameter tables the welcome carries (welcome.methods[].params for the method's
-// group, welcome.settings for the frame group, welcome.limits), light and camera fields, snapshot
-// and record buttons,
+// group, welcome.settings for the frame group, welcome.limits), the list of lights (each with its
+// kind and an on/off switch; a click selects the one the mouse moves) and the selected light's own
+// fields (a spot's cone, a glTF spot's inner cone, an area light's size, the intensity), camera
+// fields, snapshot and record buttons,
 // the live numbers of the frame on screen (its `stats`), the note on a light iird made up, and the
 // marking of a refused field. It turns edits into calls of its handlers; it sends nothing itself.
 // Charts are charts.js, the domain drawing domain.js, error banners errors.js.
 
 import { fmt } from './vec.js';
-import { isPoint } from './gizmo.js';
+import { kindOf } from './gizmo.js';
 import { vplStep, describeStep } from './vplstats.js';
 
 const $ = (sel, root = document) => root.querySelector(sel);
+const KIND_NAMES = { point: 'point', spot: 'spot', gltf_spot: 'glTF spot', sun: 'sun', area: 'area' };
+const UNITS = { point: 'W/sr', spot: 'W/sr on the axis', gltf_spot: 'W/sr', sun: 'irradiance W/m²', area: 'radiance W/(sr·m²)' };
 
 function el(tag, attrs = {}, ...children) {
     const e = document.createElement(tag);
@@ -24,8 +28,9 @@ function el(tag, attrs = {}, ...children) {
 }
 
 export class Panel {
-    // handlers: {scene(name), params(fields), light(fields), camera(fields), snapshot(format),
-    // record(), fitSize(), resetView()}
+    // handlers: {scene(name), params(fields), light(fields) (of the selected light),
+    // selectLight(index), lightOn(index, on), camera(fields), snapshot(format), record(), fitSize(),
+    // resetView()}
     constructor(root, handlers) {
         this.root = root;
         this.h = handlers;
@@ -33,6 +38,8 @@ export class Panel {
         this.state = null;
         this.methods = [];
         this.recording = null; // {since} while recording
+        this.selected = 0; // index of the selected light
+        this.listKey = ''; // the light list's names and kinds as built
         this.bindStatic();
     }
 
@@ -46,6 +53,10 @@ export class Panel {
         const cone = $('#cone', this.root);
         cone.addEventListener('input', () => ($('#cone-value', this.root).textContent = `${cone.value}°`));
         cone.addEventListener('change', () => this.h.light({ cone_angle: Number(cone.value) }));
+        const inner = $('#inner-cone', this.root);
+        inner.addEventListener('input', () => ($('#inner-cone-value', this.root).textContent = `${inner.value}°`));
+        inner.addEventListener('change', () => this.innerEdited(inner));
+        for (const id of ['#size-w', '#size-h']) $(id, this.root).addEventListener('change', () => this.sizeEdited());
         const intensity = $('#intensity', this.root);
         intensity.addEventListener('change', () => {
             const x = Number(intensity.value);
@@ -59,7 +70,7 @@ export class Panel {
 
     // ---- welcome and state ----
 
-    setWelcome(w) {
+    setWelcome(w, selected = this.selected) {
         this.setScenes(w.scenes);
         this.methods = w.methods || [];
         this.settings = w.settings || [];
@@ -68,7 +79,7 @@ export class Panel {
         this.buildHead();
         this.buildGroup($('#params-frame', this.root), this.settings);
         $('#server', this.root).textContent = `${w.server || 'iird'} · session ${w.session}`;
-        this.setState(w.state);
+        this.setState(w.state, selected);
     }
 
     // The scene picker's names (a save on the server adds one); the scene shown stays picked.
@@ -145,7 +156,7 @@ export class Panel {
         this.h.params({ [row.name]: value });
     }
 
-    setState(state) {
+    setState(state, selected = this.selected) {
         this.state = state;
         $('#scene', this.root).value = state.scene;
         this.buildMethodGroup(state.params.method);
@@ -158,28 +169,98 @@ export class Panel {
         }
         const m = this.methods.find((x) => x.name === state.params.method);
         $('#method-summary', this.root).textContent = m && m.summary ? m.summary : '';
-        this.setLight(state.light);
+        this.setLights(state.lights || (state.light ? [state.light] : []), selected);
         this.setCamera(state.camera);
         $('#light-note', this.root).hidden = !state.default_light;
     }
 
+    // ---- lights ----
+
+    // The light list (rebuilt when the scene's lights change, else updated) and the selected
+    // light's fields.
+    setLights(lights, selected = this.selected) {
+        this.lights = lights;
+        this.selected = selected;
+        const key = lights.map((L) => `${L.name}\u0000${kindOf(L)}`).join('\u0001');
+        if (key !== this.listKey) this.buildLightList(lights);
+        this.listKey = key;
+        const rows = $('#light-list', this.root).children;
+        lights.forEach((L, i) => {
+            const row = rows[i];
+            row.setAttribute('aria-selected', String(i === selected));
+            row.classList.toggle('off', L.on === false);
+            const box = row.querySelector('input');
+            box.checked = L.on !== false;
+        });
+        this.setLight(lights[selected]);
+    }
+
+    buildLightList(lights) {
+        const list = $('#light-list', this.root);
+        list.replaceChildren(...lights.map((L, i) => {
+            const on = el('input', { type: 'checkbox', title: `${L.name}: on / off`, 'aria-label': `${L.name} on` });
+            on.addEventListener('change', () => this.h.lightOn(i, on.checked));
+            on.addEventListener('click', (e) => e.stopPropagation());
+            const row = el('div', { class: 'light-row', role: 'option', 'data-index': String(i), title: 'select: the mouse moves this light' },
+                on, el('span', { class: 'light-name mono', text: L.name }), el('span', { class: 'light-kind dim', text: KIND_NAMES[kindOf(L)] || kindOf(L) }));
+            row.addEventListener('click', () => this.h.selectLight(i));
+            return row;
+        }));
+    }
+
+    // The selected light's fields: those of its kind shown, the others hidden.
     setLight(L) {
         if (!L) return;
+        const kind = kindOf(L);
+        const spot = kind === 'spot' || kind === 'gltf_spot';
+        const show = (cls, on) => this.root.querySelectorAll(cls).forEach((e) => (e.hidden = !on));
+        show('.k-spot', spot);
+        show('.k-gltf', kind === 'gltf_spot');
+        show('.k-area', kind === 'area');
+        show('.k-pos', kind !== 'sun');
         const cone = $('#cone', this.root);
-        const point = isPoint(L);
-        cone.disabled = point;
-        if (point) $('#cone-value', this.root).textContent = 'point';
-        else if (document.activeElement !== cone) {
+        if (spot && document.activeElement !== cone) {
             cone.value = String(L.cone_angle);
             $('#cone-value', this.root).textContent = `${Math.round(L.cone_angle)}°`;
         }
+        const inner = $('#inner-cone', this.root);
+        if (kind === 'gltf_spot' && document.activeElement !== inner) {
+            inner.max = String(Math.round(L.cone_angle));
+            inner.value = String(L.inner_angle || 0);
+            $('#inner-cone-value', this.root).textContent = `${Math.round(L.inner_angle || 0)}°`;
+        }
+        this.setSize(L);
         const intensity = $('#intensity', this.root);
+        intensity.title = `largest RGB channel, ${UNITS[kind] || 'W/sr'}`;
         if (document.activeElement !== intensity && L.intensity) {
             const I = Array.isArray(L.intensity) ? Math.max(...L.intensity) : L.intensity;
             intensity.value = String(Number(I.toPrecision(4)));
         }
-        $('#light-pos', this.root).textContent = fmt(L.position);
-        $('#light-dir', this.root).textContent = point ? 'all around (point light)' : fmt(L.direction);
+        $('#light-pos', this.root).textContent = L.position ? fmt(L.position) : '';
+        $('#light-dir', this.root).textContent = kind === 'point' ? 'all around (point light)' : fmt(L.direction);
+    }
+
+    setSize(L) {
+        if (kindOf(L) !== 'area' || !L.size) return;
+        ['#size-w', '#size-h'].forEach((id, k) => {
+            const input = $(id, this.root);
+            if (document.activeElement !== input) input.value = String(Number(L.size[k].toPrecision(4)));
+        });
+    }
+
+    innerEdited(input) {
+        const x = Number(input.value);
+        const L = this.lights && this.lights[this.selected];
+        if (L && x <= L.cone_angle) this.h.light({ inner_angle: x });
+        else this.flagInvalid(input, 'the inner cone must be within the cone');
+    }
+
+    sizeEdited() {
+        const w = Number($('#size-w', this.root).value);
+        const h = Number($('#size-h', this.root).value);
+        const ok = (x) => Number.isFinite(x) && x > 0 && x <= 1e6;
+        if (ok(w) && ok(h)) this.h.light({ size: [w, h] });
+        else this.flagInvalid($(ok(w) ? '#size-h' : '#size-w', this.root), 'a size must be in (0, 1e6]');
     }
 
     setCamera(C) {

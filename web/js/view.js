@@ -1,6 +1,7 @@
 // view.js -- the image: a canvas that shows the newest frame (JPEG decoded with createImageBitmap),
 // scaled to fill its container at the frame's aspect ratio, and an overlay canvas above it for the
-// VPLs, the light's gizmo (gizmo.js) and the aim marker. Maps pointer positions to frame pixels.
+// VPLs, the lights' gizmos (gizmo.js) and the aim marker. Maps pointer positions to frame pixels and
+// finds the light whose gizmo is under one.
 // Greys the image while a switch is under way and puts the last frame back when it is refused. Not
 // input handling (controls.js), not which frames may be shown (gate.js: the mayShow predicate).
 //
@@ -28,8 +29,9 @@ export class View {
         this.mayShow = () => true; // checked again after decoding: the gate may have closed meanwhile
         this.bitmap = null; // the frame drawn last, kept to put it back after a refused switch
         this.greyed = false;
-        this.gizmo = null; // {light, camera, madeUp}: the light to draw over the image
-        this.gizmoAt = { x: NaN, y: NaN, visible: false }; // where it was drawn, frame pixels
+        this.gizmo = null; // {lights, selected, camera, madeUp}: the lights to draw over the image
+        this.gizmoAt = { x: NaN, y: NaN, visible: false }; // where the selected one was drawn, frame pixels
+        this.gizmosAt = []; // where each light was drawn ({name, x, y, visible, offscreen}), in order
         this.vpls = null; // domain.vpls of the newest domain message: [[sx, sy, flags], ...]
         this.showVpls = true;
         this.marker = null; // {x, y, kind} in frame pixels while dragging
@@ -155,7 +157,7 @@ export class View {
         this.drawOverlay();
     }
 
-    // g: {light, camera, madeUp} or null.
+    // g: {lights, selected (index), camera, madeUp} or null.
     setGizmo(g) {
         this.gizmo = g;
         this.drawOverlay();
@@ -174,15 +176,43 @@ export class View {
         const sx = W / this.canvas.width;
         const sy = H / this.canvas.height;
         const dpr = window.devicePixelRatio || 1;
-        if (this.greyed) {
-            this.gizmoAt = { x: NaN, y: NaN, visible: false };
-            return; // nothing of the old state over a greyed image
-        }
+        this.gizmoAt = { x: NaN, y: NaN, visible: false };
+        this.gizmosAt = [];
+        if (this.greyed) return; // nothing of the old state over a greyed image
         if (this.showVpls && this.vpls) this.drawVpls(o, sx, sy, dpr);
-        this.gizmoAt = this.gizmo && this.drawnId
-            ? drawGizmo(o, { ...this.gizmo, width: this.canvas.width, height: this.canvas.height }, sx, sy, dpr)
-            : { x: NaN, y: NaN, visible: false };
+        if (this.gizmo && this.drawnId) this.drawGizmos(o, sx, sy, dpr);
         if (this.marker) this.drawMarker(o, this.marker.x * sx, this.marker.y * sy, dpr);
+    }
+
+    // Every light's gizmo, the selected one last (on top).
+    drawGizmos(o, sx, sy, dpr) {
+        const { lights, selected, camera, madeUp } = this.gizmo;
+        const order = lights.map((_, i) => i).filter((i) => i !== selected);
+        if (selected >= 0 && selected < lights.length) order.push(selected);
+        const at = [];
+        for (const i of order) {
+            const g = { light: lights[i], camera, madeUp, selected: i === selected, width: this.canvas.width, height: this.canvas.height };
+            at[i] = { name: lights[i].name, ...drawGizmo(o, g, sx, sy, dpr) };
+        }
+        this.gizmosAt = at;
+        if (at[selected]) this.gizmoAt = { ...at[selected] };
+        delete this.gizmoAt.name;
+    }
+
+    // The index of the light whose gizmo (its handle or off-screen arrow) is within radiusCss CSS
+    // pixels of frame point (x, y), the nearest; -1 when none is.
+    gizmoNear(x, y, radiusCss = 12) {
+        const r = radiusCss / Math.max(1e-6, this.cssPerPixel());
+        let best = -1;
+        let bestD = r;
+        this.gizmosAt.forEach((g, i) => {
+            const d = Math.hypot(g.x - x, g.y - y);
+            if (d <= bestD) {
+                best = i;
+                bestD = d;
+            }
+        });
+        return best;
     }
 
     drawVpls(o, sx, sy, dpr) {

@@ -1,7 +1,8 @@
-/* light.h -- delta lights (spot with a cosine lobe or glTF's profile inside a cone, isotropic
- * point, the sun), the maps from their directions to the disks of their VPL domains
- * (light_domain.h), and the light set that samples delta lights and emissive triangles (quad area
- * lights) for next-event estimation. Not VPLs.
+/* light.h -- the lights a scene moves (delta lights: spot with a cosine lobe or glTF's profile
+ * inside a cone, isotropic point, the sun; and the rectangular area light), the maps from their
+ * directions to the disks of their VPL domains (light_domain.h), the area light's rectangle
+ * (sampling it, hitting it), and the light set that samples all of them and the emissive triangles
+ * for next-event estimation. Not VPLs.
  *
  * Cosine spot (profile IIR_SPOT_COSINE, iir's own): frame (p; r, u, f), half-angle alpha in
  * (0, 90] degrees, I(w) = I0 cos(theta) inside the cone, optionally faded to zero over an edge of
@@ -21,7 +22,17 @@
  * on a surface facing it. It lights the scene through the disk of radius `radius` centred at
  * `position`, perpendicular to the direction -- the scene's bounding sphere
  * (iir_light_fit_sun); rays start on that disk's plane `radius` behind the centre. Its flux into
- * the scene is Phi = E pi radius^2. */
+ * the scene is Phi = E pi radius^2.
+ *
+ * Area light (IIR_LIGHT_AREA): a one-sided rectangle, a cosine emitter of radiance `intensity`
+ * (W/(sr m^2), RGB) that moves as a rigid body: centre `position`, emitting towards `direction`
+ * (its normal f), its sides `size.x` along r and `size.y` along u of the frame (f, up). A point on
+ * it has light-local coordinates q in [-1/2, 1/2]^2: x = position + q.x size.x r + q.y size.y u.
+ * From afar it is a cosine lobe of I0 = L w h; its flux is Phi = pi L w h. It is not part of the
+ * scene's geometry (the BVH is static and shared): pt and the direct-light pass of the VPL
+ * renderer (for the G-buffer's camera rays) see it by an analytic ray-rectangle test
+ * (iir_area_light_hit), and it casts no shadow. Rays pass through it (from the front they collect
+ * its radiance on the way): what lies behind it is seen and lit as if it were not there. */
 #ifndef IIR_LIGHT_H
 #define IIR_LIGHT_H
 
@@ -37,7 +48,12 @@ extern "C" {
 
 struct iir_scene;
 
-typedef enum iir_light_type { IIR_LIGHT_POINT, IIR_LIGHT_SPOT, IIR_LIGHT_SUN } iir_light_type;
+typedef enum iir_light_type {
+    IIR_LIGHT_POINT,
+    IIR_LIGHT_SPOT,
+    IIR_LIGHT_SUN,
+    IIR_LIGHT_AREA
+} iir_light_type;
 
 /* A spot's angular profile. */
 typedef enum iir_spot_profile { IIR_SPOT_COSINE, IIR_SPOT_GLTF } iir_spot_profile;
@@ -53,14 +69,17 @@ typedef struct iir_light {
     iir_spot_profile profile; /* spot: IIR_SPOT_COSINE (the default) or IIR_SPOT_GLTF */
     float inner_angle;        /* glTF spot: innerConeAngle, radians, [0, cone_angle] */
     float radius;             /* sun: radius of its disk (> 0) */
-    iir_vec3 intensity; /* RGB: point: W/sr, isotropic; spot: I0 (W/sr) on the axis; sun: W/m^2 */
+    iir_vec2 size;            /* area: width along r and height along u (> 0) */
+    iir_vec3 intensity; /* RGB: point: W/sr, isotropic; spot: I0 (W/sr) on the axis; sun: W/m^2;
+                           area: radiance W/(sr m^2) */
 } iir_light;
 
 /* ---- description and validity ---- */
 
 /* IIR_ERR_INVALID naming the light and the field for NaN/Inf, negative intensity, a zero
  * direction, a cone angle outside (0, 90] degrees, a smooth edge wider than the cone, a glTF inner
- * angle outside [0, cone angle], or a sun without a disk (radius not finite and > 0). */
+ * angle outside [0, cone angle], a sun without a disk (radius not finite and > 0), or an area light
+ * without a size (a side not finite and > 0). */
 iir_status iir_light_validate(const iir_light *light, iir_error *err);
 
 /* The light a user moves in scene (the daemon's session light, an animation script's light track):
@@ -76,18 +95,23 @@ uint32_t iir_scene_moved_light(const struct iir_scene *scene, iir_light *out);
  * animation tracks). */
 void iir_light_fit_sun(iir_light *light, const struct iir_scene *scene);
 
-/* Short name of the light's kind: "point", "spot", "gltf_spot" or "sun" (the sidecar's type). */
+/* Short name of the light's kind: "point", "spot", "gltf_spot", "sun" or "area" (the sidecar's
+ * type). */
 const char *iir_light_kind(const iir_light *light);
 
-/* Total emitted flux (W, RGB); a sun's is what crosses its disk, E pi radius^2. */
+/* Total emitted flux (W, RGB); a sun's is what crosses its disk, E pi radius^2; an area light's
+ * pi L w h. */
 iir_vec3 iir_light_flux(const iir_light *light);
 
 /* Radiant intensity (W/sr) emitted towards the unit world direction w (pointing away from the
- * light). A sun has none (0): use its irradiance, `intensity`, along `direction`. */
+ * light). A sun has none (0): use its irradiance, `intensity`, along `direction`. An area light's
+ * is its far field, the cosine lobe L w h max(0, w.f) as if all of it sat at its centre: right for
+ * whoever sees it from many times its size away (iir_area_light_sample is exact near it). */
 iir_vec3 iir_light_intensity(const iir_light *light, iir_vec3 w);
 
-/* A light prepared for evaluating many directions: the spot's frame and disk radii are computed
- * once (iir_light_intensity recomputes them per call). Valid while *light is unchanged. */
+/* A light prepared for evaluating many directions: the spot's (and the area light's) frame and disk
+ * radii are computed once (iir_light_intensity recomputes them per call). Valid while *light is
+ * unchanged. */
 typedef struct iir_light_eval {
     const iir_light *light;
     iir_frame frame;
@@ -157,28 +181,51 @@ typedef struct iir_light_ray {
 
 /* Cosine spot: uniform on its disk (the cosine lobe); glTF spot: uniform on its equal-area disk
  * (uniform in solid angle over the cone); point: uniform on the sphere; sun: origin uniform on its
- * disk (on the plane `radius` behind the centre), direction `direction`. u in [0,1)^2. */
+ * disk (on the plane `radius` behind the centre), direction `direction`; area light: as
+ * iir_light_sample_emission_from with u_origin a hash of u's bits (deterministic, and independent
+ * of u for any practical purpose). u in [0,1)^2. */
 iir_light_ray iir_light_sample_emission(const iir_light *light, iir_vec2 u);
 
-/* ---- the light set: punctual lights + emissive triangles, for next-event estimation ---- */
+/* The same with the area light's origin chosen by u_origin: uniform on the rectangle
+ * (q = u_origin - 1/2), direction from u uniform on the unit disk of the frame (r, u, f) as the
+ * cosine spot's (the cosine lobe), beta = pi L w h. Other lights ignore u_origin. */
+iir_light_ray iir_light_sample_emission_from(const iir_light *light, iir_vec2 u, iir_vec2 u_origin);
+
+/* ---- the area light's rectangle (area_hit.c) ---- */
+
+/* The world point of light-local q in [-1/2, 1/2]^2 on area light l, whose frame is
+ * fr = iir_spot_frame(l). */
+static inline iir_vec3 iir_area_light_point(const iir_light *l, const iir_frame *fr, iir_vec2 q)
+{
+    return iir_add(iir_add(l->position, iir_scale(fr->r, q.x * l->size.x)),
+                   iir_scale(fr->u, q.y * l->size.y));
+}
+
+/* The t in (0, tmax) where the ray o + t d (d need not be unit) meets area light l's rectangle
+ * from its emitting side (d.f < 0), or INFINITY when it misses it, meets it from behind or runs
+ * parallel to it. */
+float iir_area_light_hit(const iir_light *l, iir_vec3 o, iir_vec3 d, float tmax);
+
+/* ---- the light set: the scene's lights + emissive triangles, for next-event estimation ---- */
 
 typedef struct iir_lightset iir_lightset;
 
-/* Builds the set from the given punctual lights and the scene's emissive triangles, choosing lights
- * in proportion to flux (luminance). The lights array is copied. Returns NULL on allocation
- * failure. */
+/* Builds the set from the given lights (delta and area lights) and the scene's emissive triangles,
+ * choosing lights in proportion to flux (luminance). The lights array is copied. Returns NULL on
+ * allocation failure. */
 iir_lightset *iir_lightset_create(const struct iir_scene *scene, const iir_light *lights,
                                   uint32_t num_lights);
 void iir_lightset_destroy(iir_lightset *set);
 bool iir_lightset_empty(const iir_lightset *set);
-/* True when the scene has emissive triangles (BSDF-sampled rays can then find light). */
+/* True when the scene has emissive triangles or the set an area light (BSDF-sampled rays can then
+ * find light). */
 bool iir_lightset_has_area_lights(const iir_lightset *set);
 
 typedef struct iir_light_sample {
     iir_vec3 wi;   /* unit direction from the shading point to the light */
     float dist;    /* distance to the sampled point; INFINITY for a sun */
-    iir_vec3 Li;   /* radiance (area), I/d^2 (point, spot) or E (sun), not divided by pdf */
-    float pdf;     /* solid-angle pdf (area) or the pmf of choosing a punctual light */
+    iir_vec3 Li;   /* radiance (areas), I/d^2 (point, spot) or E (sun), not divided by pdf */
+    float pdf;     /* solid-angle pdf (areas) or the pmf of choosing a delta light */
     bool is_delta; /* punctual: no MIS */
 } iir_light_sample;
 
@@ -189,6 +236,31 @@ iir_light_sample iir_lightset_sample(const iir_lightset *set, iir_vec3 x, float 
 /* Solid-angle pdf with which iir_lightset_sample would have chosen the point on emissive triangle
  * `prim` seen from x along unit direction wi at distance dist (for MIS when a BSDF ray hits it). */
 float iir_lightset_pdf_area(const iir_lightset *set, uint32_t prim, iir_vec3 wi, float dist);
+
+/* The number of lights the set was created with (emissive triangles not counted). */
+uint32_t iir_lightset_num_lights(const iir_lightset *set);
+
+/* What a ray meets of one of the set's lights. */
+typedef struct iir_emitter_hit {
+    float t;     /* along the ray; INFINITY when it meets nothing (and then Le = 0, pdf = 0) */
+    iir_vec3 Le; /* radiance towards the ray's origin */
+    float pdf;   /* solid-angle pdf with which iir_lightset_sample would have chosen that point */
+} iir_emitter_hit;
+
+/* Light i (< iir_lightset_num_lights) on the ray o + t d (unit d), t in (0, tmax): an area light
+ * met from its emitting side, with the pdf for MIS when a BSDF ray finds it; delta lights are
+ * never met. Area lights do not block rays: a caller adds every light met before its surface. */
+iir_emitter_hit iir_lightset_hit_light(const iir_lightset *set, uint32_t i, iir_vec3 o, iir_vec3 d,
+                                       float tmax);
+
+/* Next-event sample of area light l alone from shading point x: a point uniform on its rectangle
+ * (u), Li = L when x is on the emitting side, pdf in solid angle d^2 / (w h cos theta_l), the pick
+ * probability not included; pdf 0 when x is behind its plane. */
+iir_light_sample iir_area_light_sample(const iir_light *l, iir_vec3 x, iir_vec2 u);
+
+/* The solid-angle pdf iir_area_light_sample gives the point at distance dist along unit wi from
+ * the shading point (0 when wi meets it from behind). */
+float iir_area_light_pdf(const iir_light *l, iir_vec3 wi, float dist);
 
 #ifdef __cplusplus
 }

@@ -11,6 +11,7 @@
  *   glTF spot    disk    equal-area (Lambert) map of w          2 sin(alpha/2)  I0 t^2(theta)
  *   point        sphere  w                                      1               I0
  *   sun          disk    ((x - c).r, (x - c).u)                 radius          E
+ *   area         disk    (w.r, w.u), w = (x - o) / |x - o|      1               L w h
  *
  * (light.h has each map.) The flux per unit domain area is the light's emission divided by the
  * map's Jacobian: for the cosine disk dA = cos(theta) dw, so I(w) / cos = I0 falloff; the
@@ -24,7 +25,17 @@
  * its normal points towards origin(x), and is lit when the segment origin(x) -> x is free.
  * A null sample (the ray escaped, hit an emitter or grazed) keeps its place as the unit direction
  * of its ray (spot, point: a point at infinity) or as the point where its ray leaves the sun's
- * sphere (sun): iir_domain_null_pose and iir_domain_locate_null. */
+ * sphere (sun): iir_domain_null_pose and iir_domain_locate_null.
+ *
+ * Area lights. A rectangle emits from every point of it, so its emission is four-dimensional
+ * (point, direction). The domain keeps the two dimensions that decide where light lands and that
+ * light moves most: directions, on the cosine disk of the hemisphere about the normal (uniform
+ * density there is the cosine emitter). Each VPL keeps its own origin o on the emitter (its
+ * light-local point q, moved with the light as a rigid body), chosen stratified over the emitter
+ * by the VPL's id; all of the domain's calls for that VPL are made at o: the domain is that of a
+ * 90-degree cosine spot at o (iir_domain_at_emitter). A cell of area A then stands for the flux
+ * L w h A the whole emitter sends into its directions, carried from one point of it: the VPLs
+ * spread evenly over what the light emits in direction, and over the emitter in expectation. */
 #ifndef IIR_LIGHT_DOMAIN_H
 #define IIR_LIGHT_DOMAIN_H
 
@@ -44,7 +55,8 @@ typedef enum iir_domain_map {
     IIR_MAP_COSINE_DISK, /* cosine spot */
     IIR_MAP_CAP_DISK,    /* glTF spot */
     IIR_MAP_SPHERE,      /* point */
-    IIR_MAP_SUN_DISK     /* sun */
+    IIR_MAP_SUN_DISK,    /* sun */
+    IIR_MAP_AREA_DISK    /* area light: the cosine disk of directions from a point on it */
 } iir_domain_map;
 
 typedef struct iir_light_domain {
@@ -61,7 +73,15 @@ typedef struct iir_light_domain {
  * iir_light_validate. *d refers to *light, which must outlive it unchanged. */
 iir_status iir_light_domain_make(const iir_light *light, iir_light_domain *d, iir_error *err);
 
-/* Short name: "disk", "cap disk" (glTF spot), "sphere", "sun disk". */
+/* An area light's domain as seen from its emitter's light-local point q in [-1/2, 1/2]^2: *d with
+ * p moved to that point (every other map: *d itself). */
+iir_light_domain iir_domain_at_emitter(const iir_light_domain *d, iir_vec2 q);
+
+/* The i-th point of the emitter strata, in light-local coordinates: the Halton point in bases 3
+ * and 5 (independent of the Hammersley points that place directions), minus 1/2. */
+iir_vec2 iir_domain_emitter_stratum(uint32_t i);
+
+/* Short name: "disk", "cap disk" (glTF spot), "sphere", "sun disk", "area disk". */
 const char *iir_domain_map_name(iir_domain_map map);
 
 /* The domain point of world point x (in double precision); true when strictly inside the domain

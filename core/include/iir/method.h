@@ -174,7 +174,7 @@ void iir_method_set_stop(iir_method *m, iir_stop_fn fn, void *ctx);
 
 /* ---- the light's domain, for drawing (optional) ---- */
 
-/* One VPL site in the spot's disk, in disk units normalised to radius 1 (s / R). */
+/* One VPL site in the drawn domain, in the unit disk (a disk's s / R). */
 typedef struct iir_domain_site {
     float x, y;
     uint32_t id; /* the VPL's id (iir_method_vpls) */
@@ -186,7 +186,10 @@ enum {
     IIR_SITE_NULL = 2 /* null sample: its ray escaped or hit an emitter */
 };
 
-/* The domain of the last frame. Sites are in the order (ascending id) of iir_method_vpls. */
+/* The domain of the last frame, drawn into the unit disk: a disk domain scaled to radius 1, a point
+ * light's sphere by Lambert's equal-area map about straight down (straight up on the rim; edges and
+ * cells the map tears are left out). Sites are in the order (ascending id) of the drawn light's
+ * own set (with one light: of iir_method_vpls). */
 typedef struct iir_domain {
     uint32_t num_sites;
     const iir_domain_site *sites;
@@ -201,6 +204,7 @@ typedef struct iir_domain {
     const float (*removed)[2]; /* sites removed in the last frame (invalidated or deleted), where
                                   the frame's light saw them: outside the unit disk for sites that
                                   left the cone */
+    const char *map; /* "disk", "cap disk", "sphere (equal-area)", "sun disk", "area disk" */
 } iir_domain;
 
 /* Fills *out for methods with a disk domain (iir, after a frame); false (and *out zeroed)

@@ -117,9 +117,9 @@ void iir_renderer_destroy(iir_renderer *r);
  * destroy; owned by the renderer. */
 const iir_gbuffer *iir_renderer_gbuffer(const iir_renderer *r);
 
-/* What a frame or a pass shades: the camera, the punctual lights (emissive triangles come from the
- * scene), the VPLs (NULL when num_vpls is 0) and the seed of the frame's random numbers (the
- * emissive-triangle samples of direct light). All read-only during the call. */
+/* What a frame or a pass shades: the camera, the lights (delta and area lights; emissive triangles
+ * come from the scene), the VPLs (NULL when num_vpls is 0) and the seed of the frame's random
+ * numbers (the emissive-triangle samples of direct light). All read-only during the call. */
 typedef struct iir_render_input {
     const iir_camera *camera;
     const iir_light *lights;

@@ -64,7 +64,9 @@ typedef struct iir_vpl {
     iir_frame frame;   /* iir_frame_from_normal(normal): the shadow map's axes */
     iir_vec3 albedo;   /* rho at the VPL */
     iir_vec3 flux;     /* Phi_i, the flux it re-emits (W, RGB) */
-    iir_vec2 disk;     /* its point in the spot light's disk domain (incremental step only) */
+    iir_vec2 disk;     /* its point in its light's domain (incremental step only) */
+    iir_vec2 emit;     /* area light: where on the emitter its birth ray started, in light-local
+                          coordinates [-1/2, 1/2]^2 (incremental step only) */
     uint32_t birth;    /* frame number it was created in */
     iir_smap smap;     /* owned by whoever owns the VPL */
 } iir_vpl;

@@ -1,6 +1,7 @@
-/* anim_eval.c -- evaluating a parsed animation script: the light and the camera at time t (key
- * lookup, linear / Catmull-Rom / step interpolation, orbit and sweep paths); not parsing. A sun
- * keeps its disk: a track turns it, never moves it.
+/* anim_eval.c -- evaluating a parsed animation script: the lights and the camera at time t (key
+ * lookup, linear / Catmull-Rom / step interpolation, orbit and sweep paths, on/off); not parsing
+ * or checking a script against a scene (anim_check.c). A sun keeps its disk: a track turns it,
+ * never moves it.
  *
  * Every field is its own curve through the keys that give it; a key without the field does not
  * pin it. Catmull-Rom is the time-parameterised (non-uniform) one: a cubic Hermite segment whose
@@ -9,6 +10,7 @@
 #include "anim_internal.h"
 
 #include <math.h>
+#include <string.h>
 
 /* A segment of one field's curve: keys c, a, b, d (indices, -1 when absent) around t, with
  * t in [t_a, t_b) at fraction u. b < 0 means "hold a". */
@@ -94,6 +96,10 @@ static iir_vec3 key_value(const iir_anim_key *k, unsigned mask)
         return iir_v3s(k->fov);
     case IIR_AF_UP:
         return k->up;
+    case IIR_AF_INNER:
+        return iir_v3s(k->inner);
+    case IIR_AF_SIZE:
+        return k->size;
     case IIR_AF_EXPOSURE:
         return iir_v3s(k->stops);
     default:
@@ -143,9 +149,9 @@ static iir_vec3 aim_at(iir_vec3 from, iir_vec3 to, iir_vec3 fallback)
  * interpolated and the light aims at it; otherwise each key's aim becomes a direction (a target
  * seen from the light's position at that key's time) and the directions are interpolated and
  * renormalised. */
-static iir_vec3 eval_aim(const iir_anim *a, const iir_light *base, iir_vec3 pos, double t)
+static iir_vec3 eval_aim(const iir_anim *a, const iir_anim_track *tr, const iir_light *base,
+                         iir_vec3 pos, double t)
 {
-    const iir_anim_track *tr = &a->light;
     iir_anim_seg s;
     if (!seg_find(tr, IIR_AF_DIRECTION | IIR_AF_TARGET, t, &s)) return base->direction;
     const int idx[4] = {s.c, s.a, s.b, s.d};
@@ -176,24 +182,81 @@ static void keep_sun_disk(iir_light *L, const iir_light *base)
     L->radius = base->radius;
 }
 
-iir_light iir_anim_light(const iir_anim *a, const iir_light *base, double t)
+/* On or off at t: the value of the last key at or before t that gives it; on before the first
+ * (the scene's light as it is). */
+static bool eval_on(const iir_anim_track *tr, double t)
 {
-    iir_light L = *base;
-    const iir_anim_track *tr = &a->light;
-    if (!tr->present) return L;
-    t = clamp_time(a, t);
-    L.position = eval_position(a, tr, base->position, t);
-    L.direction = eval_aim(a, base, L.position, t);
-    keep_sun_disk(&L, base);
+    int lo = 0, hi = tr->num_keys; /* the first key after t */
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (tr->keys[mid].t <= t)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo == 0 || tr->keys[lo - 1].on_held;
+}
+
+/* Cone, smooth edge, inner cone, size and intensity, kept valid (see anim.h). */
+static void eval_optics(const iir_anim_track *tr, double t, iir_light *L)
+{
     iir_vec3 v;
     if (eval_field(tr, IIR_AF_CONE, t, &v))
-        L.cone_angle = iir_radians(iir_clampf(v.x, 1e-3f, 90.f));
-    if (eval_field(tr, IIR_AF_SMOOTH, t, &v)) L.smooth = iir_radians(fmaxf(v.x, 0.f));
-    L.smooth = fminf(L.smooth, L.cone_angle);
-    L.inner_angle = fminf(L.inner_angle, L.cone_angle); /* a glTF spot's inner cone */
+        L->cone_angle = iir_radians(iir_clampf(v.x, 1e-3f, 90.f));
+    if (eval_field(tr, IIR_AF_SMOOTH, t, &v)) L->smooth = iir_radians(fmaxf(v.x, 0.f));
+    if (eval_field(tr, IIR_AF_INNER, t, &v)) L->inner_angle = iir_radians(fmaxf(v.x, 0.f));
+    L->smooth = fminf(L->smooth, L->cone_angle);
+    L->inner_angle = fminf(L->inner_angle, L->cone_angle); /* a glTF spot's inner cone */
+    if (eval_field(tr, IIR_AF_SIZE, t, &v)) L->size = iir_v2(fmaxf(v.x, 1e-6f), fmaxf(v.y, 1e-6f));
     if (eval_field(tr, IIR_AF_INTENSITY, t, &v))
-        L.intensity = iir_v3(fmaxf(v.x, 0.f), fmaxf(v.y, 0.f), fmaxf(v.z, 0.f));
+        L->intensity = iir_v3(fmaxf(v.x, 0.f), fmaxf(v.y, 0.f), fmaxf(v.z, 0.f));
+    if (!eval_on(tr, t)) L->intensity = iir_v3s(0.f);
+}
+
+/* The light of track tr at t (already clamped), from base. */
+static iir_light eval_light(const iir_anim *a, const iir_anim_track *tr, const iir_light *base,
+                            double t)
+{
+    iir_light L = *base;
+    L.position = eval_position(a, tr, base->position, t);
+    L.direction = eval_aim(a, tr, base, L.position, t);
+    keep_sun_disk(&L, base);
+    iir_vec3 v;
+    if (eval_field(tr, IIR_AF_UP, t, &v) && iir_length(v) > 1e-6f) L.up = iir_normalize(v);
+    eval_optics(tr, t, &L);
     return L;
+}
+
+iir_light iir_anim_light(const iir_anim *a, const iir_light *base, double t)
+{
+    if (!a->light.present) return *base;
+    return eval_light(a, &a->light, base, clamp_time(a, t));
+}
+
+int iir_anim_find_light(const iir_light *lights, uint32_t n, const char *name)
+{
+    int found = -1;
+    for (uint32_t i = 0; i < n; i++) {
+        if (strcmp(lights[i].name, name) != 0) continue;
+        if (found >= 0) return -2;
+        found = (int)i;
+    }
+    return found;
+}
+
+void iir_anim_lights(const iir_anim *a, const iir_light *lights, uint32_t n, uint32_t moved,
+                     double t, iir_light *out)
+{
+    if (out != lights)
+        for (uint32_t i = 0; i < n; i++) out[i] = lights[i];
+    t = clamp_time(a, t);
+    bool moves = moved < n && a->light.present;
+    if (moves) out[moved] = eval_light(a, &a->light, &out[moved], t);
+    for (int k = 0; k < a->num_lights; k++) {
+        int i = iir_anim_find_light(out, n, a->lights[k].name);
+        if (i >= 0 && !(moves && (uint32_t)i == moved))
+            out[i] = eval_light(a, &a->lights[k], &out[i], t);
+    }
 }
 
 iir_camera iir_anim_camera(const iir_anim *a, const iir_camera *base, double t)

@@ -17,8 +17,11 @@ enum {
     IIR_AF_SMOOTH = 1u << 4,
     IIR_AF_INTENSITY = 1u << 5,
     IIR_AF_FOV = 1u << 6,
-    IIR_AF_UP = 1u << 7,       /* camera */
+    IIR_AF_UP = 1u << 7,       /* camera; light: its up hint */
     IIR_AF_EXPOSURE = 1u << 8, /* the exposure track's "stops" */
+    IIR_AF_INNER = 1u << 9,    /* a glTF spot's inner_angle */
+    IIR_AF_SIZE = 1u << 10,    /* an area light's size */
+    IIR_AF_ON = 1u << 11,      /* on / off (a step field) */
 };
 
 typedef struct iir_anim_key {
@@ -29,9 +32,13 @@ typedef struct iir_anim_key {
     iir_vec3 direction; /* unit */
     iir_vec3 target;
     iir_vec3 intensity;
-    iir_vec3 up;             /* camera: up hint, as written */
-    float cone, smooth, fov; /* degrees, as written */
-    float stops;             /* exposure */
+    iir_vec3 up;                    /* camera, light: up hint, as written */
+    iir_vec3 size;                  /* area light: width, height (z = 0) */
+    float cone, smooth, inner, fov; /* degrees, as written */
+    float stops;                    /* exposure */
+    bool on;                        /* light: on (true) or off */
+    bool on_held; /* the on/off in force from this key on: the last "on" at or before it (true
+                     before any), set once the track is parsed */
 } iir_anim_key;
 
 typedef enum iir_anim_interp {
@@ -46,6 +53,7 @@ typedef enum iir_anim_path { IIR_ANIM_KEYS, IIR_ANIM_ORBIT, IIR_ANIM_SWEEP } iir
  * t = 0 and compute the position from the parameters below. */
 typedef struct iir_anim_track {
     bool present;
+    char name[64]; /* a light track's "name" ("" when it gives none) */
     iir_anim_path path;
     iir_anim_interp interp;
     int num_keys;
@@ -57,10 +65,12 @@ typedef struct iir_anim_track {
 } iir_anim_track;
 
 struct iir_anim {
-    char scene[129];     /* the scene the script was made for ("" when it names none) */
-    char light_name[64]; /* the light the light track moves ("" when it names none) */
+    char source[160]; /* the script's file or label, for messages */
+    char scene[129];  /* the scene the script was made for ("" when it names none) */
     double fps, duration;
-    iir_anim_track light, camera, exposure;
+    iir_anim_track light, camera, exposure; /* light.name: "" when it names none */
+    int num_lights;                         /* "lights": named tracks, names distinct */
+    iir_anim_track *lights;
 };
 
 #endif

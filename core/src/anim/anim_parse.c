@@ -1,5 +1,6 @@
 /* anim_parse.c -- reading and validating animation scripts into an iir_anim, and the frame
- * arithmetic; not evaluating tracks (anim_eval.c). The format is docs/animation-format.md. */
+ * arithmetic; not evaluating tracks (anim_eval.c) or checking them against a scene's lights
+ * (anim_check.c). The format is docs/animation-format.md. */
 #include "anim_internal.h"
 
 #include <cjson/cJSON.h>
@@ -143,9 +144,57 @@ static iir_status get_vec3(const iir_anim_ctx *c, const cJSON *obj, const char *
     return IIR_OK;
 }
 
+/* A member [w, h] of numbers in (0, 1e6] (an area light's size), kept in out->x, out->y. */
+static iir_status get_size(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                           const char *name, iir_vec3 *out, bool *present)
+{
+    char p[IIR_ANIM_PATH];
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
+    *present = m != NULL;
+    if (!m) return IIR_OK;
+    path_join(p, path, name);
+    if (!cJSON_IsArray(m) || cJSON_GetArraySize(m) != 2 || !cJSON_IsNumber(m->child) ||
+        !cJSON_IsNumber(m->child->next))
+        return anim_fail(c, IIR_ERR_FORMAT, p, "must be an array of 2 numbers [width, height]");
+    double v[2] = {m->child->valuedouble, m->child->next->valuedouble};
+    for (int i = 0; i < 2; i++)
+        if (!(v[i] > 0.0 && v[i] <= MAX_VEC3_ELEMENT))
+            return anim_fail(c, IIR_ERR_INVALID, p, "element %d (%g) is outside (0, 1e6]", i, v[i]);
+    *out = iir_v3((float)v[0], (float)v[1], 0.f);
+    return IIR_OK;
+}
+
+/* A member true / false. */
+static iir_status get_bool(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                           const char *name, bool *out, bool *present)
+{
+    char p[IIR_ANIM_PATH];
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
+    *present = m != NULL;
+    if (!m) return IIR_OK;
+    path_join(p, path, name);
+    if (!cJSON_IsBool(m)) return anim_fail(c, IIR_ERR_FORMAT, p, "must be true/false");
+    *out = cJSON_IsTrue(m);
+    return IIR_OK;
+}
+
 /* ======================== keys ======================== */
 
-/* Position, aim (direction XOR target) of a key or parametric object. */
+/* up (camera, light): any length, not zero. */
+static iir_status parse_up(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                           iir_anim_key *k)
+{
+    char p[IIR_ANIM_PATH];
+    bool has;
+    iir_status st = get_vec3(c, obj, path, "up", false, &k->up, &has);
+    k->fields |= has ? IIR_AF_UP : 0u;
+    path_join(p, path, "up");
+    if (st == IIR_OK && has && !(iir_length(k->up) > 1e-12f))
+        return anim_fail(c, IIR_ERR_INVALID, p, "must not be zero");
+    return st;
+}
+
+/* Position, aim (direction XOR target) and, for a light, up of a key or parametric object. */
 static iir_status parse_placement(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                                   iir_anim_key *k)
 {
@@ -167,25 +216,19 @@ static iir_status parse_placement(const iir_anim_ctx *c, const cJSON *obj, const
     path_join(p, path, "target");
     if (has_p && has_t && iir_length(iir_sub(k->target, k->position)) < 1e-6f)
         return anim_fail(c, IIR_ERR_INVALID, p, "equals position");
-    return IIR_OK;
+    return c->kind == KIND_LIGHT ? parse_up(c, obj, path, k) : IIR_OK;
 }
 
 /* Camera: fov_y and up. */
 static iir_status parse_lens(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                              iir_anim_key *k)
 {
-    char p[IIR_ANIM_PATH];
     bool has;
     double v = 0.0;
     iir_status st = get_ranged(c, obj, path, "fov_y", 0.0, true, 179.999, &v, &has);
     k->fov = (float)v;
     k->fields |= has ? IIR_AF_FOV : 0u;
-    if (st == IIR_OK) st = get_vec3(c, obj, path, "up", false, &k->up, &has);
-    k->fields |= has ? IIR_AF_UP : 0u;
-    path_join(p, path, "up");
-    if (st == IIR_OK && has && !(iir_length(k->up) > 1e-12f))
-        return anim_fail(c, IIR_ERR_INVALID, p, "must not be zero");
-    return st;
+    return st == IIR_OK ? parse_up(c, obj, path, k) : st;
 }
 
 /* Exposure: stops, the range of iird render --exposure. */
@@ -200,7 +243,29 @@ static iir_status parse_stops(const iir_anim_ctx *c, const cJSON *obj, const cha
     return st;
 }
 
-/* Light: cone_angle, smooth, intensity; camera: fov_y, up; exposure: stops. */
+/* Light: inner_angle (glTF spot), size (area light), on. */
+static iir_status parse_light_extras(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                                     iir_anim_key *k)
+{
+    char p[IIR_ANIM_PATH];
+    bool has;
+    double v = 0.0;
+    iir_status st = get_ranged(c, obj, path, "inner_angle", 0.0, false, 90.0, &v, &has);
+    k->inner = (float)v;
+    k->fields |= has ? IIR_AF_INNER : 0u;
+    path_join(p, path, "inner_angle");
+    if (st == IIR_OK && (k->fields & IIR_AF_CONE) && has && k->inner > k->cone)
+        return anim_fail(c, IIR_ERR_INVALID, p, "%g is wider than cone_angle %g", k->inner,
+                         k->cone);
+    if (st == IIR_OK) st = get_size(c, obj, path, "size", &k->size, &has);
+    k->fields |= has ? IIR_AF_SIZE : 0u;
+    if (st == IIR_OK) st = get_bool(c, obj, path, "on", &k->on, &has);
+    k->fields |= has ? IIR_AF_ON : 0u;
+    return st;
+}
+
+/* Light: cone_angle, smooth, intensity, inner_angle, size, on; camera: fov_y, up; exposure:
+ * stops. */
 static iir_status parse_optics(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                                iir_anim_key *k)
 {
@@ -224,11 +289,12 @@ static iir_status parse_optics(const iir_anim_ctx *c, const cJSON *obj, const ch
     path_join(p, path, "intensity");
     if (st == IIR_OK && has && fminf(k->intensity.x, fminf(k->intensity.y, k->intensity.z)) < 0.f)
         return anim_fail(c, IIR_ERR_INVALID, p, "must not be negative");
-    return st;
+    return st == IIR_OK ? parse_light_extras(c, obj, path, k) : st;
 }
 
 static const char *const LIGHT_KEY_FIELDS[] = {
-    "t", "step", "position", "direction", "target", "cone_angle", "smooth", "intensity", NULL};
+    "t",      "step",        "position", "direction", "target", "up", "cone_angle",
+    "smooth", "inner_angle", "size",     "intensity", "on",     NULL};
 static const char *const CAMERA_KEY_FIELDS[] = {"t",     "step", "position", "target",
                                                 "fov_y", "up",   NULL};
 static const char *const EXPOSURE_KEY_FIELDS[] = {"t", "step", "stops", NULL};
@@ -275,6 +341,16 @@ static iir_status parse_interp(const iir_anim_ctx *c, const cJSON *obj, const ch
     return IIR_OK;
 }
 
+/* Each key's on_held: the "on" of the last key at or before it that gives one (true before). */
+static void hold_on(iir_anim_track *tr)
+{
+    bool on = true;
+    for (int i = 0; i < tr->num_keys; i++) {
+        if (tr->keys[i].fields & IIR_AF_ON) on = tr->keys[i].on;
+        tr->keys[i].on_held = on;
+    }
+}
+
 static iir_status parse_keys(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                              iir_anim_track *tr)
 {
@@ -297,18 +373,20 @@ static iir_status parse_keys(const iir_anim_ctx *c, const cJSON *obj, const char
         st = parse_key(c, key, kp, prev_t, &tr->keys[i]);
         prev_t = tr->keys[i].t;
     }
+    hold_on(tr);
     return st;
 }
 
 /* ======================== parametric paths ======================== */
 
-static const char *const LIGHT_ORBIT_FIELDS[] = {"center",    "radius", "turns",      "phase",
-                                                 "direction", "target", "cone_angle", "smooth",
-                                                 "intensity", NULL};
+static const char *const LIGHT_ORBIT_FIELDS[] = {
+    "center",     "radius", "turns",       "phase", "direction", "target", "up",
+    "cone_angle", "smooth", "inner_angle", "size",  "intensity", "on",     NULL};
 static const char *const CAMERA_ORBIT_FIELDS[] = {"center", "radius", "turns", "phase",
                                                   "target", "fov_y",  "up",    NULL};
-static const char *const LIGHT_SWEEP_FIELDS[] = {"from",       "to",     "direction", "target",
-                                                 "cone_angle", "smooth", "intensity", NULL};
+static const char *const LIGHT_SWEEP_FIELDS[] = {"from", "to",         "direction", "target",
+                                                 "up",   "cone_angle", "smooth",    "inner_angle",
+                                                 "size", "intensity",  "on",        NULL};
 static const char *const CAMERA_SWEEP_FIELDS[] = {"from", "to", "target", "fov_y", "up", NULL};
 
 /* A required vec3 member. */
@@ -364,7 +442,9 @@ static iir_status parse_parametric(const iir_anim_ctx *c, const cJSON *obj, cons
     if (!tr->keys) return anim_fail(c, IIR_ERR_NOMEM, path, "out of memory");
     st = orbit ? parse_orbit(c, obj, path, tr) : parse_sweep(c, obj, path, tr);
     if (st == IIR_OK) st = parse_placement(c, obj, path, &tr->keys[0]);
-    return st == IIR_OK ? parse_optics(c, obj, path, &tr->keys[0]) : st;
+    if (st == IIR_OK) st = parse_optics(c, obj, path, &tr->keys[0]);
+    hold_on(tr);
+    return st;
 }
 
 static const char *const LIGHT_TRACK_FIELDS[] = {"name",  "interpolation", "keys",
@@ -374,16 +454,21 @@ static const char *const EXPOSURE_TRACK_FIELDS[] = {"interpolation", "keys", NUL
 static const char *const *const TRACK_FIELDS[] = {LIGHT_TRACK_FIELDS, CAMERA_TRACK_FIELDS,
                                                   EXPOSURE_TRACK_FIELDS};
 
-/* The light track's "name": the scene light it moves. */
-static iir_status parse_light_name(const iir_anim_ctx *c, const cJSON *obj, iir_anim *a)
+/* A light track's "name": the scene light it moves (required in "lights"). */
+static iir_status parse_track_name(const iir_anim_ctx *c, const cJSON *obj, const char *path,
+                                   bool required, iir_anim_track *tr)
 {
+    char p[IIR_ANIM_PATH];
     const cJSON *name = cJSON_GetObjectItemCaseSensitive(obj, "name");
+    path_join(p, path, "name");
+    if (!name && required)
+        return anim_fail(c, IIR_ERR_FORMAT, p, "is missing: the name of the scene light it moves");
     if (!name) return IIR_OK;
     if (!cJSON_IsString(name) || !name->valuestring[0] ||
-        strlen(name->valuestring) >= sizeof a->light_name)
-        return anim_fail(c, IIR_ERR_FORMAT, "light.name",
-                         "must be a light's name of 1 to %zu bytes", sizeof a->light_name - 1);
-    snprintf(a->light_name, sizeof a->light_name, "%s", name->valuestring);
+        strlen(name->valuestring) >= sizeof tr->name)
+        return anim_fail(c, IIR_ERR_FORMAT, p, "must be a light's name of 1 to %zu bytes",
+                         sizeof tr->name - 1);
+    snprintf(tr->name, sizeof tr->name, "%s", name->valuestring);
     return IIR_OK;
 }
 
@@ -431,8 +516,49 @@ static iir_status parse_track(iir_anim_ctx *c, const cJSON *obj, const char *nam
 
 /* ======================== the script ======================== */
 
-static const char *const TOP_FIELDS[] = {"fps",         "duration", "light",    "camera",
+static const char *const TOP_FIELDS[] = {"fps",         "duration", "light",    "lights", "camera",
                                          "description", "scene",    "exposure", NULL};
+
+/* Track i of "lights" (at path): a light track with a name no other track of the script has. */
+static iir_status parse_named_track(iir_anim_ctx *c, const cJSON *obj, const char *path,
+                                    iir_anim *a, int i)
+{
+    char p[IIR_ANIM_PATH];
+    iir_anim_track *tr = &a->lights[i];
+    iir_status st = parse_track(c, obj, path, tr);
+    if (st == IIR_OK) st = parse_track_name(c, obj, path, true, tr);
+    if (st != IIR_OK) return st;
+    path_join(p, path, "name");
+    if (a->light.present && !strcmp(a->light.name, tr->name))
+        return anim_fail(c, IIR_ERR_INVALID, p,
+                         "'%s' is also the name the \"light\" track gives: animate a light in "
+                         "one track",
+                         tr->name);
+    for (int j = 0; j < i; j++)
+        if (!strcmp(a->lights[j].name, tr->name))
+            return anim_fail(c, IIR_ERR_INVALID, p, "'%s' is also lights[%d]'s light", tr->name, j);
+    return IIR_OK;
+}
+
+/* "lights": [track, ...], each naming its light. */
+static iir_status parse_lights(iir_anim_ctx *c, const cJSON *arr, iir_anim *a)
+{
+    char p[IIR_ANIM_PATH];
+    if (!arr) return IIR_OK;
+    if (!cJSON_IsArray(arr))
+        return anim_fail(c, IIR_ERR_FORMAT, "lights", "must be an array of light tracks");
+    int n = cJSON_GetArraySize(arr);
+    a->lights = calloc(n > 0 ? (size_t)n : 1u, sizeof *a->lights);
+    if (!a->lights) return anim_fail(c, IIR_ERR_NOMEM, "lights", "out of memory");
+    a->num_lights = n;
+    iir_status st = IIR_OK;
+    const cJSON *track = arr->child;
+    for (int i = 0; i < n && st == IIR_OK; i++, track = track->next) {
+        snprintf(p, sizeof p, "lights[%d]", i);
+        st = parse_named_track(c, track, p, a, i);
+    }
+    return st;
+}
 
 static iir_status parse_root(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
 {
@@ -460,7 +586,9 @@ static iir_status parse_root(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
         st = parse_track(c, cJSON_GetObjectItemCaseSensitive(root, "exposure"), "exposure",
                          &a->exposure);
     if (st == IIR_OK && a->light.present)
-        st = parse_light_name(c, cJSON_GetObjectItemCaseSensitive(root, "light"), a);
+        st = parse_track_name(c, cJSON_GetObjectItemCaseSensitive(root, "light"), "light", false,
+                              &a->light);
+    if (st == IIR_OK) st = parse_lights(c, cJSON_GetObjectItemCaseSensitive(root, "lights"), a);
     return st;
 }
 
@@ -476,6 +604,7 @@ iir_status iir_anim_parse(const char *json_text, const char *source_name, iir_an
         return iir_fail(err, IIR_ERR_FORMAT, "%s: not valid JSON near byte %ld", c.src, at);
     }
     iir_anim *a = calloc(1, sizeof *a);
+    if (a) snprintf(a->source, sizeof a->source, "%s", c.src);
     iir_status st = a ? parse_root(&c, root, a) : iir_fail(err, IIR_ERR_NOMEM, "out of memory");
     cJSON_Delete(root);
     if (st != IIR_OK) {
@@ -513,6 +642,8 @@ void iir_anim_destroy(iir_anim *a)
     free(a->light.keys);
     free(a->camera.keys);
     free(a->exposure.keys);
+    for (int i = 0; i < a->num_lights; i++) free(a->lights[i].keys);
+    free(a->lights);
     free(a);
 }
 
@@ -560,5 +691,15 @@ bool iir_anim_has_exposure(const iir_anim *a)
 
 const char *iir_anim_light_name(const iir_anim *a)
 {
-    return a->light_name;
+    return a->light.name;
+}
+
+int iir_anim_num_light_tracks(const iir_anim *a)
+{
+    return a->num_lights;
+}
+
+const char *iir_anim_light_track_name(const iir_anim *a, int i)
+{
+    return i >= 0 && i < a->num_lights ? a->lights[i].name : NULL;
 }

@@ -1,11 +1,14 @@
-/* light.c -- delta lights (cosine spot, glTF spot, point, sun): validity, kind, intensity, flux,
- * the spots' disk maps' radii and falloff, emission sampling, and fitting a sun to the scene. Not
- * the light set (lightset.c) and not VPLs. */
+/* light.c -- the lights a scene moves (cosine spot, glTF spot, point, sun, rectangular area
+ * light): validity, kind, intensity, flux, the spots' disk maps' radii and falloff, emission
+ * sampling, and fitting a sun to the scene. Not the light set (lightset.c), not hitting an area
+ * light (area_hit.c) and not VPLs. */
 #include "iir/light.h"
 
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
+#include "iir/rng.h"
 #include "iir/scene.h"
 
 #include "sampling.h"
@@ -37,10 +40,20 @@ static iir_status validate_spot(const iir_light *l, const char *name, iir_error 
     return IIR_OK;
 }
 
+static iir_status validate_area(const iir_light *l, const char *name, iir_error *err)
+{
+    if (!(isfinite(l->size.x) && isfinite(l->size.y) && l->size.x > 0.f && l->size.y > 0.f))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "light '%s': an area light's size must be finite and > 0, got %g x %g",
+                        name, (double)l->size.x, (double)l->size.y);
+    return IIR_OK;
+}
+
 iir_status iir_light_validate(const iir_light *l, iir_error *err)
 {
     const char *name = l->name[0] ? l->name : "(unnamed)";
-    if (l->type != IIR_LIGHT_POINT && l->type != IIR_LIGHT_SPOT && l->type != IIR_LIGHT_SUN)
+    if (l->type != IIR_LIGHT_POINT && l->type != IIR_LIGHT_SPOT && l->type != IIR_LIGHT_SUN &&
+        l->type != IIR_LIGHT_AREA)
         return iir_fail(err, IIR_ERR_INVALID, "light '%s': unknown type %d", name, (int)l->type);
     if (!iir_is_finite3(l->position))
         return iir_fail(err, IIR_ERR_INVALID, "light '%s': position is not finite", name);
@@ -51,6 +64,7 @@ iir_status iir_light_validate(const iir_light *l, iir_error *err)
     if (!iir_is_finite3(l->direction) || iir_length(l->direction) < 1e-6f)
         return iir_fail(err, IIR_ERR_INVALID, "light '%s': direction is zero or not finite", name);
     if (l->type == IIR_LIGHT_SPOT) return validate_spot(l, name, err);
+    if (l->type == IIR_LIGHT_AREA) return validate_area(l, name, err);
     if (!(isfinite(l->radius) && l->radius > 0.f))
         return iir_fail(err, IIR_ERR_INVALID,
                         "light '%s': a sun needs a disk radius > 0 (iir_light_fit_sun), got %g",
@@ -67,6 +81,8 @@ const char *iir_light_kind(const iir_light *l)
         return l->profile == IIR_SPOT_GLTF ? "gltf_spot" : "spot";
     case IIR_LIGHT_SUN:
         return "sun";
+    case IIR_LIGHT_AREA:
+        return "area";
     }
     return "unknown";
 }
@@ -81,7 +97,8 @@ void iir_light_fit_sun(iir_light *l, const iir_scene *scene)
 
 /* ======================== the spots' disks ======================== */
 
-/* The spot's frame, and the sun's (the sun's disk is spanned by r and u as a spot's is). */
+/* The spot's frame, and the sun's and the area light's (their disk and rectangle are spanned by r
+ * and u as a spot's disk is). */
 iir_frame iir_spot_frame(const iir_light *spot)
 {
     iir_vec3 up = iir_length_sq(spot->up) > 0.f ? spot->up : iir_v3(0, 1, 0);
@@ -146,6 +163,8 @@ iir_vec3 iir_light_flux(const iir_light *l)
         return iir_scale(l->intensity, 4.f * IIR_PI);
     case IIR_LIGHT_SUN:
         return iir_scale(l->intensity, IIR_PI * l->radius * l->radius);
+    case IIR_LIGHT_AREA:
+        return iir_scale(l->intensity, IIR_PI * l->size.x * l->size.y);
     default:
         return iir_scale(l->intensity,
                          l->profile == IIR_SPOT_GLTF ? gltf_flux_factor(l) : spot_flux_factor(l));
@@ -155,6 +174,7 @@ iir_vec3 iir_light_flux(const iir_light *l)
 iir_light_eval iir_light_prepare(const iir_light *l)
 {
     iir_light_eval e = {.light = l};
+    if (l->type == IIR_LIGHT_AREA) e.frame = iir_spot_frame(l);
     if (l->type != IIR_LIGHT_SPOT) return e;
     e.frame = iir_spot_frame(l);
     if (l->profile == IIR_SPOT_GLTF) {
@@ -174,6 +194,8 @@ iir_vec3 iir_light_eval_intensity(const iir_light_eval *e, iir_vec3 w)
     if (l->type == IIR_LIGHT_SUN) return iir_v3s(0.f);
     float cos_theta = iir_dot(w, e->frame.f);
     if (cos_theta <= 0.f) return iir_v3s(0.f);
+    if (l->type == IIR_LIGHT_AREA) /* the far field: I0 = L w h */
+        return iir_scale(l->intensity, cos_theta * l->size.x * l->size.y);
     if (l->profile == IIR_SPOT_GLTF)
         return iir_scale(l->intensity, iir_gltf_spot_attenuation(e, cos_theta));
     iir_vec2 s = iir_spot_dir_to_disk(&e->frame, w);
@@ -230,8 +252,37 @@ static iir_light_ray sample_sun(const iir_light *l, iir_vec2 u)
     return r;
 }
 
+/* Origin uniform on the rectangle (pdf 1 / (w h) per unit area), direction uniform on the unit disk
+ * of its frame (pdf cos / pi): beta = L cos / (cos / (pi w h)) = pi L w h. */
+static iir_light_ray sample_area(const iir_light *l, iir_vec2 u, iir_vec2 u_origin)
+{
+    iir_frame fr = iir_spot_frame(l);
+    iir_vec2 q = iir_v2(u_origin.x - 0.5f, u_origin.y - 0.5f);
+    iir_light_ray r = {iir_area_light_point(l, &fr, q),
+                       iir_spot_disk_to_dir(&fr, iir_sample_uniform_disk_concentric(u)),
+                       iir_scale(l->intensity, IIR_PI * l->size.x * l->size.y)};
+    return r;
+}
+
+/* Two numbers in [0, 1) from the bits of u. */
+static iir_vec2 hash_uniform2(iir_vec2 u)
+{
+    uint32_t a, b;
+    memcpy(&a, &u.x, sizeof a);
+    memcpy(&b, &u.y, sizeof b);
+    uint64_t h = iir_hash3(a, b, 0xa7ea);
+    return iir_v2((float)(h >> 40) * 0x1p-24f, (float)((h >> 8) & 0xffffff) * 0x1p-24f);
+}
+
 iir_light_ray iir_light_sample_emission(const iir_light *l, iir_vec2 u)
 {
+    if (l->type == IIR_LIGHT_AREA) return sample_area(l, u, hash_uniform2(u));
+    return iir_light_sample_emission_from(l, u, iir_v2(0.5f, 0.5f));
+}
+
+iir_light_ray iir_light_sample_emission_from(const iir_light *l, iir_vec2 u, iir_vec2 u_origin)
+{
+    if (l->type == IIR_LIGHT_AREA) return sample_area(l, u, u_origin);
     if (l->type == IIR_LIGHT_SUN) return sample_sun(l, u);
     if (l->type == IIR_LIGHT_SPOT)
         return l->profile == IIR_SPOT_GLTF ? sample_gltf_spot(l, u) : sample_cosine_spot(l, u);

@@ -6,11 +6,12 @@
 
 #include <math.h>
 
+#include "iir/rng.h"
 #include "sampling.h"
 
 const char *iir_domain_map_name(iir_domain_map map)
 {
-    static const char *const names[] = {"disk", "cap disk", "sphere", "sun disk"};
+    static const char *const names[] = {"disk", "cap disk", "sphere", "sun disk", "area disk"};
     return (unsigned)map < sizeof names / sizeof names[0] ? names[map] : "?";
 }
 
@@ -25,7 +26,10 @@ iir_status iir_light_domain_make(const iir_light *l, iir_light_domain *d, iir_er
         return IIR_OK;
     }
     d->shape = IIR_DOMAIN_DISK;
-    if (l->type == IIR_LIGHT_SUN) {
+    if (l->type == IIR_LIGHT_AREA) {
+        d->eval.frame = iir_spot_frame(l);
+        d->map = IIR_MAP_AREA_DISK, d->R = 1.0;
+    } else if (l->type == IIR_LIGHT_SUN) {
         d->eval.frame = iir_spot_frame(l);
         d->map = IIR_MAP_SUN_DISK, d->R = (double)l->radius;
     } else if (l->profile == IIR_SPOT_GLTF) {
@@ -114,6 +118,7 @@ void iir_domain_ray(const iir_light_domain *d, const double s[3], iir_vec3 *o, i
     *o = d->p;
     switch (d->map) {
     case IIR_MAP_COSINE_DISK:
+    case IIR_MAP_AREA_DISK:
         *w = iir_normalize(iir_spot_disk_to_dir(fr, t));
         break;
     case IIR_MAP_CAP_DISK:
@@ -169,6 +174,8 @@ float iir_domain_profile(const iir_light_domain *d, const double s[3])
     case IIR_MAP_SPHERE:
     case IIR_MAP_SUN_DISK:
         return 1.f;
+    case IIR_MAP_AREA_DISK:
+        return d->light->size.x * d->light->size.y;
     }
     return 0.f;
 }
@@ -196,4 +203,21 @@ void iir_domain_pull_inside(const iir_light_domain *d, const double c[3], double
     double r = sqrt(c[0] * c[0] + c[1] * c[1]), rmax = d->R * (1.0 - margin);
     double k = r > rmax ? rmax / r : 1.0;
     s[0] = c[0] * k, s[1] = c[1] * k, s[2] = 0.0;
+}
+
+/* ---- area lights ---- */
+
+iir_light_domain iir_domain_at_emitter(const iir_light_domain *d, iir_vec2 q)
+{
+    iir_light_domain at = *d;
+    if (d->map != IIR_MAP_AREA_DISK) return at;
+    const iir_frame *fr = &d->eval.frame;
+    const iir_vec2 size = d->light->size;
+    at.p = iir_add(iir_add(d->p, iir_scale(fr->r, q.x * size.x)), iir_scale(fr->u, q.y * size.y));
+    return at;
+}
+
+iir_vec2 iir_domain_emitter_stratum(uint32_t i)
+{
+    return iir_v2(iir_radical_inverse(3, i) - 0.5f, iir_radical_inverse(5, i) - 0.5f);
 }

@@ -1,6 +1,8 @@
-/* lightset.c -- the lights next-event estimation chooses from: delta lights (point, spots, suns)
- * and emissive triangles, picked in proportion to their flux (luminance; a sun's is what crosses
- * its disk). Not the lights' own radiometry (light.c). */
+/* lightset.c -- the lights next-event estimation chooses from: delta lights (point, spots, suns),
+ * area lights (rectangles) and emissive triangles, picked in proportion to their flux (luminance;
+ * a sun's is what crosses its disk); sampling a point on an area light and the pdf of a BSDF ray
+ * that meets one. Not the lights' own radiometry (light.c) nor the ray-rectangle test
+ * (area_hit.c). */
 #include "iir/light.h"
 
 #include <math.h>
@@ -11,9 +13,10 @@
 
 struct iir_lightset {
     const iir_scene *scene;
-    uint32_t num_punctual;
+    uint32_t num_punctual; /* the lights given, delta and area lights alike */
     iir_light *punctual;
-    uint32_t num_entries; /* punctual lights first, then emissive triangles */
+    bool has_area_light;  /* one of them is an area light */
+    uint32_t num_entries; /* the lights given first, then emissive triangles */
     uint32_t *tri_of;     /* entry -> triangle (entries >= num_punctual) */
     float *cdf;           /* num_entries + 1, cdf[0] = 0, cdf[n] = 1 */
     uint32_t *entry_of;   /* triangle -> entry, UINT32_MAX if not emissive */
@@ -64,7 +67,10 @@ iir_lightset *iir_lightset_create(const iir_scene *scene, const iir_light *light
         iir_lightset_destroy(set);
         return NULL;
     }
-    for (uint32_t i = 0; i < num_lights; i++) set->punctual[i] = lights[i];
+    for (uint32_t i = 0; i < num_lights; i++) {
+        set->punctual[i] = lights[i];
+        set->has_area_light |= lights[i].type == IIR_LIGHT_AREA;
+    }
     uint32_t e = num_lights;
     for (uint32_t t = 0; t < scene->num_triangles; t++) {
         set->entry_of[t] = UINT32_MAX;
@@ -94,7 +100,12 @@ bool iir_lightset_empty(const iir_lightset *set)
 
 bool iir_lightset_has_area_lights(const iir_lightset *set)
 {
-    return set->num_entries > set->num_punctual;
+    return set->num_entries > set->num_punctual || set->has_area_light;
+}
+
+uint32_t iir_lightset_num_lights(const iir_lightset *set)
+{
+    return set->num_punctual;
 }
 
 static float entry_pmf(const iir_lightset *set, uint32_t e)
@@ -116,6 +127,47 @@ static uint32_t pick_entry(const iir_lightset *set, float u)
     return lo;
 }
 
+/* ---- area lights ---- */
+
+iir_light_sample iir_area_light_sample(const iir_light *l, iir_vec3 x, iir_vec2 u)
+{
+    iir_light_sample ls = {0};
+    iir_frame fr = iir_spot_frame(l);
+    iir_vec3 p = iir_area_light_point(l, &fr, iir_v2(u.x - 0.5f, u.y - 0.5f));
+    iir_vec3 d = iir_sub(p, x);
+    float dist2 = iir_length_sq(d);
+    if (!(dist2 > 0.f)) return ls;
+    ls.dist = sqrtf(dist2);
+    ls.wi = iir_scale(d, 1.f / ls.dist);
+    float cos_l = -iir_dot(fr.f, ls.wi); /* one-sided: x must be in front */
+    if (cos_l <= 0.f) return ls;
+    ls.Li = l->intensity;
+    ls.pdf = dist2 / (cos_l * l->size.x * l->size.y);
+    return ls;
+}
+
+float iir_area_light_pdf(const iir_light *l, iir_vec3 wi, float dist)
+{
+    float cos_l = -iir_dot(iir_spot_frame(l).f, wi);
+    return cos_l > 0.f ? dist * dist / (cos_l * l->size.x * l->size.y) : 0.f;
+}
+
+iir_emitter_hit iir_lightset_hit_light(const iir_lightset *set, uint32_t i, iir_vec3 o, iir_vec3 d,
+                                       float tmax)
+{
+    iir_emitter_hit h = {INFINITY, {0.f, 0.f, 0.f}, 0.f};
+    if (i >= set->num_punctual || set->punctual[i].type != IIR_LIGHT_AREA) return h;
+    const iir_light *l = &set->punctual[i];
+    float t = iir_area_light_hit(l, o, d, tmax);
+    if (isinf(t)) return h;
+    h.t = t;
+    h.Le = l->intensity;
+    h.pdf = entry_pmf(set, i) * iir_area_light_pdf(l, d, t);
+    return h;
+}
+
+/* ---- sampling the set ---- */
+
 /* A sun: parallel light from -direction at no finite distance; Li is its irradiance E (a delta
  * in direction, so f Li cos / pmf is the estimate). */
 static iir_light_sample sample_sun(const iir_light *l, float pmf)
@@ -129,10 +181,16 @@ static iir_light_sample sample_sun(const iir_light *l, float pmf)
     return ls;
 }
 
-static iir_light_sample sample_punctual(const iir_light *l, iir_vec3 x, float pmf)
+/* Given light l, chosen with probability pmf. */
+static iir_light_sample sample_light(const iir_light *l, iir_vec3 x, float pmf, iir_vec2 u)
 {
     iir_light_sample ls = {0};
     if (l->type == IIR_LIGHT_SUN) return sample_sun(l, pmf);
+    if (l->type == IIR_LIGHT_AREA) {
+        ls = iir_area_light_sample(l, x, u);
+        ls.pdf *= pmf;
+        return ls;
+    }
     iir_vec3 d = iir_sub(l->position, x);
     float dist2 = iir_length_sq(d);
     if (dist2 <= 0.f) return ls;
@@ -172,7 +230,7 @@ iir_light_sample iir_lightset_sample(const iir_lightset *set, iir_vec3 x, float 
     uint32_t e = pick_entry(set, u_pick);
     float pmf = entry_pmf(set, e);
     if (pmf <= 0.f) return none;
-    if (e < set->num_punctual) return sample_punctual(&set->punctual[e], x, pmf);
+    if (e < set->num_punctual) return sample_light(&set->punctual[e], x, pmf, u);
     return sample_triangle(set->scene, set->tri_of[e], x, pmf, u);
 }
 

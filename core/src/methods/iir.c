@@ -21,28 +21,11 @@
 #include "iir/rng.h"
 #include "iir/scene.h"
 #include "iir/shadowmap.h"
-#include "iir/tri.h"
+#include "domain_draw.h"
+#include "iir/light_domain.h"
 #include "iir/vplsets.h"
 #include "method_internal.h"
 #include "iir/timer.h"
-
-/* The domain drawing's buffers (grown, never shrunk) and whether they hold the last frame's. */
-typedef struct domain_bufs {
-    bool valid;
-    iir_domain_site *sites;
-    size_t sites_cap;
-    uint32_t *pairs; /* [2 edges_cap]: id pairs from tri.h, then index pairs in place */
-    size_t edges_cap;
-    uint32_t *cell_start; /* [num_sites + 1] */
-    size_t cell_start_cap;
-    float (*points)[2];
-    size_t points_cap;
-    double *xy; /* one cell polygon from tri.h */
-    size_t xy_cap;
-    float (*removed)[2];
-    size_t removed_cap;
-    iir_domain d;
-} domain_bufs;
 
 /* ---- parameters ---- */
 
@@ -105,20 +88,10 @@ typedef struct iir_state {
     iir_vpl *fresh;                           /* [fresh_cap]: refinement's fresh sets */
     uint32_t fresh_n, fresh_cap;
     uint32_t refine_frame; /* the frame being refined: the fresh sets' stream */
-    domain_bufs dom;
+    iir_domain_draw dom;
     iir_stop_fn stop; /* a live session's: frames and passes end early when it says so */
     void *stop_ctx;
 } iir_state;
-
-static void free_domain(domain_bufs *b)
-{
-    free(b->sites);
-    free(b->pairs);
-    free(b->cell_start);
-    free(b->points);
-    free(b->xy);
-    free(b->removed);
-}
 
 static void iir_m_destroy(void *state)
 {
@@ -128,7 +101,7 @@ static void iir_m_destroy(void *state)
     iir_refine_destroy(s->refine);
     iir_vplsets_destroy(s->sets);
     free(s->fresh);
-    free_domain(&s->dom);
+    iir_domain_draw_free(&s->dom);
     free(s);
 }
 
@@ -334,125 +307,15 @@ static iir_status iir_m_refine(void *state, iir_image *out, iir_frame_stats *sta
 
 /* ---- the domain, for drawing ---- */
 
-/* Grows *buf to hold n elements of size `size` (doubling); false when out of memory. */
-static bool grow(void **buf, size_t *cap, size_t n, size_t size)
-{
-    if (n <= *cap) return true;
-    size_t c = *cap ? *cap : 64;
-    while (c < n) c *= 2;
-    void *p = realloc(*buf, c * size);
-    if (!p) return false;
-    *buf = p;
-    *cap = c;
-    return true;
-}
-
-/* Index of the site with this id (sites sorted by id); UINT32_MAX when absent. */
-static uint32_t site_index(const iir_domain_site *sites, uint32_t n, uint32_t id)
-{
-    uint32_t lo = 0, hi = n;
-    while (lo < hi) {
-        uint32_t mid = lo + (hi - lo) / 2;
-        if (sites[mid].id < id)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo < n && sites[lo].id == id ? lo : UINT32_MAX;
-}
-
-static bool domain_sites(iir_incr *set, float inv_r, domain_bufs *b)
-{
-    uint32_t n = 0;
-    const iir_vpl *v = iir_incr_vpls(set, &n);
-    if (!grow((void **)&b->sites, &b->sites_cap, n, sizeof *b->sites) ||
-        !grow((void **)&b->cell_start, &b->cell_start_cap, (size_t)n + 1, sizeof *b->cell_start))
-        return false;
-    uint32_t born = iir_incr_updates(set) - 1;
-    for (uint32_t i = 0; i < n; i++)
-        b->sites[i] = (iir_domain_site){v[i].disk.x * inv_r, v[i].disk.y * inv_r, v[i].id,
-                                        (uint8_t)((v[i].birth == born ? IIR_SITE_NEW : 0) |
-                                                  (v[i].null_sample ? IIR_SITE_NULL : 0))};
-    b->d.num_sites = b->d.num_cells = n;
-    return true;
-}
-
-/* Delaunay edges as index pairs; edges whose ids are not sites are dropped. */
-static bool domain_edges(const iir_tri *tri, domain_bufs *b)
-{
-    size_t n = 0;
-    if (iir_tri_edges(tri, NULL, 0, &n) != IIR_TRI_OK) return false;
-    if (!grow((void **)&b->pairs, &b->edges_cap, n, 2 * sizeof *b->pairs)) return false;
-    if (iir_tri_edges(tri, b->pairs, b->edges_cap, &n) != IIR_TRI_OK) return false;
-    uint32_t kept = 0;
-    for (size_t e = 0; e < n; e++) {
-        uint32_t a = site_index(b->sites, b->d.num_sites, b->pairs[2 * e]);
-        uint32_t c = site_index(b->sites, b->d.num_sites, b->pairs[2 * e + 1]);
-        if (a == UINT32_MAX || c == UINT32_MAX) continue;
-        b->pairs[2 * kept] = a < c ? a : c;
-        b->pairs[2 * kept + 1] = a < c ? c : a;
-        kept++;
-    }
-    b->d.num_edges = kept;
-    return true;
-}
-
-/* Appends site k's clipped cell (empty when the triangulation does not know the id). */
-static bool domain_cell(const iir_tri *tri, uint32_t k, float inv_r, domain_bufs *b, size_t *total)
-{
-    size_t n = 0;
-    iir_tri_status ts = iir_tri_cell_polygon(tri, b->sites[k].id, b->xy, b->xy_cap / 2, &n);
-    if (ts == IIR_TRI_CAPACITY) {
-        if (!grow((void **)&b->xy, &b->xy_cap, 2 * n, sizeof *b->xy)) return false;
-        ts = iir_tri_cell_polygon(tri, b->sites[k].id, b->xy, b->xy_cap / 2, &n);
-    }
-    if (ts != IIR_TRI_OK) n = 0;
-    if (!grow((void **)&b->points, &b->points_cap, *total + n, sizeof *b->points)) return false;
-    for (size_t j = 0; j < n; j++) {
-        b->points[*total + j][0] = (float)(b->xy[2 * j] * inv_r);
-        b->points[*total + j][1] = (float)(b->xy[2 * j + 1] * inv_r);
-    }
-    *total += n;
-    return true;
-}
-
-static bool domain_removed(const iir_incr *inc, float inv_r, domain_bufs *b)
-{
-    uint32_t n = 0;
-    const double *xy = iir_incr_removed(inc, &n);
-    if (!grow((void **)&b->removed, &b->removed_cap, n, sizeof *b->removed)) return false;
-    for (uint32_t i = 0; i < n; i++) {
-        b->removed[i][0] = (float)(xy[3 * i] * inv_r);
-        b->removed[i][1] = (float)(xy[3 * i + 1] * inv_r);
-    }
-    b->d.num_removed = n;
-    return true;
-}
-
-/* The domain of the light a user moves (drawn_light), with its own set's ids. */
-static bool build_domain(iir_state *s, domain_bufs *b)
+/* The domain of the light a user moves (drawn_light), with its own set's ids (domain_draw.h). */
+static bool build_domain(iir_state *s, iir_domain_draw *b)
 {
     iir_incr *set = iir_vplsets_set(s->sets, s->drawn);
-    const iir_tri *tri = set ? iir_incr_tri(set) : NULL;
-    if (!tri || iir_tri_radius(tri) <= 0.0) return false;
-    float inv_r = (float)(1.0 / iir_tri_radius(tri));
-    memset(&b->d, 0, sizeof b->d);
-    /* a non-NULL polygon buffer, so that tri.h answers IIR_TRI_CAPACITY, not a size query */
-    if (!grow((void **)&b->xy, &b->xy_cap, 2 * 64, sizeof *b->xy)) return false;
-    if (!domain_sites(set, inv_r, b) || !domain_edges(tri, b)) return false;
-    size_t total = 0;
-    for (uint32_t k = 0; k < b->d.num_sites; k++) {
-        b->cell_start[k] = (uint32_t)total;
-        if (!domain_cell(tri, k, inv_r, b, &total)) return false;
-    }
-    b->cell_start[b->d.num_sites] = (uint32_t)total;
-    if (!domain_removed(set, inv_r, b)) return false;
-    b->d.sites = b->sites;
-    b->d.edges = (const uint32_t(*)[2])b->pairs;
-    b->d.cell_start = b->cell_start;
-    b->d.cell_points = (const float(*)[2])b->points;
-    b->d.removed = (const float(*)[2])b->removed;
-    return true;
+    iir_light_domain d;
+    iir_error err;
+    if (!set || iir_light_domain_make(&s->lights[s->drawn], &d, &err) != IIR_OK) return false;
+    const char *map = d.map == IIR_MAP_SPHERE ? "sphere (equal-area)" : iir_domain_map_name(d.map);
+    return iir_domain_draw_build(b, set, map);
 }
 
 static bool iir_m_domain(void *state, iir_domain *out)

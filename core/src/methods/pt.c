@@ -1,14 +1,20 @@
 /* pt.c -- the reference path tracer (method "pt"): next-event estimation with MIS for area
- * lights, Russian roulette, a maximum bounce count, deterministic seeds, OpenMP over tiles, and
- * progressive refinement (more samples into the same frame). Parameters: spp and bounces (below),
- * seed, jitter, refine_passes: render + refines of spp samples each are converged once the image
- * holds refine_passes samples per pixel, or one frame's spp when that is more (pt_converged_spp);
- * a refine call still adds its samples after that, so a caller can reach any count.
+ * lights (emissive triangles and rectangular area lights), Russian roulette, a maximum bounce
+ * count, deterministic seeds, OpenMP over tiles, and progressive refinement (more samples into the
+ * same frame). Parameters: spp and bounces (below), seed, jitter, refine_passes: render + refines
+ * of spp samples each are converged once the image holds refine_passes samples per pixel, or one
+ * frame's spp when that is more (pt_converged_spp); a refine call still adds its samples after
+ * that, so a caller can reach any count.
  *
  * Bounces count reflections: a light path light -> x_k -> ... -> x_1 -> camera has k of them, so
  * bounces = 1 is direct light only and bounces = 2 adds one diffuse bounce. Emitters seen directly
  * (k = 0) always count. Sample s of pixel (x, y) draws from the stream hash(x, y, s) of the seed,
- * so an image depends on the seed and the sample count only, not on threads or tile order. */
+ * so an image depends on the seed and the sample count only, not on threads or tile order.
+ *
+ * A rectangular area light (IIR_LIGHT_AREA) is not in the BVH: every ray also tests the view's
+ * area lights (iir_lightset_hit_light) up to its surface, or to infinity when it hits none, adds
+ * the emission of each one it meets from the front and goes on through them (they cast no
+ * shadow). */
 #include <omp.h>
 #include <stddef.h>
 #include <stdlib.h>
@@ -44,7 +50,8 @@ typedef struct pt_state {
     const iir_rt *rt;
     pt_options params;
     iir_lightset *lights;
-    bool has_area_lights;
+    bool has_area_lights; /* emissive triangles or area lights: BSDF rays can find light */
+    bool has_area_light;  /* a rectangular area light among the view's lights */
     iir_camera_frame cam;
     iir_image *sum; /* sum of samples; the frame is sum / spp_done */
     uint64_t spp_done;
@@ -92,6 +99,23 @@ static iir_vec3 estimate_direct(const pt_state *pt, const iir_surface *sf, iir_r
     return iir_scale(iir_mul(f, ls.Li), cos_theta * w / ls.pdf);
 }
 
+/* The emission of the area lights that the ray meets from the front before t_max, times beta,
+ * MIS-weighted against light sampling unless the ray is the camera's (pdf_bsdf 0). */
+static iir_vec3 area_lights_seen(const pt_state *pt, const iir_ray *ray, float t_max,
+                                 float pdf_bsdf, iir_vec3 beta)
+{
+    iir_vec3 L = iir_v3s(0.f);
+    if (!pt->has_area_light) return L;
+    uint32_t n = iir_lightset_num_lights(pt->lights);
+    for (uint32_t i = 0; i < n; i++) {
+        iir_emitter_hit h = iir_lightset_hit_light(pt->lights, i, ray->org, ray->dir, t_max);
+        if (isinf(h.t)) continue;
+        float w = pdf_bsdf > 0.f ? power_heuristic(pdf_bsdf, h.pdf) : 1.f;
+        L = iir_add(L, iir_scale(iir_mul(beta, h.Le), w));
+    }
+    return L;
+}
+
 static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *st)
 {
     const int max_bounces = pt->params.bounces;
@@ -101,7 +125,9 @@ static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *
     for (int vertex = 1;; vertex++) {
         iir_hit hit;
         iir_ray_kind kind = vertex == 1 ? IIR_RAYS_CAMERA : IIR_RAYS_BOUNCE;
-        if (!iir_rt_intersect(pt->rt, &ray, &hit, st, kind)) break;
+        bool found = iir_rt_intersect(pt->rt, &ray, &hit, st, kind);
+        L = iir_add(L, area_lights_seen(pt, &ray, found ? hit.t : INFINITY, pdf_bsdf, beta));
+        if (!found) break;
         iir_vec3 wo = iir_neg(ray.dir);
         iir_surface sf = iir_surface_at(pt->scene, &hit, wo);
 
@@ -251,6 +277,9 @@ static iir_status pt_render(void *state, const iir_view *view, iir_image *out,
     }
     if (!pt->lights || !pt->sum) return iir_fail(err, IIR_ERR_NOMEM, "out of memory in pt");
     pt->has_area_lights = iir_lightset_has_area_lights(pt->lights);
+    pt->has_area_light = false;
+    for (uint32_t i = 0; i < view->num_lights; i++)
+        pt->has_area_light |= view->lights[i].type == IIR_LIGHT_AREA;
     pt->cam = iir_camera_setup(&view->camera, out->width, out->height);
     iir_image_clear(pt->sum);
     pt->spp_done = 0;

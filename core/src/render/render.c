@@ -141,6 +141,7 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
         iir_camera_frame cf = iir_camera_setup(cam, w, h);
         iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, iir_v2(0.5f, 0.5f), st);
         r->gb_camera = *cam;
+        r->gb_shift = iir_v2(0.f, 0.f);
         r->gb_valid = true;
     }
     t->gbuffer_ms = iir_now_ms() - t0;
@@ -227,6 +228,8 @@ static iir_status pass_gbuffer(iir_renderer *r, const iir_camera *cam, iir_vec2 
     iir_camera_frame cf = iir_camera_setup(cam, w, h);
     iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, jitter, st);
     r->gb_valid = false;
+    r->gb_camera = *cam; /* the area lights' camera rays go through the same jittered points */
+    r->gb_shift = iir_v2(jitter.x - 0.5f, jitter.y - 0.5f);
     t->gbuffer_ms = iir_now_ms() - t0;
     return IIR_OK;
 }

@@ -1,9 +1,11 @@
 /* render_direct.c -- emission and direct light at the G-buffer's pixels: every delta light (point,
- * spots, sun) by one shadow ray per pixel (a sun's goes to infinity), emissive triangles by one
- * seeded light-set sample per pixel; not indirect light.
+ * spots, sun) by one shadow ray per pixel (a sun's goes to infinity), every rectangular area light
+ * and the emissive triangles by one seeded sample per pixel each; and the area lights that the
+ * pixels' camera rays meet from the front before their surface (they are not in the BVH, so not in
+ * the G-buffer: their radiance is added here, each frame, as they move). Not indirect light.
  *
  * Agrees in expectation with `pt --bounces 1`: pt picks one light by flux per sample, this sums
- * every delta light; pt weights area-light samples by MIS against BSDF sampling, this uses the
+ * every light; pt weights area-light samples by MIS against BSDF sampling, this uses the
  * light sample alone (weight 1), which is unbiased by itself. Shadow rays go out as 8-wide packets
  * over 4x2 pixel blocks (neighbouring pixels, one light: coherent rays). Threads: OpenMP over
  * tiles, each writing only its own pixels of the frame; ray counters per thread, summed once. */
@@ -19,6 +21,7 @@ typedef struct direct_ctx {
     const iir_light *lights;
     uint32_t num_lights;
     uint64_t seed;
+    iir_camera_frame cam; /* the G-buffer's camera: its rays through r->gb_shift */
 } direct_ctx;
 
 /* The pixels of one 4x2 block and their shadow rays. */
@@ -31,6 +34,11 @@ typedef struct block {
     iir_vec3 pending[8]; /* a light's contribution, kept if its shadow ray is unoccluded */
     iir_ray8 rays;
 } block;
+
+static void clear_rays(block *b)
+{
+    for (int k = 0; k < 8; k++) b->rays.valid[k] = 0;
+}
 
 static void set_lane(iir_ray8 *rays, int k, iir_vec3 org, iir_vec3 dir, float tfar)
 {
@@ -90,6 +98,56 @@ static void punctual_lane(const iir_renderer *r, const iir_light_eval *e, block 
     set_lane(&b->rays, k, iir_madd(p, n, r->eps), wi, dist - 2.f * r->eps);
 }
 
+/* Lane k's unshadowed f Li cos / pdf for one sample (point uniform on it) of area light l, the
+ * light's index li in the frame's list (its random numbers), and the shadow ray to the point. */
+static void area_light_lane(const direct_ctx *c, const iir_light *l, uint32_t li, block *b, int k)
+{
+    const iir_renderer *r = c->r;
+    const iir_gbuffer *gb = &r->gb;
+    int x = b->x0 + k % BLOCK_W, y = b->y0 + k / BLOCK_W;
+    iir_vec3 p = gb->position[b->index[k]], n = gb->normal[b->index[k]];
+    iir_rng rng = iir_rng_make(c->seed, iir_hash3((uint64_t)x, (uint64_t)y, 1u + (uint64_t)li));
+    iir_light_sample ls = iir_area_light_sample(l, p, iir_rng_uniform2(&rng));
+    if (ls.pdf <= 0.f || iir_is_black(ls.Li)) return;
+    float cos_theta = iir_dot(n, ls.wi);
+    if (cos_theta <= 0.f) return;
+    b->pending[k] = iir_scale(iir_mul(b->f[k], ls.Li), cos_theta / ls.pdf);
+    set_lane(&b->rays, k, iir_madd(p, n, r->eps), ls.wi, ls.dist - 2.f * r->eps);
+}
+
+/* Adds area light l's radiance to the pixels whose camera rays meet it from the front before their
+ * surface (or with no surface behind). */
+static void area_light_seen(const direct_ctx *c, const iir_light *l, block *b)
+{
+    const iir_gbuffer *gb = &c->r->gb;
+    iir_vec2 shift = c->r->gb_shift;
+    for (int k = 0; k < 8; k++) {
+        int x = b->x0 + k % BLOCK_W, y = b->y0 + k / BLOCK_W;
+        if (x >= gb->width || y >= gb->height) continue;
+        iir_vec3 d = iir_camera_dir(&c->cam, x + 0.5f + shift.x, y + 0.5f + shift.y);
+        if (!isinf(iir_area_light_hit(l, c->cam.origin, d, gb->depth[b->index[k]])))
+            b->L[k] = iir_add(b->L[k], l->intensity);
+    }
+}
+
+/* One light's direct light at the block: a delta light's or an area light's sample per pixel, and
+ * an area light seen by the camera. */
+static void shade_light(const direct_ctx *c, uint32_t li, block *b, iir_raystats *st)
+{
+    const iir_light *l = &c->lights[li];
+    iir_light_eval e = iir_light_prepare(l);
+    clear_rays(b);
+    for (int k = 0; k < 8; k++) {
+        if (!b->shaded[k]) continue;
+        if (l->type == IIR_LIGHT_AREA)
+            area_light_lane(c, l, li, b, k);
+        else
+            punctual_lane(c->r, &e, b, k);
+    }
+    resolve(c->r, b, st);
+    if (l->type == IIR_LIGHT_AREA) area_light_seen(c, l, b);
+}
+
 /* Lane k's unshadowed f Li cos / pdf for one sample of the emissive triangles, and its ray. */
 static void area_lane(const direct_ctx *c, block *b, int k)
 {
@@ -105,11 +163,6 @@ static void area_lane(const direct_ctx *c, block *b, int k)
     if (cos_theta <= 0.f) return;
     b->pending[k] = iir_scale(iir_mul(b->f[k], ls.Li), cos_theta / ls.pdf);
     set_lane(&b->rays, k, iir_madd(p, n, r->eps), ls.wi, ls.dist - 2.f * r->eps);
-}
-
-static void clear_rays(block *b)
-{
-    for (int k = 0; k < 8; k++) b->rays.valid[k] = 0;
 }
 
 /* Reads the block's pixels: emission, and which of them direct light can reach. */
@@ -131,13 +184,7 @@ static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir
 {
     block b;
     load_block(&c->r->gb, x0, y0, &b);
-    for (uint32_t l = 0; l < c->num_lights; l++) {
-        iir_light_eval e = iir_light_prepare(&c->lights[l]);
-        clear_rays(&b);
-        for (int k = 0; k < 8; k++)
-            if (b.shaded[k]) punctual_lane(c->r, &e, &b, k);
-        resolve(c->r, &b, st);
-    }
+    for (uint32_t l = 0; l < c->num_lights; l++) shade_light(c, l, &b, st);
     if (c->r->area_lights) {
         clear_rays(&b);
         for (int k = 0; k < 8; k++)
@@ -154,7 +201,8 @@ bool iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t 
                        uint64_t seed, iir_image *out, iir_raystats *st)
 {
     bool stopped = false;
-    direct_ctx c = {r, lights, num_lights, seed};
+    direct_ctx c = {r, lights, num_lights, seed,
+                    iir_camera_setup(&r->gb_camera, r->gb.width, r->gb.height)};
     int w = out->width, h = out->height, tiles = iir_tile_count(w, h, IIR_RENDER_TILE);
     iir_raystats total = {0};
 #pragma omp parallel

@@ -33,8 +33,12 @@ struct iir_renderer {
     iir_lightset *area_lights; /* the scene's emissive triangles; NULL when it has none */
 
     iir_gbuffer gb;
-    bool gb_valid; /* gb matches gb_camera and the frame size */
-    iir_camera gb_camera;
+    bool gb_valid;        /* gb matches gb_camera and the frame size */
+    iir_camera gb_camera; /* the camera gb was rendered with */
+    iir_vec2 gb_shift;    /* gb's rays went through (x + 0.5, y + 0.5) + gb_shift, and
+                             render_direct.c shoots them again at the area lights (not in the BVH):
+                             (0, 0) for frames; a jittered pass (pass_gbuffer) sets it and
+                             gb_camera */
     iir_vec3 *raw;        /* per pixel: demodulated indirect (without rho / pi), unfiltered */
     iir_filter_row *rows; /* per pixel: the filter's horizontal pass */
 
