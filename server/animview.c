@@ -17,7 +17,7 @@ iir_view iird_anim_view(const iir_anim *a, const iir_scene *scene, uint32_t spot
     if (n) /* a scene of emissive triangles only has no light array */
         memcpy(lights, scene->lights, sizeof(iir_light) * n);
     if (spot == n) iir_scene_moved_light(scene, &lights[n++]); /* the made-up spot */
-    if (spot < n) lights[spot] = iir_anim_light(a, &lights[spot], t);
+    iir_anim_lights(a, lights, n, spot, t, lights); /* the light track's and the "lights" tracks' */
     iir_view v = {lights, n, iir_anim_camera(a, &scene->camera, t)};
     return v;
 }

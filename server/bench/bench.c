@@ -158,19 +158,10 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     return iir_anim_check_lights(b->anim, v.lights, v.num_lights, b->spot, err);
 }
 
-/* Script frame f: the light track's light moved by iird_anim_view, the "lights" tracks' here. */
-static iir_view anim_view(iird_bench *b, int f)
-{
-    iir_view v = iird_anim_view(b->anim, b->scene, b->spot, b->lights, f);
-    iir_anim_lights(b->anim, b->lights, v.num_lights, UINT32_MAX, iir_anim_frame_time(b->anim, f),
-                    b->lights);
-    return v;
-}
-
 iir_view iird_bench_view(iird_bench *b, int i)
 {
     int f = b->first + i;
-    if (b->anim) return anim_view(b, f);
+    if (b->anim) return iird_anim_view(b->anim, b->scene, b->spot, b->lights, f);
     uint32_t n = b->scene->num_lights;
     if (n) memcpy(b->lights, b->scene->lights, sizeof(iir_light) * n);
     iir_light base;

@@ -119,13 +119,10 @@ typedef struct anim_job {
 } anim_job;
 
 /* The view of script frame f: the scene's camera and lights, every light the script animates
- * moved (the light track's by iird_anim_view, the "lights" tracks' here). */
+ * moved. */
 static iir_view frame_view(const anim_job *j, int f)
 {
-    iir_view v = iird_anim_view(j->anim, j->scene, j->spot, j->lights, f);
-    iir_anim_lights(j->anim, j->lights, v.num_lights, UINT32_MAX, iir_anim_frame_time(j->anim, f),
-                    j->lights);
-    return v;
+    return iird_anim_view(j->anim, j->scene, j->spot, j->lights, f);
 }
 
 /* FNV-1a 64 over bytes. */

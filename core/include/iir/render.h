@@ -46,6 +46,7 @@
 #include "iir/image.h"
 #include "iir/light.h"
 #include "iir/rt.h"
+#include "iir/rng.h"
 #include "iir/status.h"
 #include "iir/vecmath.h"
 #include "iir/vpl.h"
@@ -128,6 +129,15 @@ typedef struct iir_render_input {
     uint32_t num_vpls;
     uint64_t seed;
 } iir_render_input;
+
+/* The seed of a live frame's direct-light samples (emissive triangles, area lights): the same
+ * every frame, so their noise stays put on static emitters and moves with a moving area light (its
+ * samples are in light-local coordinates) instead of flickering from frame to frame; refinement
+ * passes vary it (refine.c). */
+static inline uint64_t iir_frame_direct_seed(uint64_t seed)
+{
+    return iir_hash3(seed, 0, 2);
+}
 
 /* Renders one frame of `in` into out (its size is the frame size): emission + direct light +
  * indirect light from the VPLs (see the top of this header). The frame depends only on its inputs

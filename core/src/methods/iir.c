@@ -229,7 +229,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
                            .num_lights = view->num_lights,
                            .vpls = vpls,
                            .num_vpls = n,
-                           .seed = iir_hash3(s->params.common.seed, s->frame, 2)};
+                           .seed = iir_frame_direct_seed(s->params.common.seed)};
     st = iir_renderer_frame(s->renderer, &in, &ind, out, &rt, &stats->rays, err);
     iir_refine_params rp = iir_refine_params_of(&s->params.common, &s->params.vpl);
     if (st == IIR_OK)

@@ -265,7 +265,7 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
                            .num_lights = view->num_lights,
                            .vpls = ir->live.v,
                            .num_vpls = ir->live.n,
-                           .seed = iir_hash3(seed, ir->frame, 2)};
+                           .seed = iir_frame_direct_seed(seed)};
     st = iir_renderer_frame(ir->renderer, &in, &ind, out, &rt, &stats->rays, err);
     iir_refine_params rp = iir_refine_params_of(&ir->params.common, &ir->params.vpl);
     if (st == IIR_OK)
