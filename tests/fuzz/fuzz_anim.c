@@ -1,7 +1,9 @@
 /* fuzz_anim.c -- libFuzzer target for animation scripts (docs/animation-format.md): the bytes are
  * a script's text; iir_anim_parse must refuse it with a message or return a script, which is then
- * evaluated at a few times and frames from the built-in Cornell box's light and camera. Checks
- * anim.h's promises: a valid base light stays valid, the camera's fov stays in (0, 180). */
+ * evaluated at a few times and frames from the built-in Cornell box's light and camera, and, when
+ * iir_anim_check_lights accepts it, over five lights of every kind (named spot, gltf, point, sun,
+ * area). Checks anim.h's promises: a valid base light stays valid, the camera's fov stays in
+ * (0, 180). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,8 +23,50 @@ static const iir_scene *default_scene(void)
     return box;
 }
 
+/* One light of every kind, each valid, named as a script's "lights" tracks may name them. */
+static const iir_light *every_kind(void)
+{
+    static iir_light L[5];
+    if (L[0].name[0]) return L;
+    const iir_scene *box = default_scene();
+    const char *names[5] = {"spot", "gltf", "point", "sun", "area"};
+    for (int i = 0; i < 5; i++) {
+        L[i] = box->lights[0]; /* the box's spot: position, direction, cone */
+        snprintf(L[i].name, sizeof L[i].name, "%s", names[i]);
+    }
+    L[1].profile = IIR_SPOT_GLTF, L[1].inner_angle = 0.2f;
+    L[2].type = IIR_LIGHT_POINT;
+    L[3].type = IIR_LIGHT_SUN;
+    iir_light_fit_sun(&L[3], box);
+    L[4].type = IIR_LIGHT_AREA, L[4].size = iir_v2(0.4f, 0.3f);
+    return L;
+}
+
+/* Every light of every kind at t, when the script's tracks fit them: each stays valid. */
+static void evaluate_kinds(const iir_anim *a, double t)
+{
+    const iir_light *L = every_kind();
+    iir_light out[5];
+    iir_error e;
+    for (uint32_t moved = 0; moved <= 5; moved += 5) {
+        if (iir_anim_check_lights(a, L, 5, moved, &e) != IIR_OK) {
+            FUZZ_CHECK(e.msg[0] != '\0');
+            continue;
+        }
+        iir_anim_lights(a, L, 5, moved, t, out);
+        for (int i = 0; i < 5; i++) {
+            if (iir_light_validate(&out[i], &e) != IIR_OK) {
+                fprintf(stderr, "light '%s' at t = %g: %s\n", L[i].name, t, e.msg);
+                FUZZ_CHECK(!"a valid light of every kind stays valid");
+            }
+            FUZZ_CHECK(out[i].type == L[i].type);
+        }
+    }
+}
+
 static void evaluate(const iir_anim *a, double t)
 {
+    evaluate_kinds(a, t);
     const iir_scene *box = default_scene();
     iir_light l = iir_anim_light(a, &box->lights[0], t);
     iir_error e;
