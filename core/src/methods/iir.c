@@ -1,6 +1,6 @@
 /* iir.c -- incremental instant radiosity, method "iir" (Laine et al. 2007): the VPL set lives
- * across frames. Each frame runs the incremental step (core/src/vpls/incremental.c) for every light of
- * the view, each on its own domain with its share of the budget (vplsets.h), renders shadow maps
+ * across frames. Each frame runs the incremental step (core/src/vpls/incremental.c) for every light
+ * of the view, each on its own domain with its share of the budget (vplsets.h), renders shadow maps
  * only for the VPLs born this frame (a map lives as long as its VPL: the scene is static), and
  * shades with the shared VPL renderer. One bounce by construction. Parameters: the incremental
  * step's (table below), the VPL shading's (vpl_options.c) and every method's. Direct light comes
