@@ -1,7 +1,8 @@
 /* test_domain.c -- iir_method_domain, the light's disk domain for drawing: sites are the VPLs (by
  * id, flags from the frame's stats), edges index sites, the clipped cells tile the unit disk and
  * hold their sites, and the removed points are the frame's invalidated and deleted VPLs, on the
- * built-in Cornell box with a moving spot (including a jump that regenerates the set). */
+ * built-in Cornell box with a moving spot (including a jump that regenerates the set); and a point
+ * light's sphere drawn by the equal-area map. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -144,6 +145,61 @@ static void test_domain_follows_frames(void **state)
     iir_image_destroy(img);
 }
 
+/* A point light's sphere, drawn by the equal-area map: every site and cell point lies in the unit
+ * disk, no drawn edge crosses the disk (the map tears only at the rim), the drawn cells cover the
+ * disk's area pi up to the few torn cells at the rim (the map keeps areas: a quarter of each cell's
+ * solid angle), and a site near the centre lies in its own cell. With a spot beside it, the drawn
+ * domain is the spot's disk (the light a user moves). */
+static void test_sphere_domain_equal_area(void **state)
+{
+    fixture *f = *state;
+    iir_params p = iir_params_default();
+    iir_test_set(&p, "vpls", 256);
+    iir_method *m = iir_test_method(f, "iir", &p);
+    iir_image *img = iir_image_create(W, H);
+    iir_frame_stats fs;
+    iir_light bulb = {.type = IIR_LIGHT_POINT,
+                      .name = "bulb",
+                      .position = iir_v3(0.1f, 1.3f, 0.2f),
+                      .intensity = iir_v3s(1.f)};
+    iir_view v = {&bulb, 1, f->scene->camera};
+    for (int t = 0; t < 3; t++) iir_test_render(m, &v, img, &fs);
+    iir_domain d;
+    assert_true(iir_method_domain(m, &d));
+    assert_string_equal(d.map, "sphere (equal-area)");
+    assert_int_equal(d.num_sites, fs.vpl.count);
+    for (uint32_t k = 0; k < d.num_sites; k++)
+        assert_true(d.sites[k].x * d.sites[k].x + d.sites[k].y * d.sites[k].y <= 1.f + 1e-5f);
+    for (uint32_t e = 0; e < d.num_edges; e++) {
+        const iir_domain_site *a = &d.sites[d.edges[e][0]], *b = &d.sites[d.edges[e][1]];
+        assert_true(iir_sqr(a->x - b->x) + iir_sqr(a->y - b->y) <= 1.f);
+    }
+    assert_true(d.num_edges > 2 * d.num_sites); /* ~3n - 6, minus the torn ones */
+    double area = 0.0;
+    uint32_t drawn = 0, centred = 0;
+    for (uint32_t k = 0; k < d.num_cells; k++) {
+        if (d.cell_start[k + 1] == d.cell_start[k]) continue; /* torn at the rim */
+        drawn++;
+        area += fabs(cell_area(&d, k));
+        float x = d.sites[k].x, y = d.sites[k].y;
+        if (x * x + y * y < 0.25f && cell_area(&d, k) > 0.0)
+            centred++, assert_true(in_cell(&d, k, x, y));
+    }
+    print_message("sphere: %u sites, %u cells drawn, their area %.4f of pi, %u near the centre\n",
+                  d.num_sites, drawn, area / M_PI, centred);
+    assert_true(drawn >= d.num_sites * 9 / 10);
+    assert_true(area > 0.85 * M_PI && area < 1.02 * M_PI);
+    assert_true(centred > 20);
+
+    iir_light two[2] = {f->scene->lights[0], bulb};
+    v = (iir_view){two, 2, f->scene->camera};
+    iir_test_render(m, &v, img, &fs);
+    assert_true(iir_method_domain(m, &d));
+    assert_string_equal(d.map, "disk");
+    iir_method_destroy(m);
+    iir_image_destroy(img);
+}
+
 static void test_other_methods_have_none(void **state)
 {
     fixture *f = *state;
@@ -169,6 +225,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_domain_follows_frames),
+        cmocka_unit_test(test_sphere_domain_equal_area),
         cmocka_unit_test(test_other_methods_have_none),
     };
     return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
