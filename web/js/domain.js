@@ -76,10 +76,9 @@ export class DomainView {
         c.clearRect(0, 0, S, S);
         this.removedDrawn = 0;
         const d = this.domain;
-        if (this.what) {
-            this.what.textContent = this.head();
-            this.what.hidden = !this.what.textContent;
-        }
+        // the line keeps its height when empty (a no-break space), so that the panel's layout -- and
+        // with it the canvas, were a scrollbar to come and go -- does not move when a map arrives
+        if (this.what) this.what.textContent = this.head() || '\u00a0';
         if (!d || !d.sites) {
             this.caption.textContent = this.note;
             return;
