@@ -52,14 +52,15 @@ async function main() {
         const f = window.iir.drawn.filter((d) => d.pass === 0).pop();
         return f && window.iir.lastDomain && window.iir.lastDomain.frame >= f.frameId;
     }, null, { timeout: WAIT_MS }).catch(() => {});
-    // and no newer domain for half a second (on a loaded machine, ctest -j2 beside another browser
-    // test, one may still be on its way)
-    for (let i = 0, last = -1; i < 20; i++) {
-        const f = await page.evaluate(() => window.iir.lastDomain.frame);
-        if (f === last) break;
-        last = f;
-        await sleep(500);
-    }
+    // and a refinement pass of that frame drawn: the domain view draws a frame's new sites and
+    // removed points, and a pass of it as unchanged, so on a loaded machine (ctest -j2 beside
+    // another browser test) the first pass, arriving late, would change the drawing inside the idle
+    // window below (measured: 19.45)
+    await page.waitForFunction(() => {
+        const d = window.iir.drawn;
+        const i = d.map((x) => x.pass === 0).lastIndexOf(true);
+        return i >= 0 && d.slice(i + 1).some((x) => x.pass > 0);
+    }, null, { timeout: WAIT_MS }).catch(() => {});
     await sleep(200);
 
     // 2. idle change (refinement) as the baseline
