@@ -215,21 +215,6 @@ static void test_conservation_area(void **state)
 
 /* ---- one bounce against pt ---- */
 
-/* Pixels whose 3x3 neighbourhood sees one plane (as in test_methods.c). */
-static bool smooth_pixel(const iir_gbuffer *gb, int x, int y)
-{
-    if (x == 0 || y == 0 || x == gb->width - 1 || y == gb->height - 1) return false;
-    size_t c = (size_t)y * gb->width + x;
-    if (gb->prim[c] == IIR_NO_HIT) return false;
-    for (int dy = -1; dy <= 1; dy++)
-        for (int dx = -1; dx <= 1; dx++) {
-            size_t i = (size_t)(y + dy) * gb->width + (x + dx);
-            if (gb->prim[i] == IIR_NO_HIT || iir_dot(gb->normal[i], gb->normal[c]) < 0.999f)
-                return false;
-        }
-    return true;
-}
-
 enum { W = 32, H = 32 };
 
 /* relMSE of img against ref over smooth pixels; *means gets the two mean luminances. */
@@ -241,7 +226,7 @@ static double rel_mse(const iir_gbuffer *gb, const iir_image *img, const iir_ima
     means[0] = means[1] = 0;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
-            if (!smooth_pixel(gb, x, y)) continue;
+            if (!iir_test_smooth_pixel(gb, x, y)) continue;
             const float *a = &iir_image_at((iir_image *)img, x, y)->x;
             const float *b = &iir_image_at((iir_image *)ref, x, y)->x;
             for (int c = 0; c < 3; c++) rel += iir_sqr(a[c] - b[c]) / (b[c] * b[c] + 0.01f) / 3;

@@ -448,21 +448,6 @@ static void test_area_light_seen(void **state)
 
 /* ---- ir against pt in the Cornell box ---- */
 
-/* Pixels whose 3x3 neighbourhood sees one plane (as test_methods.c). */
-static bool smooth_pixel(const iir_gbuffer *gb, int x, int y)
-{
-    if (x == 0 || y == 0 || x == gb->width - 1 || y == gb->height - 1) return false;
-    size_t c = (size_t)y * gb->width + x;
-    if (gb->prim[c] == IIR_NO_HIT) return false;
-    for (int dy = -1; dy <= 1; dy++)
-        for (int dx = -1; dx <= 1; dx++) {
-            size_t k = (size_t)(y + dy) * gb->width + (x + dx);
-            if (gb->prim[k] == IIR_NO_HIT || iir_dot(gb->normal[k], gb->normal[c]) < 0.999f)
-                return false;
-        }
-    return true;
-}
-
 /* ir's frame and `passes` - 1 refinement passes (each with fresh paths and a fresh light sample
  * per pixel for an area light's direct light), averaged. */
 static iir_image *render_ir(const iir_test_cornell *f, const iir_light *light, int w, int h,
@@ -511,7 +496,7 @@ static void check_ir_matches_pt(const iir_test_cornell *f, const iir_light *ligh
     int n = 0;
     for (int y = 0; y < CH; y++)
         for (int x = 0; x < CW; x++) {
-            if (!smooth_pixel(gb, x, y)) continue;
+            if (!iir_test_smooth_pixel(gb, x, y)) continue;
             iir_vec3 a = *iir_image_at(img, x, y), b = *iir_image_at(ref, x, y);
             double la = iir_luminance(a), lb = iir_luminance(b);
             double ld = iir_luminance(*iir_image_at(direct, x, y));

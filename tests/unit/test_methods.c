@@ -36,22 +36,6 @@ static iir_light moved(const iir_light *base, int frame)
     return l;
 }
 
-/* Pixels whose 3x3 neighbourhood sees one plane: away from edges, where pt's pixel jitter and the
- * G-buffer's pixel centres legitimately differ. */
-static bool smooth_pixel(const iir_gbuffer *gb, int x, int y)
-{
-    if (x == 0 || y == 0 || x == gb->width - 1 || y == gb->height - 1) return false;
-    size_t c = (size_t)y * gb->width + x;
-    if (gb->prim[c] == IIR_NO_HIT) return false;
-    for (int dy = -1; dy <= 1; dy++)
-        for (int dx = -1; dx <= 1; dx++) {
-            size_t k = (size_t)(y + dy) * gb->width + (x + dx);
-            if (gb->prim[k] == IIR_NO_HIT || iir_dot(gb->normal[k], gb->normal[c]) < 0.999f)
-                return false;
-        }
-    return true;
-}
-
 /* One-bounce ir with exact visibility, no clamping and 16k VPLs against pt with one bounce.
  * Bound: pt at 2048 spp has per-pixel relative noise of a few % in the indirect-only regions; ir
  * with 16k VPLs is within ~1-2%; so relMSE on smooth pixels of ~1e-3 is expected and 5e-3 is the
@@ -94,7 +78,7 @@ static void test_ir_converges_to_pt(void **state)
     int n = 0;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
-            if (!smooth_pixel(gb, x, y)) continue;
+            if (!iir_test_smooth_pixel(gb, x, y)) continue;
             iir_vec3 a = *iir_image_at(img, x, y), b = *iir_image_at(ref, x, y);
             iir_vec3 d = *iir_image_at(direct, x, y);
             rel += (iir_sqr(a.x - b.x) / (b.x * b.x + 0.01f) +

@@ -94,3 +94,17 @@ double iir_test_get(const iir_params *p, const char *name)
     if (!row) fail_msg("no parameter %s", name);
     return iir_method_param_value(row, p);
 }
+
+bool iir_test_smooth_pixel(const iir_gbuffer *gb, int x, int y)
+{
+    if (x == 0 || y == 0 || x == gb->width - 1 || y == gb->height - 1) return false;
+    size_t c = (size_t)y * gb->width + x;
+    if (gb->prim[c] == IIR_NO_HIT) return false;
+    for (int dy = -1; dy <= 1; dy++)
+        for (int dx = -1; dx <= 1; dx++) {
+            size_t k = (size_t)(y + dy) * gb->width + (x + dx);
+            if (gb->prim[k] == IIR_NO_HIT || iir_dot(gb->normal[k], gb->normal[c]) < 0.999f)
+                return false;
+        }
+    return true;
+}

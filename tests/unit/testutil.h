@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "iir/method.h"
+#include "iir/render.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
 #include "iir/vecmath.h"
@@ -44,5 +45,9 @@ double iir_test_get(const iir_params *p, const char *name);
 iir_method *iir_test_method(const iir_test_cornell *f, const char *name, const iir_params *p);
 /* iir_method_render that fails the running cmocka test with the method's error. */
 void iir_test_render(iir_method *m, const iir_view *v, iir_image *img, iir_frame_stats *fs);
+
+/* Whether pixel (x, y)'s 3x3 neighbourhood sees one plane: away from edges, where pt's pixel
+ * jitter and the G-buffer's pixel centres legitimately differ (the methods-against-pt tests). */
+bool iir_test_smooth_pixel(const iir_gbuffer *gb, int x, int y);
 
 #endif
