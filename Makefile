@@ -62,27 +62,37 @@ test: deps web-deps format-check
 	    ctest --output-on-failure -j $(JOBS)
 
 # Benchmarks (not tests; docs/experiments.md reads them): ray rates, then `iird bench` over the
-# standard set -- the Cornell box orbit with a VPL sweep for iir and ir and pt at 1/4/16 spp (the
-# time-against-error chart), its stress paths, and the conference room's orbit -- each with
-# references (cached in $(REFCACHE): a second run skips them), frames.csv, summary.json and charts
-# in out/bench/<scene>-<path>/. Measured: 8 min 18 s on 2 quiet cores with an empty cache.
+# standard set -- the Cornell box orbit with every method (a VPL sweep for iir, ir and ism, pt at
+# 1/4/16 spp: the time-against-error chart), its stress paths, the conference room's orbit, and
+# multiresolution shading (full against multires at 512x384, and at the paper's 1024x768) -- each
+# with references (cached in $(REFCACHE): a second run skips them), frames.csv, summary.json and
+# charts in out/bench/<scene>-<path>/. Measured: 8 min 18 s on 2 quiet cores with an empty cache
+# before rsm, ism, hier and multires joined.
 REFCACHE ?= out/refcache
 BENCH     = $(BUILD)/iird bench --ref-cache $(REFCACHE)
 STRESS    = sweep-fast corner grazing void
+PEERS     = iir,ir,rsm,ism,hier
 bench: build
-	mkdir -p out/bench/cornell-orbit out/bench/conference-orbit \
+	mkdir -p out/bench/cornell-orbit out/bench/conference-orbit out/bench/cornell-multires \
+	    out/bench/cornell-multires-1024 out/bench/conference-multires-1024 \
 	    $(foreach p,teleport occluder $(STRESS),out/bench/cornell-$(p))
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
-	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods iir,ir,pt \
+	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods $(PEERS),pt \
 	    --sweep vpls=64,256,1024 --sweep spp=1,4,16 --ref-spp 1024 --ref-every 25 \
 	    --out out/bench/cornell-orbit
-	$(foreach p,teleport occluder,$(BENCH) --anim $(p) --size 256x192 --methods iir,ir \
+	$(foreach p,teleport occluder,$(BENCH) --anim $(p) --size 256x192 --methods $(PEERS) \
 	    --ref-spp 128 --ref-every 10 --out out/bench/cornell-$(p) &&) true
-	$(foreach p,$(STRESS),$(BENCH) --anim $(p) --size 256x192 --methods iir,ir \
+	$(foreach p,$(STRESS),$(BENCH) --anim $(p) --size 256x192 --methods $(PEERS) \
 	    --ref-spp 64 --ref-every 15 --out out/bench/cornell-$(p) &&) true
-	$(BENCH) conference --anim orbit --size 320x240 --methods iir,ir --ref-spp 256 \
+	$(BENCH) conference --anim orbit --size 320x240 --methods $(PEERS) --ref-spp 256 \
 	    --ref-every 100 --out out/bench/conference-orbit
+	$(BENCH) --anim orbit --frames 0:50 --size 512x384 --methods iir,ir,rsm \
+	    --sweep shading=full,multires --ref-spp 256 --ref-every 25 --out out/bench/cornell-multires
+	$(BENCH) --anim orbit --frames 0:60 --size 1024x768 --methods iir --sweep shading=full,multires \
+	    --ref-spp 0 --out out/bench/cornell-multires-1024
+	$(BENCH) conference --anim orbit --frames 0:60 --size 1024x768 --methods iir \
+	    --sweep shading=full,multires --ref-spp 0 --out out/bench/conference-multires-1024
 	/usr/bin/python3 tools/live_bench.py --iird $(BUILD)/iird --out out/bench/live.json
 
 # Coverage-guided fuzzing of the daemon's input parsers (tests/fuzz/, issue 15): a clang build with

@@ -611,3 +611,13 @@ iir_status iird_prepare_parent(const char *path, const char *option, iir_error *
         snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
     return prepare_dir(dir, option, path, err);
 }
+
+const char *iird_method_choices(void)
+{
+    static char buf[256];
+    size_t n = 0;
+    buf[0] = '\0';
+    for (const char *const *m = iir_method_names(); *m && n < sizeof buf; m++)
+        n += (size_t)snprintf(buf + n, sizeof buf - n, "%s%s", n ? " | " : "", *m);
+    return buf;
+}

@@ -47,6 +47,9 @@ typedef struct iird_command {
 int iird_parse_command(const iird_command *cmd, int argc, char **argv, void *ctx,
                        iir_params *params, const char **scene);
 
+/* The method names joined by " | " in registry order, for usage texts (a static buffer). */
+const char *iird_method_choices(void);
+
 /* Prints the parameters of `methods` (comma-separated; NULL = every method), a section per
  * table, as --help shows them. */
 void iird_print_params(FILE *f, const char *methods);

@@ -34,7 +34,8 @@ plt.rcParams.update({
     "figure.dpi": 100,
 })
 
-METHOD_COLOURS = {"iir": "#1f77b4", "ir": "#d62728", "pt": "#2ca02c"}
+METHOD_COLOURS = {"iir": "#1f77b4", "ir": "#d62728", "pt": "#2ca02c", "rsm": "#ff7f0e",
+                  "ism": "#9467bd", "hier": "#8c564b"}
 PHASES = ["trace", "vpls", "shadowmaps", "gbuffer", "direct", "indirect", "filter"]
 
 
@@ -45,7 +46,8 @@ def colour(method):
 
 def shades(runs):
     """A colour per (method, setting): the method's hue, darker for later settings."""
-    maps = {"iir": "Blues", "ir": "Reds", "pt": "Greens"}
+    maps = {"iir": "Blues", "ir": "Reds", "pt": "Greens", "rsm": "Oranges", "ism": "Purples",
+            "hier": "copper"}
     out, per_method = {}, {}
     for method, setting in runs:
         per_method.setdefault(method, []).append(setting)

@@ -9,7 +9,9 @@
 #include "iir/scene.h"
 #include "method_internal.h"
 
-static const iir_method_ops *const registry[] = {&iir_method_pt, &iir_method_ir, &iir_method_iir};
+static const iir_method_ops *const registry[] = {&iir_method_pt,  &iir_method_ir,
+                                                 &iir_method_iir, &iir_method_rsm,
+                                                 &iir_method_ism, &iir_method_hier};
 enum { NUM_METHODS = sizeof registry / sizeof registry[0] };
 
 struct iir_method {
@@ -48,6 +50,7 @@ void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *sta
     stats->phase_ms[IIR_PHASE_DIRECT] = t->direct_ms;
     stats->phase_ms[IIR_PHASE_INDIRECT] = t->indirect_ms;
     stats->phase_ms[IIR_PHASE_FILTER] = t->filter_ms;
+    stats->vpl_evals = t->vpl_evals;
 }
 
 iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl_options *v)

@@ -17,6 +17,15 @@ typedef struct iir_method_common {
 } iir_method_common;
 extern const iir_param_table iir_common_table;
 
+/* ---- multiresolution shading (table iir_multires_table, vpl_options.c; multires.h) ---- */
+typedef struct iir_multires_options {
+    int mr_levels;   /* coarsest level */
+    float mr_depth;  /* discontinuity: tangent-plane distance relative to depth */
+    float mr_normal; /* discontinuity: minimum cosine between normals */
+    int mr_window;   /* pixels a level's interleave filter spans at most */
+} iir_multires_options;
+extern const iir_param_table iir_multires_table;
+
 /* ---- the VPL shading of ir and iir (table iir_vpl_table, render.c) ---- */
 typedef struct iir_vpl_options {
     iir_visibility visibility;
@@ -24,8 +33,43 @@ typedef struct iir_vpl_options {
     float sm_bias;
     int interleave;
     float clamp;
+    iir_shading shading;     /* table iir_shading_table */
+    iir_multires_options mr; /* table iir_multires_table */
 } iir_vpl_options;
-extern const iir_param_table iir_vpl_table;
+extern const iir_param_table iir_vpl_table; /* sm_bias, interleave */
+/* visibility and sm_res, of the same struct (ism always uses ISMs: it does not list them) */
+extern const iir_param_table iir_vis_table;
+/* `shading` (full or multires), one iir_shading, wherever a method keeps it (vpl.shading for ir,
+ * iir and ism). */
+extern const iir_param_table iir_shading_table;
+/* The geometry term's clamp, one float (the VPL methods list it at their float's offset). */
+extern const iir_param_table iir_clamp_table;
+/* clamp / D^2 (D the scene's bounding-box diagonal), or INFINITY for clamp 0 (rsm.c). */
+float iir_clamp_g_max(const struct iir_scene *scene, float clamp);
+/* The reflective shadow maps' gather (rsm_map.c; rsm, hier): rsm_map.h's iir_rsm_options. */
+extern const iir_param_table iir_rsm_table;
+
+/* ---- imperfect shadow maps as VPL visibility (table iir_ism_table, ism_options.c) ---- */
+typedef struct iir_ism_options {
+    int points;         /* the scene's point set, sampled once per method */
+    int res;            /* each VPL's map: res x res */
+    int points_per_vpl; /* each VPL's subset of the points */
+} iir_ism_options;
+extern const iir_param_table iir_ism_table;
+
+struct iir_ism_points;
+/* The ISMs (ism.h) of the non-null VPLs without one, until stop(ctx) says stop; *pts is the point
+ * set the caller keeps, created from scene and seed on first use (the caller frees it with
+ * iir_ism_points_destroy). salt tells apart VPL sets whose ids may repeat (iir's per light).
+ * *built = maps rendered. IIR_ERR_NOMEM or IIR_ERR_INVALID (a scene without area) when the point
+ * set cannot be made. */
+iir_status iir_ism_maps_build(struct iir_ism_points **pts, const struct iir_scene *scene,
+                              const iir_rt *rt, const iir_ism_options *o, uint64_t seed,
+                              uint64_t salt, iir_vpl *vpls, uint32_t n, iir_stop_fn stop, void *ctx,
+                              uint32_t *built, iir_error *err);
+/* Bytes of n VPLs' ISMs and the point set when visibility is ism, else 0 (iir_vpl_memory counts
+ * the exact maps). */
+uint64_t iir_ism_memory(const iir_ism_options *o, iir_visibility visibility, uint32_t n);
 
 /* One of a method's tables and where its options struct sits in the method's own. */
 typedef struct iir_method_table {
@@ -33,7 +77,7 @@ typedef struct iir_method_table {
     size_t offset;
 } iir_method_table;
 
-enum { IIR_METHOD_MAX_TABLES = 4 };
+enum { IIR_METHOD_MAX_TABLES = 8 };
 
 typedef struct iir_method_ops {
     const char *name;
@@ -86,6 +130,19 @@ uint32_t iir_dropped_emitters(const struct iir_scene *scene, const char *method,
 extern const iir_method_ops iir_method_pt;
 extern const iir_method_ops iir_method_ir;
 extern const iir_method_ops iir_method_iir;
+extern const iir_method_ops iir_method_ism;
+
+/* ---- instant radiosity's options (ir.c), which the ism method binds too ---- */
+typedef struct iir_ir_options {
+    iir_method_common common;
+    iir_vpl_options vpl;
+    iir_ism_options ism;
+    int vpls;         /* N light paths */
+    int bounces;      /* 1 = direct only, 2 = one diffuse bounce */
+    bool same_random; /* the same random numbers every frame */
+} iir_ir_options;
+extern const iir_method_ops iir_method_rsm;
+extern const iir_method_ops iir_method_hier;
 
 /* Shared by the VPL methods: validates the view (camera and lights), IIR_ERR_INVALID otherwise. */
 iir_status iir_view_validate(const iir_view *view, iir_error *err);

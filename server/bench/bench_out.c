@@ -21,6 +21,7 @@ typedef struct run_summary {
     double rmse, relmse, flicker; /* means over the frames that have them; NAN if none */
     double rays[IIR_RAY_KIND_COUNT], rays_total;  /* per frame */
     double inserted, deleted, invalidated, smaps; /* per frame */
+    double vpl_evals;                             /* per frame: pixel-VPL pairs shaded */
     int regenerations, scored;
     double rss_peak_mb, method_mb;
     double min_lum; /* darkest frame's mean luminance: a black frame shows as 0 */
@@ -66,6 +67,7 @@ static run_summary summarise(const iird_bench *b, int r, double *tmp)
         s.deleted += st->vpl.deleted / n;
         s.invalidated += st->vpl.invalidated / n;
         s.smaps += st->vpl.shadowmaps / n;
+        s.vpl_evals += (double)st->vpl_evals / n;
         s.regenerations += (int)st->vpl.regenerated;
         s.method_mb += row->method_mb / n;
     }
@@ -109,7 +111,8 @@ static void csv_header(FILE *f)
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",rays_%s", iir_ray_kind_name((iir_ray_kind)k));
     fprintf(f, ",vpls,vpls_valid,vpls_invalidated,vpls_deleted,vpls_inserted,vpls_null,"
-               "regenerated,shadowmaps,rss_mb,method_mb,mean_lum,rmse,relmse,flicker\n");
+               "regenerated,shadowmaps,vpl_evals,recomputed,rss_mb,method_mb,mean_lum,rmse,relmse,"
+               "flicker\n");
 }
 
 static void csv_number(FILE *f, double v, const char *end)
@@ -128,9 +131,9 @@ static void csv_row(FILE *f, const iird_bench_run *run, int frame, const iird_be
     for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, ",%.4f", s->phase_ms[p]);
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",%llu", (unsigned long long)s->rays.n[k]);
-    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%.2f,%.3f,%.6g,", c->count, c->valid, c->invalidated,
-            c->deleted, c->inserted, c->null_samples, c->regenerated, c->shadowmaps, r->rss_mb,
-            r->method_mb, r->mean_lum);
+    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%llu,%.4f,%.2f,%.3f,%.6g,", c->count, c->valid,
+            c->invalidated, c->deleted, c->inserted, c->null_samples, c->regenerated, c->shadowmaps,
+            (unsigned long long)s->vpl_evals, s->recomputed, r->rss_mb, r->method_mb, r->mean_lum);
     csv_number(f, r->rmse, ",");
     csv_number(f, r->relmse, ",");
     csv_number(f, r->flicker, "\n");
@@ -212,6 +215,7 @@ static cJSON *run_json(const iird_bench_run *run, const run_summary *s)
     add_num(churn, "shadowmaps", s->smaps);
     cJSON_AddItemToObject(o, "vpl_churn_per_frame", churn);
     cJSON_AddNumberToObject(o, "regenerations", s->regenerations);
+    add_num(o, "vpl_evals_per_frame", s->vpl_evals);
     add_num(o, "rss_peak_mb", s->rss_peak_mb);
     add_num(o, "method_mb", s->method_mb);
     add_num(o, "min_mean_lum", s->min_lum);

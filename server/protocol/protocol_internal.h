@@ -38,6 +38,9 @@ bool iird_json_add_num(cJSON *obj, const char *name, double v);
 bool iird_json_add_float(cJSON *obj, const char *name, float v);
 bool iird_json_add_u64(cJSON *obj, const char *name, uint64_t v);
 bool iird_json_add_vec3(cJSON *obj, const char *name, iir_vec3 v);
+/* An area light's shape as "shape": [[[x, y], [x, y], [x, y]], ...] (light-local corners, each
+ * float written to read back the same); false on out-of-memory. */
+bool iird_json_add_shape(cJSON *obj, const iir_area_shape *shape);
 
 /* ---- readers of one JSON value (protocol_fields.c) ----
  * Each checks the value's JSON type and range and returns true, or returns false with *c->err

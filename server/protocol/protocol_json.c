@@ -74,6 +74,23 @@ bool iird_json_add_vec3(cJSON *obj, const char *name, iir_vec3 v)
            iird_json_add_float(a, NULL, v.z);
 }
 
+bool iird_json_add_shape(cJSON *obj, const iir_area_shape *shape)
+{
+    cJSON *tris = cJSON_CreateArray();
+    if (!add_item(obj, "shape", tris)) return false;
+    for (uint32_t t = 0; t < shape->num_triangles; t++) {
+        cJSON *tri = cJSON_CreateArray();
+        if (!add_item(tris, NULL, tri)) return false;
+        for (int k = 0; k < 3; k++) {
+            cJSON *p = cJSON_CreateArray();
+            if (!add_item(tri, NULL, p) || !iird_json_add_float(p, NULL, shape->tri[t][k].x) ||
+                !iird_json_add_float(p, NULL, shape->tri[t][k].y))
+                return false;
+        }
+    }
+    return true;
+}
+
 static bool add_str(cJSON *obj, const char *name, const char *s)
 {
     return cJSON_AddStringToObject(obj, name, s ? s : "") != NULL;
@@ -142,14 +159,17 @@ static bool add_vec2(cJSON *obj, const char *name, iir_vec2 v)
 }
 
 /* The fields only some kinds have: a spot's cone, a glTF spot's inner cone, an area light's up
- * hint (its frame: r = up x direction, u = direction x r) and size. */
+ * hint (its frame: r = up x direction, u = direction x r), size and, when it is not the whole
+ * rectangle, shape (light-local triangles, for drawing its outline). */
 static bool add_kind_fields(cJSON *o, const iir_light *L)
 {
     bool spot = L->type == IIR_LIGHT_SPOT, area = L->type == IIR_LIGHT_AREA;
     return (!spot || iird_json_add_num(o, "cone_angle", degrees(L->cone_angle))) &&
            (!spot || L->profile != IIR_SPOT_GLTF ||
             iird_json_add_num(o, "inner_angle", degrees(L->inner_angle))) &&
-           (!area || iird_json_add_vec3(o, "up", L->up)) && (!area || add_vec2(o, "size", L->size));
+           (!area || iird_json_add_vec3(o, "up", L->up)) &&
+           (!area || add_vec2(o, "size", L->size)) &&
+           (!area || !L->shape.num_triangles || iird_json_add_shape(o, &L->shape));
 }
 
 /* One light: name, kind, on, its pose (a sun's position is the centre of its disk over the scene)
@@ -345,6 +365,8 @@ char *iird_json_stats(const iird_stats_view *v)
               add_item(o, "phases", iird_json_phases(st, 1e3)) &&
               add_item(o, "vpl", iird_json_vpl_counts(&st->vpl)) &&
               add_item(o, "rays", iird_json_rays(&st->rays)) &&
+              iird_json_add_u64(o, "vpl_evals", st->vpl_evals) &&
+              iird_json_add_num(o, "recomputed", rounded(st->recomputed, 1e4)) &&
               iird_json_add_u64(o, "dropped", v->dropped) &&
               iird_json_add_u64(o, "memory_bytes", v->memory_bytes);
     return iird_json_finish(keep_if(o, ok));

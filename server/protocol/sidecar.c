@@ -7,7 +7,9 @@
 #include "protocol_internal.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 static cJSON *camera_json(const iir_camera *c, float aspect)
 {
@@ -40,14 +42,32 @@ static bool sun_json(cJSON *o, const iir_light *L)
     return iird_json_add_vec3(o, "direction", L->direction) && iird_json_add_vec3(o, "up", L->up);
 }
 
-/* An area light's: its normal, the up hint (its frame, as a spot's) and [width, height]. */
+/* "emission_map": the image as seen from the saved sidecar, which lies in a folder beside the
+ * scene folder the image is in: "../FOLDER/FILE". */
+static bool map_json(cJSON *o, const iir_emission_map *m)
+{
+    const char *file = strrchr(m->path, '/');
+    if (!file) return cJSON_AddStringToObject(o, "emission_map", m->path) != NULL;
+    const char *folder = file;
+    while (folder > m->path && folder[-1] != '/') folder--;
+    char rel[1100];
+    snprintf(rel, sizeof rel, "../%.*s%s", (int)(file - folder), folder, file);
+    return cJSON_AddStringToObject(o, "emission_map", rel) != NULL;
+}
+
+/* An area light's: its normal, the up hint (its frame, as a spot's), [width, height] and, for a
+ * shaped light, "shape": its triangles' light-local corners [[x, y], [x, y], [x, y]] (floats in
+ * [-1/2, 1/2], written so they read back the same). */
 static bool area_json(cJSON *o, const iir_light *L)
 {
     if (!iird_json_add_vec3(o, "direction", L->direction) || !iird_json_add_vec3(o, "up", L->up))
         return false;
     cJSON *size = cJSON_AddArrayToObject(o, "size");
-    return size && iird_json_add_float(size, NULL, L->size.x) &&
-           iird_json_add_float(size, NULL, L->size.y);
+    if (!size || !iird_json_add_float(size, NULL, L->size.x) ||
+        !iird_json_add_float(size, NULL, L->size.y))
+        return false;
+    return (L->shape.num_triangles == 0 || iird_json_add_shape(o, &L->shape)) &&
+           (!L->map || map_json(o, L->map));
 }
 
 /* The light's kind-specific fields: a point's position, a spot's position and cone, a sun's

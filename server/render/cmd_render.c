@@ -29,7 +29,7 @@ static void render_usage(FILE *f)
         "  --out FILE|DIR       output image; the format follows the extension (required).\n"
         "                       With --anim a directory (created if missing) that gets\n"
         "                       frame_NNNNN.<format> and render.json\n"
-        "  --method NAME        pt | ir | iir (default pt; with --anim iir)\n"
+        "  --method NAME        %s (default pt; with --anim iir)\n"
         "  --size WxH           image size (default 512x512; with --anim 512 high and as wide\n"
         "                       as the scene camera's aspect asks, 910x512 when it gives none)\n"
         "  --exposure E         PNG (and video) exposure in stops (default 0; with --anim\n"
@@ -43,7 +43,8 @@ static void render_usage(FILE *f)
         "  --scenes DIR         where scene names are looked up (default ./scenes)\n"
         "  -h, --help           this text (with --method M: M's parameters only)\n"
         "\n"
-        "Exit codes: 0 ok, 2 bad input, 3 file error, 4 unsupported, 64 usage, 130 interrupted.\n");
+        "Exit codes: 0 ok, 2 bad input, 3 file error, 4 unsupported, 64 usage, 130 interrupted.\n",
+        iird_method_choices());
 }
 
 enum {

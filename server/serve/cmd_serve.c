@@ -59,7 +59,7 @@ static void serve_usage(FILE *f)
         "                       own, http(s)://127.0.0.1|localhost|[::1]|HOST:PORT, always are)\n"
         "  --token T            clients must send this token in hello\n"
         "  --tls-cert F --tls-key F  serve https/wss with this PEM certificate and key\n"
-        "  --method NAME        a new session's method: pt | ir | iir (default iir)\n"
+        "  --method NAME        a new session's method: %s (default iir)\n"
         "  --size WxH           a new session's frame size (default 512x384)\n"
         "  --verbose            libwebsockets notices on stderr\n"
         "  -h, --help           this text\n"
@@ -69,7 +69,8 @@ static void serve_usage(FILE *f)
         "\n"
         "The parameters below set a new session's defaults, which are otherwise each\n"
         "parameter's one default (as for every command; welcome in docs/protocol.md);\n"
-        "clients change them with params.\n");
+        "clients change them with params.\n",
+        iird_method_choices());
 }
 
 enum {

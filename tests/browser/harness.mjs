@@ -166,10 +166,22 @@ export async function startDaemon(IIRD, args, port = 0) {
     }
 }
 
+// disc_lamp's light: a 0.8 x 0.8 area light at the back wall's middle facing +z (r = +x, u = +y),
+// emitting from the 32-gon inscribed in it (corners at radius 1/2 of its light-local square).
+const DISC_SIDES = 32;
+export const DISC_LAMP = {
+    type: 'area', name: 'disc', position: [0, 1, -0.95], direction: [0, 0, 1], up: [0, 1, 0], size: [0.8, 0.8], intensity: 4,
+    shape: Array.from({ length: DISC_SIDES }, (_, k) => {
+        const at = (i) => [0.5 * Math.cos((2 * Math.PI * i) / DISC_SIDES), 0.5 * Math.sin((2 * Math.PI * i) / DISC_SIDES)];
+        return [[0, 0], at(k), at(k + 1)];
+    }),
+};
+
 // A scenes folder for the tests: the shipped Cornell box, and scenes on its geometry that the
 // shipped ones do not cover: point_box (one point light), dark_box (no light at all: iird makes up a
-// spot), two_lights (a spot and a point light 'bulb') and glow_box (a spot, with the box's ceiling
-// lamp left emitting: a material whose indirect light iir leaves out); with {conference: true} the
+// spot), two_lights (a spot and a point light 'bulb'), glow_box (a spot, with the box's ceiling
+// lamp left emitting: a material whose indirect light iir leaves out) and disc_lamp (an area light
+// 'disc' on the back wall facing the camera, shaped as a 32-gon: DISC_LAMP); with {conference: true} the
 // shipped conference room too (a scene that takes a while to load). Removed at exit.
 export function makeScenes(SRC, { conference = false } = {}) {
     fs.mkdirSync(process.env.IIR_TEST_TMP || os.tmpdir(), { recursive: true });
@@ -189,6 +201,7 @@ export function makeScenes(SRC, { conference = false } = {}) {
         glow_box: [
             { type: 'spot', name: 'spot', position: [0, 1.9, 0], direction: [0, -1, 0], cone_angle: 60, intensity: [4, 3, 1] },
         ],
+        disc_lamp: [DISC_LAMP],
     };
     for (const [name, lights] of Object.entries(scenes)) {
         const d = path.join(dir, name);

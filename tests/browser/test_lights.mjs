@@ -7,7 +7,10 @@
 //     it moved and the spot where it was, and the daemon agrees (its next `state` says the same);
 //  3. its box switches the bulb off: state says off, the image darkens and its gizmo is drawn grey;
 //     on again, the image comes back;
-//  4. a click on the spot's gizmo in the image selects the spot again.
+//  4. a click on the spot's gizmo in the image selects the spot again;
+//  5. on disc_lamp (an area light shaped as a 32-gon, harness.mjs DISC_LAMP), state sends its shape
+//     and the gizmo draws the disc's outline: gizmo pixels at its rim, none at the corners of its
+//     bounding square (a rectangle's outline would be there).
 // Screenshot: browser_lights.png in the working directory.
 //
 // Usage (as ctest runs it): node tests/browser/test_lights.mjs IIRD SOURCE_DIR
@@ -19,6 +22,8 @@ const [IIRD, SRC] = process.argv.slice(2);
 const { check, log } = H;
 
 const OFF_GREY = [0x6c, 0x6c, 0x6c]; // gizmo.js COLORS.off
+const SELECTED = [0xff, 0xd2, 0x3c]; // COLORS.scene
+const OTHER = [0xa0, 0xa8, 0xb8]; // COLORS.other
 // Measured (RelWithDebInfo build, 2 cores): the image's brightness 0-255 is 70.4 with both lights
 // (converged), 32.0 with the bulb off and 71.2 on again (refinement had not ended yet).
 const DARKER = 0.75; // off: at most this share of the brightness with both lights
@@ -120,6 +125,33 @@ async function main() {
     await page.mouse.click(css.x + spot.x * css.sx, css.y + spot.y * css.sy);
     await H.waitFor(page, () => window.iir.selected === 0).catch(() => {});
     check((await page.evaluate(() => window.iir.selected)) === 0, 'a click on the spot\'s gizmo selects the spot');
+
+    // 5. a shaped area light's outline
+    await page.selectOption('#scene', 'disc_lamp');
+    await H.waitFor(page, () => window.iir.state.scene === 'disc_lamp' && !window.iir.switching && !window.iir.greyed);
+    await H.settle(page, 2);
+    const sd = await model(page);
+    const fd = await page.evaluate(() => window.iir.lastFrame);
+    const disc = sd.lights[0];
+    const sameShape = Array.isArray(disc.shape) && disc.shape.length === H.DISC_LAMP.shape.length &&
+        disc.shape.every((t, i) => t.every((p, k) => dist(p, H.DISC_LAMP.shape[i][k]) < 1e-6));
+    check(disc.kind === 'area' && sameShape, `state sends the disc's shape (${disc.shape ? disc.shape.length : 0} triangles)`);
+    const at = (x, y) => H.project(sd.camera, fd.width, fd.height, [disc.position[0] + x * disc.size[0], disc.position[1] + y * disc.size[1], disc.position[2]]);
+    const colour = (await page.evaluate(() => window.iir.selected)) === 0 ? SELECTED : OTHER;
+    const rim = [];
+    for (let k = 0; k < 8; k++) {
+        const p = at(0.5 * Math.cos((k * Math.PI) / 4), 0.5 * Math.sin((k * Math.PI) / 4));
+        rim.push(await H.overlayPixelsNear(page, p.x, p.y, 3, colour, 40));
+    }
+    const corners = [];
+    for (const [x, y] of [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]) {
+        const p = at(x, y);
+        corners.push(await H.overlayPixelsNear(page, p.x, p.y, 3, colour, 40));
+    }
+    await page.screenshot({ path: path.resolve('browser_disc_lamp.png') });
+    log(`disc outline: gizmo pixels at 8 rim points ${JSON.stringify(rim)}, at the square's corners ${JSON.stringify(corners)}`);
+    check(rim.every((n) => n >= 2), 'the gizmo draws the disc\'s rim');
+    check(corners.every((n) => n === 0), 'and not the corners of its bounding square');
 
     check(page.problems.length === 0, `no console errors${page.problems.length ? `:\n  ${page.problems.join('\n  ')}` : ''}`);
     await daemon.stop();

@@ -177,10 +177,18 @@ echo "$out" | grep -q "fillnode" && fail "pt renders the point light, yet it was
 out=$("$iird" render "$tmp/sunroom.gltf" --method iir --size 16x12 --vpls 8 --sm-res 8 \
     --refine-passes 1 --out "$tmp/sun_iir.png" 2>&1) || fail "render sunroom iir: $out"
 echo "$out" | grep -q "light '" && fail "iir keeps VPLs for every light, yet one was warned about: $out"
-out=$("$iird" render "$tmp/room.obj" --method ir --size 16x12 --vpls 8 --sm-res 8 --refine-passes 1 \
-    --out "$tmp/room_ir.png" 2>&1) || fail "render room ir: $out"
+# the room's lamp kept as static emissive triangles (a sidecar with a "lights" array)
+printf '{"file": "room.obj", "lights": []}' > "$tmp/static.scene.json"
+out=$("$iird" render "$tmp/static.scene.json" --method ir --size 16x12 --vpls 8 --sm-res 8 \
+    --refine-passes 1 --out "$tmp/room_ir.png" 2>&1) || fail "render static room ir: $out"
 echo "$out" | grep -q "warning: ir: material 'lamp': emits light: its indirect light is left out" ||
     fail "ir leaves out the lamp's indirect light silently: $out"
+# without a sidecar the lamp (an emissive quad) is a movable area light: iir renders it, and says so
+out=$("$iird" render "$tmp/room.obj" --method iir --size 16x12 --vpls 8 --sm-res 8 \
+    --refine-passes 1 --out "$tmp/room_iir.pfm" 2>&1) || fail "render room iir: $out"
+echo "$out" | grep -q "material 'lamp': emits light: became the movable area light 'lamp'" ||
+    fail "the lamp's conversion to an area light is not noted: $out"
+lit "$(mean_of "$tmp/room_iir.pfm")" 0.05 || fail "iir's room lit by its lamp is dark"
 # the same note for several materials is one line naming them all
 out=$("$iird" render "$tmp/textured.obj" "${pt[@]}" --out "$tmp/tex.png" 2>&1) || fail "render textured: $out"
 [ "$(echo "$out" | grep -c "colour texture")" = 1 ] &&

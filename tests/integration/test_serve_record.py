@@ -70,13 +70,17 @@ def image_diff(a, b):
 
 def box_room(scenes, name, lights=None):
     """A scene folder `name` in scenes: the Cornell box's mesh, with a sidecar giving these lights
-    (None: no sidecar, the mesh's lights: none)."""
+    (None: a sidecar with no lights that keeps the ceiling panel a static emitter, as the mesh alone
+    once had it; without a sidecar it would become a movable area light)."""
     room = os.path.join(scenes, name)
     os.makedirs(room)
     box = os.path.join(iirserve.SRC, "scenes", "cornell_box")
     for f in ("CornellBox-Original.obj", "CornellBox-Original.mtl"):
         shutil.copy(os.path.join(box, f), room)
-    if lights is not None:
+    if lights is None:
+        with open(os.path.join(room, f"{name}.scene.json"), "w") as f:
+            json.dump({"file": "CornellBox-Original.obj", "lights": []}, f)
+    else:
         with open(os.path.join(room, f"{name}.scene.json"), "w") as f:
             json.dump({"file": "CornellBox-Original.obj", "materials": {"light": {"emission": 0}},
                        "camera": {"position": [0, 1, 3.9], "target": [0, 1, 0], "up": [0, 1, 0], "fov_y": 39.3},

@@ -77,6 +77,10 @@ class StartupSceneTest(DaemonTest):
         os.makedirs(dark)
         for f in ("CornellBox-Original.obj", "CornellBox-Original.mtl"):
             shutil.copy(os.path.join(room, f), dark)
+        # no lights: a "lights" array keeps the ceiling panel a static emitter (without a sidecar its
+        # emissive material would become a movable area light, docs/scene-format.md section 3)
+        with open(os.path.join(dark, "dark_room.scene.json"), "w") as f:
+            json.dump({"file": "CornellBox-Original.obj", "lights": []}, f)
         cls.dark = dark
         cls.daemon = Daemon(*FAST_ARGS, room)
 

@@ -723,7 +723,39 @@ static void test_unknown_extensions(void **state)
         assert_false(file_exists(path));
         read_expect_failure(path, IIR_ERR_UNSUPPORTED);
     }
-    read_expect_failure(scratch_path(path, sizeof path, names[3]), IIR_ERR_UNSUPPORTED);
+    read_expect_failure(scratch_path(path, sizeof path, names[3]), IIR_ERR_IO); /* missing */
+    iir_image_destroy(img);
+}
+
+/* A PNG read back: 8-bit sRGB decoded to linear, within the quantisation of 8 bits; a file that
+ * is not a PNG is a format error naming it. */
+static void test_png_read(void **state)
+{
+    (void)state;
+    iir_image *img = iir_image_create(3, 2);
+    for (int i = 0; i < 6; i++)
+        img->pixels[i] = iir_v3(0.1f * i, 1.f - 0.15f * i, i == 2 ? 1.f : 0.f);
+    char path[1024];
+    iir_error err = {0};
+    assert_int_equal(iir_image_write(img, scratch_path(path, sizeof path, "back.png"), 0.f, &err),
+                     IIR_OK);
+    iir_image *back = NULL;
+    assert_int_equal(iir_image_read(path, &back, &err), IIR_OK);
+    assert_int_equal(back->width, 3);
+    assert_int_equal(back->height, 2);
+    for (int i = 0; i < 6; i++) {
+        iir_vec3 a = img->pixels[i], b = back->pixels[i];
+        /* one 8-bit sRGB step is at most about 1.3% of a linear value above 0.05 */
+        assert_true(fabsf(a.x - b.x) <= 0.02f * a.x + 0.002f);
+        assert_true(fabsf(a.y - b.y) <= 0.02f * a.y + 0.002f);
+        assert_true(fabsf(a.z - b.z) <= 0.02f * a.z + 0.002f);
+    }
+    iir_image_destroy(back);
+    FILE *f = fopen(scratch_path(path, sizeof path, "fake.png"), "w");
+    assert_non_null(f);
+    fputs("not a png", f);
+    fclose(f);
+    read_expect_failure(path, IIR_ERR_FORMAT);
     iir_image_destroy(img);
 }
 
@@ -848,6 +880,7 @@ int main(void)
         cmocka_unit_test(test_pfm_truncated),
         cmocka_unit_test(test_pfm_bad_headers),
         cmocka_unit_test(test_unknown_extensions),
+        cmocka_unit_test(test_png_read),
         cmocka_unit_test(test_write_into_missing_directory),
         cmocka_unit_test(test_jpeg_encode_and_reuse),
         cmocka_unit_test(test_jpeg_bad_quality),

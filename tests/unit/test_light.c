@@ -16,6 +16,7 @@
 #include "iir/light.h"
 #include "iir/rng.h"
 #include "iir/scene.h"
+#include "testutil.h"
 
 static iir_light make_spot(float alpha_deg, float smooth_deg)
 {
@@ -526,6 +527,14 @@ static iir_light make_area(void)
     return l;
 }
 
+/* make_area's light, emitting from the 32-gon inscribed in its rectangle (an ellipse-like lamp). */
+static iir_light make_disc(void)
+{
+    iir_light l = make_area();
+    iir_test_disc_shape(&l.shape, 32);
+    return l;
+}
+
 /* Light-local coordinates of world point x on area light l (q in [-1/2, 1/2]^2 on it) and its
  * height above the plane along f. */
 static iir_vec3 area_local(const iir_light *l, iir_vec3 x)
@@ -724,6 +733,8 @@ static void test_lightset_area(void **state)
     iir_lightset_destroy(set);
 }
 
+static void check_pdf_integrates_to_one(const iir_scene *scp, const iir_light *lp);
+
 /* The MIS pdf is a density: over directions uniform on the sphere (pdf 1 / 4 pi), the mean of
  * pdf / (1 / 4 pi) is 1, within 4 standard errors (and 2%). */
 static void test_area_pdf_integrates_to_one(void **state)
@@ -731,7 +742,204 @@ static void test_area_pdf_integrates_to_one(void **state)
     (void)state;
     iir_scene sc;
     memset(&sc, 0, sizeof sc);
+    for (int disc = 0; disc < 2; disc++) {
+        iir_light l = disc ? make_disc() : make_area();
+        check_pdf_integrates_to_one(&sc, &l);
+    }
+}
+
+/* ======================== shaped area lights ======================== */
+
+/* Whether light-local q lies in the regular n-gon of iir_test_disc_shape (corners at radius 1/2,
+ * angles 2 pi k / n), by its own polar test: inside when q's distance along the normal of the edge
+ * of its sector is at most the apothem. */
+static bool in_ngon(int n, double x, double y)
+{
+    double t = atan2(y, x), step = 2 * M_PI / n;
+    if (t < 0) t += 2 * M_PI;
+    double mid = (floor(t / step) + 0.5) * step;
+    return x * cos(mid) + y * sin(mid) <= 0.5 * cos(M_PI / n);
+}
+
+/* The L-shaped panel: the rectangle without its (+x, +y) quarter, as 6 triangles. */
+static iir_light make_l_panel(void)
+{
     iir_light l = make_area();
+    static const float quads[3][2] = {{-0.5f, -0.5f}, {0.f, -0.5f}, {-0.5f, 0.f}};
+    for (int k = 0; k < 3; k++) {
+        float x = quads[k][0], y = quads[k][1];
+        iir_vec2 a = {x, y}, b = {x + 0.5f, y}, c = {x + 0.5f, y + 0.5f}, d = {x, y + 0.5f};
+        iir_vec2 *t = l.shape.tri[2 * k];
+        t[0] = a, t[1] = b, t[2] = c;
+        t = l.shape.tri[2 * k + 1];
+        t[0] = a, t[1] = c, t[2] = d;
+    }
+    l.shape.num_triangles = 6;
+    return l;
+}
+
+static bool in_l_panel(iir_vec2 q)
+{
+    return fabsf(q.x) <= 0.5f && fabsf(q.y) <= 0.5f && !(q.x > 0.f && q.y > 0.f);
+}
+
+/* A shape's area and flux: Phi = pi L w h a with a = n sin(2 pi / n) / 8 for the n-gon (the
+ * closed form, not the triangles' sum), 3/4 for the L; the far-field lobe integrates to it; every
+ * broken shape is refused, naming it. */
+static void test_area_shape_flux_and_check(void **state)
+{
+    (void)state;
+    iir_error err = {0};
+    iir_light l = make_disc();
+    assert_int_equal(iir_light_validate(&l, &err), IIR_OK);
+    double a = 32 * sin(2 * M_PI / 32) / 8, A = a * l.size.x * l.size.y;
+    assert_true(fabs(iir_area_light_area(&l) - A) < 1e-5 * A);
+    iir_vec3 phi = iir_light_flux(&l), num = integrate_intensity(&l);
+    assert_true(fabs(phi.x - M_PI * 4.0 * A) < 1e-5 * phi.x);
+    assert_true(fabsf(num.x - phi.x) < 5e-3f * phi.x);
+    l = make_l_panel();
+    assert_int_equal(iir_light_validate(&l, &err), IIR_OK);
+    assert_true(fabsf(iir_area_shape_fraction(&l.shape) - 0.75f) < 1e-6f);
+    assert_true(fabsf(iir_light_flux(&l).y - IIR_PI * 3.f * 0.75f * 0.15f) < 1e-5f);
+    /* broken shapes */
+    static const char *const problems[] = {"more than 64", "outside",     "outside",
+                                           "degenerate",   "overlapping", "overlapping"};
+    for (int k = 0; k < 6; k++) {
+        l = make_disc();
+        iir_vec2 *t = l.shape.tri[3];
+        if (k == 0) l.shape.num_triangles = IIR_AREA_MAX_TRIANGLES + 1;
+        if (k == 1) t[1].x = 0.51f;
+        if (k == 2) t[2].y = NAN;
+        if (k == 3) t[2] = iir_v2(0.5f * t[1].x, 0.5f * t[1].y);      /* on the edge t0 t1 */
+        if (k == 4) memcpy(l.shape.tri[4], t, sizeof l.shape.tri[4]); /* the same twice */
+        if (k == 5) t[0] = iir_v2(-0.2f * t[1].x, -0.2f * t[1].y); /* reaches into its neighbours */
+        assert_int_equal(iir_light_validate(&l, &err), IIR_ERR_INVALID);
+        print_message("%s\n", err.msg);
+        assert_non_null(strstr(err.msg, "light 'panel': its shape"));
+        assert_non_null(strstr(err.msg, problems[k]));
+    }
+}
+
+/* Emission from the disc: origins on the n-gon only and uniform by area over it (an 8 x 8
+ * histogram of q against the cells' shares of the n-gon, measured by the test's own polygon test
+ * on a fine grid; each within 5 standard deviations), beta = the flux; from the L: no origin in
+ * the missing quarter, a third in each other one. */
+static void test_area_shape_sampling(void **state)
+{
+    (void)state;
+    enum { N = 200000, G = 8, SUB = 64 };
+    iir_light l = make_disc();
+    double want[G][G] = {{0}}, got[G][G] = {{0}}, beta = 0, inside = 0;
+    for (int j = 0; j < G * SUB; j++)
+        for (int i = 0; i < G * SUB; i++) {
+            double x = (i + 0.5) / (G * SUB) - 0.5, y = (j + 0.5) / (G * SUB) - 0.5;
+            bool in = in_ngon(32, x, y);
+            want[j / SUB][i / SUB] += in, inside += in;
+        }
+    iir_rng rng = iir_rng_make(31, 0);
+    for (int n = 0; n < N; n++) {
+        iir_light_ray r = iir_light_sample_emission(&l, iir_rng_uniform2(&rng));
+        iir_vec3 q = area_local(&l, r.origin);
+        assert_true(in_ngon(32, q.x * 0.9999, q.y * 0.9999));
+        int i = (int)floor((q.x + 0.5) * G), j = (int)floor((q.y + 0.5) * G);
+        got[j < 0 ? 0 : j >= G ? G - 1 : j][i < 0 ? 0 : i >= G ? G - 1 : i] += 1;
+        beta += r.beta.x;
+    }
+    int bad = 0;
+    for (int j = 0; j < G; j++)
+        for (int i = 0; i < G; i++) {
+            double e = N * want[j][i] / inside;
+            bad += fabs(got[j][i] - e) > 5 * sqrt(e) + 1;
+        }
+    assert_int_equal(bad, 0);
+    assert_true(fabs(beta / N - iir_light_flux(&l).x) < 1e-5 * iir_light_flux(&l).x);
+    l = make_l_panel();
+    double quarter[3] = {0};
+    for (int n = 0; n < N; n++) {
+        iir_light_ray r =
+            iir_light_sample_emission_from(&l, iir_rng_uniform2(&rng), iir_rng_uniform2(&rng));
+        iir_vec3 q = area_local(&l, r.origin);
+        assert_true(fabsf(q.x) <= 0.5f + 1e-5f && fabsf(q.y) <= 0.5f + 1e-5f);
+        assert_false(q.x > 1e-5f && q.y > 1e-5f); /* not in the missing quarter */
+        quarter[q.y < 0 ? (q.x < 0 ? 0 : 1) : 2] += 1;
+    }
+    for (int k = 0; k < 3; k++) assert_true(fabs(quarter[k] - N / 3.0) < 5 * sqrt(N * 2.0 / 9));
+}
+
+/* Rays at points in and around the L: they meet it exactly where the test's own test puts the
+ * point on it (away from its edges), never in the missing quarter. */
+static void test_area_shape_hit(void **state)
+{
+    (void)state;
+    iir_light l = make_l_panel();
+    iir_frame fr = iir_spot_frame(&l);
+    iir_rng rng = iir_rng_make(5, 5);
+    int hits = 0, checked = 0;
+    for (int i = 0; i < 20000; i++) {
+        iir_vec2 q =
+            iir_v2(1.4f * iir_rng_uniform(&rng) - 0.7f, 1.4f * iir_rng_uniform(&rng) - 0.7f);
+        float edge = fminf(fminf(fabsf(fabsf(q.x) - 0.5f), fabsf(fabsf(q.y) - 0.5f)),
+                           q.x > 0.f && q.y > 0.f ? fminf(q.x, q.y) : 1.f);
+        if (edge < 1e-3f) continue;
+        iir_vec3 x = iir_area_light_point(&l, &fr, q);
+        iir_vec3 o = iir_madd(x, fr.f, 0.5f + iir_rng_uniform(&rng));
+        o = iir_madd(o, fr.r, iir_rng_uniform(&rng) - 0.5f);
+        float t = iir_area_light_hit(&l, o, iir_sub(x, o), INFINITY);
+        bool on = in_l_panel(q);
+        assert_int_equal(on, !isinf(t));
+        assert_int_equal(on, iir_area_light_contains(&l, q));
+        if (on) assert_true(fabsf(t - 1.f) < 1e-4f);
+        hits += on, checked++;
+    }
+    assert_true(hits > checked / 3);
+}
+
+/* NEE of the disc through the set against the irradiance integrated over the n-gon by the test
+ * (midpoint rule on a 400 x 400 grid of the rectangle, the test's own polygon test), within 1%. */
+static void test_lightset_disc(void **state)
+{
+    (void)state;
+    iir_scene sc;
+    memset(&sc, 0, sizeof sc);
+    iir_light l = make_disc();
+    iir_lightset *set = iir_lightset_create(&sc, &l, 1);
+    iir_frame fr = iir_spot_frame(&l);
+    const iir_vec2 offsets[] = {{0.f, 0.f}, {0.45f, -0.3f}, {1.2f, 0.8f}};
+    for (int k = 0; k < 3; k++) {
+        iir_vec3 x = iir_madd(iir_area_light_point(&l, &fr, offsets[k]), fr.f, 0.35f);
+        iir_vec3 n = iir_neg(fr.f);
+        enum { G = 400 };
+        double want = 0, dA = l.size.x * l.size.y / (double)(G * G);
+        for (int j = 0; j < G; j++)
+            for (int i = 0; i < G; i++) {
+                double qx = (i + 0.5) / G - 0.5, qy = (j + 0.5) / G - 0.5;
+                if (!in_ngon(32, qx, qy)) continue;
+                iir_vec3 p = iir_area_light_point(&l, &fr, iir_v2((float)qx, (float)qy));
+                iir_vec3 d = iir_sub(p, x);
+                double d2 = iir_length_sq(d), c = iir_dot(d, n) / sqrt(d2);
+                want += l.intensity.x * c * c / d2 * dA; /* cos at x = cos at the light here */
+            }
+        iir_rng rng = iir_rng_make(41, (uint64_t)k);
+        enum { N = 200000 };
+        double E = 0;
+        for (int i = 0; i < N; i++) {
+            iir_light_sample ls = iir_lightset_sample(set, x, 0.5f, iir_rng_uniform2(&rng));
+            assert_true(ls.pdf > 0.f);
+            iir_emitter_hit h = iir_lightset_hit_light(set, 0, x, ls.wi, INFINITY);
+            assert_true(fabsf(h.pdf - ls.pdf) < 1e-3f * ls.pdf);
+            E += ls.Li.x * iir_dot(ls.wi, n) / ls.pdf;
+        }
+        print_message("disc irradiance at offset %d: %.5f, integrated %.5f\n", k, E / N, want);
+        assert_true(fabs(E / N - want) < 0.01 * want);
+    }
+    iir_lightset_destroy(set);
+}
+
+/* (the rectangle's and the disc's: the pdf over the sphere of directions has mean 1) */
+static void check_pdf_integrates_to_one(const iir_scene *scp, const iir_light *lp)
+{
+    iir_scene sc = *scp;
+    iir_light l = *lp;
     iir_lightset *set = iir_lightset_create(&sc, &l, 1);
     iir_frame fr = iir_spot_frame(&l);
     iir_vec3 x = iir_madd(iir_area_light_point(&l, &fr, iir_v2(0.3f, 0.1f)), fr.f, 0.4f);
@@ -774,6 +982,10 @@ int main(void)
         cmocka_unit_test(test_area_hit),
         cmocka_unit_test(test_lightset_area),
         cmocka_unit_test(test_area_pdf_integrates_to_one),
+        cmocka_unit_test(test_area_shape_flux_and_check),
+        cmocka_unit_test(test_area_shape_sampling),
+        cmocka_unit_test(test_area_shape_hit),
+        cmocka_unit_test(test_lightset_disc),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

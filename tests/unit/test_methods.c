@@ -200,7 +200,7 @@ static void test_refusals(void **state)
     iir_image *img = iir_image_create(16, 16);
     iir_frame_stats fs;
     assert_int_equal(iir_method_render(m, &v, img, &fs, &err), IIR_ERR_UNSUPPORTED);
-    assert_non_null(strstr(err.msg, "spot, point or sun"));
+    assert_non_null(strstr(err.msg, "spot, point, sun or area light"));
     iir_light bad = f->scene->lights[0];
     bad.position.y = NAN;
     v.lights = &bad;

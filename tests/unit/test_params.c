@@ -235,7 +235,7 @@ static void test_accepted_renders(void **state)
     spot.type = IIR_LIGHT_SPOT;
     assert_int_equal(iir_method_supports("iir", &point, 1, &err), IIR_OK); /* its sphere */
     assert_int_equal(iir_method_supports("iir", &point, 0, &err), IIR_ERR_UNSUPPORTED);
-    assert_non_null(strstr(err.msg, "spot, point or sun"));
+    assert_non_null(strstr(err.msg, "spot, point, sun or area light"));
     assert_int_equal(iir_method_supports("iir", (iir_light[]){point, spot}, 2, &err), IIR_OK);
     assert_int_equal(iir_method_supports("pt", &point, 1, &err), IIR_OK);
     assert_int_equal(iir_method_supports("nope", &point, 1, &err), IIR_ERR_INVALID);

@@ -20,6 +20,7 @@
 #include "protocol.h"
 #include "protocol_internal.h"
 #include "recording.h"
+#include "testutil.h"
 
 /* ======================== helpers ======================== */
 
@@ -1211,6 +1212,65 @@ static size_t mutate(iir_rng *rng, char *buf, size_t len, size_t cap)
     }
 }
 
+/* A shaped area light (a 32-gon) in `state`: its `shape` is sent, every corner the same float; a
+ * rectangle sends none; a client's `light` message cannot carry one. `save`'s sidecar writes the
+ * shape so that the scene it makes loads the same light (pose, size, shape bit for bit). */
+static void test_shaped_light_sent_and_saved(void **state)
+{
+    (void)state;
+    iir_light L = {.type = IIR_LIGHT_AREA, .name = "disc"};
+    L.position = iir_v3(0.1f, 1.9f, -0.2f);
+    L.direction = iir_v3(0.f, -1.f, 0.f);
+    L.up = iir_v3(0.f, 0.f, 1.f);
+    L.size = iir_v2(0.5f, 0.3f);
+    L.intensity = iir_v3(5.f, 4.f, 3.f);
+    iir_test_disc_shape(&L.shape, 32);
+    iir_camera C = cam();
+    iird_settings s = iird_settings_default();
+    iird_state_view v = {"builtin", &L, &C, &s, 1, false, NULL, NULL, NULL, 0};
+    cJSON *o = reply_ok(iird_json_state(&v, 1), "state");
+    const cJSON *shape =
+        cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(o, "light"), "shape");
+    assert_true(cJSON_IsArray(shape) && cJSON_GetArraySize(shape) == 32);
+    for (int t = 0; t < 32; t++)
+        for (int k = 0; k < 3; k++) {
+            const cJSON *p = cJSON_GetArrayItem(cJSON_GetArrayItem(shape, t), k);
+            assert_true(cJSON_IsArray(p) && cJSON_GetArraySize(p) == 2);
+            assert_true((float)cJSON_GetArrayItem(p, 0)->valuedouble == L.shape.tri[t][k].x);
+            assert_true((float)cJSON_GetArrayItem(p, 1)->valuedouble == L.shape.tri[t][k].y);
+        }
+    cJSON_Delete(o);
+    iir_light rect = L;
+    memset(&rect.shape, 0, sizeof rect.shape);
+    v.light = &rect;
+    o = reply_ok(iird_json_state(&v, 1), "state");
+    assert_null(
+        cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(o, "light"), "shape"));
+    cJSON_Delete(o);
+    expect("{\"type\":\"light\",\"shape\":[[[0,0],[0.5,0],[0,0.5]]]}", IIRD_E_UNKNOWN_FIELD,
+           "light.shape");
+
+    /* save: the sidecar, loaded as a scene based on the built-in box */
+    iird_sidecar_view sv = {"builtin", &C, 1.f, &L, 1};
+    char *text = iird_sidecar_text(&sv);
+    assert_non_null(text);
+    assert_non_null(strstr(text, "\"shape\""));
+    const char *dir = iir_test_tmpdir("protocol-saved-disc");
+    const char *path = iir_test_write_file(dir, "saved.scene.json", text);
+    free(text);
+    iir_scene *scene = NULL;
+    iir_error err = {0};
+    if (iir_scene_load(path, &scene, &err) != IIR_OK) fail_msg("%s", err.msg);
+    assert_int_equal(scene->num_lights, 1);
+    const iir_light *back = &scene->lights[0];
+    assert_string_equal(back->name, "disc");
+    assert_true(back->size.x == L.size.x && back->size.y == L.size.y);
+    assert_near3(back->position, L.position, 0.f);
+    assert_int_equal(back->shape.num_triangles, 32);
+    assert_memory_equal(&back->shape, &L.shape, sizeof L.shape);
+    iir_scene_destroy(scene);
+}
+
 static void test_fuzz(void **state)
 {
     (void)state;
@@ -1301,6 +1361,7 @@ int main(void)
         cmocka_unit_test(test_frame_header),
         cmocka_unit_test(test_json_replies),
         cmocka_unit_test(test_json_domain),
+        cmocka_unit_test(test_shaped_light_sent_and_saved),
         cmocka_unit_test(test_fuzz),
         cmocka_unit_test(test_embedded_nul),
     };

@@ -171,7 +171,8 @@ static void test_point_light_plane(void **state)
 
 /* ---- one bounce against quadrature ---- */
 
-/* Floor A (y = 0), wall B (x = 1), and a small downward panel light (albedo 0). Seen on B,
+/* Floor A (y = 0), wall B (x = 1), and a small downward panel light (albedo 0): emissive
+ * triangles, which the sidecar's "lights": [] keeps static (not an area light). Seen on B,
  * bounces 2 - bounces 1 is light that reflected once, off A. */
 static const float RHO = 0.5f, LE = 10.f;
 static const iir_vec3 PANEL_C = {-0.4f, 1.5f, 0.f};
@@ -191,7 +192,7 @@ static void write_bounce_scene(const char *dir)
     fclose(f);
     iir_test_write_file(dir, "bounce.scene.json",
                         "{\"camera\": {\"position\": [-0.9, 0.8, 0], \"target\": [1, 0.8, 0],"
-                        " \"up\": [0, 1, 0], \"fov_y\": 70}}");
+                        " \"up\": [0, 1, 0], \"fov_y\": 70}, \"lights\": []}");
 }
 
 /* Irradiance at p (normal n) from the panel, midpoint rule over NL x NL cells. */

@@ -3,6 +3,7 @@
  * (its spot, gltf_spot, point, sun and area lights, an area light taken from a material's
  * rectangle), degenerate triangles, resolving names, the camera frame, and every refusal (each
  * must name the file and the problem). */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -963,15 +964,165 @@ static void test_sidecar_area_from_material(void **state)
     iir_scene_destroy(s);
 }
 
-/* A material that is not one flat rectangle facing one way, or that the mesh lacks, is refused. */
+/* The lamp without one quad (an L) is no rectangle any more: it keeps the rectangle as its pose
+ * and size and gets a shape, 3/4 of it, whose points are where the mesh had the L. */
+static void test_sidecar_area_l_shape(void **state)
+{
+    (void)state;
+    char obj[1024], sc[1024];
+    write_lamp("llamp.obj", 1, obj, sizeof obj);
+    write_file("llamp.scene.json", "{\"lights\": [{\"type\": \"area\", \"material\": \"lamp\"}]}",
+               sc, sizeof sc);
+    iir_scene *s = load_ok(obj);
+    assert_int_equal(s->num_lights, 1);
+    const iir_light *l = &s->lights[0];
+    iir_error err;
+    assert_int_equal(iir_light_validate(l, &err), IIR_OK);
+    assert_vec_near(l->position, LAMP_C, 1e-5f);
+    assert_true(near(l->size.x, 0.6f, 1e-5f) && near(l->size.y, 0.3f, 1e-5f));
+    assert_int_equal(l->shape.num_triangles, 6);
+    assert_true(near(iir_area_shape_fraction(&l->shape), 0.75f, 1e-5f));
+    assert_true(near(iir_light_flux(l).x, IIR_PI * 5.f * 0.75f * 0.18f, 1e-4f));
+    /* its shape holds the three quads' centres and not the missing one's; q maps back onto them */
+    iir_frame fr = iir_spot_frame(l);
+    for (int q = 0; q < 4; q++) {
+        iir_vec3 c = lamp_point(0.25f + 0.5f * (q % 2), 0.25f + 0.5f * (q / 2));
+        iir_vec3 d = iir_sub(c, l->position);
+        iir_vec2 ql = iir_v2(iir_dot(d, fr.r) / l->size.x, iir_dot(d, fr.u) / l->size.y);
+        assert_true(iir_area_light_contains(l, ql) == (q != 3));
+        assert_vec_near(iir_area_light_point(l, &fr, ql), c, 1e-5f);
+    }
+    assert_int_equal(s->num_triangles, 2); /* the floor alone */
+    iir_scene_destroy(s);
+}
+
+/* disc.obj: a grey floor and a disc lamp (material "disc", Ke 5 4 3) of n triangles, radius 0.3,
+ * centred at DISC_C, facing down. */
+static const iir_vec3 DISC_C = {0.1f, 1.8f, 0.2f};
+
+static void write_disc_obj(const char *name, int n, char *out, size_t size)
+{
+    char path[1024];
+    write_file("disc.mtl", "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl disc\nKd 0.8 0.8 0.8\nKe 5 4 3\n",
+               path, sizeof path);
+    snprintf(out, size, "%s/%s", tmp, name);
+    FILE *f = fopen(out, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib disc.mtl\n");
+    iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 2), iir_v3(2, 0, 0));
+    iir_test_write_disc(f, "disc", DISC_C, iir_v3(0.3f, 0, 0), iir_v3(0, 0, 0.3f), n);
+    fclose(f);
+}
+
+/* A disc lamp of 32 triangles from its material: a shaped light of 32 triangles whose flux is
+ * pi L times the 32-gon's area (n R^2 sin(2 pi / n) / 2), facing down, around the disc. */
+static void test_sidecar_area_disc(void **state)
+{
+    (void)state;
+    char obj[1024], sc[1024];
+    write_disc_obj("disc.obj", 32, obj, sizeof obj);
+    write_file("disc.scene.json",
+               "{\"lights\": [{\"type\": \"area\", \"name\": \"lamp\", \"material\": \"disc\"}]}",
+               sc, sizeof sc);
+    iir_scene *s = load_ok(obj);
+    assert_int_equal(s->num_lights, 1);
+    const iir_light *l = &s->lights[0];
+    assert_string_equal(l->name, "lamp");
+    assert_int_equal(l->shape.num_triangles, 32);
+    assert_vec_near(l->position, DISC_C, 1e-5f);
+    assert_vec_near(l->direction, iir_v3(0, -1, 0), 1e-6f);
+    assert_true(near(l->size.x, l->size.y, 1e-5f) && l->size.x > 0.59f &&
+                l->size.x <= 0.6f + 1e-5f);
+    double area = 32 * 0.09 * sin(2 * M_PI / 32) / 2;
+    assert_true(fabs(iir_area_light_area(l) - area) < 1e-5 * area);
+    assert_true(fabs(iir_light_flux(l).y - M_PI * 4.0 * area) < 1e-4 * M_PI * 4.0 * area);
+    assert_true(material_area(s, "disc") == 0.f);
+    assert_int_equal(s->num_triangles, 2);
+    iir_scene_destroy(s);
+    /* 80 triangles: more than a shape takes */
+    write_disc_obj("bigdisc.obj", 80, obj, sizeof obj);
+    write_file("bigdisc.scene.json", "{\"lights\": [{\"type\": \"area\", \"material\": \"disc\"}]}",
+               sc, sizeof sc);
+    assert_load_fails(obj, "lights[0].material: material 'disc' has 80 triangles",
+                      "a shaped area light has at most 64");
+}
+
+/* A light by its pose with a "shape" (as the scene writer saves one) loads it as given; a broken
+ * shape is refused naming the field and the problem. */
+static void test_sidecar_area_shape_field(void **state)
+{
+    (void)state;
+    char sc[1024];
+    write_sidecar(
+        "shape.scene.json",
+        "{\"file\": \"box.obj\", \"lights\": [{\"type\": \"area\", \"position\": [0.5, "
+        "0.5, 1], \"direction\": [0, 0, -1], \"size\": [0.4, 0.2], \"intensity\": 2,\n"
+        " \"shape\": [[[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5]], [[-0.5, -0.5], [0.5, 0.5], "
+        "[-0.25, 0.125]]]}]}",
+        sc, sizeof sc);
+    iir_scene *s = load_ok(sc);
+    const iir_light *l = &s->lights[0];
+    assert_int_equal(l->shape.num_triangles, 2);
+    assert_true(l->shape.tri[1][2].x == -0.25f && l->shape.tri[1][2].y == 0.125f);
+    assert_true(near(iir_area_shape_fraction(&l->shape), 0.5f + 0.1875f, 1e-6f));
+    iir_scene_destroy(s);
+    static const struct {
+        const char *shape, *field, *problem;
+    } cases[] = {
+        {"[[[-0.5, -0.5], [0.6, -0.5], [0.5, 0.5]]]", "lights[0].shape[0][1][0]", "outside"},
+        {"[[[0, 0], [0.5, 0.5], [0.25, 0.25]]]", "lights[0].shape", "degenerate"},
+        {"[[[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5]], [[-0.5, -0.5], [0.5, 0.5], [0.5, -0.4]]]",
+         "lights[0].shape", "overlapping"},
+        {"[]", "lights[0].shape", "1 to 64 triangles"},
+        {"[[[0, 0], [0.5, 0.5]]]", "lights[0].shape[0]", "3 corners"},
+        {"[[0, 0, 0.5, 0.5, 0.5, 0]]", "lights[0].shape[0]", "3 corners"},
+        {"[[[0, 0], [0.5, 0.5], \"x\"]]", "lights[0].shape[0][2]", "2 numbers"},
+        {"{}", "lights[0].shape", "triangles"},
+    };
+    char text[1024];
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        snprintf(text, sizeof text,
+                 "{\"file\": \"box.obj\", \"lights\": [{\"type\": \"area\", \"position\": [0, "
+                 "0, 1], \"direction\": [0, 0, -1], \"size\": [1, 1], \"intensity\": 1, \"shape\": "
+                 "%s}]}",
+                 cases[i].shape);
+        write_sidecar("badshape.scene.json", text, sc, sizeof sc);
+        assert_load_fails(sc, cases[i].field, cases[i].problem);
+    }
+    /* 65 triangles */
+    int len = snprintf(text, sizeof text,
+                       "{\"file\": \"box.obj\", \"lights\": [{\"type\": "
+                       "\"area\", \"position\": [0, 0, 1], \"direction\": [0, 0, -1], "
+                       "\"size\": [1, 1], \"intensity\": 1, \"shape\": [");
+    char big[8192];
+    snprintf(big, sizeof big, "%s", text);
+    for (int t = 0; t < 65; t++)
+        len += snprintf(big + len, sizeof big - (size_t)len, "%s[[0, 0], [0.1, 0], [0, 0.1]]",
+                        t ? ", " : "");
+    snprintf(big + len, sizeof big - (size_t)len, "]}]}");
+    write_sidecar("badshape.scene.json", big, sc, sizeof sc);
+    assert_load_fails(sc, "lights[0].shape", "1 to 64 triangles");
+    /* a shape on a light taken from a material, or on a spot */
+    write_sidecar("badshape.scene.json",
+                  "{\"file\": \"box.obj\", \"lights\": [{\"type\": \"area\", \"material\": "
+                  "\"glow\", \"shape\": [[[0, 0], [0.5, 0], [0, 0.5]]]}]}",
+                  sc, sizeof sc);
+    assert_load_fails(sc, "lights[0].shape", "gets its pose, size and shape from the material");
+    write_sidecar("badshape.scene.json",
+                  "{\"file\": \"box.obj\", \"lights\": [{\"type\": \"point\", \"position\": [0, "
+                  "0, 1], \"intensity\": 1, \"shape\": [[[0, 0], [0.5, 0], [0, 0.5]]]}]}",
+                  sc, sizeof sc);
+    assert_load_fails(sc, "lights[0].shape", "only area lights");
+}
+
+/* A material that is not flat, or not facing one way, or that the mesh lacks, is refused. */
 static void test_sidecar_area_material_refused(void **state)
 {
     (void)state;
     static const struct {
         int variant;
         const char *problem;
-    } cases[] = {
-        {1, "does not form one rectangle"}, {2, "is not flat"}, {3, "facing different ways"}};
+    } cases[] = {{2, "is not flat"}, {3, "facing different ways (two-sided or mixed facing)"}};
     char obj[1024], sc[1024];
     write_file("badlamp.scene.json", "{\"lights\": [{\"type\": \"area\", \"material\": \"lamp\"}]}",
                sc, sizeof sc);
@@ -1181,6 +1332,9 @@ int main(void)
         cmocka_unit_test(test_sidecar_area),
         cmocka_unit_test(test_sidecar_area_from_material),
         cmocka_unit_test(test_sidecar_area_material_refused),
+        cmocka_unit_test(test_sidecar_area_l_shape),
+        cmocka_unit_test(test_sidecar_area_disc),
+        cmocka_unit_test(test_sidecar_area_shape_field),
         cmocka_unit_test(test_sidecar_file_escapes),
         cmocka_unit_test(test_resolve),
         cmocka_unit_test(test_open),

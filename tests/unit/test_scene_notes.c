@@ -3,6 +3,7 @@
  * aspect a scene's camera was framed for, the lights and materials the loader ignores and each
  * method leaves out (iir_method_dropped), and why a view renders black (iir_scene_explain_dark).
  * Every scene is written here: OBJ rooms with and without a wall, a closed box, a glTF file. */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -20,26 +21,27 @@ static char tmp[512];
 
 /* ======================== scenes ======================== */
 
-enum { ROOM_WALLS = 1, ROOM_FRONT = 2, ROOM_LAMP = 4, ROOM_BOX = 8, BIG_BOX = 16 };
+enum { ROOM_WALLS = 1, ROOM_FRONT = 2, ROOM_LAMP = 4, ROOM_BOX = 8, BIG_BOX = 16, LAMP_BOX = 32 };
 
 static const char *const MTL = "newmtl white\nKd 0.75 0.75 0.75\n"
                                "newmtl red\nKd 0.7 0.1 0.1\n"
                                "newmtl lamp\nKd 0.8 0.8 0.8\nKe 20 18 15\n";
 
-/* A closed box of half size h at c, faces outwards (a solid object). */
-static void write_box(FILE *f, iir_vec3 c, float h)
+/* A closed box of half size h at c in material m, faces outwards (a solid object). */
+static void write_box(FILE *f, iir_vec3 c, float h, const char *m)
 {
     iir_vec3 x = iir_v3(h, 0, 0), y = iir_v3(0, h, 0), z = iir_v3(0, 0, h);
-    iir_test_write_quad(f, "white", iir_add(c, y), z, x);
-    iir_test_write_quad(f, "white", iir_sub(c, y), x, z);
-    iir_test_write_quad(f, "white", iir_add(c, x), y, z);
-    iir_test_write_quad(f, "white", iir_sub(c, x), z, y);
-    iir_test_write_quad(f, "white", iir_add(c, z), x, y);
-    iir_test_write_quad(f, "white", iir_sub(c, z), y, x);
+    iir_test_write_quad(f, m, iir_add(c, y), z, x);
+    iir_test_write_quad(f, m, iir_sub(c, y), x, z);
+    iir_test_write_quad(f, m, iir_add(c, x), y, z);
+    iir_test_write_quad(f, m, iir_sub(c, x), z, y);
+    iir_test_write_quad(f, m, iir_add(c, z), x, y);
+    iir_test_write_quad(f, m, iir_sub(c, z), y, x);
 }
 
 /* dir/name.obj: a room 4 x 2.5 x 3 (walls facing in; the +z wall only with ROOM_FRONT), a lamp
- * under the ceiling facing down, a box on the floor, or a big closed box around its centre. */
+ * under the ceiling facing down, a box on the floor, a big closed box around its centre, or a
+ * glowing cube (material "lamp") hanging in a corner. */
 static void write_scene(const char *name, int parts)
 {
     char path[1024];
@@ -60,8 +62,9 @@ static void write_scene(const char *name, int parts)
     if (parts & ROOM_LAMP)
         iir_test_write_quad(f, "lamp", iir_v3(0, H - 0.01f, 0), iir_v3(0.4f, 0, 0),
                             iir_v3(0, 0, 0.3f));
-    if (parts & ROOM_BOX) write_box(f, iir_v3(0.5f, 0.4f, 0.f), 0.4f);
-    if (parts & BIG_BOX) write_box(f, iir_v3(0.f, 1.25f, 0.f), 0.6f);
+    if (parts & ROOM_BOX) write_box(f, iir_v3(0.5f, 0.4f, 0.f), 0.4f, "white");
+    if (parts & BIG_BOX) write_box(f, iir_v3(0.f, 1.25f, 0.f), 0.6f, "white");
+    if (parts & LAMP_BOX) write_box(f, iir_v3(-1.f, 2.f, 0.f), 0.1f, "lamp");
     fclose(f);
     iir_test_write_file(tmp, "scene.mtl", MTL);
 }
@@ -314,12 +317,15 @@ static void test_sidecar_lights_clear_light_notes(void **state)
     iir_scene_destroy(s);
 }
 
-/* Emissive materials: ir and iir take VPLs from punctual lights only and say so. */
+/* Emissive materials kept static (a sidecar with a "lights" array): ir and iir take VPLs from
+ * lights only and say so. */
 static void test_emitters_dropped(void **state)
 {
     (void)state;
     write_scene("glow", ROOM_WALLS | ROOM_FRONT | ROOM_LAMP);
+    iir_test_write_file(tmp, "glow.scene.json", "{\"lights\": []}");
     opened o = open_obj("glow");
+    assert_int_equal(o.scene->num_lights, 0);
     iir_dropped d[8];
     assert_int_equal(iir_method_dropped("pt", o.scene, NULL, 0, d, 8), 0);
     assert_int_equal(iir_method_dropped("ir", o.scene, NULL, 0, d, 8), 1);
@@ -327,6 +333,112 @@ static void test_emitters_dropped(void **state)
     assert_string_equal(d[0].kind, "material");
     assert_string_equal(d[0].name, "lamp");
     close_scene(&o);
+}
+
+/* The triangles of material `name` and their total area. */
+static uint32_t material_triangles(const iir_scene *s, const char *name, double *area)
+{
+    uint32_t n = 0;
+    *area = 0;
+    for (uint32_t t = 0; t < s->num_triangles; t++)
+        if (!strcmp(s->material_list[s->materials[t]].name, name)) n++, *area += s->areas[t];
+    return n;
+}
+
+/* One frame of method `name` of the scene's own view and lights at 32 x 24; its mean luminance. */
+static double render_mean(const opened *o, const char *name)
+{
+    iir_params p = iir_params_default();
+    iir_test_set(&p, "vpls", 64);
+    iir_test_set(&p, "sm_res", 16);
+    iir_method *m = iir_test_method(&(iir_test_cornell){o->scene, o->rt}, name, &p);
+    iir_image *img = iir_image_create(32, 24);
+    iir_view v = {o->scene->lights, o->scene->num_lights, o->scene->camera};
+    iir_frame_stats fs;
+    iir_test_render(m, &v, img, &fs);
+    double sum = 0;
+    for (int i = 0; i < 32 * 24; i++) sum += iir_luminance(img->pixels[i]);
+    iir_image_destroy(img);
+    iir_method_destroy(m);
+    return sum / (32 * 24);
+}
+
+/* An OBJ whose lamp is an emissive quad, without a sidecar: the lamp becomes a movable area light
+ * named after its material (its triangles gone, its radiance the material's emission, the quad's
+ * pose and size), the scene's notes say so, and iir renders it (it used to refuse emitters); a
+ * sidecar with "lights": [] keeps the lamp static emissive triangles; a lamp that is no one-sided
+ * planar set (a glowing cube) stays static with a note saying why. */
+static void test_emitter_becomes_area_light(void **state)
+{
+    (void)state;
+    write_scene("lamproom", ROOM_WALLS | ROOM_FRONT | ROOM_LAMP);
+    opened o = open_obj("lamproom");
+    const iir_scene *s = o.scene;
+    assert_int_equal(s->num_lights, 1);
+    const iir_light *l = &s->lights[0];
+    assert_int_equal(l->type, IIR_LIGHT_AREA);
+    assert_string_equal(l->name, "lamp");
+    assert_true(l->intensity.x == 20.f && l->intensity.y == 18.f && l->intensity.z == 15.f);
+    assert_true(fabsf(l->position.y - 2.49f) < 1e-5f && fabsf(l->position.x) < 1e-5f);
+    assert_true(fabsf(l->direction.y + 1.f) < 1e-6f);
+    assert_true(fabsf(l->size.x * l->size.y - 0.48f) < 1e-5f);
+    assert_int_equal(l->shape.num_triangles, 0); /* a rectangle */
+    double area;
+    assert_int_equal(material_triangles(s, "lamp", &area), 0);
+    assert_true(find(s->dropped, s->num_dropped, "", "lamp",
+                     "emits light: became the movable area light 'lamp'") >= 0);
+    double mean_iir = render_mean(&o, "iir"), mean_pt = render_mean(&o, "pt");
+    print_message("lamp room: iir mean %.4f, pt mean %.4f\n", mean_iir, mean_pt);
+    assert_true(mean_iir > 0.05 && mean_pt > 0.05);
+    close_scene(&o);
+
+    iir_test_write_file(tmp, "lamproom.scene.json", "{\"lights\": []}");
+    o = open_obj("lamproom");
+    assert_int_equal(o.scene->num_lights, 0);
+    assert_int_equal(material_triangles(o.scene, "lamp", &area), 2);
+    assert_true(fabs(area - 0.48) < 1e-5);
+    assert_true(find(o.scene->dropped, o.scene->num_dropped, "", "lamp", "") < 0);
+    close_scene(&o);
+
+    write_scene("cuberoom", ROOM_WALLS | ROOM_FRONT | LAMP_BOX);
+    o = open_obj("cuberoom");
+    assert_int_equal(o.scene->num_lights, 0);
+    assert_int_equal(material_triangles(o.scene, "lamp", &area), 12);
+    assert_true(find(o.scene->dropped, o.scene->num_dropped, "", "lamp",
+                     "emits light: stays static emissive triangles, not a movable area light: it "
+                     "has triangles facing different ways") >= 0);
+    close_scene(&o);
+}
+
+/* The same rule for glTF: the file's plate (material "steel" made emissive, emissiveFactor) becomes
+ * an area light after the file's own lights, facing up as its winding does, and leaves the mesh. */
+static void test_gltf_emitter_becomes_area_light(void **state)
+{
+    (void)state;
+    static const char *const steel = "{\"name\": \"steel\", \"pbrMetallicRoughness\"";
+    const char *at = strstr(GLTF, steel);
+    assert_non_null(at);
+    char text[8192];
+    snprintf(text, sizeof text,
+             "%.*s{\"name\": \"glowplate\", \"emissiveFactor\": [1, 0.5, 0.25], "
+             "\"pbrMetallicRoughness\"%s",
+             (int)(at - GLTF), GLTF, at + strlen(steel));
+    const char *path = iir_test_write_file(tmp, "glowplate.gltf", text);
+    iir_scene *s = NULL;
+    iir_error err = {0};
+    if (iir_scene_load(path, &s, &err) != IIR_OK) fail_msg("%s", err.msg);
+    const iir_light *l = &s->lights[s->num_lights - 1];
+    assert_int_equal(l->type, IIR_LIGHT_AREA);
+    assert_string_equal(l->name, "glowplate");
+    assert_true(l->intensity.x == 1.f && l->intensity.y == 0.5f && l->intensity.z == 0.25f);
+    assert_true(fabsf(l->position.y - 0.5f) < 1e-6f && fabsf(fabsf(l->direction.y) - 1.f) < 1e-6f);
+    assert_true(fabsf(l->size.x - 2.f) < 1e-5f && fabsf(l->size.y - 2.f) < 1e-5f);
+    double area;
+    assert_int_equal(material_triangles(s, "glowplate", &area), 0);
+    assert_int_equal(s->num_triangles, 2); /* the floor alone */
+    assert_true(find(s->dropped, s->num_dropped, "", "glowplate",
+                     "became the movable area light 'glowplate'") >= 0);
+    iir_scene_destroy(s);
 }
 
 /* ======================== why a view is black ======================== */
@@ -373,6 +485,8 @@ int main(void)
         cmocka_unit_test(test_gltf_aspect_and_dropped),
         cmocka_unit_test(test_sidecar_lights_clear_light_notes),
         cmocka_unit_test(test_emitters_dropped),
+        cmocka_unit_test(test_emitter_becomes_area_light),
+        cmocka_unit_test(test_gltf_emitter_becomes_area_light),
         cmocka_unit_test(test_explain_dark),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,6 +1,7 @@
 /* testutil.c -- scratch directories, file writers and method shortcuts for the unit tests. */
 #include "testutil.h"
 
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -41,6 +42,29 @@ void iir_test_write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_v
     fprintf(f, "usemtl %s\n", mtl);
     for (int i = 0; i < 4; i++) fprintf(f, "v %.9g %.9g %.9g\n", v[i].x, v[i].y, v[i].z);
     fprintf(f, "f -4 -3 -2 -1\n");
+}
+
+void iir_test_write_disc(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b, int n)
+{
+    fprintf(f, "usemtl %s\nv %.9g %.9g %.9g\n", mtl, c.x, c.y, c.z);
+    for (int k = 0; k < n; k++) {
+        double t = 2 * M_PI * k / n;
+        iir_vec3 p = iir_add(c, iir_add(iir_scale(a, (float)cos(t)), iir_scale(b, (float)sin(t))));
+        fprintf(f, "v %.9g %.9g %.9g\n", p.x, p.y, p.z);
+    }
+    for (int k = 0; k < n; k++) fprintf(f, "f %d %d %d\n", -(n + 1), -(n - k), -(n - (k + 1) % n));
+}
+
+void iir_test_disc_shape(iir_area_shape *s, int n)
+{
+    memset(s, 0, sizeof *s);
+    s->num_triangles = (uint32_t)n;
+    for (int k = 0; k < n; k++) {
+        double t0 = 2 * M_PI * k / n, t1 = 2 * M_PI * (k + 1) / n;
+        s->tri[k][0] = iir_v2(0.f, 0.f);
+        s->tri[k][1] = iir_v2((float)(0.5 * cos(t0)), (float)(0.5 * sin(t0)));
+        s->tri[k][2] = iir_v2((float)(0.5 * cos(t1)), (float)(0.5 * sin(t1)));
+    }
 }
 
 iir_status iir_test_load_obj(const char *dir, const char *name, iir_scene **scene, iir_rt **rt,

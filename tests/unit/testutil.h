@@ -22,6 +22,15 @@ const char *iir_test_write_file(const char *dir, const char *name, const char *t
 /* Writes an OBJ quad centred at c spanned by +-a, +-b (normal cross(a, b)) with material mtl. */
 void iir_test_write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b);
 
+/* Appends to OBJ file f a disc lamp in material mtl: the regular n-gon with corners
+ * c + cos(2 pi k / n) a + sin(2 pi k / n) b, as a fan of n triangles about c, facing a x b. */
+void iir_test_write_disc(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b, int n);
+
+/* The same n-gon as an area light's shape: corners at radius 1/2, angles 2 pi k / n, as a fan of
+ * n triangles about the centre (n <= IIR_AREA_MAX_TRIANGLES). Its fraction of the rectangle is
+ * n sin(2 pi / n) / 8. */
+void iir_test_disc_shape(iir_area_shape *s, int n);
+
 /* Loads dir/name.obj (with its sidecar, if any) and builds its ray tracer; on error both stay NULL
  * and err says why. */
 iir_status iir_test_load_obj(const char *dir, const char *name, iir_scene **scene, iir_rt **rt,

@@ -66,16 +66,46 @@ function rim(L, alphaDeg, h, n) {
     return { c, pts };
 }
 
-// An area light's corners: its frame is core's (f = direction, r = up x f, u = f x r).
-export function areaCorners(L) {
+// The world point of an area light's light-local q = (x, y) in [-1/2, 1/2]^2: its frame is core's
+// (f = direction, r = up x f, u = f x r).
+function areaPoint(L) {
     const f = v.normalize(L.direction);
     let r = v.cross(L.up || [0, 1, 0], f);
     if (v.length(r) < 1e-5) r = v.cross(Math.abs(f[0]) < 0.9 ? [1, 0, 0] : [0, 0, 1], f);
     r = v.normalize(r);
     const u = v.cross(f, r);
     const [w, h] = L.size || [1, 1];
-    const at = (x, y) => v.add(L.position, v.add(v.scale(r, x * w), v.scale(u, y * h)));
+    return (x, y) => v.add(L.position, v.add(v.scale(r, x * w), v.scale(u, y * h)));
+}
+
+// An area light's (bounding) rectangle's corners.
+export function areaCorners(L) {
+    const at = areaPoint(L);
     return [at(-0.5, -0.5), at(0.5, -0.5), at(0.5, 0.5), at(-0.5, 0.5)];
+}
+
+// An area light's outline as world segments [[a, b], ...]: its rectangle's four sides, or for a
+// shaped light (a disc lamp, an L-shaped panel: `shape`, light-local triangles) the edges that only
+// one of its triangles has (inner edges shared by two are not drawn).
+export function areaOutline(L) {
+    const at = areaPoint(L);
+    if (!Array.isArray(L.shape) || L.shape.length === 0) {
+        const c = areaCorners(L);
+        return c.map((p, i) => [p, c[(i + 1) % 4]]);
+    }
+    const key = (p) => `${p[0].toFixed(5)},${p[1].toFixed(5)}`;
+    const count = new Map();
+    const edges = [];
+    for (const t of L.shape) {
+        for (let k = 0; k < 3; k++) {
+            const a = t[k];
+            const b = t[(k + 1) % 3];
+            const id = [key(a), key(b)].sort().join('|');
+            count.set(id, (count.get(id) || 0) + 1);
+            edges.push([id, a, b]);
+        }
+    }
+    return edges.filter(([id]) => count.get(id) === 1).map(([, a, b]) => [at(a[0], a[1]), at(b[0], b[1])]);
 }
 
 // Where a light out of view is marked: the point of the frame's edge (inset by `inset` frame pixels)
@@ -161,10 +191,12 @@ function shape(o, g, P, apex, dpr) {
             line([apex[0] + 0.55 * r * Math.cos(t), apex[1] + 0.55 * r * Math.sin(t)], [apex[0] + r * Math.cos(t), apex[1] + r * Math.sin(t)]);
         }
     } else if (isArea(L)) {
-        const c = areaCorners(L).map(P);
-        ring(c);
-        line(c[0], c[2]);
-        line(c[1], c[3]);
+        for (const [a, b] of areaOutline(L)) line(P(a), P(b));
+        if (!Array.isArray(L.shape) || L.shape.length === 0) {
+            const c = areaCorners(L).map(P);
+            line(c[0], c[2]);
+            line(c[1], c[3]);
+        }
         line(apex, P(v.add(L.position, v.scale(v.normalize(L.direction), CONE_LENGTH * scale))));
     } else if (isSun(L)) {
         const head = P(L.position);

@@ -55,9 +55,11 @@ iir_status iir_image_encode_png(const iir_image *img, float exposure, uint8_t **
                                 iir_error *err);
 iir_status iir_image_encode_exr(const iir_image *img, uint8_t **data, size_t *size, iir_error *err);
 
-/* Reads .exr (R, G, B channels, any pixel type) or .pfm (colour "PF" or grey "Pf"). On error *out
- * stays NULL and err names the file and the problem. */
+/* Reads .exr (R, G, B channels, any pixel type), .pfm (colour "PF" or grey "Pf") or .png (8 or 16
+ * bits, decoded from sRGB to linear, alpha dropped). On error *out stays NULL and err names the
+ * file and the problem. */
 iir_status iir_image_read(const char *path, iir_image **out, iir_error *err);
+iir_status iir_image_read_png(const char *path, iir_image **out, iir_error *err);
 iir_status iir_image_read_exr(const char *path, iir_image **out, iir_error *err);
 iir_status iir_image_read_pfm(const char *path, iir_image **out, iir_error *err);
 

@@ -1,8 +1,8 @@
 /* light.h -- the lights a scene moves (delta lights: spot with a cosine lobe or glTF's profile
- * inside a cone, isotropic point, the sun; and the rectangular area light), the maps from their
- * directions to the disks of their VPL domains (light_domain.h), the area light's rectangle
- * (sampling it, hitting it), and the light set that samples all of them and the emissive triangles
- * for next-event estimation. Not VPLs.
+ * inside a cone, isotropic point, the sun; and the planar area light), the maps from their
+ * directions to the disks of their VPL domains (light_domain.h), the area light's rectangle and
+ * shape (sampling them, hitting them), and the light set that samples all of them and the emissive
+ * triangles for next-event estimation. Not VPLs.
  *
  * Cosine spot (profile IIR_SPOT_COSINE, iir's own): frame (p; r, u, f), half-angle alpha in
  * (0, 90] degrees, I(w) = I0 cos(theta) inside the cone, optionally faded to zero over an edge of
@@ -24,15 +24,30 @@
  * (iir_light_fit_sun); rays start on that disk's plane `radius` behind the centre. Its flux into
  * the scene is Phi = E pi radius^2.
  *
- * Area light (IIR_LIGHT_AREA): a one-sided rectangle, a cosine emitter of radiance `intensity`
- * (W/(sr m^2), RGB) that moves as a rigid body: centre `position`, emitting towards `direction`
- * (its normal f), its sides `size.x` along r and `size.y` along u of the frame (f, up). A point on
- * it has light-local coordinates q in [-1/2, 1/2]^2: x = position + q.x size.x r + q.y size.y u.
- * From afar it is a cosine lobe of I0 = L w h; its flux is Phi = pi L w h. It is not part of the
- * scene's geometry (the BVH is static and shared): pt and the direct-light pass of the VPL
- * renderer (for the G-buffer's camera rays) see it by an analytic ray-rectangle test
- * (iir_area_light_hit), and it casts no shadow. Rays pass through it (from the front they collect
- * its radiance on the way): what lies behind it is seen and lit as if it were not there. */
+ * Area light (IIR_LIGHT_AREA): a one-sided planar emitter, a cosine emitter of radiance
+ * `intensity` (W/(sr m^2), RGB) that moves as a rigid body: centre `position`, emitting towards
+ * `direction` (its normal f), inside its bounding rectangle of sides `size.x` along r and `size.y`
+ * along u of the frame (f, up). A point of the rectangle has light-local coordinates
+ * q in [-1/2, 1/2]^2: x = position + q.x size.x r + q.y size.y u. The emitter is the whole
+ * rectangle (shape.num_triangles == 0), or the union of `shape`'s triangles (a disc lamp, an
+ * L-shaped panel: up to IIR_AREA_MAX_TRIANGLES, non-overlapping, in q coordinates, so they stretch
+ * with size). Its area is A = w h a with a the shape's fraction of the rectangle (1 without a
+ * shape; iir_area_light_area). From afar it is a cosine lobe of I0 = L A; its flux is
+ * Phi = pi L A. Points on it are sampled uniformly by area (a triangle by its area, then the
+ * square-to-triangle warp). It is not part of the scene's geometry (the BVH is static and shared):
+ * pt and the direct-light pass of the VPL renderer (for the G-buffer's camera rays) see it by an
+ * analytic test (iir_area_light_hit: the rectangle's plane, then the point in the shape), and it
+ * casts no shadow. Rays pass through it (from the front they collect its radiance on the way):
+ * what lies behind it is seen and lit as if it were not there. The shape is part of the plain
+ * struct (copied with it); a client moving or resizing a light keeps it.
+ *
+ * An area light's radiance may be an image (a "screen", `map`): L(q) = intensity x map(u, v),
+ * u = q.x + 1/2 to the right and v = 1/2 - q.y down the image, as its front is seen (r points to
+ * the right of a viewer facing it when up is up); bilinear, linear RGB (a PNG is decoded from
+ * sRGB). Points and directions are still sampled uniformly (not by the image), so every estimator
+ * stays unbiased: a sample carries the radiance at its own point. Flux and the far-field lobe use
+ * the image's mean over the rectangle. The maps belong to the scene (iir_scene.maps); a light
+ * copied from it points at its map for as long as the scene lives. */
 #ifndef IIR_LIGHT_H
 #define IIR_LIGHT_H
 
@@ -58,6 +73,25 @@ typedef enum iir_light_type {
 /* A spot's angular profile. */
 typedef enum iir_spot_profile { IIR_SPOT_COSINE, IIR_SPOT_GLTF } iir_spot_profile;
 
+/* Most triangles an area light's shape has. */
+#define IIR_AREA_MAX_TRIANGLES 64
+
+/* An area light's emitter inside its bounding rectangle: num_triangles triangles (either winding)
+ * in light-local q coordinates, each corner in [-1/2, 1/2]^2, not overlapping; 0 triangles = the
+ * whole rectangle. Unused entries stay zero (lights are compared with memcmp). */
+typedef struct iir_area_shape {
+    uint32_t num_triangles;
+    iir_vec2 tri[IIR_AREA_MAX_TRIANGLES][3];
+} iir_area_shape;
+
+/* An area light's radiance image (a scene's: iir_scene.maps). */
+typedef struct iir_emission_map {
+    int width, height;
+    iir_vec3 *texels; /* linear RGB, row-major from the top row */
+    iir_vec3 mean;    /* over every texel */
+    char path[1024];  /* the file it was read from (absolute) */
+} iir_emission_map;
+
 typedef struct iir_light {
     iir_light_type type;
     char name[64];
@@ -69,7 +103,9 @@ typedef struct iir_light {
     iir_spot_profile profile; /* spot: IIR_SPOT_COSINE (the default) or IIR_SPOT_GLTF */
     float inner_angle;        /* glTF spot: innerConeAngle, radians, [0, cone_angle] */
     float radius;             /* sun: radius of its disk (> 0) */
-    iir_vec2 size;            /* area: width along r and height along u (> 0) */
+    iir_vec2 size;            /* area: bounding rectangle, width along r, height along u (> 0) */
+    iir_area_shape shape;     /* area: the emitter inside the rectangle (0 triangles: all of it) */
+    const iir_emission_map *map; /* area: radiance image times intensity, NULL = uniform */
     iir_vec3 intensity; /* RGB: point: W/sr, isotropic; spot: I0 (W/sr) on the axis; sun: W/m^2;
                            area: radiance W/(sr m^2) */
 } iir_light;
@@ -78,8 +114,8 @@ typedef struct iir_light {
 
 /* IIR_ERR_INVALID naming the light and the field for NaN/Inf, negative intensity, a zero
  * direction, a cone angle outside (0, 90] degrees, a smooth edge wider than the cone, a glTF inner
- * angle outside [0, cone angle], a sun without a disk (radius not finite and > 0), or an area light
- * without a size (a side not finite and > 0). */
+ * angle outside [0, cone angle], a sun without a disk (radius not finite and > 0), an area light
+ * without a size (a side not finite and > 0) or with a bad shape (iir_area_shape_check). */
 iir_status iir_light_validate(const iir_light *light, iir_error *err);
 
 /* The light a user moves in scene (the daemon's session light, an animation script's light track):
@@ -100,12 +136,12 @@ void iir_light_fit_sun(iir_light *light, const struct iir_scene *scene);
 const char *iir_light_kind(const iir_light *light);
 
 /* Total emitted flux (W, RGB); a sun's is what crosses its disk, E pi radius^2; an area light's
- * pi L w h. */
+ * pi L A (A = iir_area_light_area). */
 iir_vec3 iir_light_flux(const iir_light *light);
 
 /* Radiant intensity (W/sr) emitted towards the unit world direction w (pointing away from the
  * light). A sun has none (0): use its irradiance, `intensity`, along `direction`. An area light's
- * is its far field, the cosine lobe L w h max(0, w.f) as if all of it sat at its centre: right for
+ * is its far field, the cosine lobe L A max(0, w.f) as if all of it sat at its centre: right for
  * whoever sees it from many times its size away (iir_area_light_sample is exact near it). */
 iir_vec3 iir_light_intensity(const iir_light *light, iir_vec3 w);
 
@@ -186,12 +222,36 @@ typedef struct iir_light_ray {
  * of u for any practical purpose). u in [0,1)^2. */
 iir_light_ray iir_light_sample_emission(const iir_light *light, iir_vec2 u);
 
-/* The same with the area light's origin chosen by u_origin: uniform on the rectangle
- * (q = u_origin - 1/2), direction from u uniform on the unit disk of the frame (r, u, f) as the
- * cosine spot's (the cosine lobe), beta = pi L w h. Other lights ignore u_origin. */
+/* The same with the area light's origin chosen by u_origin: uniform on the emitter
+ * (q = iir_area_light_sample_q(l, u_origin)), direction from u uniform on the unit disk of the
+ * frame (r, u, f) as the cosine spot's (the cosine lobe), beta = pi L A. Other lights ignore
+ * u_origin. */
 iir_light_ray iir_light_sample_emission_from(const iir_light *light, iir_vec2 u, iir_vec2 u_origin);
 
-/* ---- the area light's rectangle (area_hit.c) ---- */
+/* ---- the area light's rectangle and shape (area_shape.c, area_hit.c) ---- */
+
+/* Why shape is not usable (a phrase: "has a degenerate triangle"), or NULL when it is: more
+ * than IIR_AREA_MAX_TRIANGLES triangles, a corner not finite or outside [-1/2, 1/2]^2, a
+ * degenerate triangle (area below 1e-7 of the rectangle), overlapping triangles (their areas sum
+ * to more than the rectangle's, or two of them share interior points). */
+const char *iir_area_shape_check(const iir_area_shape *shape);
+
+/* The fraction a of the bounding rectangle the emitter covers: 1 without a shape, else the sum of
+ * its triangles' areas. */
+float iir_area_shape_fraction(const iir_area_shape *shape);
+
+/* The emitter's area A = size.x size.y a (world units^2). */
+float iir_area_light_area(const iir_light *l);
+
+/* A light-local point q uniform by area on the emitter, for u in [0, 1)^2: u - 1/2 on the
+ * rectangle; on a shape, a triangle chosen by u.x over the triangles' area CDF (u.x rescaled to
+ * [0, 1) inside it), then the square-to-triangle warp. Stratified u gives points stratified over
+ * the emitter. */
+iir_vec2 iir_area_light_sample_q(const iir_light *l, iir_vec2 u);
+
+/* Whether light-local q lies on the emitter (inside the rectangle and, with a shape, in one of its
+ * triangles; boundaries included). */
+bool iir_area_light_contains(const iir_light *l, iir_vec2 q);
 
 /* The world point of light-local q in [-1/2, 1/2]^2 on area light l, whose frame is
  * fr = iir_spot_frame(l). */
@@ -201,9 +261,24 @@ static inline iir_vec3 iir_area_light_point(const iir_light *l, const iir_frame 
                    iir_scale(fr->u, q.y * l->size.y));
 }
 
-/* The t in (0, tmax) where the ray o + t d (d need not be unit) meets area light l's rectangle
- * from its emitting side (d.f < 0), or INFINITY when it misses it, meets it from behind or runs
- * parallel to it. */
+/* ---- an area light's radiance image (emission_map.c) ---- */
+
+/* Reads a .png (sRGB, decoded to linear), .exr or .pfm as an emission map (its path made absolute).
+ * IIR_ERR_IO / IIR_ERR_FORMAT naming the file, IIR_ERR_NOMEM. */
+iir_status iir_emission_map_load(const char *path, iir_emission_map **out, iir_error *err);
+void iir_emission_map_free(iir_emission_map *m);
+
+/* The radiance area light l emits at light-local q: intensity, times its map at q (bilinear, q
+ * clamped to the rectangle) when it has one. */
+iir_vec3 iir_area_light_radiance(const iir_light *l, iir_vec2 q);
+/* The same at world point x on the light's plane. */
+iir_vec3 iir_area_light_radiance_at(const iir_light *l, const iir_frame *fr, iir_vec3 x);
+/* The mean radiance over the rectangle: intensity times the map's mean (intensity without one). */
+iir_vec3 iir_area_light_mean_radiance(const iir_light *l);
+
+/* The t in (0, tmax) where the ray o + t d (d need not be unit) meets area light l's emitter
+ * (its rectangle, and its shape when it has one) from its emitting side (d.f < 0), or INFINITY
+ * when it misses it, meets it from behind or runs parallel to it. */
 float iir_area_light_hit(const iir_light *l, iir_vec3 o, iir_vec3 d, float tmax);
 
 /* ---- the light set: the scene's lights + emissive triangles, for next-event estimation ---- */
@@ -253,9 +328,9 @@ typedef struct iir_emitter_hit {
 iir_emitter_hit iir_lightset_hit_light(const iir_lightset *set, uint32_t i, iir_vec3 o, iir_vec3 d,
                                        float tmax);
 
-/* Next-event sample of area light l alone from shading point x: a point uniform on its rectangle
- * (u), Li = L when x is on the emitting side, pdf in solid angle d^2 / (w h cos theta_l), the pick
- * probability not included; pdf 0 when x is behind its plane. */
+/* Next-event sample of area light l alone from shading point x: a point uniform on its emitter
+ * (iir_area_light_sample_q(l, u)), Li = L when x is on the emitting side, pdf in solid angle
+ * d^2 / (A cos theta_l), the pick probability not included; pdf 0 when x is behind its plane. */
 iir_light_sample iir_area_light_sample(const iir_light *l, iir_vec3 x, iir_vec2 u);
 
 /* The solid-angle pdf iir_area_light_sample gives the point at distance dist along unit wi from

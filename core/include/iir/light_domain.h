@@ -11,7 +11,7 @@
  *   glTF spot    disk    equal-area (Lambert) map of w          2 sin(alpha/2)  I0 t^2(theta)
  *   point        sphere  w                                      1               I0
  *   sun          disk    ((x - c).r, (x - c).u)                 radius          E
- *   area         disk    (w.r, w.u), w = (x - o) / |x - o|      1               L w h
+ *   area         disk    (w.r, w.u), w = (x - o) / |x - o|      1               L A
  *
  * (light.h has each map.) The flux per unit domain area is the light's emission divided by the
  * map's Jacobian: for the cosine disk dA = cos(theta) dw, so I(w) / cos = I0 falloff; the
@@ -27,15 +27,17 @@
  * of its ray (spot, point: a point at infinity) or as the point where its ray leaves the sun's
  * sphere (sun): iir_domain_null_pose and iir_domain_locate_null.
  *
- * Area lights. A rectangle emits from every point of it, so its emission is four-dimensional
- * (point, direction). The domain keeps the two dimensions that decide where light lands and that
- * light moves most: directions, on the cosine disk of the hemisphere about the normal (uniform
- * density there is the cosine emitter). Each VPL keeps its own origin o on the emitter (its
- * light-local point q, moved with the light as a rigid body), chosen stratified over the emitter
- * by the VPL's id; all of the domain's calls for that VPL are made at o: the domain is that of a
- * 90-degree cosine spot at o (iir_domain_at_emitter). A cell of area A then stands for the flux
- * L w h A the whole emitter sends into its directions, carried from one point of it: the VPLs
- * spread evenly over what the light emits in direction, and over the emitter in expectation. */
+ * Area lights. An emitter (its rectangle, or the shape in it; A its area) emits from every point
+ * of it, so its emission is four-dimensional (point, direction). The domain keeps the two
+ * dimensions that decide where light lands and that light moves most: directions, on the cosine
+ * disk of the hemisphere about the normal (uniform density there is the cosine emitter). Each VPL
+ * keeps its own origin o on the emitter (its light-local point q, moved with the light as a rigid
+ * body), chosen stratified over the emitter by the VPL's id (iir_domain_emitter_stratum: through
+ * the shape's area CDF, so only points of the real emitter); all of the domain's calls for that
+ * VPL are made at o: the domain is that of a 90-degree cosine spot at o (iir_domain_at_emitter).
+ * A cell of domain area a then stands for the flux L A a the whole emitter sends into its
+ * directions, carried from one point of it: the VPLs spread evenly over what the light emits in
+ * direction, and over the emitter in expectation. */
 #ifndef IIR_LIGHT_DOMAIN_H
 #define IIR_LIGHT_DOMAIN_H
 
@@ -77,9 +79,11 @@ iir_status iir_light_domain_make(const iir_light *light, iir_light_domain *d, ii
  * p moved to that point (every other map: *d itself). */
 iir_light_domain iir_domain_at_emitter(const iir_light_domain *d, iir_vec2 q);
 
-/* The i-th point of the emitter strata, in light-local coordinates: the Halton point in bases 3
- * and 5 (independent of the Hammersley points that place directions), minus 1/2. */
-iir_vec2 iir_domain_emitter_stratum(uint32_t i);
+/* The i-th point of the emitter strata of d's area light, in light-local coordinates: the Halton
+ * point u in bases 3 and 5 (independent of the Hammersley points that place directions) mapped
+ * onto the emitter by iir_area_light_sample_q (u - 1/2 on a rectangle; through the shape's area
+ * CDF on a shape). Other maps: u - 1/2. */
+iir_vec2 iir_domain_emitter_stratum(const iir_light_domain *d, uint32_t i);
 
 /* Short name: "disk", "cap disk" (glTF spot), "sphere", "sun disk", "area disk". */
 const char *iir_domain_map_name(iir_domain_map map);

@@ -54,6 +54,10 @@ typedef struct iir_frame_stats {
                                    (always true for pt and for frames) */
     iir_vpl_counts vpl; /* VPL bookkeeping (vpl.h), zero for methods without VPLs; refinement:
                            count = the size of the pass's VPL set */
+    uint64_t vpl_evals; /* VPL evaluations: pixel-VPL pairs shaded (multires: texel-VPL pairs
+                           too; iir_render_timing), 0 for methods without VPLs */
+    double recomputed;  /* rsm with screen-space interpolation: the share of the frame's pixels
+                           that gathered their own light (their four nodes disagreed); 0 else */
 } iir_frame_stats;
 
 const char *iir_phase_name(iir_phase phase);

@@ -30,6 +30,12 @@
  *     if similar to the centre of its row pass, which is similar to the pixel), on the demodulated
  *     indirect light (without rho_x / pi), which is then multiplied by the pixel's own albedo, so
  *     colour and texture edges stay sharp.
+ *  With shading = multires (multires.h) phase 3 evaluates the VPL sum on coarse levels of the
+ *  G-buffer where it has no depth or normal discontinuity (texel (i, j) of every level evaluates
+ *  subset (j mod n) n + (i mod n), and a per-level filter with phase 4's window gathers them), and
+ *  upsamples; only pixels whose 2x2 block holds a discontinuity are shaded as above, and phase 4
+ *  filters only them (the upsampled pixels count as taps carrying every subset). The
+ *  discontinuity hierarchy is kept with the G-buffer.
  *
  * Threads: a renderer is used by one thread at a time; inside a frame every phase is an OpenMP
  * loop over tiles (16x16; 64x64 for the indirect phase) with per-thread ray counters summed once.
@@ -70,11 +76,29 @@ typedef struct iir_gbuffer {
 
 typedef enum iir_visibility {
     IIR_VIS_SHADOWMAP, /* the VPLs' shadow maps (iir_smaps_build them first) */
-    IIR_VIS_RAYS       /* one exact occlusion ray per pixel-VPL pair (IIR_RAYS_VISIBILITY) */
+    IIR_VIS_RAYS,      /* one exact occlusion ray per pixel-VPL pair (IIR_RAYS_VISIBILITY) */
+    IIR_VIS_ISM        /* a method option only: imperfect shadow maps (ism.h) in the VPLs' maps,
+                          which the renderer reads as IIR_VIS_SHADOWMAP (iir_vpl_indirect) */
 } iir_visibility;
+
+typedef enum iir_shading {
+    IIR_SHADING_FULL,    /* every pixel evaluates its interleaved subset (the default) */
+    IIR_SHADING_MULTIRES /* multires.h: coarse levels where the G-buffer is smooth, pixels at
+                            discontinuities as full does; the interleave pattern and its filter
+                            apply per level */
+} iir_shading;
 
 typedef struct iir_indirect_params {
     iir_visibility visibility;
+    iir_shading shading; /* full or multires (refinement passes are always full) */
+    int mr_levels;       /* multires: the coarsest level (texels of 2^mr_levels pixels). [1, 6] */
+    float mr_depth;      /* multires: discontinuity where a neighbour lies off a pixel's tangent
+                            plane by more than mr_depth times its camera depth. [0, inf) */
+    float mr_normal;     /* multires: discontinuity where neighbours' normals' cosine is below.
+                            [-1, 1] */
+    int mr_window;       /* multires: pixels the per-level interleave filter spans at most (level
+                            l interleaves min(n, mr_window / 2^l) x as many; 1 there = every VPL
+                            at every texel). [1, 1024] */
     int interleave;      /* n: n x n VPL subsets; 1 = every VPL at every pixel, no filter. [1, 8] */
     bool filter;         /* apply the geometry-aware filter when interleave > 1 (default true;
                             false leaves the raw interleaved estimate, for tests and debugging) */
@@ -105,6 +129,8 @@ iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error 
 typedef struct iir_render_timing {
     double gbuffer_ms, direct_ms, indirect_ms, filter_ms;
     bool gbuffer_cached; /* the G-buffer of the previous frame was reused */
+    uint64_t vpl_evals;  /* pixel-VPL pairs shaded (multires: texel-VPL pairs and pixel-VPL
+                            pairs of the full-resolution pixels) */
 } iir_render_timing;
 
 typedef struct iir_renderer iir_renderer;

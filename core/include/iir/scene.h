@@ -19,7 +19,9 @@
 extern "C" {
 #endif
 
-/* Two-sided diffuse material. Emissive materials make quad/triangle area lights. */
+/* Two-sided diffuse material. Emissive materials are static emitting triangles, or, when a
+ * scene's sidecar gives no "lights" array and their triangles are one-sided and planar, movable
+ * area lights (iir_scene_load). */
 typedef struct iir_material {
     char name[64];
     iir_vec3 albedo;   /* diffuse reflectance rho, each channel in [0, 1] */
@@ -76,14 +78,19 @@ typedef struct iir_scene {
     uint32_t skipped_degenerate; /* triangles dropped at load: zero area or repeated vertices */
     uint32_t skipped_duplicate;  /* triangles dropped at load: same three positions as another */
     char *paths_json;            /* sidecar "paths" object as JSON text, or NULL */
-    uint32_t num_dropped;        /* lights and materials of the file that nothing renders */
+    uint32_t num_maps;           /* the area lights' radiance images (lights point at them) */
+    iir_emission_map **maps;
+    uint32_t num_dropped; /* lights and materials of the file that nothing renders */
     iir_dropped *dropped;
 } iir_scene;
 
 /* Loads a scene from a file (.obj, .gltf, .glb, or a .scene.json sidecar naming one) or a folder
  * (its *.scene.json, else its only mesh file). A sidecar NAME.scene.json next to NAME.obj is
- * applied. On error returns a status and a message naming the file and the problem; *out is left
- * NULL. */
+ * applied. Unless the sidecar gives a "lights" array, each emissive material whose triangles are
+ * one-sided and planar (a rectangle, or at most 64 triangles) becomes a movable area light named
+ * after it, its triangles leaving the mesh; `dropped` notes each emissive material's fate
+ * (docs/scene-format.md, section 3). On error returns a status and a message naming the file and
+ * the problem; *out is left NULL. */
 iir_status iir_scene_load(const char *path, iir_scene **out, iir_error *err);
 
 /* Maps what a user typed to a path: an existing file or folder is taken as is; otherwise a bare

@@ -190,7 +190,8 @@ iir_status iir_image_read(const char *path, iir_image **out, iir_error *err)
     const char *ext = path_extension(path);
     if (strcasecmp(ext, "exr") == 0) return iir_image_read_exr(path, out, err);
     if (strcasecmp(ext, "pfm") == 0) return iir_image_read_pfm(path, out, err);
+    if (strcasecmp(ext, "png") == 0) return iir_image_read_png(path, out, err);
     return iir_fail(err, IIR_ERR_UNSUPPORTED,
-                    "cannot read image %s: unknown extension \"%s\" (readable: .exr, .pfm)", path,
-                    ext);
+                    "cannot read image %s: unknown extension \"%s\" (readable: .exr, .pfm, .png)",
+                    path, ext);
 }

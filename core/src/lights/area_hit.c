@@ -1,6 +1,6 @@
-/* area_hit.c -- the analytic ray-rectangle test of an area light (IIR_LIGHT_AREA), which pt and
- * the direct-light pass use to see it: it is not in the scene's BVH. Not its sampling (light.c,
- * lightset.c). */
+/* area_hit.c -- the analytic ray test of an area light (IIR_LIGHT_AREA): its rectangle's plane,
+ * then the point in its shape (area_shape.c); pt and the direct-light pass use it to see the
+ * light, which is not in the scene's BVH. Not its sampling (light.c, lightset.c). */
 #include "iir/light.h"
 
 #include <math.h>
@@ -16,5 +16,7 @@ float iir_area_light_hit(const iir_light *l, iir_vec3 o, iir_vec3 d, float tmax)
     iir_vec3 x = iir_sub(iir_madd(o, d, t), l->position);
     float a = iir_dot(x, fr.r), b = iir_dot(x, fr.u);
     if (fabsf(a) > 0.5f * l->size.x || fabsf(b) > 0.5f * l->size.y) return INFINITY;
+    if (l->shape.num_triangles && !iir_area_light_contains(l, iir_v2(a / l->size.x, b / l->size.y)))
+        return INFINITY;
     return t;
 }

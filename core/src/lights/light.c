@@ -1,7 +1,7 @@
-/* light.c -- the lights a scene moves (cosine spot, glTF spot, point, sun, rectangular area
+/* light.c -- the lights a scene moves (cosine spot, glTF spot, point, sun, planar area
  * light): validity, kind, intensity, flux, the spots' disk maps' radii and falloff, emission
- * sampling, and fitting a sun to the scene. Not the light set (lightset.c), not hitting an area
- * light (area_hit.c) and not VPLs. */
+ * sampling, and fitting a sun to the scene. Not the light set (lightset.c), not an area light's
+ * shape (area_shape.c) or hitting it (area_hit.c), and not VPLs. */
 #include "iir/light.h"
 
 #include <math.h>
@@ -46,6 +46,8 @@ static iir_status validate_area(const iir_light *l, const char *name, iir_error 
         return iir_fail(err, IIR_ERR_INVALID,
                         "light '%s': an area light's size must be finite and > 0, got %g x %g",
                         name, (double)l->size.x, (double)l->size.y);
+    const char *why = iir_area_shape_check(&l->shape);
+    if (why) return iir_fail(err, IIR_ERR_INVALID, "light '%s': its shape %s", name, why);
     return IIR_OK;
 }
 
@@ -164,7 +166,7 @@ iir_vec3 iir_light_flux(const iir_light *l)
     case IIR_LIGHT_SUN:
         return iir_scale(l->intensity, IIR_PI * l->radius * l->radius);
     case IIR_LIGHT_AREA:
-        return iir_scale(l->intensity, IIR_PI * l->size.x * l->size.y);
+        return iir_scale(iir_area_light_mean_radiance(l), IIR_PI * iir_area_light_area(l));
     default:
         return iir_scale(l->intensity,
                          l->profile == IIR_SPOT_GLTF ? gltf_flux_factor(l) : spot_flux_factor(l));
@@ -194,8 +196,8 @@ iir_vec3 iir_light_eval_intensity(const iir_light_eval *e, iir_vec3 w)
     if (l->type == IIR_LIGHT_SUN) return iir_v3s(0.f);
     float cos_theta = iir_dot(w, e->frame.f);
     if (cos_theta <= 0.f) return iir_v3s(0.f);
-    if (l->type == IIR_LIGHT_AREA) /* the far field: I0 = L w h */
-        return iir_scale(l->intensity, cos_theta * l->size.x * l->size.y);
+    if (l->type == IIR_LIGHT_AREA) /* the far field: I0 = L A (L the mean over the image) */
+        return iir_scale(iir_area_light_mean_radiance(l), cos_theta * iir_area_light_area(l));
     if (l->profile == IIR_SPOT_GLTF)
         return iir_scale(l->intensity, iir_gltf_spot_attenuation(e, cos_theta));
     iir_vec2 s = iir_spot_dir_to_disk(&e->frame, w);
@@ -252,15 +254,15 @@ static iir_light_ray sample_sun(const iir_light *l, iir_vec2 u)
     return r;
 }
 
-/* Origin uniform on the rectangle (pdf 1 / (w h) per unit area), direction uniform on the unit disk
- * of its frame (pdf cos / pi): beta = L cos / (cos / (pi w h)) = pi L w h. */
+/* Origin uniform on the emitter (pdf 1 / A per unit area), direction uniform on the unit disk of
+ * its frame (pdf cos / pi): beta = L(q) cos / (cos / (pi A)) = pi L(q) A. */
 static iir_light_ray sample_area(const iir_light *l, iir_vec2 u, iir_vec2 u_origin)
 {
     iir_frame fr = iir_spot_frame(l);
-    iir_vec2 q = iir_v2(u_origin.x - 0.5f, u_origin.y - 0.5f);
+    iir_vec2 q = iir_area_light_sample_q(l, u_origin);
     iir_light_ray r = {iir_area_light_point(l, &fr, q),
                        iir_spot_disk_to_dir(&fr, iir_sample_uniform_disk_concentric(u)),
-                       iir_scale(l->intensity, IIR_PI * l->size.x * l->size.y)};
+                       iir_scale(iir_area_light_radiance(l, q), IIR_PI * iir_area_light_area(l))};
     return r;
 }
 

@@ -175,7 +175,7 @@ float iir_domain_profile(const iir_light_domain *d, const double s[3])
     case IIR_MAP_SUN_DISK:
         return 1.f;
     case IIR_MAP_AREA_DISK:
-        return d->light->size.x * d->light->size.y;
+        return iir_area_light_area(d->light);
     }
     return 0.f;
 }
@@ -217,7 +217,9 @@ iir_light_domain iir_domain_at_emitter(const iir_light_domain *d, iir_vec2 q)
     return at;
 }
 
-iir_vec2 iir_domain_emitter_stratum(uint32_t i)
+iir_vec2 iir_domain_emitter_stratum(const iir_light_domain *d, uint32_t i)
 {
-    return iir_v2(iir_radical_inverse(3, i) - 0.5f, iir_radical_inverse(5, i) - 0.5f);
+    iir_vec2 u = iir_v2(iir_radical_inverse(3, i), iir_radical_inverse(5, i));
+    if (d->map != IIR_MAP_AREA_DISK) return iir_v2(u.x - 0.5f, u.y - 0.5f);
+    return iir_area_light_sample_q(d->light, u);
 }

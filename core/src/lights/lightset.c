@@ -1,8 +1,8 @@
 /* lightset.c -- the lights next-event estimation chooses from: delta lights (point, spots, suns),
- * area lights (rectangles) and emissive triangles, picked in proportion to their flux (luminance;
- * a sun's is what crosses its disk); sampling a point on an area light and the pdf of a BSDF ray
- * that meets one. Not the lights' own radiometry (light.c) nor the ray-rectangle test
- * (area_hit.c). */
+ * area lights (rectangles or shapes in them) and emissive triangles, picked in proportion to their
+ * flux (luminance; a sun's is what crosses its disk); sampling a point on an area light and the pdf
+ * of a BSDF ray that meets one. Not the lights' own radiometry (light.c) nor the ray-rectangle test
+ * (area_hit.c) or the shape (area_shape.c). */
 #include "iir/light.h"
 
 #include <math.h>
@@ -133,7 +133,8 @@ iir_light_sample iir_area_light_sample(const iir_light *l, iir_vec3 x, iir_vec2 
 {
     iir_light_sample ls = {0};
     iir_frame fr = iir_spot_frame(l);
-    iir_vec3 p = iir_area_light_point(l, &fr, iir_v2(u.x - 0.5f, u.y - 0.5f));
+    iir_vec2 q = iir_area_light_sample_q(l, u);
+    iir_vec3 p = iir_area_light_point(l, &fr, q);
     iir_vec3 d = iir_sub(p, x);
     float dist2 = iir_length_sq(d);
     if (!(dist2 > 0.f)) return ls;
@@ -141,15 +142,15 @@ iir_light_sample iir_area_light_sample(const iir_light *l, iir_vec3 x, iir_vec2 
     ls.wi = iir_scale(d, 1.f / ls.dist);
     float cos_l = -iir_dot(fr.f, ls.wi); /* one-sided: x must be in front */
     if (cos_l <= 0.f) return ls;
-    ls.Li = l->intensity;
-    ls.pdf = dist2 / (cos_l * l->size.x * l->size.y);
+    ls.Li = iir_area_light_radiance(l, q);
+    ls.pdf = dist2 / (cos_l * iir_area_light_area(l));
     return ls;
 }
 
 float iir_area_light_pdf(const iir_light *l, iir_vec3 wi, float dist)
 {
     float cos_l = -iir_dot(iir_spot_frame(l).f, wi);
-    return cos_l > 0.f ? dist * dist / (cos_l * l->size.x * l->size.y) : 0.f;
+    return cos_l > 0.f ? dist * dist / (cos_l * iir_area_light_area(l)) : 0.f;
 }
 
 iir_emitter_hit iir_lightset_hit_light(const iir_lightset *set, uint32_t i, iir_vec3 o, iir_vec3 d,
@@ -161,7 +162,8 @@ iir_emitter_hit iir_lightset_hit_light(const iir_lightset *set, uint32_t i, iir_
     float t = iir_area_light_hit(l, o, d, tmax);
     if (isinf(t)) return h;
     h.t = t;
-    h.Le = l->intensity;
+    iir_frame fr = iir_spot_frame(l);
+    h.Le = iir_area_light_radiance_at(l, &fr, iir_madd(o, d, t));
     h.pdf = entry_pmf(set, i) * iir_area_light_pdf(l, d, t);
     return h;
 }

@@ -3,8 +3,9 @@
  * of the view, each on its own domain with its share of the budget (vplsets.h), renders shadow maps
  * only for the VPLs born this frame (a map lives as long as its VPL: the scene is static), and
  * shades with the shared VPL renderer. One bounce by construction. Parameters: the incremental
- * step's (table below), the VPL shading's (vpl_options.c) and every method's. Direct light comes
- * from every light of the view.
+ * step's (table below), the VPL shading's (vpl_options.c), the ISMs' (ism_options.c: with
+ * visibility=ism a VPL's map is an imperfect one, also built at its birth) and every method's.
+ * Direct light comes from every light of the view.
  *
  * Refinement (refine.h; refine_passes, jitter, interleave, clamp): sweep 0 shades the live
  * set, sweep s >= 1 a fresh set sampled as a regeneration would (iir_incr_sample_set, stream
@@ -17,6 +18,7 @@
 #include <string.h>
 
 #include "iir/method.h"
+#include "iir/ism.h"
 #include "iir/refine.h"
 #include "iir/rng.h"
 #include "iir/scene.h"
@@ -32,6 +34,7 @@
 typedef struct iir_options {
     iir_method_common common;
     iir_vpl_options vpl;
+    iir_ism_options ism;
     int vpls;              /* N: the VPL set's size */
     int kmin, kmax;        /* replacements per frame */
     iir_weights weights;   /* uniform or Voronoi cell areas */
@@ -81,6 +84,7 @@ typedef struct iir_state {
     iir_options params;
     iir_renderer *renderer;
     iir_vplsets *sets;
+    iir_ism_points *ism; /* visibility=ism: the scene's point set, made on first use */
     uint32_t frame;
     iir_refine *refine;
     iir_light lights[IIR_VPLSETS_MAX_LIGHTS]; /* the lights of the frame being refined */
@@ -100,6 +104,7 @@ static void iir_m_destroy(void *state)
     iir_renderer_destroy(s->renderer);
     iir_refine_destroy(s->refine);
     iir_vplsets_destroy(s->sets);
+    iir_ism_points_destroy(s->ism);
     free(s->fresh);
     iir_domain_draw_free(&s->dom);
     free(s);
@@ -154,8 +159,10 @@ static iir_status iir_m_supports(const iir_light *lights, uint32_t num_lights, i
     (void)lights;
     if (num_lights > 0) return IIR_OK;
     return iir_fail(err, IIR_ERR_UNSUPPORTED,
-                    "iir needs a spot, point or sun light to keep VPLs for (emissive triangles "
-                    "alone have no VPL domain yet); these lights are none");
+                    "iir needs a light (spot, point, sun or area light) to keep VPLs for; the "
+                    "scene has none (static emissive triangles have no VPL domain: an emissive "
+                    "material becomes a movable area light when the scene's sidecar gives no "
+                    "\"lights\" array, docs/scene-format.md section 3)");
 }
 
 /* Every light keeps VPLs (up to IIR_VPLSETS_MAX_LIGHTS); the emitters' indirect light is left out
@@ -179,21 +186,28 @@ static void fill_counts(const iir_incr_stats *is, uint32_t maps, iir_vpl_counts 
     c->shadowmaps = maps;
 }
 
-/* Shadow maps for every set's new VPLs, on the sets' own arrays (where maps live), until the stop
- * hook says stop; returns how many were built. */
-static uint32_t build_maps(iir_state *s, iir_raystats *rays)
+/* Shadow maps (exact or ISMs, as visibility says) for every set's new VPLs, on the sets' own
+ * arrays (where maps live), until the stop hook says stop; *maps = how many were built. Fails
+ * only when ISM's point set cannot be made. */
+static iir_status build_maps(iir_state *s, iir_raystats *rays, uint32_t *maps, iir_error *err)
 {
-    if (s->params.vpl.visibility != IIR_VIS_SHADOWMAP) return 0;
-    uint32_t maps = 0;
-    for (uint32_t k = 0; k < iir_vplsets_lights(s->sets); k++) {
+    iir_visibility vis = s->params.vpl.visibility;
+    iir_status st = IIR_OK;
+    *maps = 0;
+    for (uint32_t k = 0; vis != IIR_VIS_RAYS && st == IIR_OK && k < iir_vplsets_lights(s->sets);
+         k++) {
         iir_incr *set = iir_vplsets_set(s->sets, k);
-        uint32_t n = 0;
+        uint32_t n = 0, built = 0;
         iir_vpl *v = set ? iir_incr_vpls(set, &n) : NULL;
-        if (n)
-            maps += iir_smaps_build_until(v, n, s->rt, s->params.vpl.sm_res, rays, s->stop,
+        if (n && vis == IIR_VIS_SHADOWMAP)
+            built = iir_smaps_build_until(v, n, s->rt, s->params.vpl.sm_res, rays, s->stop,
                                           s->stop_ctx);
+        else if (n)
+            st = iir_ism_maps_build(&s->ism, s->scene, s->rt, &s->params.ism, s->params.common.seed,
+                                    k, v, n, s->stop, s->stop_ctx, &built, err);
+        *maps += built;
     }
-    return maps;
+    return st;
 }
 
 static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out,
@@ -207,7 +221,8 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     if (view->num_lights == 0)
         return iir_fail(
             err, IIR_ERR_UNSUPPORTED,
-            "iir needs a spot, point or sun light to keep VPLs for; this view has none");
+            "iir needs a light (spot, point, sun or area light) to keep VPLs for; this view has "
+            "none");
     double t0 = iir_now_ms();
     iir_incr_stats is;
     uint32_t nl =
@@ -216,7 +231,9 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     if (st != IIR_OK) return st;
     iir_raystats_add(&stats->rays, &is.rays);
     double t1 = iir_now_ms();
-    uint32_t maps = build_maps(s, &stats->rays);
+    uint32_t maps = 0;
+    st = build_maps(s, &stats->rays, &maps, err);
+    if (st != IIR_OK) return s->frame++, st;
     if (s->stop && s->stop(s->stop_ctx)) /* the maps not built are built by the next frame */
         return s->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double t2 = iir_now_ms();
@@ -334,11 +351,27 @@ static void iir_m_set_stop(void *state, iir_stop_fn fn, void *ctx)
     iir_renderer_set_stop(s->renderer, fn, ctx);
 }
 
-/* Only IIR_PARAM_LIVE rows changed: the step's budgets, weights and threshold go to the step. */
+/* Drops every map, so the next frame builds them anew (exact maps and ISMs may share a res). */
+static void release_maps(iir_state *s)
+{
+    for (uint32_t k = 0; k < iir_vplsets_lights(s->sets); k++) {
+        iir_incr *set = iir_vplsets_set(s->sets, k);
+        uint32_t n = 0;
+        iir_vpl *v = set ? iir_incr_vpls(set, &n) : NULL;
+        for (uint32_t i = 0; i < n; i++) iir_smap_release(&v[i].smap);
+    }
+}
+
+/* Only IIR_PARAM_LIVE rows changed: the step's budgets, weights and threshold go to the step; a
+ * change of visibility to or from ism drops the maps of the other kind. */
 static void iir_m_update(void *state, const void *opts)
 {
     iir_state *s = state;
+    iir_visibility was = s->params.vpl.visibility;
     s->params = *(const iir_options *)opts;
+    if (was != s->params.vpl.visibility &&
+        (was == IIR_VIS_ISM || s->params.vpl.visibility == IIR_VIS_ISM))
+        release_maps(s);
     iir_incr_params ip = incr_params(&s->params);
     iir_error err;
     iir_vplsets_set_params(s->sets, &ip, &err); /* same N: cannot fail once bound */
@@ -349,14 +382,20 @@ static uint64_t iir_m_memory(const void *opts, int width, int height)
 {
     const iir_options *o = opts;
     uint64_t n = (uint64_t)o->vpls;
-    return iir_vpl_memory(&o->vpl, (uint32_t)n, width, height) + n * (sizeof(iir_vpl) + 200);
+    return iir_vpl_memory(&o->vpl, (uint32_t)n, width, height) + n * (sizeof(iir_vpl) + 200) +
+           iir_ism_memory(&o->ism, o->vpl.visibility, (uint32_t)n);
 }
 
 const iir_method_ops iir_method_iir = {
     .name = "iir",
     .summary = "incremental instant radiosity: VPLs kept across frames, few replaced per frame",
     .tables = {{&IIR_TABLE, 0},
+               {&iir_vis_table, offsetof(iir_options, vpl)},
                {&iir_vpl_table, offsetof(iir_options, vpl)},
+               {&iir_ism_table, offsetof(iir_options, ism)},
+               {&iir_clamp_table, offsetof(iir_options, vpl.clamp)},
+               {&iir_shading_table, offsetof(iir_options, vpl.shading)},
+               {&iir_multires_table, offsetof(iir_options, vpl.mr)},
                {&iir_common_table, offsetof(iir_options, common)}},
     .opts_size = sizeof(iir_options),
     .create = iir_m_create,

@@ -3,7 +3,8 @@
  * reflects; paths end by Russian roulette or after `bounces - 1` VPL vertices (so bounces = 2 is
  * one-bounce indirect light, like iir). All VPLs are new each frame, so all their shadow maps are
  * rendered each frame: this is the baseline the incremental method must beat.
- * Parameters: its own table below, the VPL shading's (vpl_options.c) and every method's.
+ * Parameters: its own table below, the VPL shading's (vpl_options.c), the ISMs' (ism_options.c,
+ * for visibility=ism: an imperfect shadow map per VPL instead) and every method's.
  *
  * The first two dimensions of path i (the point on the spot's disk, the point light's sphere or
  * the sun's disk of origins: iir_light_sample_emission) are the Halton point i in bases 2 and 3,
@@ -19,6 +20,7 @@
 #include <string.h>
 
 #include "iir/method.h"
+#include "iir/ism.h"
 #include "iir/refine.h"
 #include "iir/rng.h"
 #include "iir/scene.h"
@@ -38,13 +40,7 @@ typedef struct vpl_list {
 
 /* ---- parameters ---- */
 
-typedef struct ir_options {
-    iir_method_common common;
-    iir_vpl_options vpl;
-    int vpls;         /* N light paths */
-    int bounces;      /* 1 = direct only, 2 = one diffuse bounce */
-    bool same_random; /* the same random numbers every frame */
-} ir_options;
+typedef iir_ir_options ir_options; /* method_internal.h: the ism method binds it too */
 
 static const iir_param IR_ROWS[] = {
     {"vpls", IIR_PARAM_INT, offsetof(ir_options, vpls), 256, 1, 16384, 4096, NULL, "paths",
@@ -63,6 +59,7 @@ typedef struct ir_state {
     ir_options params;
     iir_renderer *renderer;
     vpl_list live;          /* the frame's VPLs (with shadow maps) */
+    iir_ism_points *ism;    /* visibility=ism: the scene's point set, made on first use */
     vpl_list fresh;         /* refinement: the current sweep's VPLs (no maps) */
     uint64_t seed_rendered; /* the frame seed of the last frame */
     uint32_t frame;
@@ -218,6 +215,7 @@ static void ir_destroy(void *state)
     if (!ir) return;
     clear_list(&ir->live);
     clear_list(&ir->fresh);
+    iir_ism_points_destroy(ir->ism);
     free(ir->live.v);
     free(ir->fresh.v);
     free(ir->light_pmf);
@@ -255,6 +253,10 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
     if (ir->params.vpl.visibility == IIR_VIS_SHADOWMAP)
         maps = iir_smaps_build_until(ir->live.v, ir->live.n, ir->rt, ir->params.vpl.sm_res,
                                      &stats->rays, ir->stop, ir->stop_ctx);
+    else if (ir->params.vpl.visibility == IIR_VIS_ISM)
+        st = iir_ism_maps_build(&ir->ism, ir->scene, ir->rt, &ir->params.ism, seed, 0, ir->live.v,
+                                ir->live.n, ir->stop, ir->stop_ctx, &maps, err);
+    if (st != IIR_OK) return ir->frame++, st;
     if (ir->stop && ir->stop(ir->stop_ctx))
         return ir->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double t2 = iir_now_ms();
@@ -336,7 +338,8 @@ static uint64_t ir_memory(const void *opts, int width, int height)
 {
     const ir_options *o = opts;
     uint32_t n = (uint32_t)o->vpls * (uint32_t)(o->bounces > 1 ? o->bounces - 1 : 0);
-    return iir_vpl_memory(&o->vpl, n, width, height);
+    return iir_vpl_memory(&o->vpl, n, width, height) +
+           iir_ism_memory(&o->ism, o->vpl.visibility, n);
 }
 
 /* ir's light paths leave the punctual lights only: emitters' indirect light is left out. */
@@ -351,7 +354,12 @@ const iir_method_ops iir_method_ir = {
     .name = "ir",
     .summary = "instant radiosity: VPLs from light paths, regenerated every frame",
     .tables = {{&IR_TABLE, 0},
+               {&iir_vis_table, offsetof(ir_options, vpl)},
                {&iir_vpl_table, offsetof(ir_options, vpl)},
+               {&iir_ism_table, offsetof(ir_options, ism)},
+               {&iir_clamp_table, offsetof(ir_options, vpl.clamp)},
+               {&iir_shading_table, offsetof(ir_options, vpl.shading)},
+               {&iir_multires_table, offsetof(ir_options, vpl.mr)},
                {&iir_common_table, offsetof(ir_options, common)}},
     .opts_size = sizeof(ir_options),
     .create = ir_create,

@@ -14,17 +14,39 @@
 iir_indirect_params iir_indirect_params_default(void)
 {
     iir_vpl_options o;
+    iir_params_defaults(&iir_vis_table, &o);
     iir_params_defaults(&iir_vpl_table, &o);
+    iir_params_defaults(&iir_clamp_table, &o.clamp);
+    iir_params_defaults(&iir_shading_table, &o.shading);
+    iir_params_defaults(&iir_multires_table, &o.mr);
     iir_indirect_params p = {
         .visibility = o.visibility,
         .interleave = o.interleave,
         .filter = true,
         .clamp = o.clamp,
         .sm_bias = o.sm_bias,
+        .shading = o.shading,
+        .mr_levels = o.mr.mr_levels,
+        .mr_depth = o.mr.mr_depth,
+        .mr_normal = o.mr.mr_normal,
+        .mr_window = o.mr.mr_window,
         .filter_normal = 0.9f,
         .filter_depth = 0.05f,
     };
     return p;
+}
+
+/* What multires.h is asked for by the indirect parameters. */
+static iir_mr_params multires_params(const iir_indirect_params *p)
+{
+    iir_mr_params m = {.max_level = p->mr_levels,
+                       .depth = p->mr_depth,
+                       .normal = p->mr_normal,
+                       .interleave = p->interleave,
+                       .window = p->mr_window,
+                       .filter_normal = p->filter_normal,
+                       .filter_depth = p->filter_depth};
+    return m;
 }
 
 iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error *err)
@@ -47,6 +69,13 @@ iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error 
     if (!(p->filter_depth > 0.f) || isinf(p->filter_depth))
         return iir_fail(err, IIR_ERR_INVALID, "indirect filter_depth %g must be finite and > 0",
                         (double)p->filter_depth);
+    if (p->shading != IIR_SHADING_FULL && p->shading != IIR_SHADING_MULTIRES)
+        return iir_fail(err, IIR_ERR_INVALID, "indirect shading %d is neither full nor multires",
+                        (int)p->shading);
+    if (p->shading == IIR_SHADING_MULTIRES) {
+        iir_mr_params mp = multires_params(p);
+        return iir_mr_params_validate(&mp, err);
+    }
     return IIR_OK;
 }
 
@@ -76,9 +105,11 @@ void iir_renderer_destroy(iir_renderer *r)
 {
     if (!r) return;
     iir_lightset_destroy(r->area_lights);
+    iir_multires_destroy(r->mr);
     iir_gbuffer_free(&r->gb);
     free(r->raw);
     free(r->rows);
+    free(r->near_fine);
     free(r->vpl);
     free(r);
 }
@@ -119,10 +150,13 @@ static iir_status resize(iir_renderer *r, int w, int h, iir_error *err)
     r->gb_valid = false;
     free(r->raw);
     free(r->rows);
+    free(r->near_fine);
     r->raw = malloc(sizeof(iir_vec3) * (size_t)w * (size_t)h);
     r->rows = malloc(sizeof(iir_filter_row) * (size_t)w * (size_t)h);
+    r->near_fine = malloc((size_t)iir_tile_count(w, h, IIR_RENDER_TILE));
+    r->near_fine_gen = 0;
     iir_status s = iir_gbuffer_resize(&r->gb, w, h, err);
-    if (s == IIR_OK && (!r->raw || !r->rows)) {
+    if (s == IIR_OK && (!r->raw || !r->rows || !r->near_fine)) {
         iir_gbuffer_free(&r->gb);
         s = iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %dx%d frame", w, h);
     }
@@ -140,6 +174,7 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
     if (!t->gbuffer_cached) {
         iir_camera_frame cf = iir_camera_setup(cam, w, h);
         iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, iir_v2(0.5f, 0.5f), st);
+        r->gb_serial++;
         r->gb_camera = *cam;
         r->gb_shift = iir_v2(0.f, 0.f);
         r->gb_valid = true;
@@ -167,13 +202,33 @@ static bool shade(iir_renderer *r, const shade_job *job, iir_render_timing *tm, 
     double t0 = iir_now_ms();
     bool stopped = iir_render_direct(r, job->lights, job->num_lights, job->seed, job->out, rays);
     double t1 = iir_now_ms();
-    if (!stopped) stopped = iir_render_indirect(r, job->p, job->shift, true, rays);
+    if (!stopped && r->level)
+        stopped = iir_render_indirect_coarse(r, job->p, true, rays, &tm->vpl_evals);
+    else if (!stopped)
+        stopped = iir_render_indirect(r, job->p, job->shift, true, rays, &tm->vpl_evals);
     double t2 = iir_now_ms();
     if (!stopped) iir_render_filter(r, job->p, job->out);
     tm->direct_ms = t1 - t0;
     tm->indirect_ms = t2 - t1;
     tm->filter_ms = iir_now_ms() - t2;
     return stopped;
+}
+
+/* Multires: builds (or keeps) the hierarchy of the current G-buffer and sets r->level; full
+ * shading clears it. Timed into t->indirect_ms (shade adds the shading to it). */
+static iir_status multires_phase(iir_renderer *r, const iir_indirect_params *p,
+                                 iir_render_timing *t, iir_error *err)
+{
+    r->level = NULL;
+    if (p->shading != IIR_SHADING_MULTIRES) return IIR_OK;
+    double t0 = iir_now_ms();
+    if (!r->mr && !(r->mr = iir_multires_create()))
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the multires hierarchy");
+    iir_mr_params mp = multires_params(p);
+    iir_status s = iir_multires_build(r->mr, &r->gb, r->gb_serial, &mp, err);
+    if (s == IIR_OK) r->level = iir_multires_levels(r->mr);
+    t->indirect_ms = iir_now_ms() - t0;
+    return s;
 }
 
 static bool stop_requested(const iir_renderer *r)
@@ -190,10 +245,15 @@ iir_status iir_renderer_frame(iir_renderer *r, const iir_render_input *in,
     iir_status s = check_inputs(in->camera, in->lights, in->num_lights, p, out, err);
     if (s == IIR_OK) s = iir_render_subsets(r, in->vpls, in->num_vpls, p, false, err);
     if (s == IIR_OK) s = gbuffer_phase(r, in->camera, out->width, out->height, &tm, &rays, err);
+    if (s == IIR_OK) s = multires_phase(r, p, &tm, err);
     shade_job job = {
         .lights = in->lights, .num_lights = in->num_lights, .p = p, .seed = in->seed, .out = out};
     bool stopped = s == IIR_OK && stop_requested(r);
-    if (s == IIR_OK && !stopped) stopped = shade(r, &job, &tm, &rays);
+    double mr_ms = tm.indirect_ms;
+    if (s == IIR_OK && !stopped) {
+        stopped = shade(r, &job, &tm, &rays);
+        tm.indirect_ms += mr_ms; /* the hierarchy's build (0 when kept) */
+    }
     if (stopped) s = iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);
@@ -227,6 +287,7 @@ static iir_status pass_gbuffer(iir_renderer *r, const iir_camera *cam, iir_vec2 
     if (s != IIR_OK) return s;
     iir_camera_frame cf = iir_camera_setup(cam, w, h);
     iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, jitter, st);
+    r->gb_serial++;
     r->gb_valid = false;
     r->gb_camera = *cam; /* the area lights' camera rays go through the same jittered points */
     r->gb_shift = iir_v2(jitter.x - 0.5f, jitter.y - 0.5f);
@@ -246,6 +307,8 @@ iir_status iir_renderer_pass(iir_renderer *r, const iir_render_input *in, const 
     iir_render_timing tm = {0};
     iir_raystats rays = {0};
     iir_indirect_params ind = iir_indirect_params_default();
+    r->level = NULL; /* passes are full resolution: exact */
+    ind.shading = IIR_SHADING_FULL;
     ind.visibility = IIR_VIS_RAYS;
     ind.interleave = p->interleave;
     ind.filter = false;

@@ -112,7 +112,13 @@ static void area_light_lane(const direct_ctx *c, const iir_light *l, uint32_t li
     float cos_theta = iir_dot(n, ls.wi);
     if (cos_theta <= 0.f) return;
     b->pending[k] = iir_scale(iir_mul(b->f[k], ls.Li), cos_theta / ls.pdf);
-    set_lane(&b->rays, k, iir_madd(p, n, r->eps), ls.wi, ls.dist - 2.f * r->eps);
+    /* aimed from the lifted point at the sampled point itself, stopping 2 eps short (pt.c's
+       shadow_ray: along wi from the lifted point, a grazing ray met the emitter just before it) */
+    iir_vec3 o = iir_madd(p, n, r->eps);
+    iir_vec3 d = iir_sub(iir_madd(p, ls.wi, ls.dist), o);
+    float len = iir_length(d);
+    if (!(len > 2.f * r->eps)) return;
+    set_lane(&b->rays, k, o, iir_scale(d, 1.f / len), len - 2.f * r->eps);
 }
 
 /* Adds area light l's radiance to the pixels whose camera rays meet it from the front before their
@@ -121,12 +127,15 @@ static void area_light_seen(const direct_ctx *c, const iir_light *l, block *b)
 {
     const iir_gbuffer *gb = &c->r->gb;
     iir_vec2 shift = c->r->gb_shift;
+    iir_frame fr = iir_spot_frame(l);
     for (int k = 0; k < 8; k++) {
         int x = b->x0 + k % BLOCK_W, y = b->y0 + k / BLOCK_W;
         if (x >= gb->width || y >= gb->height) continue;
         iir_vec3 d = iir_camera_dir(&c->cam, x + 0.5f + shift.x, y + 0.5f + shift.y);
-        if (!isinf(iir_area_light_hit(l, c->cam.origin, d, gb->depth[b->index[k]])))
-            b->L[k] = iir_add(b->L[k], l->intensity);
+        float t = iir_area_light_hit(l, c->cam.origin, d, gb->depth[b->index[k]]);
+        if (!isinf(t))
+            b->L[k] =
+                iir_add(b->L[k], iir_area_light_radiance_at(l, &fr, iir_madd(c->cam.origin, d, t)));
     }
 }
 
@@ -162,7 +171,13 @@ static void area_lane(const direct_ctx *c, block *b, int k)
     float cos_theta = iir_dot(n, ls.wi);
     if (cos_theta <= 0.f) return;
     b->pending[k] = iir_scale(iir_mul(b->f[k], ls.Li), cos_theta / ls.pdf);
-    set_lane(&b->rays, k, iir_madd(p, n, r->eps), ls.wi, ls.dist - 2.f * r->eps);
+    /* aimed from the lifted point at the sampled point itself, stopping 2 eps short (pt.c's
+       shadow_ray: along wi from the lifted point, a grazing ray met the emitter just before it) */
+    iir_vec3 o = iir_madd(p, n, r->eps);
+    iir_vec3 d = iir_sub(iir_madd(p, ls.wi, ls.dist), o);
+    float len = iir_length(d);
+    if (!(len > 2.f * r->eps)) return;
+    set_lane(&b->rays, k, o, iir_scale(d, 1.f / len), len - 2.f * r->eps);
 }
 
 /* Reads the block's pixels: emission, and which of them direct light can reach. */

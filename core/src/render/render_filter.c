@@ -13,6 +13,11 @@
  * the normals' cosine is at least filter_normal and the camera depths differ by at most
  * filter_depth relative to the centre's; background (depth INFINITY) is never similar.
  *
+ * Multires (r->level set): only level-0 pixels are filtered, and the row pass runs only where a
+ * column pass will read it; a pixel of a coarse level is a tap carrying every subset (its value is
+ * the upsampled mean of all of them: iir_multires_upsample_span, written to r->raw first in the
+ * tiles near level-0 pixels), and takes its own value unfiltered.
+ *
  * Threads: both passes are OpenMP loops over tiles writing only their own pixels; the implicit
  * barrier after the row pass orders it before the column pass that reads neighbouring tiles. */
 #include <omp.h>
@@ -51,6 +56,13 @@ static iir_filter_row row_pass(const filter_ctx *c, int x, int y, const int *liv
     iir_filter_row acc = {iir_v3s(0.f), 0.f};
     for (int xx = x0; xx <= x1; xx++, sx = sx + 1 == n ? 0 : sx + 1) {
         size_t j = row + (size_t)xx;
+        if (c->r->level) { /* multires: a coarse pixel is a tap of every subset */
+            if (!((live[sx] | (c->r->level[j] > 0)) & similar(c, centre, j))) continue;
+            float w = tap_weight(c, xx - x);
+            acc.sum = iir_madd(acc.sum, c->r->raw[j], w); /* upsample_tile filled it */
+            acc.w += w;
+            continue;
+        }
         float w = (live[sx] & similar(c, centre, j)) ? tap_weight(c, xx - x) : 0.f;
         acc.sum = iir_madd(acc.sum, c->r->raw[j], w);
         acc.w += w;
@@ -58,17 +70,62 @@ static iir_filter_row row_pass(const filter_ctx *c, int x, int y, const int *liv
     return acc;
 }
 
+/* Whether a level-0 pixel's column pass reads the row pass at (x, y): always with full shading. */
+static bool row_wanted(const filter_ctx *c, int x, int y)
+{
+    const uint8_t *level = c->r->level;
+    if (!level) return true;
+    const iir_gbuffer *gb = &c->r->gb;
+    int y0 = y - c->h > 0 ? y - c->h : 0, y1 = y + c->h < gb->height ? y + c->h : gb->height - 1;
+    for (int yy = y0; yy <= y1; yy++)
+        if (level[(size_t)yy * (size_t)gb->width + (size_t)x] == 0) return true;
+    return false;
+}
+
+/* Whether a level-0 pixel lies in the tile grown by mx columns and my rows: always with full
+ * shading. */
+static bool tile_near_fine(const filter_ctx *c, const iir_tile *tl, int mx, int my)
+{
+    const uint8_t *level = c->r->level;
+    if (!level) return true;
+    const iir_gbuffer *gb = &c->r->gb;
+    int y0 = tl->y0 - my > 0 ? tl->y0 - my : 0,
+        y1 = tl->y1 + my < gb->height ? tl->y1 + my : gb->height;
+    int x0 = tl->x0 - mx > 0 ? tl->x0 - mx : 0,
+        x1 = tl->x1 + mx < gb->width ? tl->x1 + mx : gb->width;
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++)
+            if (level[(size_t)y * (size_t)gb->width + (size_t)x] == 0) return true;
+    return false;
+}
+
+/* Multires: whether a level-0 pixel lies within h pixels of the tile (into r->near_fine unless it
+ * holds it for these levels: `known`), and if so the upsampled value into r->raw at its coarse
+ * pixels -- every tap a row pass reads lies in such a tile. */
+static void upsample_tile(const filter_ctx *c, int t, bool known)
+{
+    const iir_gbuffer *gb = &c->r->gb;
+    iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_RENDER_TILE, t);
+    if (!known) c->r->near_fine[t] = tile_near_fine(c, &tl, c->h, c->h);
+    if (!c->r->near_fine[t]) return;
+    for (int y = tl.y0; y < tl.y1; y++)
+        iir_multires_upsample_span(c->r->mr, y, tl.x0, tl.x1,
+                                   c->r->raw + (size_t)y * (size_t)gb->width + (size_t)tl.x0);
+}
+
 /* Row pass over a tile. */
 static void row_pass_tile(const filter_ctx *c, int t)
 {
     const iir_gbuffer *gb = &c->r->gb;
     iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_RENDER_TILE, t);
+    if (c->r->level && !c->r->near_fine[t]) return; /* no level-0 pixel reads this tile's rows */
     int n = c->n;
     for (int y = tl.y0; y < tl.y1; y++) {
         const int *live = &c->live[(y % n) * n];
         int sx = ((tl.x0 - c->h) % n + n) % n;
         for (int x = tl.x0; x < tl.x1; x++, sx = sx + 1 == n ? 0 : sx + 1)
-            c->r->rows[(size_t)y * (size_t)gb->width + (size_t)x] = row_pass(c, x, y, live, sx);
+            if (row_wanted(c, x, y))
+                c->r->rows[(size_t)y * (size_t)gb->width + (size_t)x] = row_pass(c, x, y, live, sx);
     }
 }
 
@@ -102,34 +159,62 @@ static filter_ctx make_ctx(const iir_renderer *r, const iir_indirect_params *p)
     return c;
 }
 
-/* out += rho / pi * E over a tile, E the filtered (or raw) demodulated indirect light. */
-static void compose_tile(const filter_ctx *c, bool filter, int t, iir_image *out)
+/* out += rho / pi * E over one segment [x0, x1) of row y inside filter tile t, E the filtered (or
+ * raw) demodulated indirect light. */
+static void compose_segment(const filter_ctx *c, bool filter, int t, int y, int x0, int x1,
+                            iir_image *out)
 {
     const iir_gbuffer *gb = &c->r->gb;
-    iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_RENDER_TILE, t);
-    for (int y = tl.y0; y < tl.y1; y++)
-        for (int x = tl.x0; x < tl.x1; x++) {
-            size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
-            if (gb->prim[i] == IIR_NO_HIT) continue;
-            iir_vec3 E = filter ? column_pass(c, x, y) : c->r->raw[i];
-            iir_vec3 *L = iir_image_at(out, x, y);
-            *L = iir_add(*L, iir_mul(iir_scale(gb->albedo[i], IIR_INV_PI), E));
-        }
+    /* multires: coarse pixels hold their upsampled value in raw where upsample_tile wrote it */
+    bool filled = filter && c->r->level && c->r->near_fine[t];
+    iir_vec3 up[IIR_RENDER_TILE];
+    if (c->r->level && !filled) iir_multires_upsample_span(c->r->mr, y, x0, x1, up);
+    for (int x = x0; x < x1; x++) {
+        size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
+        if (gb->prim[i] == IIR_NO_HIT) continue;
+        bool coarse = c->r->level && c->r->level[i] > 0;
+        iir_vec3 E = coarse && !filled   ? up[x - x0]
+                     : coarse || !filter ? c->r->raw[i]
+                                         : column_pass(c, x, y);
+        iir_vec3 *L = iir_image_at(out, x, y);
+        *L = iir_add(*L, iir_mul(iir_scale(gb->albedo[i], IIR_INV_PI), E));
+    }
 }
 
-void iir_render_filter(const iir_renderer *r, const iir_indirect_params *p, iir_image *out)
+/* Composes row y, tile by tile along it: whole rows stream through memory (the per-pixel arrays
+ * are read once, in order, which a tile's 16-pixel pieces of 16 rows would not do). */
+static void compose_row(const filter_ctx *c, bool filter, int y, iir_image *out)
+{
+    const iir_gbuffer *gb = &c->r->gb;
+    int tiles_x = (gb->width + IIR_RENDER_TILE - 1) / IIR_RENDER_TILE;
+    for (int tx = 0; tx < tiles_x; tx++) {
+        int x0 = tx * IIR_RENDER_TILE;
+        int x1 = x0 + IIR_RENDER_TILE < gb->width ? x0 + IIR_RENDER_TILE : gb->width;
+        compose_segment(c, filter, (y / IIR_RENDER_TILE) * tiles_x + tx, y, x0, x1, out);
+    }
+}
+
+void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image *out)
 {
     filter_ctx c = make_ctx(r, p);
     bool filter = p->filter && p->interleave > 1;
     const iir_gbuffer *gb = &r->gb;
     int tiles = iir_tile_count(gb->width, gb->height, IIR_RENDER_TILE);
+    /* the tiles near level-0 pixels change only with the hierarchy (kept while the camera is) */
+    uint64_t gen = r->level ? iir_multires_generation(r->mr) : 0;
+    bool known = r->near_fine_gen == gen && r->near_fine_h == c.h;
 #pragma omp parallel
     {
+        if (filter && r->level) {
+#pragma omp for schedule(dynamic, 1)
+            for (int t = 0; t < tiles; t++) upsample_tile(&c, t, known);
+        }
         if (filter) {
 #pragma omp for schedule(dynamic, 1)
             for (int t = 0; t < tiles; t++) row_pass_tile(&c, t);
         }
-#pragma omp for schedule(dynamic, 1)
-        for (int t = 0; t < tiles; t++) compose_tile(&c, filter, t, out);
+#pragma omp for schedule(dynamic, 8)
+        for (int y = 0; y < gb->height; y++) compose_row(&c, filter, y, out);
     }
+    if (filter && r->level) r->near_fine_gen = gen, r->near_fine_h = c.h;
 }

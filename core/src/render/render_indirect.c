@@ -109,6 +109,7 @@ typedef struct indirect_ctx {
     bool use_smap;
     float g_max;    /* clamp / D^2, or INFINITY */
     float rel_bias; /* sm_bias */
+    int n;          /* multires: the interleave n (subset k sits at (k mod n, k / n)) */
 } indirect_ctx;
 
 typedef struct pixel_batch {
@@ -348,8 +349,10 @@ static int padded(int m)
     return (m + 3) & ~3;
 }
 
-static void indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *b, iir_raystats *st)
+/* Shades one tile; returns the pixel-VPL pairs shaded. */
+static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *b, iir_raystats *st)
 {
+    uint64_t evals = 0;
     const iir_renderer *r = c->r;
     const iir_gbuffer *gb = &r->gb;
     iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_INDIRECT_TILE, t);
@@ -365,6 +368,7 @@ static void indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *b, i
             if (r->start[k] == r->start[k + 1]) continue;
             while (collect(r, &tl, tl.x0 + i, n, &x, &y, b)) {
                 int m = b->m;
+                evals += (uint64_t)m * (r->start[k + 1] - r->start[k]);
                 for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++) {
                     if (c->use_smap) {
                         b->m = padded(m);
@@ -378,21 +382,24 @@ static void indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *b, i
                     r->raw[b->index[q]] = iir_v3(b->Ex[q], b->Ey[q], b->Ez[q]);
             }
         }
+    return evals;
 }
 
 bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t shift,
-                         bool stoppable, iir_raystats *st)
+                         bool stoppable, iir_raystats *st, uint64_t *evals)
 {
     indirect_ctx c = {r,
                       stoppable ? r->stop : NULL,
                       shift,
                       p->visibility == IIR_VIS_SHADOWMAP,
                       p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
-                      p->sm_bias};
+                      p->sm_bias,
+                      p->interleave};
     int tiles = iir_tile_count(r->gb.width, r->gb.height, IIR_INDIRECT_TILE), n = p->interleave;
     iir_raystats total = {0};
     int skipped = 0;
-#pragma omp parallel reduction(+ : skipped)
+    uint64_t sum = 0;
+#pragma omp parallel reduction(+ : skipped, sum)
     {
         iir_raystats local = {0};
         pixel_batch b; /* on the stack: no allocation */
@@ -402,11 +409,82 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
                 skipped = 1; /* this thread's remaining tiles are skipped without asking again */
                 continue;
             }
-            indirect_tile(&c, n, t, &b, &local);
+            sum += indirect_tile(&c, n, t, &b, &local);
         }
 #pragma omp critical(iir_indirect_rays)
         iir_raystats_add(&total, &local);
     }
     iir_raystats_add(st, &total);
+    *evals += sum;
     return skipped > 0;
+}
+
+/* ---- multires: the VPL sum at the hierarchy's texels and level-0 pixels (multires.h's client)
+ * ---- */
+
+_Static_assert((int)IIR_MR_BATCH <= (int)BATCH, "a multires batch must fit a pixel batch");
+
+/* Adds subset k's power G V to every sample of the batch (its E zeroed first). */
+static void apply_subset(const indirect_ctx *c, uint32_t k, int count, pixel_batch *b,
+                         iir_raystats *st)
+{
+    const iir_renderer *r = c->r;
+    for (int q = 0; q < padded(count); q++) b->Ex[q] = b->Ey[q] = b->Ez[q] = 0.f;
+    for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++) {
+        if (c->use_smap) {
+            b->m = padded(count);
+            apply_vpl_smap(c, &r->vpl[v], b);
+            b->m = count;
+        } else {
+            apply_vpl_rays(c, &r->vpl[v], b, st);
+        }
+    }
+}
+
+/* Shades samples of class cls of an m x m lattice: the union U of the subsets k whose lattice
+ * position is cls's mod m, subset k's estimate weighted |k| / |U| (so U's VPLs carry
+ * Phi_i N / |U|: m = n is subset cls alone, m = 1 every VPL with its own flux). */
+static uint64_t coarse_samples(void *ctx, int m, uint32_t cls, const iir_mr_sample *s, int count,
+                               iir_vec3 *E, iir_raystats *st)
+{
+    const indirect_ctx *c = ctx;
+    const iir_renderer *r = c->r;
+    uint32_t n = (uint32_t)c->n, cx = cls % (uint32_t)m, cy = cls / (uint32_t)m, union_size = 0;
+    for (uint32_t k = 0; k < r->num_subsets; k++)
+        if (k % n % (uint32_t)m == cx && k / n % (uint32_t)m == cy)
+            union_size += r->start[k + 1] - r->start[k];
+    pixel_batch b;
+    b.m = 0;
+    for (int q = 0; q < count; q++) batch_push(&b, (uint32_t)q, s[q].position, s[q].normal);
+    while (b.m % 4) batch_push(&b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
+    b.m = count;
+    for (int q = 0; q < count; q++) E[q] = iir_v3s(0.f);
+    for (uint32_t k = 0; k < r->num_subsets && union_size; k++) {
+        uint32_t size = r->start[k + 1] - r->start[k];
+        if (!size || k % n % (uint32_t)m != cx || k / n % (uint32_t)m != cy) continue;
+        apply_subset(c, (k + c->shift) % r->num_subsets, count, &b, st);
+        float w = (float)size / (float)union_size;
+        for (int q = 0; q < count; q++) E[q] = iir_madd(E[q], iir_v3(b.Ex[q], b.Ey[q], b.Ez[q]), w);
+    }
+    return (uint64_t)count * union_size;
+}
+
+bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, bool stoppable,
+                                iir_raystats *st, uint64_t *evals)
+{
+    indirect_ctx c = {r,
+                      stoppable ? r->stop : NULL,
+                      0,
+                      p->visibility == IIR_VIS_SHADOWMAP,
+                      p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
+                      p->sm_bias,
+                      p->interleave};
+    uint64_t live = 0;
+    for (uint32_t k = 0; k < r->num_subsets; k++)
+        if (r->start[k] < r->start[k + 1]) live |= 1ull << k;
+    if (iir_multires_shade_fine(r->mr, &r->gb, coarse_samples, &c, live, r->raw, c.stop,
+                                r->stop_ctx, st, evals))
+        return true;
+    return iir_multires_shade(r->mr, coarse_samples, &c, live, NULL, c.stop, r->stop_ctx, st,
+                              evals); /* the filter phase upsamples (render_filter.c) */
 }

@@ -4,6 +4,7 @@
 #ifndef IIR_RENDER_INTERNAL_H
 #define IIR_RENDER_INTERNAL_H
 
+#include "iir/multires.h"
 #include "iir/render.h"
 #include "iir/scene.h"
 
@@ -33,14 +34,22 @@ struct iir_renderer {
     iir_lightset *area_lights; /* the scene's emissive triangles; NULL when it has none */
 
     iir_gbuffer gb;
-    bool gb_valid;        /* gb matches gb_camera and the frame size */
-    iir_camera gb_camera; /* the camera gb was rendered with */
-    iir_vec2 gb_shift;    /* gb's rays went through (x + 0.5, y + 0.5) + gb_shift, and
-                             render_direct.c shoots them again at the area lights (not in the BVH):
-                             (0, 0) for frames; a jittered pass (pass_gbuffer) sets it and
-                             gb_camera */
-    iir_vec3 *raw;        /* per pixel: demodulated indirect (without rho / pi), unfiltered */
-    iir_filter_row *rows; /* per pixel: the filter's horizontal pass */
+    bool gb_valid;          /* gb matches gb_camera and the frame size */
+    iir_camera gb_camera;   /* the camera gb was rendered with */
+    iir_vec2 gb_shift;      /* gb's rays went through (x + 0.5, y + 0.5) + gb_shift, and
+                               render_direct.c shoots them again at the area lights (not in the BVH):
+                               (0, 0) for frames; a jittered pass (pass_gbuffer) sets it and
+                               gb_camera */
+    uint64_t gb_serial;     /* G-buffers rendered so far: multires keeps its hierarchy per one */
+    iir_multires *mr;       /* shading = multires: the hierarchy (created on first use) */
+    const uint8_t *level;   /* this frame's per-pixel multires level (multires.h; 0 = shaded at full
+                               resolution), or NULL when every pixel is (shading = full) */
+    iir_vec3 *raw;          /* per pixel: demodulated indirect (without rho / pi), unfiltered */
+    iir_filter_row *rows;   /* per pixel: the filter's horizontal pass */
+    uint8_t *near_fine;     /* per filter tile (IIR_RENDER_TILE), multires: a level-0 pixel lies
+                               within the filter's reach (render_filter.c) */
+    uint64_t near_fine_gen; /* the multires generation near_fine was computed for; 0 = none */
+    int near_fine_h;        /* and the filter's half-width */
 
     /* Per frame: the VPLs in use, sorted by subset; subset k is vpl[start[k] .. start[k+1]). */
     iir_shade_vpl *vpl;
@@ -96,11 +105,20 @@ bool iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t 
 iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num_vpls,
                               const iir_indirect_params *p, bool exact_mean, iir_error *err);
 /* With `stoppable`, each tile first polls r->stop and is skipped once it said stop; returns true
- * when tiles were skipped (r->raw is then incomplete). */
+ * when tiles were skipped (r->raw is then incomplete). Adds the pixel-VPL pairs shaded to *evals.
+ */
 bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t shift,
-                         bool stoppable, iir_raystats *st);
+                         bool stoppable, iir_raystats *st, uint64_t *evals);
+/* Multires (r->mr built for this frame's G-buffer): the VPL sum as multires.h's client -- level-0
+ * pixels into r->raw as iir_render_indirect shades them (pixel (x, y) evaluating subset
+ * (y mod n) n + (x mod n)), coarse texels by their level's lattice into r->mr (multires.h), whose
+ * upsampled values the filter phase reads. Same stop rule and counts as iir_render_indirect. */
+bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, bool stoppable,
+                                iir_raystats *st, uint64_t *evals);
 
-/* render_filter.c: out += rho / pi * (filtered or raw) r->raw. */
-void iir_render_filter(const iir_renderer *r, const iir_indirect_params *p, iir_image *out);
+/* render_filter.c: out += rho / pi * (filtered or raw) r->raw; with r->level set only its level-0
+ * pixels are filtered (the others take their upsampled value, iir_multires_upsample_span, and count
+ * as taps of every subset). */
+void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image *out);
 
 #endif

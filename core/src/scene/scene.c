@@ -31,6 +31,8 @@ void iir_scene_destroy(iir_scene *scene)
     free(scene->lights);
     free(scene->dropped);
     free(scene->paths_json);
+    for (uint32_t i = 0; i < scene->num_maps; i++) iir_emission_map_free(scene->maps[i]);
+    free(scene->maps);
     free(scene);
 }
 
@@ -278,12 +280,15 @@ static bool sibling_mesh(const char *sidecar, char *out, size_t n)
     return false;
 }
 
-/* Loads mesh into b, applies sc (may be NULL) and finishes. Always frees b. */
+/* Loads mesh into b, applies sc (may be NULL), turns its emissive materials into area lights
+ * unless sc gives a "lights" array (iir_builder_emitters_to_lights), and finishes. Always frees
+ * b. */
 static iir_status build(iir_scene_builder *b, const char *mesh, iir_sidecar *sc, iir_scene **out,
                         iir_error *err)
 {
     iir_status st = iir_assimp_load(mesh, b, err);
     if (st == IIR_OK && sc) st = iir_sidecar_apply(sc, b, err);
+    if (st == IIR_OK && !(sc && sc->has_lights)) st = iir_builder_emitters_to_lights(b, err);
     if (st == IIR_OK) st = iir_builder_finish(b, out, err);
     iir_builder_free(b);
     return st;
@@ -331,6 +336,7 @@ static iir_status load_on_base(const char *path, iir_sidecar *sc, int depth, iir
     scene_name(path, name, sizeof name);
     iir_builder_init(&b, name, path);
     st = iir_builder_add_scene(&b, base, err);
+    if (st == IIR_OK) st = iir_builder_take_maps(&b, base, err);
     if (st == IIR_OK) st = iir_sidecar_apply(sc, &b, err);
     if (st == IIR_OK) st = iir_builder_finish(&b, out, err);
     iir_builder_free(&b);

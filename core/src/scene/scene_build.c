@@ -67,6 +67,10 @@ void iir_builder_free(iir_scene_builder *b)
     free(b->lights);
     free(b->dropped);
     free(b->paths_json);
+    for (uint32_t i = 0; i < b->num_maps; i++) iir_emission_map_free(b->maps[i]);
+    free(b->maps);
+    b->maps = NULL;
+    b->num_maps = 0;
     b->positions = NULL;
     b->indices = b->tri_materials = NULL;
     b->materials = NULL;
@@ -426,6 +430,10 @@ static void move_into_scene(iir_scene_builder *b, iir_scene *s)
     s->num_dropped = b->num_dropped;
     s->dropped = b->dropped;
     s->paths_json = b->paths_json;
+    s->maps = b->maps;
+    s->num_maps = b->num_maps;
+    b->maps = NULL;
+    b->num_maps = 0;
     b->positions = NULL;
     b->indices = b->tri_materials = NULL;
     b->materials = NULL;
@@ -492,4 +500,29 @@ iir_status iir_builder_finish(iir_scene_builder *b, iir_scene **out, iir_error *
     for (uint32_t i = 0; i < s->num_lights; i++) iir_light_fit_sun(&s->lights[i], s);
     *out = s;
     return IIR_OK;
+}
+
+iir_status iir_builder_add_map(iir_scene_builder *b, iir_emission_map *map, iir_error *err)
+{
+    iir_emission_map **grown = realloc(b->maps, sizeof *grown * (b->num_maps + 1));
+    if (!grown) {
+        iir_emission_map_free(map);
+        return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory for an emission map", b->source);
+    }
+    b->maps = grown;
+    b->maps[b->num_maps++] = map;
+    return IIR_OK;
+}
+
+iir_status iir_builder_take_maps(iir_scene_builder *b, iir_scene *scene, iir_error *err)
+{
+    iir_status st = IIR_OK;
+    for (uint32_t i = 0; i < scene->num_maps; i++) {
+        iir_status s = iir_builder_add_map(b, scene->maps[i], err);
+        if (st == IIR_OK) st = s;
+    }
+    free(scene->maps);
+    scene->maps = NULL;
+    scene->num_maps = 0;
+    return st;
 }

@@ -54,6 +54,9 @@ typedef struct iir_scene_builder {
     uint32_t num_dropped, cap_dropped;
 
     char *paths_json; /* owned; moved into the scene */
+
+    iir_emission_map **maps; /* owned; moved into the scene (lights point at them) */
+    uint32_t num_maps;
 } iir_scene_builder;
 
 /* An empty builder; name and source are copied (truncated to fit). */
@@ -61,6 +64,12 @@ void iir_builder_init(iir_scene_builder *b, const char *name, const char *source
 
 /* Releases everything the builder still owns; safe after any other call, and twice. */
 void iir_builder_free(iir_scene_builder *b);
+
+/* Takes map over (the builder, then its scene, frees it). IIR_ERR_NOMEM (map then freed). */
+iir_status iir_builder_add_map(iir_scene_builder *b, iir_emission_map *map, iir_error *err);
+/* Takes every map of scene over (scene keeps none): for a scene whose lights the builder copied
+ * (a sidecar's base), before the scene is destroyed. */
+iir_status iir_builder_take_maps(iir_scene_builder *b, iir_scene *scene, iir_error *err);
 
 /* Makes room for n more vertices and triangles (an optimisation; appending grows as needed). */
 iir_status iir_builder_reserve(iir_scene_builder *b, uint32_t more_vertices,
@@ -151,7 +160,9 @@ typedef struct iir_sidecar {
     iir_light *lights;
     uint32_t num_materials;
     iir_sidecar_material *materials;
-    char *paths_json; /* the "paths" object as compact JSON, or NULL */
+    char *paths_json;  /* the "paths" object as compact JSON, or NULL */
+    uint32_t num_maps; /* area lights' "emission_map"s, read (the lights point at them) */
+    iir_emission_map **maps;
 } iir_sidecar;
 
 /* Reads and validates a sidecar. Errors (IIR_ERR_IO, IIR_ERR_FORMAT, IIR_ERR_INVALID) name the
@@ -162,6 +173,36 @@ iir_status iir_sidecar_parse(const char *path, iir_sidecar *sc, iir_error *err);
  * path names it in messages and "file" is joined with path's folder. */
 iir_status iir_sidecar_parse_text(const char *path, const char *text, size_t len, iir_sidecar *sc,
                                   iir_error *err);
+
+/* scene_area.c: area lights from the triangles of a material (the sidecar's "material" form, and
+ * a scene's emissive materials). */
+typedef struct iir_area_fit {
+    uint32_t triangles; /* the material's triangles */
+    double area, w, h;  /* the area they cover, their smallest bounding rectangle's sides */
+    char why[160];      /* "" on success, else why not, a phrase that follows "material 'NAME' " */
+} iir_area_fit;
+
+/* Fits the triangles of material `name` (any material of that name): one-sided (all wound the
+ * same way, within about 1 degree) and coplanar (within 1e-4 of the rectangle's larger side). On
+ * success sets l's position, direction, up, size (the smallest bounding rectangle with a side along
+ * one of the triangles' edges) and shape (none when they form that rectangle, else their
+ * light-local triangles: at most IIR_AREA_MAX_TRIANGLES) and leaves the rest of *l alone.
+ * IIR_ERR_INVALID with fit->why for no triangles, more than 1024, facing different ways, not flat,
+ * overlapping, or more than 64 not forming a rectangle; IIR_ERR_NOMEM. The builder is not changed.
+ */
+iir_status iir_builder_fit_area_light(const iir_scene_builder *b, const char *name, iir_light *l,
+                                      iir_area_fit *fit);
+
+/* Removes material `name`'s triangles from the mesh (the rest keep their order) and zeroes its
+ * emission: an area light took them. */
+void iir_builder_take_emitter(iir_scene_builder *b, const char *name);
+
+/* For a scene whose sidecar gives no "lights" array: every emissive material whose triangles fit
+ * (iir_builder_fit_area_light) becomes a movable area light named after it (made unique among the
+ * lights with "-2", "-3"...), of radiance its emission; its triangles leave the mesh, unless they
+ * are all that is left. Each emissive material gets a note (iir_builder_drop, kind "material"):
+ * which light it became, or why it stays static emissive triangles. IIR_ERR_NOMEM only. */
+iir_status iir_builder_emitters_to_lights(iir_scene_builder *b, iir_error *err);
 
 /* Applies a parsed sidecar to a builder that already holds the mesh: unit scale first, then
  * material overrides (an unknown material name is an error), camera, lights, paths (moved). */

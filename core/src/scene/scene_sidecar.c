@@ -7,9 +7,12 @@
  * never silently ignored. Angles are degrees in the file and radians in memory.
  *
  * An area light may be taken from a material of the mesh ("material": "NAME"): its triangles must
- * form one planar rectangle, which becomes the light and leaves the geometry when the sidecar is
- * applied (the builder holds the mesh only then). Until then the name waits in a block after the
- * light array, in the same allocation (light_material), so iir_sidecar keeps its shape. */
+ * be one-sided and planar (scene_area.c); they become the light (a rectangle, or a shape in its
+ * bounding rectangle) and leave the geometry when the sidecar is applied (the builder holds the
+ * mesh only then). An area light given by its pose may carry a "shape": triangles in its
+ * light-local coordinates, as the scene writer saves a shaped light. Until then the name waits in a
+ * block after the light array, in the same allocation (light_material), so iir_sidecar keeps its
+ * shape. */
 #include "scene_build.h"
 
 #include <cjson/cJSON.h>
@@ -23,9 +26,8 @@
 #include <sys/stat.h>
 
 #define MAX_SIDECAR_BYTES (16L << 20)
-#define MAX_COORD 1e6           /* positions, targets, directions: |x| <= this (world units) */
-#define MAX_INTENSITY 1e9       /* W/sr (a sun's: W/m^2), and emission in W/sr/m^2 */
-#define MAX_AREA_TRIANGLES 1024 /* triangles of a material that becomes an area light */
+#define MAX_COORD 1e6     /* positions, targets, directions: |x| <= this (world units) */
+#define MAX_INTENSITY 1e9 /* W/sr (a sun's: W/m^2), and emission in W/sr/m^2 */
 
 typedef char material_name[64]; /* an area light's "material", "" for none */
 
@@ -339,7 +341,7 @@ static iir_status forbid(const ctx *c, const cJSON *obj, const char *where,
     return IIR_OK;
 }
 
-static const char *const AREA_ONLY[] = {"size", "material", NULL};
+static const char *const AREA_ONLY[] = {"size", "material", "shape", "emission_map", NULL};
 static const char *const AREA_ONLY_WHY = "only area lights (type \"area\") have this field";
 
 /* The spots' fields: axis, up (default +y), cone, and the edge of the other profile refused. */
@@ -416,17 +418,71 @@ static iir_status parse_size(const ctx *c, const member *m, iir_vec2 *size)
     return IIR_OK;
 }
 
-/* An area light given by its pose: position, normal (target or direction), up, size. */
+/* Corner k of a shape's triangle: [x, y], each in [-1/2, 1/2]. */
+static iir_status parse_shape_corner(const ctx *c, const cJSON *item, const char *field,
+                                     iir_vec2 *out)
+{
+    if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 2)
+        return field_error(c, IIR_ERR_FORMAT, field, "must be an array of 2 numbers [x, y]");
+    double v[2] = {0.0, 0.0};
+    int i = 0;
+    for (const cJSON *e = item->child; e; e = e->next, i++) {
+        char sub[256];
+        snprintf(sub, sizeof sub, "%s[%d]", field, i);
+        iir_status st = get_number(c, e, sub, -0.5, 0.5, &v[i]);
+        if (st != IIR_OK) return st;
+    }
+    *out = iir_v2((float)v[0], (float)v[1]);
+    return IIR_OK;
+}
+
+/* shape: [[[x, y], [x, y], [x, y]], ...], 1 to IIR_AREA_MAX_TRIANGLES triangles in light-local
+ * coordinates, none degenerate, none overlapping (iir_area_shape_check). */
+static iir_status parse_shape(const ctx *c, const member *m, iir_area_shape *shape)
+{
+    int n = cJSON_IsArray(m->item) ? cJSON_GetArraySize(m->item) : -1;
+    if (n < 0)
+        return field_error(c, IIR_ERR_FORMAT, m->field,
+                           "must be an array of 1 to %d triangles [[x, y], [x, y], [x, y]]",
+                           IIR_AREA_MAX_TRIANGLES);
+    if (n < 1 || n > IIR_AREA_MAX_TRIANGLES)
+        return field_error(c, IIR_ERR_INVALID, m->field,
+                           "has %d triangles: a shape has 1 to %d triangles", n,
+                           IIR_AREA_MAX_TRIANGLES);
+    memset(shape, 0, sizeof *shape);
+    int t = 0;
+    for (const cJSON *tri = m->item->child; tri; tri = tri->next, t++) {
+        char field[208];
+        snprintf(field, sizeof field, "%s[%d]", m->field, t);
+        if (!cJSON_IsArray(tri) || cJSON_GetArraySize(tri) != 3)
+            return field_error(c, IIR_ERR_FORMAT, field,
+                               "must be a triangle: an array of 3 corners [x, y]");
+        int k = 0;
+        for (const cJSON *p = tri->child; p; p = p->next, k++) {
+            char sub[224];
+            snprintf(sub, sizeof sub, "%s[%d]", field, k);
+            iir_status st = parse_shape_corner(c, p, sub, &shape->tri[t][k]);
+            if (st != IIR_OK) return st;
+        }
+        shape->num_triangles++;
+    }
+    const char *why = iir_area_shape_check(shape);
+    return why ? field_error(c, IIR_ERR_INVALID, m->field, "%s", why) : IIR_OK;
+}
+
+/* An area light given by its pose: position, normal (target or direction), up, size and
+ * optionally its shape. */
 static iir_status parse_area_pose(const ctx *c, const cJSON *obj, const char *where, iir_light *l)
 {
     member pos = get_member(obj, where, "position"), up = get_member(obj, where, "up");
-    member size = get_member(obj, where, "size");
+    member size = get_member(obj, where, "size"), shape = get_member(obj, where, "shape");
     iir_status st = required(c, &pos, " for an area light (its centre)");
     if (st == IIR_OK) st = get_position(c, pos.item, pos.field, &l->position);
     if (st == IIR_OK) st = parse_axis(c, obj, where, l);
     if (st == IIR_OK && up.item) st = get_direction(c, up.item, up.field, &l->up);
     if (st == IIR_OK) st = required(c, &size, " for an area light ([width, height])");
     if (st == IIR_OK) st = parse_size(c, &size, &l->size);
+    if (st == IIR_OK && shape.item) st = parse_shape(c, &shape, &l->shape);
     return st;
 }
 
@@ -436,15 +492,16 @@ static iir_status parse_area(const ctx *c, const cJSON *obj, const char *where, 
                              material_name *material)
 {
     static const char *const cone[] = {"cone_angle", "smooth", "inner_angle", NULL};
-    static const char *const pose[] = {"position", "target", "direction", "up", "size", NULL};
+    static const char *const pose[] = {"position", "target", "direction", "up",
+                                       "size",     "shape",  NULL};
     member mat = get_member(obj, where, "material");
     l->up = iir_v3(0.f, 1.f, 0.f);
     iir_status st = forbid(c, obj, where, cone, "an area light has no cone");
     if (st != IIR_OK) return st;
     if (!mat.item) return parse_area_pose(c, obj, where, l);
     st = forbid(c, obj, where, pose,
-                "an area light taken from a material gets its pose and size from the material's "
-                "triangles");
+                "an area light taken from a material gets its pose, size and shape from the "
+                "material's triangles");
     if (st == IIR_OK) st = get_string(c, mat.item, mat.field, *material, sizeof *material);
     return st;
 }
@@ -499,9 +556,10 @@ static iir_status parse_intensity(const ctx *c, const member *in, iir_light *l, 
 static iir_status parse_light(const ctx *c, const cJSON *obj, int index, iir_light *l,
                               material_name *material)
 {
-    static const char *const fields[] = {
-        "type",   "name",        "position", "target",   "direction", "up", "cone_angle",
-        "smooth", "inner_angle", "size",     "material", "intensity", NULL};
+    static const char *const fields[] = {"type",        "name",         "position",   "target",
+                                         "direction",   "up",           "cone_angle", "smooth",
+                                         "inner_angle", "size",         "shape",      "material",
+                                         "intensity",   "emission_map", NULL};
     char where[32];
     snprintf(where, sizeof where, "lights[%d]", index);
     if (!cJSON_IsObject(obj)) return field_error(c, IIR_ERR_FORMAT, where, "must be an object");
@@ -522,6 +580,35 @@ static iir_status parse_light(const ctx *c, const cJSON *obj, int index, iir_lig
     return st;
 }
 
+/* An area light's "emission_map": an image file (.png, .exr, .pfm) named relative to the
+ * sidecar's folder, read now; light l points at it, sc owns it. */
+static iir_status parse_emission_map(const ctx *c, const cJSON *obj, int index, iir_light *l,
+                                     iir_sidecar *sc)
+{
+    char where[32], name[512], path[2048];
+    snprintf(where, sizeof where, "lights[%d]", index);
+    member m = get_member(obj, where, "emission_map");
+    if (!m.item) return IIR_OK;
+    iir_status st = get_string(c, m.item, m.field, name, sizeof name);
+    if (st != IIR_OK) return st;
+    const char *slash = strrchr(c->path, '/');
+    int dir_len = slash ? (int)(slash - c->path) : 1;
+    if (name[0] == '/')
+        snprintf(path, sizeof path, "%s", name);
+    else
+        snprintf(path, sizeof path, "%.*s/%s", dir_len, slash ? c->path : ".", name);
+    iir_emission_map **grown = realloc(sc->maps, sizeof *grown * (sc->num_maps + 1));
+    if (!grown) return iir_fail(c->err, IIR_ERR_NOMEM, "%s: out of memory", c->path);
+    sc->maps = grown;
+    iir_error e = {0};
+    iir_emission_map *map = NULL;
+    if (iir_emission_map_load(path, &map, &e) != IIR_OK)
+        return field_error(c, e.status, m.field, "%s", e.msg);
+    sc->maps[sc->num_maps++] = map;
+    l->map = map;
+    return IIR_OK;
+}
+
 static iir_status parse_lights(const ctx *c, const cJSON *arr, iir_sidecar *sc)
 {
     if (!cJSON_IsArray(arr)) return field_error(c, IIR_ERR_FORMAT, "lights", "must be an array");
@@ -534,6 +621,7 @@ static iir_status parse_lights(const ctx *c, const cJSON *arr, iir_sidecar *sc)
     int i = 0;
     for (const cJSON *e = arr->child; e; e = e->next, i++) {
         iir_status st = parse_light(c, e, i, &sc->lights[i], &materials[i]);
+        if (st == IIR_OK) st = parse_emission_map(c, e, i, &sc->lights[i], sc);
         if (st != IIR_OK) return st;
         sc->num_lights++;
     }
@@ -710,6 +798,10 @@ void iir_sidecar_free(iir_sidecar *sc)
     free(sc->lights);
     free(sc->materials);
     free(sc->paths_json);
+    for (uint32_t i = 0; i < sc->num_maps; i++) iir_emission_map_free(sc->maps[i]);
+    free(sc->maps);
+    sc->maps = NULL;
+    sc->num_maps = 0;
     sc->lights = NULL;
     sc->materials = NULL;
     sc->paths_json = NULL;
@@ -767,193 +859,9 @@ static iir_status apply_camera(const iir_sidecar *sc, iir_scene_builder *b, iir_
 
 /* ======================== area lights from materials ======================== */
 
-/* A material's triangles as a rectangle: the plane's unit normal n (the triangles' winding side),
- * the sides' unit directions a, b (b = n x a), the centre, the extents along a and b, the spread
- * of the corners along n, and the area the triangles cover. Double precision throughout. */
-typedef struct rect_fit {
-    double n[3], a[3], b[3], centre[3];
-    double w, h, thickness, area;
-} rect_fit;
-
-static void sub3(const iir_vec3 p, const iir_vec3 q, double out[3])
-{
-    out[0] = (double)p.x - q.x, out[1] = (double)p.y - q.y, out[2] = (double)p.z - q.z;
-}
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static bool normalize3(double v[3])
-{
-    double len = sqrt(dot3(v, v));
-    if (!(len > 0.0)) return false;
-    for (int k = 0; k < 3; k++) v[k] /= len;
-    return true;
-}
-
-static bool uses_material(const iir_scene_builder *b, uint32_t t, const char *name)
-{
-    return strcmp(b->materials[b->tri_materials[t]].name, name) == 0;
-}
-
-static uint32_t count_triangles(const iir_scene_builder *b, const char *name)
-{
-    uint32_t n = 0;
-    for (uint32_t t = 0; t < b->num_triangles; t++) n += uses_material(b, t, name);
-    return n;
-}
-
-/* The corners of material `name`'s n triangles, 3 per triangle in winding order (malloc'd; NULL
- * when out of memory). */
-static iir_vec3 *material_corners(const iir_scene_builder *b, const char *name, uint32_t n)
-{
-    iir_vec3 *c = malloc(sizeof(iir_vec3) * 3 * (size_t)n), *at = c;
-    for (uint32_t t = 0; c && t < b->num_triangles; t++) {
-        if (!uses_material(b, t, name)) continue;
-        for (int k = 0; k < 3; k++) *at++ = b->positions[b->indices[3 * (size_t)t + (size_t)k]];
-    }
-    return c;
-}
-
-/* Twice the vector area of the triangle with corners c[0..2], (c1 - c0) x (c2 - c0). */
-static void tri_cross(const iir_vec3 *c, double out[3])
-{
-    double e1[3], e2[3];
-    sub3(c[1], c[0], e1);
-    sub3(c[2], c[0], e2);
-    cross3(e1, e2, out);
-}
-
-/* The n triangles' covered area and mean winding normal; false when they face several ways (a
- * triangle's normal more than about 1 degree off the mean). */
-static bool fit_plane(const iir_vec3 *c, uint32_t n, rect_fit *f)
-{
-    double sum[3] = {0, 0, 0}, x[3];
-    for (uint32_t t = 0; t < n; t++) {
-        tri_cross(c + 3 * t, x);
-        for (int k = 0; k < 3; k++) sum[k] += x[k];
-        f->area += 0.5 * sqrt(dot3(x, x));
-    }
-    memcpy(f->n, sum, sizeof sum);
-    if (!normalize3(f->n)) return false;
-    for (uint32_t t = 0; t < n; t++) {
-        tri_cross(c + 3 * t, x);
-        double len = sqrt(dot3(x, x));
-        if (len > 0.0 && dot3(x, f->n) < 0.9998 * len) return false;
-    }
-    return true;
-}
-
-/* The extents of the m corners, relative to c[0], along three unit axes: lo and hi per axis. */
-static void extents(const iir_vec3 *c, uint32_t m, const double *axes[3], double lo[3],
-                    double hi[3])
-{
-    for (int k = 0; k < 3; k++) lo[k] = INFINITY, hi[k] = -INFINITY;
-    for (uint32_t v = 0; v < m; v++) {
-        double d[3];
-        sub3(c[v], c[0], d);
-        for (int k = 0; k < 3; k++) {
-            double x = dot3(d, axes[k]);
-            lo[k] = fmin(lo[k], x), hi[k] = fmax(hi[k], x);
-        }
-    }
-}
-
-/* The box of the corners along side a (unit, in the plane), b = n x a and n, into f when its
- * area in the plane is below *best. */
-static void try_side(const iir_vec3 *c, uint32_t m, double a[3], rect_fit *f, double *best)
-{
-    double b[3], lo[3], hi[3];
-    cross3(f->n, a, b);
-    const double *axes[3] = {a, b, f->n};
-    extents(c, m, axes, lo, hi);
-    double area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
-    if (!(area < *best)) return;
-    *best = area;
-    memcpy(f->a, a, sizeof f->a);
-    memcpy(f->b, b, sizeof f->b);
-    f->w = hi[0] - lo[0], f->h = hi[1] - lo[1], f->thickness = hi[2] - lo[2];
-    double o[3] = {c[0].x, c[0].y, c[0].z};
-    for (int k = 0; k < 3; k++)
-        f->centre[k] = o[k] + 0.5 * ((lo[0] + hi[0]) * a[k] + (lo[1] + hi[1]) * b[k] +
-                                     (lo[2] + hi[2]) * f->n[k]);
-}
-
-/* The smallest rectangle around the n triangles with a side along one of their edges (the
- * smallest bounding rectangle of a convex outline has a side on it). */
-static void fit_rectangle(const iir_vec3 *c, uint32_t n, rect_fit *f)
-{
-    double best = INFINITY;
-    for (uint32_t v = 0; v < 3 * n; v++) {
-        double a[3];
-        sub3(c[v % 3 == 2 ? v - 2 : v + 1], c[v], a); /* edge v -> its successor */
-        double along = dot3(a, f->n);
-        for (int k = 0; k < 3; k++) a[k] -= along * f->n[k];
-        if (normalize3(a)) try_side(c, 3 * n, a, f, &best);
-    }
-}
-
-/* The light from the rectangle: centre, normal, and as up the side more along y (a wall light's
- * vertical side; a ceiling panel's side more along z), pointing to +y (+z); size.x is the other
- * side's length (along r = up x f), size.y up's. */
-static void rect_to_light(const rect_fit *f, iir_light *l)
-{
-    double ka = fabs(f->a[1]) - fabs(f->b[1]);
-    if (fabs(ka) < 1e-6) ka = fabs(f->a[2]) - fabs(f->b[2]);
-    bool a_up = ka > 0.0;
-    const double *up = a_up ? f->a : f->b;
-    double sign = (fabs(up[1]) > 1e-6 ? up[1] : up[2]) < 0.0 ? -1.0 : 1.0;
-    l->position = iir_v3((float)f->centre[0], (float)f->centre[1], (float)f->centre[2]);
-    l->direction = iir_v3((float)f->n[0], (float)f->n[1], (float)f->n[2]);
-    l->up = iir_v3((float)(sign * up[0]), (float)(sign * up[1]), (float)(sign * up[2]));
-    l->size = a_up ? iir_v2((float)f->h, (float)f->w) : iir_v2((float)f->w, (float)f->h);
-}
-
-/* Removes material `name`'s triangles from the builder (the rest keep their order). */
-static void remove_triangles(iir_scene_builder *b, const char *name)
-{
-    uint32_t kept = 0;
-    for (uint32_t t = 0; t < b->num_triangles; t++) {
-        if (uses_material(b, t, name)) continue;
-        memmove(&b->indices[3 * (size_t)kept], &b->indices[3 * (size_t)t], 3 * sizeof(uint32_t));
-        b->tri_materials[kept++] = b->tri_materials[t];
-    }
-    b->num_triangles = kept;
-}
-
-/* Why material `name`'s triangles are not one planar rectangle, or NULL when they are and fill
- * f; *count gets how many there are. */
-static const char *fit_material(const iir_scene_builder *b, const char *name, rect_fit *f,
-                                uint32_t *count, bool *oom)
-{
-    memset(f, 0, sizeof *f);
-    uint32_t n = *count = count_triangles(b, name);
-    if (n == 0) return "has no triangles";
-    if (n > MAX_AREA_TRIANGLES) return "has more than 1024 triangles";
-    iir_vec3 *c = material_corners(b, name, n);
-    if (!c) return *oom = true, "is too large for the memory left";
-    const char *why = NULL;
-    if (!fit_plane(c, n, f)) why = "has triangles facing different ways";
-    if (!why) fit_rectangle(c, n, f);
-    free(c);
-    if (!why && !(f->thickness <= 1e-4 * fmax(f->w, f->h))) why = "is not flat";
-    if (!why && !(fabs(f->area - f->w * f->h) <= 1e-3 * f->w * f->h))
-        why = "does not form one rectangle";
-    return why;
-}
-
-/* Light i of the sidecar, taken from its material: the rectangle's pose and size, the material's
- * emission unless the light gives an intensity; the triangles leave the mesh and the material
- * stops emitting (nothing uses it any more). */
+/* Light i of the sidecar, taken from its material: the pose, size and shape its triangles give
+ * (iir_builder_fit_area_light), the material's emission unless the light gives an intensity; the
+ * triangles leave the mesh and the material stops emitting (nothing uses it any more). */
 static iir_status apply_area_material(iir_sidecar *sc, iir_scene_builder *b, uint32_t i,
                                       iir_error *err)
 {
@@ -967,21 +875,18 @@ static iir_status apply_area_material(iir_sidecar *sc, iir_scene_builder *b, uin
                         "%s: lights[%u].material: the mesh has no material '%s' (it has: %s)",
                         sc->path, i, name, names);
     }
-    rect_fit f;
-    uint32_t count = 0;
-    bool oom = false;
-    const char *why = fit_material(b, name, &f, &count, &oom);
-    if (why)
-        return iir_fail(err, oom ? IIR_ERR_NOMEM : IIR_ERR_INVALID,
+    iir_area_fit fit;
+    iir_status st = iir_builder_fit_area_light(b, name, l, &fit);
+    if (st != IIR_OK)
+        return iir_fail(err, st,
                         "%s: lights[%u].material: material '%s' %s (an area light taken from a "
-                        "material needs its triangles to form one planar rectangle; %u triangles, "
-                        "area %g of a %g x %g bounding rectangle)",
-                        sc->path, i, name, why, count, f.area, f.w, f.h);
-    rect_to_light(&f, l);
+                        "material needs one-sided coplanar triangles: at most %d, or any number "
+                        "forming one rectangle; %u triangles, area %g of a %g x %g bounding "
+                        "rectangle)",
+                        sc->path, i, name, fit.why, IIR_AREA_MAX_TRIANGLES, fit.triangles, fit.area,
+                        fit.w, fit.h);
     if (l->intensity.x < 0.f) l->intensity = b->materials[m].emission; /* none given */
-    remove_triangles(b, name);
-    for (uint32_t k = 0; k < b->num_materials; k++)
-        if (strcmp(b->materials[k].name, name) == 0) b->materials[k].emission = iir_v3s(0.f);
+    iir_builder_take_emitter(b, name);
     return IIR_OK;
 }
 
@@ -997,6 +902,11 @@ iir_status iir_sidecar_apply(iir_sidecar *sc, iir_scene_builder *b, iir_error *e
             if (st == IIR_OK) st = iir_builder_add_light(b, &sc->lights[i], err);
         }
     }
+    for (uint32_t i = 0; i < sc->num_maps; i++) { /* the builder owns them now, even on error */
+        iir_status s = iir_builder_add_map(b, sc->maps[i], err);
+        if (st == IIR_OK) st = s;
+    }
+    sc->num_maps = 0;
     if (st == IIR_OK && sc->paths_json) {
         free(b->paths_json);
         b->paths_json = sc->paths_json;

@@ -393,7 +393,7 @@ static sample regen_sample(const iir_incr *inc, const pose *ps, uint32_t i, uint
 {
     double s[3];
     iir_domain_sample(ps, hammersley(i, n, o), IIR_INCR_EDGE_MARGIN, s);
-    return trace_point(inc, ps, s, iir_domain_emitter_stratum(k), rays);
+    return trace_point(inc, ps, s, iir_domain_emitter_stratum(ps, k), rays);
 }
 
 /* REGENERATE: discards the whole set and makes N new VPLs from a scrambled Hammersley set, one
@@ -480,7 +480,7 @@ static iir_status phase_insert(iir_incr *inc, const pose *ps, uint32_t limit, ui
         if (ts == IIR_TRI_TOO_FEW) break; /* an empty set: only when a regeneration found nothing */
         if (ts != IIR_TRI_OK) return tri_fail(ts, "finding the largest empty circle", err);
         iir_domain_pull_inside(ps, c, IIR_INCR_EDGE_MARGIN, s);
-        sample sm = trace_point(inc, ps, s, iir_domain_emitter_stratum(inc->next_id), rays);
+        sample sm = trace_point(inc, ps, s, iir_domain_emitter_stratum(ps, inc->next_id), rays);
         if (!stage(inc, ps, &sm)) break; /* only for a cone too narrow for float directions */
         ts = iir_sites_insert(&inc->sites, &inc->xy[3 * inc->count], inc->next_id);
         if (ts == IIR_TRI_DUPLICATE_POINT || ts == IIR_TRI_OUTSIDE) break; /* saturated */
@@ -492,12 +492,14 @@ static iir_status phase_insert(iir_incr *inc, const pose *ps, uint32_t limit, ui
 }
 
 /* Phi = I rho A profile(s): the flux a VPL carries for a cell of area A at domain point s (I is
- * I0 or E; 0 for a null sample). */
+ * I0 or E, an area light's radiance at the VPL's own point of it; 0 for a null sample). */
 static iir_vec3 cell_flux(const pose *ps, const iir_vpl *v, double A, const double s[3])
 {
     if (v->null_sample) return iir_v3s(0.f);
     float k = (float)A * iir_domain_profile(ps, s);
-    return iir_scale(iir_mul(ps->light->intensity, v->albedo), k);
+    const iir_light *l = ps->light;
+    iir_vec3 I = l->type == IIR_LIGHT_AREA ? iir_area_light_radiance(l, v->emit) : l->intensity;
+    return iir_scale(iir_mul(I, v->albedo), k);
 }
 
 /* WEIGH: Phi_i = I rho_i A_i profile(s_i); A_i the clipped Voronoi cell or the domain's area /
@@ -601,7 +603,8 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *light, iir_incr_stats
 
     /* 6. weigh */
     if (status == IIR_OK) status = phase_weigh(inc, &ps, &st.flux_in, err);
-    st.flux_in *= iir_luminance(light->intensity);
+    st.flux_in *= iir_luminance(light->type == IIR_LIGHT_AREA ? iir_area_light_mean_radiance(light)
+                                                              : light->intensity);
     lap(&st, IIR_INCR_WEIGH, &t);
 
     c->count = inc->count;

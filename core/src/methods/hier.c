@@ -1,0 +1,346 @@
+/* hier.c -- hierarchical image-space shading (Nichols, Shopf & Wyman 2009, with Nichols & Wyman's
+ * multiresolution splatting), method "hier": all light is shaded in image space on the G-buffer's
+ * multiresolution hierarchy (multires.h: coarse where the surface is smooth, per pixel at depth
+ * and normal discontinuities), with cheap visibility:
+ *  - direct light from every light of the view, an area light as K point samples, shadowed by a
+ *    coarse voxel grid of the scene (3DDA, or a few probes along the ray) -- hier_light.h;
+ *  - one-bounce indirect light gathered from the lights' reflective shadow maps without
+ *    visibility, as rsm does (rsm_map.h).
+ * Its failures are the chart's: shadows that stop at voxel resolution (light leaks through thin
+ * walls and under contacts, blurred and blocky penumbrae), shadow edges blurred by the coarse
+ * levels (the hierarchy follows geometry, not light), and RSM's leaks in the bounced light.
+ *
+ * The voxel grid is built once, when the method is created (the scene is static); the maps every
+ * frame; the hierarchy when the G-buffer changes. The renderer (render.h) gives the G-buffer and
+ * the light of emissive triangles (with its exact shadow rays); an area light seen by the camera
+ * is added here. No refinement: a frame is what the method gives. */
+#include <math.h>
+#include <stddef.h>
+#include <stdlib.h>
+
+#include "hier_light.h"
+#include "iir/method.h"
+#include "iir/multires.h"
+#include "iir/timer.h"
+#include "iir/vplsets.h"
+#include "method_internal.h"
+#include "rsm_map.h"
+
+/* ---- parameters ---- */
+
+typedef struct hier_options {
+    iir_method_common common;
+    float clamp;
+    iir_rsm_options rsm;
+    iir_multires_options mr;
+    int samples;   /* K points per area light */
+    int voxel_res; /* cells along the scene's longest side */
+    hier_visibility vis;
+    int vis_points;
+} hier_options;
+
+static const char *const VIS_CHOICES[] = {"voxels", "points", "none", NULL};
+
+static const iir_param HIER_ROWS[] = {
+    {"area_samples", IIR_PARAM_INT, offsetof(hier_options, samples), 64, 1, 4096, 1024, NULL,
+     "points", "points per area light for its direct light", IIR_PARAM_LIVE},
+    {"voxel_res", IIR_PARAM_INT, offsetof(hier_options, voxel_res), 128, 4, 1024, 512, NULL,
+     "cells", "voxel grid cells along the scene's longest side (built once per scene)",
+     IIR_PARAM_RESTART},
+    {"hier_visibility", IIR_PARAM_ENUM, offsetof(hier_options, vis), HIER_VIS_VOXELS, 0, 2, 0,
+     VIS_CHOICES, "",
+     "direct light's shadows: voxels (3DDA through the grid), points (probe the grid at "
+     "vis_points points along the ray) or none",
+     IIR_PARAM_LIVE},
+    {"vis_points", IIR_PARAM_INT, offsetof(hier_options, vis_points), 4, 1, 64, 0, NULL, "points",
+     "hier_visibility points: probes per shadow ray", IIR_PARAM_LIVE},
+};
+static const iir_param_table HIER_TABLE = {"hier: direct light and voxel visibility", HIER_ROWS,
+                                           sizeof HIER_ROWS / sizeof HIER_ROWS[0], NULL};
+
+/* ---- state ---- */
+
+typedef struct hier_state {
+    const iir_scene *scene;
+    const iir_rt *rt;
+    hier_options o;
+    iir_renderer *renderer;
+    iir_voxels *grid;
+    iir_multires *mr;
+    uint64_t gb_serial; /* G-buffers rendered: the hierarchy's key */
+    hier_lights lights;
+    rsm_map maps[IIR_VPLSETS_MAX_LIGHTS];
+    uint32_t num_maps;
+    rsm_pattern pattern;
+    iir_vec3 *E; /* per pixel: the demodulated light */
+    size_t E_cap;
+    iir_stop_fn stop;
+    void *stop_ctx;
+} hier_state;
+
+/* ---- shading ---- */
+
+/* Direct plus indirect irradiance at (x, n); the evaluations (light points and gather samples). */
+static iir_vec3 shade_point(const hier_state *s, iir_vec3 x, iir_vec3 n, uint64_t *evals)
+{
+    iir_vec3 E = hier_direct(&s->lights, x, n, evals);
+    for (uint32_t l = 0; l < s->num_maps; l++)
+        E = iir_add(E, rsm_gather_map(&s->pattern, &s->maps[l], x, n));
+    *evals += (uint64_t)s->num_maps * (uint64_t)s->pattern.m;
+    return E;
+}
+
+/* multires.h's callback: every sample evaluates everything (no interleaving). */
+static uint64_t shade_samples(void *ctx, int m, uint32_t cls, const iir_mr_sample *smp, int count,
+                              iir_vec3 *E, iir_raystats *st)
+{
+    (void)m, (void)cls, (void)st;
+    const hier_state *s = ctx;
+    uint64_t evals = 0;
+    for (int i = 0; i < count; i++) E[i] = shade_point(s, smp[i].position, smp[i].normal, &evals);
+    return evals;
+}
+
+/* The pixels at discontinuities (level 0): evaluated here, per pixel. */
+static uint64_t shade_pixels(hier_state *s, const iir_gbuffer *gb, const uint8_t *levels)
+{
+    const int n = gb->width * gb->height;
+    uint64_t evals = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : evals)
+    for (int p = 0; p < n; p++) {
+        if (levels[p] != 0) continue;
+        s->E[p] = isfinite(gb->depth[p]) ? shade_point(s, gb->position[p], gb->normal[p], &evals)
+                                         : iir_v3s(0.f);
+    }
+    return evals;
+}
+
+static iir_mr_params mr_params(const hier_options *o)
+{
+    iir_indirect_params f = iir_indirect_params_default();
+    return (iir_mr_params){.max_level = o->mr.mr_levels,
+                           .depth = o->mr.mr_depth,
+                           .normal = o->mr.mr_normal,
+                           .interleave = 1,
+                           .window = o->mr.mr_window,
+                           .filter_normal = f.filter_normal,
+                           .filter_depth = f.filter_depth};
+}
+
+/* Fills s->E for every pixel: the hierarchy's levels, then the level-0 pixels. */
+static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *stats,
+                        iir_error *err)
+{
+    size_t n = (size_t)gb->width * (size_t)gb->height;
+    if (n > s->E_cap) {
+        iir_vec3 *E = realloc(s->E, sizeof *E * n);
+        if (!E) return iir_fail(err, IIR_ERR_NOMEM, "hier: out of memory for the frame");
+        s->E = E, s->E_cap = n;
+    }
+    uint64_t evals = 0;
+    iir_mr_params p = mr_params(&s->o);
+    iir_status st = iir_multires_build(s->mr, gb, s->gb_serial, &p, err);
+    if (st != IIR_OK) return st;
+    if (iir_multires_shade(s->mr, shade_samples, s, 1u, s->E, s->stop, s->stop_ctx, &stats->rays,
+                           &evals))
+        return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
+    stats->vpl_evals = evals + shade_pixels(s, gb, iir_multires_levels(s->mr));
+    return IIR_OK;
+}
+
+/* ---- the frame ---- */
+
+static iir_status render_maps(hier_state *s, const iir_view *view, iir_frame_stats *stats,
+                              iir_error *err)
+{
+    uint32_t n =
+        view->num_lights < IIR_VPLSETS_MAX_LIGHTS ? view->num_lights : IIR_VPLSETS_MAX_LIGHTS;
+    for (uint32_t l = s->num_maps; l < n; l++) {
+        if (!rsm_map_alloc(&s->maps[l], s->o.rsm.res))
+            return iir_fail(err, IIR_ERR_NOMEM, "hier: out of memory for the light's map");
+        s->num_maps = l + 1;
+    }
+    s->num_maps = n;
+    stats->vpl = (iir_vpl_counts){.regenerated = 1};
+    for (uint32_t l = 0; l < n; l++) {
+        iir_status st =
+            rsm_map_render(&s->maps[l], &view->lights[l], s->scene, s->rt, &stats->rays, err);
+        if (st != IIR_OK) return st;
+        stats->vpl.count += s->maps[l].in_disk;
+        stats->vpl.inserted += s->maps[l].in_disk;
+        stats->vpl.null_samples += s->maps[l].in_disk - s->maps[l].lit;
+    }
+    return IIR_OK;
+}
+
+/* Area lights seen by the camera: their radiance where a camera ray meets one from the front
+ * before the G-buffer's surface. */
+static void add_seen_area_lights(const iir_view *view, const iir_gbuffer *gb, iir_image *out)
+{
+    iir_camera_frame cf = iir_camera_setup(&view->camera, gb->width, gb->height);
+    for (uint32_t i = 0; i < view->num_lights; i++) {
+        const iir_light *l = &view->lights[i];
+        if (l->type != IIR_LIGHT_AREA) continue;
+        iir_frame fr = iir_spot_frame(l);
+#pragma omp parallel for schedule(dynamic, 4)
+        for (int y = 0; y < gb->height; y++)
+            for (int x = 0; x < gb->width; x++) {
+                size_t p = (size_t)y * gb->width + x;
+                iir_vec3 d = iir_camera_dir(&cf, (float)x + 0.5f, (float)y + 0.5f);
+                float t = iir_area_light_hit(l, view->camera.position, d, gb->depth[p]);
+                if (!isinf(t))
+                    out->pixels[p] = iir_add(
+                        out->pixels[p],
+                        iir_area_light_radiance_at(l, &fr, iir_madd(view->camera.position, d, t)));
+            }
+    }
+}
+
+static iir_status hier_render(void *state, const iir_view *view, iir_image *out,
+                              iir_frame_stats *stats, iir_error *err)
+{
+    hier_state *s = state;
+    iir_status st = iir_view_validate(view, err);
+    if (st != IIR_OK) return st;
+    double t0 = iir_now_ms();
+    st = render_maps(s, view, stats, err);
+    if (st == IIR_OK &&
+        !hier_lights_prepare(&s->lights, view->lights, view->num_lights, s->o.samples))
+        st = iir_fail(err, IIR_ERR_NOMEM, "hier: out of memory for the light points");
+    if (st != IIR_OK) return st;
+    double t1 = iir_now_ms();
+    iir_indirect_params ind = iir_indirect_params_default();
+    ind.visibility = IIR_VIS_RAYS, ind.interleave = 1; /* no lights, no VPLs: G-buffer, emitters */
+    iir_render_timing rt;
+    iir_render_input in = {.camera = &view->camera,
+                           .seed = iir_frame_direct_seed(s->o.common.seed)};
+    st = iir_renderer_frame(s->renderer, &in, &ind, out, &rt, &stats->rays, err);
+    if (st != IIR_OK) return st;
+    s->gb_serial += !rt.gbuffer_cached;
+    const iir_gbuffer *gb = iir_renderer_gbuffer(s->renderer);
+    double t2 = iir_now_ms();
+    st = shade(s, gb, stats, err);
+    if (st != IIR_OK) return st;
+    for (size_t p = 0; p < (size_t)gb->width * gb->height; p++)
+        out->pixels[p] =
+            iir_madd(out->pixels[p], iir_mul(gb->albedo[p], s->E[p]), 1.f / (float)M_PI);
+    add_seen_area_lights(view, gb, out);
+    uint64_t evals = stats->vpl_evals;
+    iir_render_timing_to_stats(&rt, stats);
+    stats->vpl_evals = evals;
+    stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
+    stats->phase_ms[IIR_PHASE_INDIRECT] = iir_now_ms() - t2; /* direct and indirect together */
+    stats->total_ms = iir_now_ms() - t0;
+    return IIR_OK;
+}
+
+/* ---- the method interface ---- */
+
+static void hier_destroy(void *state)
+{
+    hier_state *s = state;
+    if (!s) return;
+    for (uint32_t l = 0; l < IIR_VPLSETS_MAX_LIGHTS; l++) rsm_map_free(&s->maps[l]);
+    rsm_pattern_free(&s->pattern);
+    hier_lights_free(&s->lights);
+    iir_multires_destroy(s->mr);
+    iir_voxels_destroy(s->grid);
+    iir_renderer_destroy(s->renderer);
+    free(s->E);
+    free(s);
+}
+
+/* The lights' visibility settings from the options. */
+static void apply(hier_state *s, const hier_options *o)
+{
+    s->o = *o;
+    s->lights.grid = s->grid;
+    s->lights.vis = o->vis;
+    s->lights.vis_points = o->vis_points;
+    s->lights.offset = sqrtf(3.f) * iir_voxels_cell_size(s->grid);
+    iir_vec3 e = iir_sub(s->scene->bounds_max, s->scene->bounds_min);
+    s->lights.scene_radius = 0.5f * iir_length(e);
+}
+
+static iir_status hier_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
+                              void **state, iir_error *err)
+{
+    const hier_options *o = opts;
+    hier_state *s = calloc(1, sizeof *s);
+    if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating hier");
+    s->scene = scene;
+    s->rt = rt;
+    iir_status st = iir_voxels_build(scene, o->voxel_res, &s->grid, err);
+    s->renderer = iir_renderer_create(scene, rt);
+    s->mr = iir_multires_create();
+    if (st == IIR_OK &&
+        (!s->renderer || !s->mr ||
+         !rsm_pattern_build(&s->pattern, &o->rsm, iir_clamp_g_max(scene, o->clamp))))
+        st = iir_fail(err, IIR_ERR_NOMEM, "out of memory creating hier");
+    if (st != IIR_OK) {
+        hier_destroy(s);
+        return st;
+    }
+    apply(s, o);
+    *state = s;
+    return IIR_OK;
+}
+
+static void hier_update(void *state, const void *opts)
+{
+    hier_state *s = state;
+    const hier_options *o = opts;
+    if (rsm_pattern_build(&s->pattern, &o->rsm, iir_clamp_g_max(s->scene, o->clamp)))
+        apply(s, o); /* out of memory: the old parameters stay, with their pattern */
+}
+
+static void hier_set_stop(void *state, iir_stop_fn fn, void *ctx)
+{
+    hier_state *s = state;
+    s->stop = fn;
+    s->stop_ctx = ctx;
+    iir_renderer_set_stop(s->renderer, fn, ctx);
+}
+
+/* The renderer's G-buffer and scratch, the hierarchy (about a third of a level-0 copy), E, one
+ * light's map, the voxel grid (for a cube: the worst case). */
+static uint64_t hier_memory(const void *opts, int width, int height)
+{
+    const hier_options *o = opts;
+    uint64_t px = (uint64_t)width * (uint64_t)height;
+    uint64_t texels = (uint64_t)o->rsm.res * (uint64_t)o->rsm.res;
+    return px * (56 + 12 + 16) + px * (48 + 12) + texels * sizeof(iir_vpl) +
+           iir_voxels_memory(iir_v3s(1.f), o->voxel_res) + (uint64_t)o->rsm.samples * 12;
+}
+
+/* The maps come from the lights only: emitters' indirect light is left out. */
+static uint32_t hier_dropped(const iir_scene *scene, const iir_light *lights, uint32_t num_lights,
+                             iir_dropped *out, uint32_t max)
+{
+    uint32_t n = 0;
+    for (uint32_t i = IIR_VPLSETS_MAX_LIGHTS; i < num_lights; i++)
+        iir_dropped_add(out, max, &n, "hier", "light", lights[i].name,
+                        "light %u: its indirect light is left out, as hier renders maps for %u "
+                        "lights at most (its direct light is rendered)",
+                        i + 1, IIR_VPLSETS_MAX_LIGHTS);
+    return n + iir_dropped_emitters(scene, "hier", n < max ? out + n : NULL, n < max ? max - n : 0);
+}
+
+const iir_method_ops iir_method_hier = {
+    .name = "hier",
+    .summary = "hierarchical image-space shading: direct light with voxel shadows and RSM bounce "
+               "light on a multiresolution G-buffer",
+    .tables = {{&HIER_TABLE, 0},
+               {&iir_rsm_table, offsetof(hier_options, rsm)},
+               {&iir_multires_table, offsetof(hier_options, mr)},
+               {&iir_clamp_table, offsetof(hier_options, clamp)},
+               {&iir_common_table, offsetof(hier_options, common)}},
+    .opts_size = sizeof(hier_options),
+    .create = hier_create,
+    .destroy = hier_destroy,
+    .render = hier_render,
+    .set_stop = hier_set_stop,
+    .update = hier_update,
+    .memory = hier_memory,
+    .dropped = hier_dropped,
+};
