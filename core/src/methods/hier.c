@@ -153,24 +153,9 @@ static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *s
 static iir_status render_maps(hier_state *s, const iir_view *view, iir_frame_stats *stats,
                               iir_error *err)
 {
-    uint32_t n =
-        view->num_lights < IIR_VPLSETS_MAX_LIGHTS ? view->num_lights : IIR_VPLSETS_MAX_LIGHTS;
-    for (uint32_t l = s->num_maps; l < n; l++) {
-        if (!rsm_map_alloc(&s->maps[l], s->o.rsm.res))
-            return iir_fail(err, IIR_ERR_NOMEM, "hier: out of memory for the light's map");
-        s->num_maps = l + 1;
-    }
-    s->num_maps = n;
-    stats->vpl = (iir_vpl_counts){.regenerated = 1};
-    for (uint32_t l = 0; l < n; l++) {
-        iir_status st =
-            rsm_map_render(&s->maps[l], &view->lights[l], s->scene, s->rt, &stats->rays, err);
-        if (st != IIR_OK) return st;
-        stats->vpl.count += s->maps[l].in_disk;
-        stats->vpl.inserted += s->maps[l].in_disk;
-        stats->vpl.null_samples += s->maps[l].in_disk - s->maps[l].lit;
-    }
-    return IIR_OK;
+    iir_status st = rsm_maps_render(s->maps, &s->num_maps, s->o.rsm.res, view->lights,
+                                    view->num_lights, s->scene, s->rt, "hier", stats, err);
+    return st;
 }
 
 /* Area lights seen by the camera: their radiance where a camera ray meets one from the front
@@ -317,13 +302,7 @@ static uint64_t hier_memory(const void *opts, int width, int height)
 static uint32_t hier_dropped(const iir_scene *scene, const iir_light *lights, uint32_t num_lights,
                              iir_dropped *out, uint32_t max)
 {
-    uint32_t n = 0;
-    for (uint32_t i = IIR_VPLSETS_MAX_LIGHTS; i < num_lights; i++)
-        iir_dropped_add(out, max, &n, "hier", "light", lights[i].name,
-                        "light %u: its indirect light is left out, as hier renders maps for %u "
-                        "lights at most (its direct light is rendered)",
-                        i + 1, IIR_VPLSETS_MAX_LIGHTS);
-    return n + iir_dropped_emitters(scene, "hier", n < max ? out + n : NULL, n < max ? max - n : 0);
+    return rsm_maps_dropped("hier", scene, lights, num_lights, out, max);
 }
 
 const iir_method_ops iir_method_hier = {

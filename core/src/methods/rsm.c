@@ -280,25 +280,11 @@ static bool collect_lit(rsm_state *s)
 static iir_status render_maps(rsm_state *s, const iir_view *view, iir_frame_stats *stats,
                               iir_error *err)
 {
-    uint32_t n =
-        view->num_lights < IIR_VPLSETS_MAX_LIGHTS ? view->num_lights : IIR_VPLSETS_MAX_LIGHTS;
-    for (uint32_t l = s->num_maps; l < n; l++) {
-        if (!rsm_map_alloc(&s->maps[l], s->o.map.res))
-            return iir_fail(err, IIR_ERR_NOMEM, "rsm: out of memory for the light's map");
-        s->num_maps = l + 1;
-    }
-    s->num_maps = n;
-    stats->vpl = (iir_vpl_counts){.regenerated = 1};
-    for (uint32_t l = 0; l < n; l++) {
-        iir_status st =
-            rsm_map_render(&s->maps[l], &view->lights[l], s->scene, s->rt, &stats->rays, err);
-        if (st != IIR_OK) return st;
-        stats->vpl.count += s->maps[l].in_disk;
-        stats->vpl.inserted += s->maps[l].in_disk;
-        stats->vpl.null_samples += s->maps[l].in_disk - s->maps[l].lit;
-    }
-    if (!collect_lit(s)) return iir_fail(err, IIR_ERR_NOMEM, "rsm: out of memory for the texels");
-    return IIR_OK;
+    iir_status st = rsm_maps_render(s->maps, &s->num_maps, s->o.map.res, view->lights,
+                                    view->num_lights, s->scene, s->rt, "rsm", stats, err);
+    if (st == IIR_OK && !collect_lit(s))
+        st = iir_fail(err, IIR_ERR_NOMEM, "rsm: out of memory for the texels");
+    return st;
 }
 
 static iir_status rsm_render(void *state, const iir_view *view, iir_image *out,
@@ -407,13 +393,7 @@ static uint64_t rsm_memory(const void *opts, int width, int height)
 static uint32_t rsm_dropped(const iir_scene *scene, const iir_light *lights, uint32_t num_lights,
                             iir_dropped *out, uint32_t max)
 {
-    uint32_t n = 0;
-    for (uint32_t i = IIR_VPLSETS_MAX_LIGHTS; i < num_lights; i++)
-        iir_dropped_add(out, max, &n, "rsm", "light", lights[i].name,
-                        "light %u: its indirect light is left out, as rsm renders maps for %u "
-                        "lights at most (its direct light is rendered)",
-                        i + 1, IIR_VPLSETS_MAX_LIGHTS);
-    return n + iir_dropped_emitters(scene, "rsm", n < max ? out + n : NULL, n < max ? max - n : 0);
+    return rsm_maps_dropped("rsm", scene, lights, num_lights, out, max);
 }
 
 const iir_method_ops iir_method_rsm = {

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 
 #include "iir/rng.h"
+#include "iir/vplsets.h"
 #include "method_internal.h"
 
 #include "surface.h"
@@ -123,6 +124,42 @@ iir_vec2 rsm_map_project(const rsm_map *m, iir_vec3 x)
     double s[3];
     iir_domain_locate(&m->dom, x, s); /* s is its point even where it is not inside */
     return iir_v2((float)s[0] / m->half, (float)s[1] / m->half);
+}
+
+/* ---- the maps of a frame ---- */
+
+iir_status rsm_maps_render(rsm_map *maps, uint32_t *num_maps, int res, const iir_light *lights,
+                           uint32_t num_lights, const iir_scene *scene, const iir_rt *rt,
+                           const char *method, iir_frame_stats *stats, iir_error *err)
+{
+    uint32_t n = num_lights < IIR_VPLSETS_MAX_LIGHTS ? num_lights : IIR_VPLSETS_MAX_LIGHTS;
+    for (uint32_t l = *num_maps; l < n; l++) {
+        if (!maps[l].texel && !rsm_map_alloc(&maps[l], res))
+            return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory for the light's map", method);
+        *num_maps = l + 1;
+    }
+    *num_maps = n;
+    stats->vpl = (iir_vpl_counts){.regenerated = 1};
+    for (uint32_t l = 0; l < n; l++) {
+        iir_status st = rsm_map_render(&maps[l], &lights[l], scene, rt, &stats->rays, err);
+        if (st != IIR_OK) return st;
+        stats->vpl.count += maps[l].in_disk;
+        stats->vpl.inserted += maps[l].in_disk;
+        stats->vpl.null_samples += maps[l].in_disk - maps[l].lit;
+    }
+    return IIR_OK;
+}
+
+uint32_t rsm_maps_dropped(const char *method, const iir_scene *scene, const iir_light *lights,
+                          uint32_t num_lights, iir_dropped *out, uint32_t max)
+{
+    uint32_t n = 0;
+    for (uint32_t i = IIR_VPLSETS_MAX_LIGHTS; i < num_lights; i++)
+        iir_dropped_add(out, max, &n, method, "light", lights[i].name,
+                        "light %u: its indirect light is left out, as %s renders maps for %u "
+                        "lights at most (its direct light is rendered)",
+                        i + 1, method, IIR_VPLSETS_MAX_LIGHTS);
+    return n + iir_dropped_emitters(scene, method, n < max ? out + n : NULL, n < max ? max - n : 0);
 }
 
 /* ---- gathering ---- */

@@ -16,6 +16,7 @@
 #define IIR_RSM_MAP_H
 
 #include "iir/light.h"
+#include "iir/method.h"
 #include "iir/light_domain.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
@@ -40,6 +41,18 @@ void rsm_map_free(rsm_map *m);
  * IIR_ERR_INVALID for a light that fails iir_light_validate. */
 iir_status rsm_map_render(rsm_map *m, const iir_light *l, const iir_scene *scene, const iir_rt *rt,
                           iir_raystats *st, iir_error *err);
+
+/* The maps of a frame's lights (up to IIR_VPLSETS_MAX_LIGHTS; maps[] holds that many): allocates
+ * res^2 texels for lights not seen before, renders every map, and counts the texels on the
+ * domains as the frame's VPLs (*num_maps: the maps in use). `method` names the caller in errors. */
+iir_status rsm_maps_render(rsm_map *maps, uint32_t *num_maps, int res, const iir_light *lights,
+                           uint32_t num_lights, const iir_scene *scene, const iir_rt *rt,
+                           const char *method, iir_frame_stats *stats, iir_error *err);
+
+/* iir_method_dropped's entries of a method that renders maps for the first lights only (rsm,
+ * hier): the lights beyond them, then the emissive materials. */
+uint32_t rsm_maps_dropped(const char *method, const iir_scene *scene, const iir_light *lights,
+                          uint32_t num_lights, iir_dropped *out, uint32_t max);
 
 /* Map coordinates of world point x: where the light's ray towards x crosses the map (outside
  * [-1, 1]^2 for points the light cannot see along its domain). */

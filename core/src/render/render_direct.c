@@ -98,6 +98,19 @@ static void punctual_lane(const iir_renderer *r, const iir_light_eval *e, block 
     set_lane(&b->rays, k, iir_madd(p, n, r->eps), wi, dist - 2.f * r->eps);
 }
 
+/* Lane k's shadow ray from p (normal n) to the point sampled by ls: from the lifted point aimed at
+ * the sampled point itself, stopping 2 eps short (pt.c's shadow_ray: along wi from the lifted
+ * point, a grazing ray met an emissive triangle just before the point). */
+static void aim_lane(const iir_renderer *r, block *b, int k, iir_vec3 p, iir_vec3 n,
+                     const iir_light_sample *ls)
+{
+    iir_vec3 o = iir_madd(p, n, r->eps);
+    iir_vec3 d = iir_sub(iir_madd(p, ls->wi, ls->dist), o);
+    float len = iir_length(d);
+    if (!(len > 2.f * r->eps)) return;
+    set_lane(&b->rays, k, o, iir_scale(d, 1.f / len), len - 2.f * r->eps);
+}
+
 /* Lane k's unshadowed f Li cos / pdf for one sample (point uniform on it) of area light l, the
  * light's index li in the frame's list (its random numbers), and the shadow ray to the point. */
 static void area_light_lane(const direct_ctx *c, const iir_light *l, uint32_t li, block *b, int k)
@@ -112,13 +125,7 @@ static void area_light_lane(const direct_ctx *c, const iir_light *l, uint32_t li
     float cos_theta = iir_dot(n, ls.wi);
     if (cos_theta <= 0.f) return;
     b->pending[k] = iir_scale(iir_mul(b->f[k], ls.Li), cos_theta / ls.pdf);
-    /* aimed from the lifted point at the sampled point itself, stopping 2 eps short (pt.c's
-       shadow_ray: along wi from the lifted point, a grazing ray met the emitter just before it) */
-    iir_vec3 o = iir_madd(p, n, r->eps);
-    iir_vec3 d = iir_sub(iir_madd(p, ls.wi, ls.dist), o);
-    float len = iir_length(d);
-    if (!(len > 2.f * r->eps)) return;
-    set_lane(&b->rays, k, o, iir_scale(d, 1.f / len), len - 2.f * r->eps);
+    aim_lane(r, b, k, p, n, &ls);
 }
 
 /* Adds area light l's radiance to the pixels whose camera rays meet it from the front before their
@@ -171,13 +178,7 @@ static void area_lane(const direct_ctx *c, block *b, int k)
     float cos_theta = iir_dot(n, ls.wi);
     if (cos_theta <= 0.f) return;
     b->pending[k] = iir_scale(iir_mul(b->f[k], ls.Li), cos_theta / ls.pdf);
-    /* aimed from the lifted point at the sampled point itself, stopping 2 eps short (pt.c's
-       shadow_ray: along wi from the lifted point, a grazing ray met the emitter just before it) */
-    iir_vec3 o = iir_madd(p, n, r->eps);
-    iir_vec3 d = iir_sub(iir_madd(p, ls.wi, ls.dist), o);
-    float len = iir_length(d);
-    if (!(len > 2.f * r->eps)) return;
-    set_lane(&b->rays, k, o, iir_scale(d, 1.f / len), len - 2.f * r->eps);
+    aim_lane(r, b, k, p, n, &ls);
 }
 
 /* Reads the block's pixels: emission, and which of them direct light can reach. */
