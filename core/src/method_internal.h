@@ -122,8 +122,9 @@ const iir_method_ops *iir_method_ops_of(const char *name);
 void iir_dropped_add(iir_dropped *out, uint32_t max, uint32_t *n, const char *method,
                      const char *kind, const char *name, const char *fmt, ...)
     __attribute__((format(printf, 7, 8)));
-/* An entry per emissive material of the scene: `method` leaves out its indirect light. Returns how
- * many; writes at most max. */
+/* An entry per emissive material of the scene (`method` leaves out its indirect light) and per
+ * mirror or glass (a diffuse-only `method` renders it black). Returns how many; writes at most
+ * max. */
 uint32_t iir_dropped_emitters(const struct iir_scene *scene, const char *method, iir_dropped *out,
                               uint32_t max);
 
@@ -143,6 +144,8 @@ typedef struct iir_ir_options {
 } iir_ir_options;
 extern const iir_method_ops iir_method_rsm;
 extern const iir_method_ops iir_method_hier;
+extern const iir_method_ops iir_method_radiosity;
+extern const iir_method_ops iir_method_whitted;
 
 /* Shared by the VPL methods: validates the view (camera and lights), IIR_ERR_INVALID otherwise. */
 iir_status iir_view_validate(const iir_view *view, iir_error *err);

@@ -34,6 +34,11 @@ uint64_t iird_bench_scene_hash(const iir_scene *s)
         const iir_material *m = &s->material_list[s->materials[t]];
         h = HASH(h, m->albedo);
         h = HASH(h, m->emission);
+        if (m->kind == IIR_MATERIAL_DIFFUSE) continue; /* diffuse scenes keep their keys */
+        int32_t kind = (int32_t)m->kind;
+        h = HASH(h, kind);
+        h = HASH(h, m->specular);
+        h = HASH(h, m->ior);
     }
     return h;
 }

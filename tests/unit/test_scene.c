@@ -295,6 +295,96 @@ static void test_obj_colours_clamped(void **state)
     iir_scene_destroy(s);
 }
 
+/* MTL illum 3 is a mirror of colour Ks; illum 5 and 7 are glass of index Ni (tinted by Tf); other
+ * models stay diffuse, whatever their Ni and Ks say (docs/scene-format.md, section 3). */
+static void test_obj_specular_materials(void **state)
+{
+    (void)state;
+    char path[1024];
+    write_file("spec.mtl",
+               "newmtl wall\nillum 2\nKd 0.5 0.5 0.5\nKs 1 1 1\nNi 1.5\n"
+               "newmtl silver\nillum 3\nKd 0.2 0.2 0.2\nKs 0.9 0.8 0.7\n"
+               "newmtl window\nillum 5\nNi 1.33\n"
+               "newmtl bottle\nillum 7\nNi 1.7\nTf 0.9 1 0.8\nd 0.2\n",
+               path, sizeof path);
+    write_file("spec.obj",
+               "mtllib spec.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\n"
+               "usemtl wall\nf 1 2 3\nusemtl silver\nf 2 4 3\nusemtl window\nf 1 5 2\n"
+               "usemtl bottle\nf 2 5 6\n",
+               path, sizeof path);
+    iir_scene *s = load_ok(path);
+    const iir_material *wall = find_material(s, "wall"), *silver = find_material(s, "silver");
+    const iir_material *window = find_material(s, "window"), *bottle = find_material(s, "bottle");
+    assert_int_equal(wall->kind, IIR_MATERIAL_DIFFUSE);
+    assert_vec_near(wall->albedo, iir_v3s(0.5f), 1e-6f);
+    assert_int_equal(silver->kind, IIR_MATERIAL_MIRROR);
+    assert_vec_near(silver->specular, iir_v3(0.9f, 0.8f, 0.7f), 1e-6f);
+    assert_vec_near(silver->albedo, iir_v3s(0.f), 0.f); /* no diffuse part */
+    assert_int_equal(window->kind, IIR_MATERIAL_GLASS);
+    assert_float_equal(window->ior, 1.33f, 1e-6);
+    assert_vec_near(window->specular, iir_v3s(1.f), 0.f);
+    assert_int_equal(bottle->kind, IIR_MATERIAL_GLASS);
+    assert_float_equal(bottle->ior, 1.7f, 1e-6);
+    assert_vec_near(bottle->specular, iir_v3(0.9f, 1.f, 0.8f), 1e-6f);
+    for (uint32_t i = 0; i < s->num_dropped; i++) /* glass's "d" is not "transparency" */
+        assert_string_not_equal(s->dropped[i].name, "bottle");
+    assert_string_equal(iir_material_kind_name(IIR_MATERIAL_GLASS), "glass");
+    iir_scene_destroy(s);
+    write_file("badior.mtl", "newmtl dense\nillum 7\nNi 4.2\n", path, sizeof path);
+    write_file("badior.obj",
+               "mtllib badior.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl dense\nf 1 2 3\n", path,
+               sizeof path);
+    assert_load_fails(path, "material 'dense'", "ior 4.2 must be a finite number in [1, 3]");
+}
+
+/* The sidecar's "kind", "specular" and "ior", and clear errors for bad ones. */
+static void test_sidecar_specular_materials(void **state)
+{
+    (void)state;
+    char path[1024];
+    write_file("side.mtl", "newmtl a\nKd 0.5 0.5 0.5\nnewmtl b\nKd 0.5 0.5 0.5\n", path,
+               sizeof path);
+    write_file("side.obj",
+               "mtllib side.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl a\nf 1 2 3\n"
+               "usemtl b\nf 2 4 3\n",
+               path, sizeof path);
+    write_file("side.scene.json",
+               "{\"materials\": {\"a\": {\"kind\": \"mirror\", \"specular\": [0.9, 0.9, 0.8]},"
+               " \"b\": {\"kind\": \"glass\", \"ior\": 1.33}}}",
+               path, sizeof path);
+    iir_scene *s = load_ok(path);
+    const iir_material *a = find_material(s, "a"), *b = find_material(s, "b");
+    assert_int_equal(a->kind, IIR_MATERIAL_MIRROR);
+    assert_vec_near(a->specular, iir_v3(0.9f, 0.9f, 0.8f), 1e-6f);
+    assert_vec_near(a->albedo, iir_v3s(0.f), 0.f);
+    assert_int_equal(b->kind, IIR_MATERIAL_GLASS);
+    assert_float_equal(b->ior, 1.33f, 1e-6);
+    assert_vec_near(b->specular, iir_v3s(1.f), 0.f); /* clear unless tinted */
+    iir_scene_destroy(s);
+    static const struct {
+        const char *json, *needle1, *needle2;
+    } bad[] = {
+        {"{\"materials\": {\"b\": {\"kind\": \"glass\", \"ior\": 3.5}}}", "materials.b.ior",
+         "3.5 is outside [1, 3]"},
+        {"{\"materials\": {\"b\": {\"kind\": \"glass\", \"ior\": 0.5}}}", "materials.b.ior",
+         "outside [1, 3]"},
+        {"{\"materials\": {\"b\": {\"kind\": \"metal\"}}}", "materials.b.kind",
+         "not a material kind"},
+        {"{\"materials\": {\"a\": {\"kind\": \"mirror\", \"specular\": 1.2}}}",
+         "materials.a.specular", "outside [0, 1]"},
+        {"{\"materials\": {\"a\": {\"kind\": \"mirror\", \"ior\": 1.5}}}", "materials.a.ior",
+         "a mirror has no ior"},
+        {"{\"materials\": {\"a\": {\"kind\": \"mirror\", \"albedo\": 0.5}}}", "materials.a",
+         "has no diffuse albedo"},
+        {"{\"materials\": {\"a\": {\"ior\": 1.5}}}", "materials.a",
+         "ior is only for a mirror or glass"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        write_file("side.scene.json", bad[i].json, path, sizeof path);
+        assert_load_fails(path, bad[i].needle1, bad[i].needle2);
+    }
+}
+
 static void test_degenerate_triangles(void **state)
 {
     (void)state;
@@ -432,6 +522,47 @@ static void replace_once(const char *text, const char *from, const char *to, cha
     const char *at = strstr(text, from);
     assert_non_null(at);
     snprintf(out, n, "%.*s%s%s", (int)(at - text), text, to, at + strlen(from));
+}
+
+/* glTF: KHR_materials_transmission is glass of index KHR_materials_ior tinted by the base colour;
+ * metallic 1 with roughness 0 is a mirror of the base colour; rough metal stays diffuse. */
+static void test_gltf_specular_materials(void **state)
+{
+    (void)state;
+    static const char *const MATS =
+        "\"materials\": [{\"name\": \"glass\", \"extensions\": {\n"
+        "   \"KHR_materials_transmission\": {\"transmissionFactor\": 1},\n"
+        "   \"KHR_materials_ior\": {\"ior\": 1.45}},\n"
+        "   \"pbrMetallicRoughness\": {\"baseColorFactor\": [0.9, 0.95, 1, 1]}}],\n";
+    static const char *const MIRROR =
+        "\"materials\": [{\"name\": \"chrome\", \"pbrMetallicRoughness\": {\n"
+        "   \"baseColorFactor\": [0.8, 0.8, 0.7, 1], \"metallicFactor\": 1, \"roughnessFactor\": "
+        "0}}],\n";
+    const char *from = strstr(GLTF, "\"materials\"");
+    const char *to = strstr(GLTF, "\"buffers\"");
+    char text[8192], path[1024];
+    for (int pass = 0; pass < 2; pass++) {
+        char joined[8192];
+        snprintf(joined, sizeof joined, "%.*s%s %s", (int)(from - GLTF), GLTF, pass ? MIRROR : MATS,
+                 to);
+        replace_once(joined, "[\"KHR_lights_punctual\"]",
+                     "[\"KHR_lights_punctual\", \"KHR_materials_transmission\", "
+                     "\"KHR_materials_ior\"]",
+                     text, sizeof text);
+        write_file(pass ? "chrome.gltf" : "glass.gltf", text, path, sizeof path);
+        iir_scene *s = load_ok(path);
+        const iir_material *m = &s->material_list[0];
+        if (pass == 0) {
+            assert_int_equal(m->kind, IIR_MATERIAL_GLASS);
+            assert_float_equal(m->ior, 1.45f, 1e-5);
+            assert_vec_near(m->specular, iir_v3(0.9f, 0.95f, 1.f), 1e-6f);
+        } else {
+            assert_int_equal(m->kind, IIR_MATERIAL_MIRROR);
+            assert_vec_near(m->specular, iir_v3(0.8f, 0.8f, 0.7f), 1e-6f);
+        }
+        assert_vec_near(m->albedo, iir_v3s(0.f), 0.f);
+        iir_scene_destroy(s);
+    }
 }
 
 /* The directional light is a sun: its direction is the node's -z, its intensity colour times
@@ -1318,6 +1449,9 @@ int main(void)
         cmocka_unit_test(test_gltf_bad_light),
         cmocka_unit_test(test_gltf_sun),
         cmocka_unit_test(test_gltf_spot_defaults),
+        cmocka_unit_test(test_obj_specular_materials),
+        cmocka_unit_test(test_gltf_specular_materials),
+        cmocka_unit_test(test_sidecar_specular_materials),
         cmocka_unit_test(test_missing_file),
         cmocka_unit_test(test_unreadable_file),
         cmocka_unit_test(test_unknown_format),

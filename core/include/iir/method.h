@@ -52,12 +52,14 @@ typedef struct iir_frame_stats {
     bool whole_sweeps;          /* refinement: the passes so far give every interleaved VPL
                                    subset equal weight, so the image shows no subset pattern
                                    (always true for pt and for frames) */
-    iir_vpl_counts vpl; /* VPL bookkeeping (vpl.h), zero for methods without VPLs; refinement:
-                           count = the size of the pass's VPL set */
-    uint64_t vpl_evals; /* VPL evaluations: pixel-VPL pairs shaded (multires: texel-VPL pairs
-                           too; iir_render_timing), 0 for methods without VPLs */
-    double recomputed;  /* rsm with screen-space interpolation: the share of the frame's pixels
-                           that gathered their own light (their four nodes disagreed); 0 else */
+    iir_vpl_counts vpl;    /* VPL bookkeeping (vpl.h), zero for methods without VPLs; refinement:
+                              count = the size of the pass's VPL set */
+    uint64_t vpl_evals;    /* VPL evaluations: pixel-VPL pairs shaded (multires: texel-VPL pairs
+                              too; iir_render_timing), 0 for methods without VPLs */
+    double recomputed;     /* rsm with screen-space interpolation: the share of the frame's pixels
+                              that gathered their own light (their four nodes disagreed); 0 else */
+    uint64_t branches_cut; /* whitted: ray-tree branches the adaptive depth control stopped (each
+                              saves its ray and the tree under it); 0 else */
 } iir_frame_stats;
 
 const char *iir_phase_name(iir_phase phase);

@@ -1,8 +1,8 @@
-/* scene.h -- the static scene: triangle meshes with diffuse materials, punctual lights, the camera,
- * named light paths; loading it from OBJ/MTL or glTF 2.0 (assimp) plus a JSON sidecar, the
- * Cornell box built into the binary, and opening a scene with its ray tracer in one call. A loaded
- * scene is read-only and shared between threads. Not ray tracing (rt.h) and not light sampling
- * (light.h). Format: docs/scene-format.md. */
+/* scene.h -- the static scene: triangle meshes with diffuse, mirror and glass materials, lights,
+ * the camera, named light paths; loading it from OBJ/MTL or glTF 2.0 (assimp) plus a JSON sidecar,
+ * the Cornell box built into the binary, and opening a scene with its ray tracer in one call. A
+ * loaded scene is read-only and shared between threads. Not ray tracing (rt.h) and not light
+ * sampling (light.h). Format: docs/scene-format.md. */
 #ifndef IIR_SCENE_H
 #define IIR_SCENE_H
 
@@ -19,14 +19,29 @@
 extern "C" {
 #endif
 
-/* Two-sided diffuse material. Emissive materials are static emitting triangles, or, when a
- * scene's sidecar gives no "lights" array and their triangles are one-sided and planar, movable
- * area lights (iir_scene_load). */
+/* What a surface does with light. Zero (a zero-initialised material) is diffuse. */
+typedef enum iir_material_kind {
+    IIR_MATERIAL_DIFFUSE = 0, /* Lambertian: albedo */
+    IIR_MATERIAL_MIRROR,      /* perfect mirror: reflects `specular` along R = V - 2 (V.N) N */
+    IIR_MATERIAL_GLASS        /* smooth dielectric of index `ior`: Fresnel-weighted reflection and
+                                 refraction (Snell), transmission tinted by `specular` */
+} iir_material_kind;
+
+/* A two-sided material. Emissive materials are static emitting triangles, or, when a scene's
+ * sidecar gives no "lights" array and their triangles are one-sided and planar, movable area
+ * lights (iir_scene_load). A mirror or glass has no diffuse part: its albedo is 0 (the loaders
+ * see to it), so every diffuse-only method renders it black (docs/scene-format.md, section 3). */
 typedef struct iir_material {
     char name[64];
-    iir_vec3 albedo;   /* diffuse reflectance rho, each channel in [0, 1] */
-    iir_vec3 emission; /* emitted radiance Le (W/sr/m^2), >= 0 */
+    iir_vec3 albedo;        /* diffuse reflectance rho, each channel in [0, 1]; 0 unless diffuse */
+    iir_vec3 emission;      /* emitted radiance Le (W/sr/m^2), >= 0 */
+    iir_material_kind kind; /* IIR_MATERIAL_DIFFUSE unless a file or sidecar says otherwise */
+    iir_vec3 specular;      /* mirror: reflectance; glass: transmission tint; each in [0, 1] */
+    float ior;              /* glass: index of refraction, in [1, 3]; 0 otherwise */
 } iir_material;
+
+/* "diffuse", "mirror" or "glass" (the sidecar's "kind"). */
+const char *iir_material_kind_name(iir_material_kind kind);
 
 /* Something of a scene that is not rendered, for warnings (the CLI prints them; the daemon can send
  * them): a light or material by its name in the scene that no method renders (the loader's list,

@@ -1,6 +1,7 @@
 /* dropped.c -- what the methods leave out of a scene, as the named entries of iir_method_dropped
  * (method.h): the scene's own notes (lights and materials nothing renders) and each method's (ir:
- * the indirect light of emissive materials; iir: that too, and every light's but the first spot's).
+ * the indirect light of emissive materials, and mirrors and glass, which it renders black; iir:
+ * those too, and every light's but the first spot's).
  * Not the loader's notes (scene_assimp.c makes them). */
 #include <stdarg.h>
 #include <stdio.h>
@@ -32,6 +33,12 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
     uint32_t n = 0;
     for (uint32_t i = 0; i < scene->num_materials; i++) {
         const iir_material *m = &scene->material_list[i];
+        if (m->kind != IIR_MATERIAL_DIFFUSE)
+            iir_dropped_add(out, max, &n, method, "material", m->name,
+                            "is a %s: %s renders it black (its VPLs and shading are diffuse "
+                            "only); use pt, whitted or hybrid",
+                            m->kind == IIR_MATERIAL_GLASS ? "dielectric (glass)" : "mirror",
+                            method);
         if (iir_is_black(m->emission)) continue;
         iir_dropped_add(out, max, &n, method, "material", m->name,
                         "emits light: its indirect light is left out, as %s's VPLs come from "

@@ -1,10 +1,12 @@
 /* pt.c -- the reference path tracer (method "pt"): next-event estimation with MIS for area
- * lights (emissive triangles and rectangular area lights), Russian roulette, a maximum bounce
- * count, deterministic seeds, OpenMP over tiles, and progressive refinement (more samples into the
- * same frame). Parameters: spp and bounces (below), seed, jitter, refine_passes: render + refines
- * of spp samples each are converged once the image holds refine_passes samples per pixel, or one
- * frame's spp when that is more (pt_converged_spp); a refine call still adds its samples after
- * that, so a caller can reach any count.
+ * lights (emissive triangles and rectangular area lights), mirrors and glass as delta BSDFs
+ * (specular.h: no next-event estimation there, emission found through them counts fully; a
+ * specular bounce counts as a bounce), Russian roulette, a maximum bounce count, deterministic
+ * seeds, OpenMP over tiles, and progressive refinement (more samples into the same frame).
+ * Parameters: spp and bounces (below), seed, jitter, refine_passes: render + refines of spp samples
+ * each are converged once the image holds refine_passes samples per pixel, or one frame's spp when
+ * that is more (pt_converged_spp); a refine call still adds its samples after that, so a caller can
+ * reach any count.
  *
  * Bounces count reflections: a light path light -> x_k -> ... -> x_1 -> camera has k of them, so
  * bounces = 1 is direct light only and bounces = 2 adds one diffuse bounce. Emitters seen directly
@@ -25,6 +27,7 @@
 #include "iir/scene.h"
 #include "method_internal.h"
 #include "sampling.h"
+#include "specular.h"
 #include "surface.h"
 #include "iir/timer.h"
 
@@ -130,6 +133,42 @@ static iir_vec3 area_lights_seen(const pt_state *pt, const iir_ray *ray, float t
     return L;
 }
 
+/* Russian roulette once paths are long enough to matter: false when the path ends (killed, or
+ * its throughput is black); a survivor's beta is divided by its survival probability. */
+static bool russian_roulette(int vertex, iir_vec3 *beta, iir_rng *rng)
+{
+    if (vertex >= RR_START) {
+        float q = fmaxf(0.05f, 1.f - iir_max_comp(*beta));
+        if (iir_rng_uniform(rng) < q) return false;
+        *beta = iir_scale(*beta, 1.f / (1.f - q));
+    }
+    return !iir_is_black(*beta);
+}
+
+/* A delta BSDF's bounce of the ray travelling along V at sf (mirror or glass, specular.h): the
+ * new direction *wi and the throughput factor f cos / pdf (the mirror's reflectance; glass picks
+ * reflection with probability F, so its weight is 1 reflected and the tint refracted). */
+static iir_vec3 sample_specular(const iir_surface *sf, iir_vec3 V, float u, iir_vec3 *wi)
+{
+    const iir_material *m = sf->mat;
+    if (m->kind == IIR_MATERIAL_MIRROR) {
+        *wi = iir_reflect(V, sf->n);
+        return m->specular;
+    }
+    iir_glass_split g = iir_glass_at(V, sf->n, m->ior);
+    bool reflect = !g.has_t || u < g.F;
+    *wi = reflect ? g.wr : g.wt;
+    return reflect ? iir_v3s(1.f) : m->specular;
+}
+
+/* A ray leaving sf along wi, lifted off the surface on wi's side (refraction leaves through the
+ * back). */
+static iir_ray leave(const iir_surface *sf, iir_vec3 wi, float eps)
+{
+    iir_vec3 side = iir_dot(wi, sf->n) < 0.f ? iir_neg(sf->n) : sf->n;
+    return iir_make_ray(iir_madd(sf->p, side, eps), wi, 0.f, INFINITY);
+}
+
 static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *st)
 {
     const int max_bounces = pt->params.bounces;
@@ -156,6 +195,17 @@ static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *
         }
         if (vertex > max_bounces) break;
 
+        /* A mirror or glass: no next-event estimation (a delta BSDF never meets a sampled light);
+           what the bounce finds counts fully (pdf_bsdf 0: no MIS). */
+        if (sf.mat->kind != IIR_MATERIAL_DIFFUSE) {
+            iir_vec3 wi;
+            beta = iir_mul(beta, sample_specular(&sf, ray.dir, iir_rng_uniform(rng), &wi));
+            pdf_bsdf = 0.f;
+            if (!russian_roulette(vertex, &beta, rng)) break;
+            ray = leave(&sf, wi, iir_rt_epsilon(pt->rt));
+            continue;
+        }
+
         /* Next-event estimation: a light path with `vertex` reflections. */
         L = iir_add(L, iir_mul(beta, estimate_direct(pt, &sf, rng, st)));
         if (vertex == max_bounces && !pt->has_area_lights) break;
@@ -168,13 +218,7 @@ static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *
         if (pdf_bsdf <= 0.f) break;
         beta = iir_mul(beta, sf.mat->albedo);
 
-        /* Russian roulette once paths are long enough to matter. */
-        if (vertex >= RR_START) {
-            float q = fmaxf(0.05f, 1.f - iir_max_comp(beta));
-            if (iir_rng_uniform(rng) < q) break;
-            beta = iir_scale(beta, 1.f / (1.f - q));
-        }
-        if (iir_is_black(beta)) break;
+        if (!russian_roulette(vertex, &beta, rng)) break;
         ray = iir_make_ray(iir_surface_offset(&sf, iir_rt_epsilon(pt->rt)), wi, 0.f, INFINITY);
     }
     return L;

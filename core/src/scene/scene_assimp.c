@@ -18,8 +18,8 @@
  * taken as I0 in W/sr (a directional light's: as its irradiance E in W/m^2), without a
  * photometric conversion; a spot keeps glTF's own profile (IIR_SPOT_GLTF: outer and inner cone
  * angles), a directional light becomes a sun. Area and ambient lights are ignored, and so are
- * colour textures, transparency and metal; each such light and material is noted by name in the
- * scene (iir_scene.dropped) for the commands' warnings.
+ * colour textures, transparency and rough metal; each such light and material is noted by name in
+ * the scene (iir_scene.dropped) for the commands' warnings. Mirrors and glass: convert_kind.
  *
  * assimp's C API keeps the last error message in one process-wide string, so imports run under a
  * mutex (the only shared state here; it guards the library, not ours). */
@@ -229,8 +229,50 @@ static iir_vec3 clamp0(iir_vec3 c)
     return iir_v3(fmaxf(c.x, 0.f), fmaxf(c.y, 0.f), fmaxf(c.z, 0.f));
 }
 
+static float float_key(const struct aiMaterial *mat, const char *key, unsigned type, unsigned idx,
+                       float fallback)
+{
+    float f = fallback;
+    return aiGetMaterialFloat(mat, key, type, idx, &f) == aiReturn_SUCCESS ? f : fallback;
+}
+
+/* The MTL illumination model (assimp's "$mat.illum"), -1 when the file gives none. */
+static int mtl_illum(const struct aiMaterial *mat)
+{
+    int illum = -1;
+    return aiGetMaterialInteger(mat, "$mat.illum", 0, 0, &illum) == aiReturn_SUCCESS ? illum : -1;
+}
+
+/* The kind of a material (docs/scene-format.md, section 3). MTL: illum 3 is a mirror of colour Ks;
+ * illum 5 or 7 is glass of index Ni tinted by Tf (white without one). glTF: a transmission factor
+ * above 0 (KHR_materials_transmission) is glass of index KHR_materials_ior (1.5 without it) tinted
+ * by the base colour; metallic 1 with roughness 0 is a mirror of the base colour. The colours are
+ * clamped to [0, 1]; the ior is checked by the builder. */
+static void convert_kind(const struct aiMaterial *mat, iir_vec3 base, iir_material *m)
+{
+    int illum = mtl_illum(mat);
+    float transmission = float_key(mat, AI_MATKEY_TRANSMISSION_FACTOR, 0.f);
+    float metallic = float_key(mat, AI_MATKEY_METALLIC_FACTOR, 0.f);
+    float roughness = float_key(mat, AI_MATKEY_ROUGHNESS_FACTOR, 1.f);
+    if (illum == 5 || illum == 7 || transmission > 0.f) {
+        m->kind = IIR_MATERIAL_GLASS;
+        m->ior = float_key(mat, AI_MATKEY_REFRACTI, 1.5f);
+        m->specular = illum >= 0 ? color3(mat, AI_MATKEY_COLOR_TRANSPARENT, iir_v3s(1.f)) : base;
+    } else if (illum == 3) {
+        m->kind = IIR_MATERIAL_MIRROR;
+        m->specular = color3(mat, AI_MATKEY_COLOR_SPECULAR, iir_v3s(0.f));
+    } else if (metallic >= 1.f && roughness <= 0.f) {
+        m->kind = IIR_MATERIAL_MIRROR;
+        m->specular = base;
+    } else {
+        return;
+    }
+    m->specular = clamp01(m->specular);
+    m->albedo = iir_v3s(0.f); /* no diffuse part */
+}
+
 /* Diffuse colour -> albedo (clamped to [0, 1]), emissive colour -> emission (negatives to 0;
- * NaN stays NaN and is refused by the builder). */
+ * NaN stays NaN and is refused by the builder); a mirror or glass as convert_kind says. */
 static iir_material convert_material(const struct aiMaterial *mat, unsigned index)
 {
     iir_material m;
@@ -246,24 +288,32 @@ static iir_material convert_material(const struct aiMaterial *mat, unsigned inde
     iir_vec3 ke = color3(mat, AI_MATKEY_COLOR_EMISSIVE, iir_v3s(0.f));
     m.albedo = isnan(kd.x) || isnan(kd.y) || isnan(kd.z) ? kd : clamp01(kd);
     m.emission = isnan(ke.x) || isnan(ke.y) || isnan(ke.z) ? ke : clamp0(ke);
+    iir_vec3 base = color3(mat, AI_MATKEY_BASE_COLOR, kd);
+    if (!isnan(kd.x + kd.y + kd.z)) convert_kind(mat, base, &m);
     return m;
 }
 
 /* Notes what a material has that iir does not render (iir_scene.dropped): a colour texture,
  * transparency, metal. Specular colours (OBJ Ks, which exporters write by default) are not noted:
  * every surface is diffuse (docs/scene-format.md, section 3). */
-static void note_material(iir_scene_builder *b, const struct aiMaterial *mat, const char *name)
+static void note_material(iir_scene_builder *b, const struct aiMaterial *mat, const iir_material *m)
 {
+    const char *name = m->name;
     float f = 0.f;
     if (aiGetMaterialTextureCount(mat, aiTextureType_DIFFUSE) +
         aiGetMaterialTextureCount(mat, aiTextureType_BASE_COLOR))
         iir_builder_drop(b, "material", name, "a colour texture: ignored; its flat colour is used");
-    if (aiGetMaterialFloat(mat, AI_MATKEY_OPACITY, &f) == aiReturn_SUCCESS && f < 0.999f)
+    if (m->kind != IIR_MATERIAL_GLASS &&
+        aiGetMaterialFloat(mat, AI_MATKEY_OPACITY, &f) == aiReturn_SUCCESS && f < 0.999f)
         iir_builder_drop(b, "material", name, "transparency (opacity %g): rendered opaque",
                          (double)f);
-    if (aiGetMaterialFloat(mat, AI_MATKEY_TRANSMISSION_FACTOR, &f) == aiReturn_SUCCESS && f > 0.f)
-        iir_builder_drop(b, "material", name, "transmission %g: rendered opaque", (double)f);
-    if (aiGetMaterialFloat(mat, AI_MATKEY_METALLIC_FACTOR, &f) == aiReturn_SUCCESS && f > 0.f)
+    if (aiGetMaterialFloat(mat, AI_MATKEY_TRANSMISSION_FACTOR, &f) == aiReturn_SUCCESS && f > 0.f &&
+        f < 1.f)
+        iir_builder_drop(b, "material", name, "transmission %g: rendered as clear glass",
+                         (double)f);
+    if (aiGetMaterialFloat(mat, AI_MATKEY_METALLIC_FACTOR, &f) == aiReturn_SUCCESS && f > 0.f &&
+        !(f >= 1.f && float_key(mat, AI_MATKEY_ROUGHNESS_FACTOR, 1.f) <= 0.f) &&
+        float_key(mat, AI_MATKEY_TRANSMISSION_FACTOR, 0.f) <= 0.f)
         iir_builder_drop(b, "material", name,
                          "metallic %g: rendered as a diffuse surface of its base colour",
                          (double)f);
@@ -286,7 +336,7 @@ static iir_status use_material(loader *L, unsigned i, uint32_t *out, iir_error *
         iir_material m = convert_material(L->s->mMaterials[i], i);
         iir_status st = iir_builder_add_material(L->b, &m, &L->material_map[i], err);
         if (st != IIR_OK) return st;
-        note_material(L->b, L->s->mMaterials[i], m.name);
+        note_material(L->b, L->s->mMaterials[i], &m);
     }
     *out = L->material_map[i];
     return IIR_OK;

@@ -150,6 +150,9 @@ iir_status iir_builder_add_material(iir_scene_builder *b, const iir_material *m,
                         "%s: material '%s': emission (%g, %g, %g) must be finite and >= 0",
                         b->source, m->name, (double)m->emission.x, (double)m->emission.y,
                         (double)m->emission.z);
+    char why[160];
+    if (iir_material_check(m, why, sizeof why))
+        return iir_fail(err, IIR_ERR_INVALID, "%s: material '%s': %s", b->source, m->name, why);
     if (!grow((void **)&b->materials, &b->cap_materials, (uint64_t)b->num_materials + 1,
               sizeof(iir_material)))
         return no_memory(b, err);

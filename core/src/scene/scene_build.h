@@ -87,10 +87,16 @@ iir_status iir_builder_add_triangle(iir_scene_builder *b, uint32_t i0, uint32_t 
                                     uint32_t material, iir_error *err);
 
 /* Appends a material and writes its index to *index (may be NULL). IIR_ERR_INVALID naming the
- * material when albedo is not in [0, 1] or emission is negative or not finite; callers that
- * promise to clamp (file colours) clamp before calling. */
+ * material when albedo is not in [0, 1], emission is negative or not finite, or the kind's fields
+ * are not usable (iir_material_check); callers that promise to clamp (file colours) clamp before
+ * calling. */
 iir_status iir_builder_add_material(iir_scene_builder *b, const iir_material *m, uint32_t *index,
                                     iir_error *err);
+
+/* Why material m's kind fields are not usable (written into why, size n, and returned), or NULL
+ * when they are: a mirror or glass needs specular in [0, 1] and albedo 0, glass an ior in [1, 3]
+ * (scene_material.c). */
+const char *iir_material_check(const iir_material *m, char *why, size_t n);
 
 /* Index of the first material called name, or -1. */
 int64_t iir_builder_find_material(const iir_scene_builder *b, const char *name);
@@ -142,8 +148,10 @@ iir_status iir_assimp_load(const char *path, iir_scene_builder *b, iir_error *er
  * units (after unit_scale). */
 typedef struct iir_sidecar_material {
     char name[64];
-    bool has_albedo, has_emission;
-    iir_vec3 albedo, emission;
+    bool has_albedo, has_emission, has_kind, has_specular, has_ior;
+    iir_vec3 albedo, emission, specular;
+    iir_material_kind kind;
+    float ior;
 } iir_sidecar_material;
 
 typedef struct iir_sidecar {

@@ -628,9 +628,50 @@ static iir_status parse_lights(const ctx *c, const cJSON *arr, iir_sidecar *sc)
     return IIR_OK;
 }
 
+/* "kind": "diffuse", "mirror" or "glass". */
+static iir_status parse_material_kind(const ctx *c, const member *k, iir_sidecar_material *m)
+{
+    static const iir_material_kind kinds[] = {IIR_MATERIAL_DIFFUSE, IIR_MATERIAL_MIRROR,
+                                              IIR_MATERIAL_GLASS};
+    if (!cJSON_IsString(k->item))
+        return field_error(c, IIR_ERR_FORMAT, k->field,
+                           "must be \"diffuse\", \"mirror\" or \"glass\"");
+    for (size_t i = 0; i < sizeof kinds / sizeof kinds[0]; i++)
+        if (strcmp(k->item->valuestring, iir_material_kind_name(kinds[i])) == 0) {
+            m->kind = kinds[i];
+            return IIR_OK;
+        }
+    return field_error(c, IIR_ERR_INVALID, k->field,
+                       "'%s' is not a material kind (known: diffuse, mirror, glass)",
+                       k->item->valuestring);
+}
+
+/* The specular fields: "kind", "specular" (mirror, glass) and "ior" (glass, in [1, 3]). */
+static iir_status parse_material_specular(const ctx *c, const cJSON *obj, const char *where,
+                                          iir_sidecar_material *m)
+{
+    member kind = get_member(obj, where, "kind"), spec = get_member(obj, where, "specular"),
+           ior = get_member(obj, where, "ior");
+    m->has_kind = kind.item != NULL;
+    m->has_specular = spec.item != NULL;
+    m->has_ior = ior.item != NULL;
+    iir_status st = kind.item ? parse_material_kind(c, &kind, m) : IIR_OK;
+    if (st == IIR_OK && spec.item) st = get_color(c, spec.item, spec.field, 1.0, &m->specular);
+    double v = 0.0;
+    if (st == IIR_OK && ior.item &&
+        (st = get_number(c, ior.item, ior.field, 1.0, 3.0, &v)) == IIR_OK)
+        m->ior = (float)v;
+    if (st == IIR_OK && m->has_kind && m->kind == IIR_MATERIAL_DIFFUSE && (spec.item || ior.item))
+        return field_error(c, IIR_ERR_INVALID, spec.item ? spec.field : ior.field,
+                           "a diffuse material has no specular colour or ior");
+    if (st == IIR_OK && m->has_kind && m->kind == IIR_MATERIAL_MIRROR && ior.item)
+        return field_error(c, IIR_ERR_INVALID, ior.field, "a mirror has no ior (only glass)");
+    return st;
+}
+
 static iir_status parse_material(const ctx *c, const cJSON *obj, iir_sidecar_material *m)
 {
-    static const char *const fields[] = {"albedo", "emission", NULL};
+    static const char *const fields[] = {"albedo", "emission", "kind", "specular", "ior", NULL};
     char where[96];
     snprintf(where, sizeof where, "materials.%s", obj->string);
     if (strlen(obj->string) >= sizeof m->name)
@@ -645,6 +686,7 @@ static iir_status parse_material(const ctx *c, const cJSON *obj, iir_sidecar_mat
     if (st == IIR_OK && albedo.item) st = get_color(c, albedo.item, albedo.field, 1.0, &m->albedo);
     if (st == IIR_OK && emission.item)
         st = get_color(c, emission.item, emission.field, MAX_INTENSITY, &m->emission);
+    if (st == IIR_OK) st = parse_material_specular(c, obj, where, m);
     return st;
 }
 
@@ -822,6 +864,39 @@ static void material_names(const iir_scene_builder *b, char *buf, size_t n)
     }
 }
 
+/* Material m's kind as override o says: a new kind starts from its defaults (diffuse: albedo 0.8
+ * unless given; mirror and glass: no albedo, specular 1, glass ior 1.5), then o's fields. */
+static void apply_kind(const iir_sidecar_material *o, iir_material *m)
+{
+    if (o->has_kind && o->kind != m->kind) {
+        if (o->kind == IIR_MATERIAL_DIFFUSE) m->albedo = iir_v3s(0.8f);
+        m->kind = o->kind;
+        m->specular = iir_v3s(o->kind == IIR_MATERIAL_DIFFUSE ? 0.f : 1.f);
+        m->ior = o->kind == IIR_MATERIAL_GLASS ? 1.5f : 0.f;
+    }
+    if (m->kind != IIR_MATERIAL_DIFFUSE && !o->has_albedo) m->albedo = iir_v3s(0.f);
+    if (o->has_specular) m->specular = o->specular;
+    if (o->has_ior) m->ior = o->ior;
+}
+
+/* Applies override o to material m; IIR_ERR_INVALID when the result is not a usable material. */
+static iir_status apply_material(const iir_sidecar *sc, const iir_sidecar_material *o,
+                                 iir_material *m, iir_error *err)
+{
+    if (o->has_albedo) m->albedo = o->albedo;
+    if (o->has_emission) m->emission = o->emission;
+    apply_kind(o, m);
+    if (m->kind == IIR_MATERIAL_DIFFUSE && (o->has_specular || o->has_ior))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "%s: materials.%s: %s is only for a mirror or glass (this material is "
+                        "diffuse: give \"kind\")",
+                        sc->path, o->name, o->has_ior ? "ior" : "specular");
+    char why[160];
+    if (iir_material_check(m, why, sizeof why))
+        return iir_fail(err, IIR_ERR_INVALID, "%s: materials.%s: %s", sc->path, o->name, why);
+    return IIR_OK;
+}
+
 static iir_status apply_materials(const iir_sidecar *sc, iir_scene_builder *b, iir_error *err)
 {
     for (uint32_t k = 0; k < sc->num_materials; k++) {
@@ -829,8 +904,8 @@ static iir_status apply_materials(const iir_sidecar *sc, iir_scene_builder *b, i
         bool found = false;
         for (uint32_t i = 0; i < b->num_materials; i++) {
             if (strcmp(b->materials[i].name, o->name) != 0) continue;
-            if (o->has_albedo) b->materials[i].albedo = o->albedo;
-            if (o->has_emission) b->materials[i].emission = o->emission;
+            iir_status st = apply_material(sc, o, &b->materials[i], err);
+            if (st != IIR_OK) return st;
             found = true;
         }
         if (!found) {
