@@ -404,3 +404,11 @@ bool iir_method_domain(iir_method *m, iir_domain *out)
     memset(out, 0, sizeof *out);
     return m->ops->domain ? m->ops->domain(m->state, out) : false;
 }
+
+int iir_method_reference_bounces(const char *name, const iir_params *p)
+{
+    const iir_param *row = iir_method_find_param(name, "bounces");
+    if (row) return (int)iir_method_param_value(row, p);
+    const iir_method_ops *ops = find_ops(name);
+    return ops && ops->reference_bounces > 0 ? ops->reference_bounces : 2;
+}

@@ -108,6 +108,9 @@ typedef struct iir_method_ops {
     /* samples_per_pixel at which refinement converges (iir_method_converged_at). NULL: the
      * refine_passes parameter (one pass per refine call). */
     uint64_t (*converged_at)(const void *opts);
+    /* pt's bounce count for this method's references (iir_method_reference_bounces): 0 = the
+     * method's `bounces` parameter, or 2 (one bounce) without one. */
+    int reference_bounces;
     /* NULL when the method renders all of every light it is given (pt). Otherwise appends to out
      * (at most max entries; returns how many there are) what it leaves out of these lights and
      * the scene's emissive materials (iir_method_dropped). */

@@ -16,12 +16,12 @@
 #include "iir/vpl.h"
 #include "orbit.h"
 
-/* The bounce count of a method's references: its bounces parameter, or one bounce (2) for a
- * method without one (iir is one bounce by construction). */
+/* The bounce count of a method's references (iir_method_reference_bounces): its bounces
+ * parameter, a multi-bounce method's own count, or one bounce (2: iir is one bounce by
+ * construction). */
 static int ref_bounces(const iird_bench_run *r)
 {
-    const iir_param *row = iir_method_find_param(r->method, "bounces");
-    return row ? (int)iir_method_param_value(row, &r->params) : 2;
+    return iir_method_reference_bounces(r->method, &r->params);
 }
 
 static iir_status refset_for(iird_bench *b, int bounces, int *out, iir_error *err)

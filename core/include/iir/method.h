@@ -107,6 +107,11 @@ double iir_method_param_value(const iir_param *row, const iir_params *p);
  * that cannot refine. */
 uint64_t iir_method_converged_at(const char *name, const iir_params *p);
 
+/* The bounce count of the pt reference that method `name` is measured against (iird bench): its
+ * `bounces` parameter when it has one; a multi-bounce method's own count (radiosity, whitted: 8);
+ * else 2 (one bounce: iir, rsm, ism, hier). 2 for an unknown name. */
+int iir_method_reference_bounces(const char *name, const iir_params *p);
+
 /* Bytes method `name` would hold with p for a width x height frame (frame buffers, VPLs and their
  * shadow maps, G-buffer, refinement buffers): an estimate from the parameters alone, so a caller
  * can refuse a request before anything is allocated. 0 for an unknown name. */
