@@ -566,7 +566,7 @@ static uint32_t rad_dropped(const iir_scene *scene, const iir_light *lights, uin
         if (m->kind != IIR_MATERIAL_DIFFUSE)
             iir_dropped_add(out, max, &n, "radiosity", "material", m->name,
                             "is a %s: radiosity's patches are diffuse only, so it is black; use "
-                            "pt, whitted or hybrid",
+                            "pt or whitted",
                             m->kind == IIR_MATERIAL_GLASS ? "dielectric (glass)" : "mirror");
     }
     return n;
