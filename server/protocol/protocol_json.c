@@ -367,6 +367,7 @@ char *iird_json_stats(const iird_stats_view *v)
               add_item(o, "rays", iird_json_rays(&st->rays)) &&
               iird_json_add_u64(o, "vpl_evals", st->vpl_evals) &&
               iird_json_add_num(o, "recomputed", rounded(st->recomputed, 1e4)) &&
+              iird_json_add_u64(o, "branches_cut", st->branches_cut) &&
               iird_json_add_u64(o, "dropped", v->dropped) &&
               iird_json_add_u64(o, "memory_bytes", v->memory_bytes);
     return iird_json_finish(keep_if(o, ok));
