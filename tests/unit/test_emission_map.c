@@ -72,10 +72,7 @@ static void test_lookup_and_flux(void **state)
 
 /* A wall z = 0 (4 x 2); the screen (2 x 1, red | green) 0.25 in front of it, facing it; the camera
  * behind the screen, looking through its back at the wall. */
-typedef struct loaded {
-    iir_scene *scene;
-    iir_rt *rt;
-} loaded;
+typedef iir_test_cornell loaded; /* a scene and its rays */
 
 static loaded load_wall(void)
 {
@@ -95,10 +92,7 @@ static loaded load_wall(void)
         " \"lights\": [{\"type\": \"area\", \"name\": \"screen\","
         " \"position\": [0, 0, 0.25], \"direction\": [0, 0, -1], \"up\": [0, 1, 0],"
         " \"size\": [2, 1], \"intensity\": 2, \"emission_map\": \"two.png\"}]}");
-    loaded l = {0};
-    iir_error err = {0};
-    if (iir_test_load_obj(dir, "w", &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return l;
+    return iir_test_load(dir, "w");
 }
 
 /* Mean colour of the image's columns [x0, x1) in its middle third of rows. */

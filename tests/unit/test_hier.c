@@ -20,16 +20,7 @@
 #include "iir/render.h"
 #include "iir/scene.h"
 
-typedef struct loaded {
-    iir_scene *scene;
-    iir_rt *rt;
-} loaded;
-
-static void unload(loaded *l)
-{
-    iir_rt_destroy(l->rt);
-    iir_scene_destroy(l->scene);
-}
+typedef iir_test_cornell loaded; /* a scene and its rays */
 
 /* The plane y = 0 (8 x 8), optionally a square occluder at height 0.5 over (0, 0), an area light
  * 1.5 above it facing down, the camera looking down from 3. */
@@ -52,10 +43,7 @@ static loaded load_plane(bool occluder)
                         " \"lights\": [{\"type\": \"area\", \"name\": \"panel\","
                         " \"position\": [0, 1.5, 0], \"direction\": [0, -1, 0], \"up\": [0, 0, 1],"
                         " \"size\": [0.5, 0.5], \"intensity\": 20}]}");
-    loaded l = {0};
-    iir_error err = {0};
-    if (iir_test_load_obj(dir, "p", &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return l;
+    return iir_test_load(dir, "p");
 }
 
 static iir_image *render(const char *method, const loaded *l, int w, int h, const iir_params *p,
@@ -131,7 +119,7 @@ static void test_plane_matches_pt(void **state)
     iir_image_destroy(img);
     iir_image_destroy(img1);
     iir_image_destroy(ref);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 static iir_image *render_from(const char *method, const loaded *l, iir_vec3 eye, int w, int h,
@@ -186,7 +174,7 @@ static void test_occluder_shadow(void **state)
     assert_true(umbra[4] < 0.02 * lit[0]); /* probes closer than a cell */
     assert_true(umbra[2] > 0.5 * lit[0]);  /* 4 probes step over the occluder's cells */
     assert_true(umbra[3] > 0.5 * lit[0]);  /* the leak without visibility */
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* The Cornell box with its panel as an area light instead of the spot. Bound: hier's direct light

@@ -29,10 +29,7 @@ static const float OCC_H = 0.15f;                  /* its half size */
 static const iir_vec3 SPOT_P = {0.f, 1.f, 0.f};    /* the glTF spot, aimed straight down */
 static const float OUTER = 40.f, INNER = 20.f;     /* degrees */
 
-typedef struct loaded {
-    iir_scene *scene;
-    iir_rt *rt;
-} loaded;
+typedef iir_test_cornell loaded; /* a scene and its rays */
 
 static bool in_occluder(iir_vec3 q)
 {
@@ -61,16 +58,7 @@ static loaded load_plane(void)
              " \"intensity\": 1}]}",
              (double)SPOT_P.x, (double)SPOT_P.y, (double)SPOT_P.z, (double)OUTER, (double)INNER);
     iir_test_write_file(dir, "plane.scene.json", json);
-    loaded l = {0};
-    iir_error err = {0};
-    if (iir_test_load_obj(dir, "plane", &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return l;
-}
-
-static void unload(loaded *l)
-{
-    iir_rt_destroy(l->rt);
-    iir_scene_destroy(l->scene);
+    return iir_test_load(dir, "plane");
 }
 
 /* glTF's t^2 in double precision, from the specification. */
@@ -197,7 +185,7 @@ static void test_gltf_spot_plane(void **state)
     assert_int_equal(bad, 0);
     assert_true(bad_lobe > 100); /* the bound tells the profiles apart */
     iir_image_destroy(img);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 static void test_sun_plane(void **state)
@@ -223,7 +211,7 @@ static void test_sun_plane(void **state)
     assert_int_equal(bad, 0);
     assert_true(dark > 8); /* the occluder's shadow is in view */
     iir_image_destroy(img);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* ---- the area light over a plane ---- */
@@ -265,10 +253,7 @@ static loaded load_bare_plane(void)
              (double)AREA_P.x, (double)AREA_P.y, (double)AREA_P.z, (double)u.x, (double)u.z,
              (double)AREA_W, (double)AREA_H, (double)AREA_L);
     iir_test_write_file(dir, "bare.scene.json", json);
-    loaded l = {0};
-    iir_error err = {0};
-    if (iir_test_load_obj(dir, "bare", &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return l;
+    return iir_test_load(dir, "bare");
 }
 
 /* The form factor from a point to a parallel rectangle [0, a] x [0, b] (a, b signed) at height c
@@ -367,7 +352,7 @@ static void test_area_light_plane(void **state)
     assert_true(bad_far > 20);
     assert_true(fabs(sum - sum_ref) < 0.005 * sum_ref);
     iir_image_destroy(img);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* Whether the camera ray o + t d meets the area light from its front (below), by the test's own
@@ -444,7 +429,7 @@ static void test_area_light_seen(void **state)
     iir_method_destroy(m);
     iir_image_destroy(img);
     iir_image_destroy(direct);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* ---- the disc lamp: a shaped area light against its own emissive triangles ---- */
@@ -474,10 +459,7 @@ static loaded load_disc(const char *lights)
              " \"up\": [0, 1, 0], \"fov_y\": 70}, \"lights\": %s}",
              lights);
     iir_test_write_file(dir, "disc.scene.json", json);
-    loaded l = {0};
-    iir_error err = {0};
-    if (iir_test_load_obj(dir, "disc", &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return l;
+    return iir_test_load(dir, "disc");
 }
 
 /* Whether pixel (x, y) may see the lamp itself (its ray crosses the lamp's plane within 1.2 R of
@@ -508,12 +490,12 @@ static void test_disc_light_against_triangles(void **state)
     iir_test_set(&p, "seed", 3);
     iir_image *img_a = render("pt", a.scene, a.rt, a.scene->lights, 1, W, H, &p);
     iir_camera_frame cf = iir_camera_setup(&a.scene->camera, W, H);
-    unload(&a);
+    iir_test_unload(&a);
     loaded b = load_disc("[]");
     assert_int_equal(b.scene->num_lights, 0);
     iir_test_set(&p, "seed", 4);
     iir_image *img_b = render("pt", b.scene, b.rt, NULL, 0, W, H, &p);
-    unload(&b);
+    iir_test_unload(&b);
     double blocks[W * H / (BLOCK * BLOCK)][2], top = 0, sum_a = 0, sum_b = 0;
     int n = 0, bad = 0, skipped = 0;
     for (int by = 0; by < H; by += BLOCK)

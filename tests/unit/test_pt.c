@@ -20,24 +20,7 @@
 
 /* ---- writing small scenes ---- */
 
-typedef struct loaded {
-    iir_scene *scene;
-    iir_rt *rt;
-} loaded;
-
-static loaded load(const char *dir, const char *name)
-{
-    loaded l = {0};
-    iir_error err = {0};
-    if (iir_test_load_obj(dir, name, &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return l;
-}
-
-static void unload(loaded *l)
-{
-    iir_rt_destroy(l->rt);
-    iir_scene_destroy(l->scene);
-}
+typedef iir_test_cornell loaded; /* a scene and its rays */
 
 static iir_image *render_pt(const loaded *l, int w, int h, int spp, int bounces, uint64_t seed)
 {
@@ -87,7 +70,7 @@ static void check_furnace(float rho)
 {
     const char *dir = iir_test_tmpdir(rho < 0.6f ? "pt-furnace-a" : "pt-furnace-b");
     write_furnace(dir, rho);
-    loaded l = load(dir, "furnace");
+    loaded l = iir_test_load(dir, "furnace");
     enum { W = 24, H = 24 };
     iir_image *img = render_pt(&l, W, H, 64, 1000, 3);
     double expect = 1.0 / (1.0 - rho), mean = 0;
@@ -105,7 +88,7 @@ static void check_furnace(float rho)
     if (fabs(mean - expect) > 0.01 * expect)
         fail_msg("furnace rho %.2f: mean %.4f, expected %.4f (1%%)", rho, mean, expect);
     iir_image_destroy(img);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 static void test_white_furnace(void **state)
@@ -150,7 +133,7 @@ static void test_point_light_plane(void **state)
                         " \"up\": [0, 0, -1], \"fov_y\": 90},"
                         " \"lights\": [{\"type\": \"point\", \"name\": \"bulb\","
                         " \"position\": [0, 1, 0], \"intensity\": [1, 1, 1]}]}");
-    loaded l = load(dir, "plane");
+    loaded l = iir_test_load(dir, "plane");
     enum { W = 64, H = 64 };
     iir_image *direct = render_pt(&l, W, H, 256, 1, 5);
     iir_image *bounce = render_pt(&l, W, H, 256, 2, 5);
@@ -166,7 +149,7 @@ static void test_point_light_plane(void **state)
         }
     iir_image_destroy(direct);
     iir_image_destroy(bounce);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* ---- one bounce against quadrature ---- */
@@ -246,7 +229,7 @@ static void test_one_bounce_matches_quadrature(void **state)
     (void)state;
     const char *dir = iir_test_tmpdir("pt-bounce");
     write_bounce_scene(dir);
-    loaded l = load(dir, "bounce");
+    loaded l = iir_test_load(dir, "bounce");
     enum { W = 32, H = 32 };
     iir_image *b1 = render_pt(&l, W, H, 256, 1, 11);
     iir_image *b2 = render_pt(&l, W, H, 256, 2, 11);
@@ -274,7 +257,7 @@ static void test_one_bounce_matches_quadrature(void **state)
     free(Lf);
     iir_image_destroy(b1);
     iir_image_destroy(b2);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* ---- determinism and progressive refinement ---- */

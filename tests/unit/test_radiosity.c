@@ -22,23 +22,11 @@
 
 static const char *tmp;
 
-typedef struct loaded {
-    iir_scene *scene;
-    iir_rt *rt;
-} loaded;
+typedef iir_test_cornell loaded; /* a scene and its rays */
 
 static loaded load(const char *name)
 {
-    loaded l = {0};
-    iir_error err = {0};
-    if (iir_test_load_obj(tmp, name, &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return l;
-}
-
-static void unload(loaded *l)
-{
-    iir_rt_destroy(l->rt);
-    iir_scene_destroy(l->scene);
+    return iir_test_load(tmp, name);
 }
 
 static FILE *open_obj(const char *name)
@@ -150,7 +138,7 @@ static void test_ff_closed_forms(void **state)
         assert_true(fabs(F - exact) < tol);
         rad_ff_free(&ff);
         rad_mesh_free(&m);
-        unload(&l);
+        iir_test_unload(&l);
     }
 }
 
@@ -201,7 +189,7 @@ static void test_ff_rows_and_reciprocity(void **state)
      * 0.138 at 48, about 1 / sqrt(res); asserted 1.5 / sqrt(res) and the trend. */
     for (int r = 0; r < 2; r++) assert_true(err[r] < 1.5 / sqrt(res[r]));
     assert_true(err[1] < 0.5 * err[0]);
-    unload(&l);
+    iir_test_unload(&l);
     loaded o = box(true);
     rad_mesh m;
     rad_ff ff;
@@ -216,7 +204,7 @@ static void test_ff_rows_and_reciprocity(void **state)
     assert_true(least < 0.9);
     rad_ff_free(&ff);
     rad_mesh_free(&m);
-    unload(&o);
+    iir_test_unload(&o);
 }
 
 /* ---- solvers ---- */
@@ -274,7 +262,7 @@ static void test_white_furnace(void **state)
     free(rho), free(E);
     rad_ff_free(&ff);
     rad_mesh_free(&m);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* ---- the method ---- */

@@ -23,24 +23,7 @@
 #include "iir/render.h"
 #include "iir/scene.h"
 
-typedef struct loaded {
-    iir_scene *scene;
-    iir_rt *rt;
-} loaded;
-
-static loaded load(const char *dir, const char *name)
-{
-    loaded l = {0};
-    iir_error err = {0};
-    if (iir_test_load_obj(dir, name, &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
-    return l;
-}
-
-static void unload(loaded *l)
-{
-    iir_rt_destroy(l->rt);
-    iir_scene_destroy(l->scene);
-}
+typedef iir_test_cornell loaded; /* a scene and its rays */
 
 static iir_image *render(const char *method, const loaded *l, const iir_view *v, int w, int h,
                          const iir_params *p, iir_frame_stats *fs)
@@ -106,7 +89,7 @@ static loaded load_corner(void)
     iir_test_write_file(dir, "corner.scene.json",
                         "{\"camera\": {\"position\": [3, 3.5, 6], \"target\": [-0.5, 0.8, -0.5],"
                         " \"fov_y\": 50}, \"lights\": []}");
-    return load(dir, "corner");
+    return iir_test_load(dir, "corner");
 }
 
 /* One light of each kind over the corner, lighting the floor and the walls. */
@@ -164,7 +147,7 @@ static void test_corner_matches_pt(void **state)
     check_corner_kind(&c, corner_light(IIR_LIGHT_POINT, IIR_SPOT_COSINE));
     check_corner_kind(&c, corner_light(IIR_LIGHT_SUN, IIR_SPOT_COSINE));
     check_corner_kind(&c, corner_light(IIR_LIGHT_AREA, IIR_SPOT_COSINE));
-    unload(&c);
+    iir_test_unload(&c);
 }
 
 /* ---- two closed rooms side by side; the spot is in the left one ---- */
@@ -193,7 +176,7 @@ static loaded load_rooms(void)
         " \"fov_y\": 70},"
         " \"lights\": [{\"type\": \"spot\", \"name\": \"s\", \"position\": [-1, 1.9, 0],"
         " \"direction\": [0, -1, 0], \"cone_angle\": 75, \"intensity\": 3}]}");
-    return load(dir, "rooms");
+    return iir_test_load(dir, "rooms");
 }
 
 static double mean_luminance(const iir_image *img)
@@ -230,7 +213,7 @@ static void test_leak_through_a_wall(void **state)
     iir_image_destroy(pt_left);
     iir_image_destroy(pt_right);
     iir_image_destroy(rsm_right);
-    unload(&r);
+    iir_test_unload(&r);
 }
 
 /* ---- the Cornell box ---- */

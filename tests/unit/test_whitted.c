@@ -22,10 +22,7 @@
 
 /* ---- small scenes ---- */
 
-typedef struct loaded {
-    iir_scene *scene;
-    iir_rt *rt;
-} loaded;
+typedef iir_test_cornell loaded; /* a scene and its rays */
 
 static loaded load_path(const char *path)
 {
@@ -33,12 +30,6 @@ static loaded load_path(const char *path)
     iir_error err = {0};
     if (iir_scene_open(path, NULL, &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
     return l;
-}
-
-static void unload(loaded *l)
-{
-    iir_rt_destroy(l->rt);
-    iir_scene_destroy(l->scene);
 }
 
 /* An axis-aligned box of half-sizes h about c, wound outward. */
@@ -222,7 +213,7 @@ static void test_mirror_shows_bounce_point(void **state)
             iir_test_set(&p, "bounces", 4);
         }
         check_mirror_image(&l, pass ? "pt" : "whitted", &p);
-        unload(&l);
+        iir_test_unload(&l);
     }
 }
 
@@ -295,7 +286,7 @@ static void test_total_internal_reflection_rendered(void **state)
             }
         }
         iir_image_destroy(img);
-        unload(&l);
+        iir_test_unload(&l);
     }
 }
 
@@ -359,7 +350,7 @@ static void test_adaptive_depth(void **state)
     assert_true(rays_full - rays_cut >= fs_cut.branches_cut); /* each cut saves its own ray */
     iir_image_destroy(a);
     iir_image_destroy(b);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* Deterministic: the same frame twice. */
@@ -374,7 +365,7 @@ static void test_deterministic(void **state)
     assert_memory_equal(a->pixels, b->pixels, sizeof(iir_vec3) * 48 * 40);
     iir_image_destroy(a);
     iir_image_destroy(b);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* ---- pt through a glass slab ---- */
@@ -413,7 +404,7 @@ static void test_pt_glass_slab(void **state)
     img = render(&l, "whitted", &p, 8, 8, &fs);
     for (int i = 0; i < 64; i++) assert_float_equal(iir_luminance(img->pixels[i]), T, 1e-3);
     iir_image_destroy(img);
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 /* ---- the VPL methods' notes ---- */
@@ -440,7 +431,7 @@ static void test_vpl_methods_note_specular(void **state)
     uint32_t n =
         iir_method_dropped("whitted", l.scene, l.scene->lights, l.scene->num_lights, d, 32);
     for (uint32_t i = 0; i < n && i < 32; i++) assert_string_not_equal(d[i].method, "whitted");
-    unload(&l);
+    iir_test_unload(&l);
 }
 
 int main(void)

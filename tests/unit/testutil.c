@@ -75,6 +75,20 @@ iir_status iir_test_load_obj(const char *dir, const char *name, iir_scene **scen
     return iir_scene_open(path, NULL, scene, rt, err);
 }
 
+iir_test_cornell iir_test_load(const char *dir, const char *name)
+{
+    iir_test_cornell l = {0};
+    iir_error err = {0};
+    if (iir_test_load_obj(dir, name, &l.scene, &l.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
+    return l;
+}
+
+void iir_test_unload(iir_test_cornell *l)
+{
+    iir_rt_destroy(l->rt);
+    iir_scene_destroy(l->scene);
+}
+
 int iir_test_cornell_setup(void **state)
 {
     static iir_test_cornell f;

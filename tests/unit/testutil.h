@@ -44,6 +44,11 @@ typedef struct iir_test_cornell {
 int iir_test_cornell_setup(void **state);
 int iir_test_cornell_teardown(void **state);
 
+/* dir/name.obj (with its sidecar) and its rays as a pair like the fixture's; fails the running
+ * cmocka test when it does not load. iir_test_unload frees both. */
+iir_test_cornell iir_test_load(const char *dir, const char *name);
+void iir_test_unload(iir_test_cornell *l);
+
 /* Creates method `name` over the fixture's scene; fails the running cmocka test with the method's
  * error when it cannot. */
 /* Sets parameter `name` of p (any method's), failing the test when it is refused. */
