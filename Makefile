@@ -64,7 +64,10 @@ test: deps web-deps format-check
 # Benchmarks (not tests; docs/experiments.md reads them): ray rates, then `iird bench` over the
 # standard set -- the Cornell box orbit with every method (a VPL sweep for iir, ir and ism, pt at
 # 1/4/16 spp: the time-against-error chart), its stress paths, the conference room's orbit, and
-# multiresolution shading (full against multires at 512x384, and at the paper's 1024x768) -- each
+# multiresolution shading (full against multires at 512x384, and at the paper's 1024x768), the
+# classics (radiosity at three patch sizes beside ir and iir against 8-bounce references; whitted,
+# hybrid, radiosity and pt on the mirror/glass box; radiosity's form-factor time and cache load at
+# each patch size) -- each
 # with references (cached in $(REFCACHE): a second run skips them), frames.csv, summary.json and
 # charts in out/bench/<scene>-<path>/. Measured: 8 min 18 s on 2 quiet cores with an empty cache
 # before rsm, ism, hier and multires joined.
@@ -75,7 +78,8 @@ PEERS     = iir,ir,rsm,ism,hier
 bench: build
 	mkdir -p out/bench/cornell-orbit out/bench/conference-orbit out/bench/cornell-multires \
 	    out/bench/cornell-multires-1024 out/bench/conference-multires-1024 \
-	    $(foreach p,teleport occluder $(STRESS),out/bench/cornell-$(p))
+	    $(foreach p,teleport occluder $(STRESS),out/bench/cornell-$(p)) \
+	    out/bench/cornell-classics out/bench/cornell-spheres
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods $(PEERS),pt \
@@ -93,6 +97,15 @@ bench: build
 	    --ref-spp 0 --out out/bench/cornell-multires-1024
 	$(BENCH) conference --anim orbit --frames 0:60 --size 1024x768 --methods iir \
 	    --sweep shading=full,multires --ref-spp 0 --out out/bench/conference-multires-1024
+	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods radiosity,ir,iir --bounces 8 \
+	    --sweep patch_area=0.008,0.002,0.0005 --sweep direct=pixels,patches --ref-spp 512 \
+	    --ref-every 25 --out out/bench/cornell-classics
+	$(BENCH) cornell_spheres --anim orbit --frames 0:100 --size 320x240 \
+	    --methods whitted,hybrid,radiosity,pt --bounces 8 --sweep spp=4,16 --ref-spp 512 \
+	    --ref-every 25 --save-images --out out/bench/cornell-spheres
+	rm -rf out/bench/ffcache && $(foreach a,0.008 0.002 0.0005,$(foreach run,compute load, \
+	    IIR_CACHE_DIR=out/bench/ffcache $(BUILD)/iird render --method radiosity --patch-area $(a) \
+	    --size 64x48 --out out/bench/ffcache/still.png 2>&1 | grep "form factors of" &&)) true
 	/usr/bin/python3 tools/live_bench.py --iird $(BUILD)/iird --out out/bench/live.json
 
 # Coverage-guided fuzzing of the daemon's input parsers (tests/fuzz/, issue 15): a clang build with

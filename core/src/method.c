@@ -10,8 +10,9 @@
 #include "method_internal.h"
 
 static const iir_method_ops *const registry[] = {
-    &iir_method_pt,  &iir_method_ir,   &iir_method_iir,       &iir_method_rsm,
-    &iir_method_ism, &iir_method_hier, &iir_method_radiosity, &iir_method_whitted};
+    &iir_method_pt,        &iir_method_ir,      &iir_method_iir,
+    &iir_method_rsm,       &iir_method_ism,     &iir_method_hier,
+    &iir_method_radiosity, &iir_method_whitted, &iir_method_hybrid};
 enum { NUM_METHODS = sizeof registry / sizeof registry[0] };
 
 struct iir_method {

@@ -149,6 +149,7 @@ extern const iir_method_ops iir_method_rsm;
 extern const iir_method_ops iir_method_hier;
 extern const iir_method_ops iir_method_radiosity;
 extern const iir_method_ops iir_method_whitted;
+extern const iir_method_ops iir_method_hybrid;
 
 /* Shared by the VPL methods: validates the view (camera and lights), IIR_ERR_INVALID otherwise. */
 iir_status iir_view_validate(const iir_view *view, iir_error *err);

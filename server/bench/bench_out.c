@@ -346,12 +346,12 @@ void iird_bench_summary(const iird_bench *b, FILE *f)
         fprintf(f, "references: %d at %d spp, %d from the cache%s%s (%.1f s)\n", b->refs_total,
                 b->o->ref_spp, b->refs_cached, b->cache_dir[0] ? " in " : "", b->cache_dir,
                 b->refs_s);
-    fprintf(f, "%-6s %-16s %9s %9s %7s %9s %9s %9s", "method", "setting", "ms/frame", "p95 ms",
+    fprintf(f, "%-9s %-16s %9s %9s %7s %9s %9s %9s", "method", "setting", "ms/frame", "p95 ms",
             "fps", "rmse", "relmse", "flicker");
     for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, " %10s", iir_phase_name((iir_phase)p));
     fputc('\n', f);
     for (int r = 0; r < b->num_runs; r++) {
-        fprintf(f, "%-6s %-16s %9.2f %9.2f %7.2f %9.5f %9.5f %9.5f", b->runs[r].method,
+        fprintf(f, "%-9s %-16s %9.2f %9.2f %7.2f %9.5f %9.5f %9.5f", b->runs[r].method,
                 b->runs[r].setting, s[r].mean_ms, s[r].p95_ms, s[r].fps, s[r].rmse, s[r].relmse,
                 s[r].flicker);
         for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, " %10.2f", s[r].phase[p]);

@@ -188,8 +188,8 @@ static iir_status render_still(iir_method *m, uint64_t total, const iir_scene *s
     return st;
 }
 
-/* What the frame holds: samples per pixel (pt), the ray trees' cut branches (whitted), or
- * refinement passes and the VPLs. */
+/* What the frame holds: samples per pixel (pt), the ray trees' cut branches (whitted, hybrid),
+ * radiosity's refinement passes, or refinement passes and the VPLs. */
 static void work_text(const render_opts *o, const iir_frame_stats *fs, char *buf, size_t n)
 {
     unsigned long long done = (unsigned long long)fs->samples_per_pixel;
@@ -199,6 +199,9 @@ static void work_text(const render_opts *o, const iir_frame_stats *fs, char *buf
     else if (iir_method_find_param(o->method, "min_weight")) /* whitted's adaptive depth */
         snprintf(buf, n, "a ray tree per pixel, %llu branches cut by min-weight",
                  (unsigned long long)fs->branches_cut);
+    else if (iir_method_find_param(o->method, "patch_area")) /* radiosity */
+        snprintf(buf, n, "a radiosity solution, %llu refinement pass%s", done,
+                 done == 1 ? "" : "es");
     else
         snprintf(buf, n, "%llu refinement pass%s over %u VPLs", done, done == 1 ? "" : "es",
                  fs->vpl.count);

@@ -36,7 +36,7 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
         if (m->kind != IIR_MATERIAL_DIFFUSE)
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is a %s: %s renders it black (its VPLs and shading are diffuse "
-                            "only); use pt or whitted",
+                            "only); use pt, whitted or hybrid",
                             m->kind == IIR_MATERIAL_GLASS ? "dielectric (glass)" : "mirror",
                             method);
         if (iir_is_black(m->emission)) continue;

@@ -1,6 +1,7 @@
-/* radiosity.h -- the patch radiosity solver's parts (internal; the method is methods/radiosity.c):
- * the mesh of patches (mesh.c), hemicube form factors (hemicube.c), their on-disk cache
- * (ffcache.c) and the solvers (solve.c). Not the display: the method interpolates and shades.
+/* radiosity.h -- the patch radiosity solver's parts (internal; the methods are methods/radiosity.c
+ * and methods/hybrid.c): the mesh of patches (mesh.c), hemicube form factors (hemicube.c), their
+ * on-disk cache (ffcache.c), the solvers (solve.c) and the solution a method keeps and looks up
+ * (solution.c). Not the pixels: the methods shade.
  *
  * Units: B, E (W/m^2, radiosity and emitted exitance), H (irradiance, W/m^2), per RGB channel.
  * The radiosity equation, per patch i:  B_i = E_i + rho_i sum_j F_ij B_j. */
@@ -125,5 +126,73 @@ bool rad_progressive_shoot(rad_progressive *p, const rad_mesh *m, iir_vec3 *B, i
                            float tol);
 /* The ambient term (Cohen et al. 1988): rho_avg-weighted unshot radiosity, added as rho_i * it. */
 iir_vec3 rad_progressive_ambient(const rad_progressive *p, const rad_mesh *m);
+
+/* ---- the parameters (table rad_param_table, methods/radiosity.c; radiosity and hybrid) ---- */
+typedef enum rad_direct { RAD_DIRECT_PATCHES, RAD_DIRECT_PIXELS } rad_direct;
+
+typedef struct rad_params {
+    float patch_area; /* target patch area as a fraction of the bounding box's surface */
+    int hemicube_res;
+    rad_solver solver;
+    int iterations;
+    float tolerance;
+    int shoot_batch;
+    int light_samples;
+    rad_direct direct;
+} rad_params;
+struct iir_param_table;
+extern const struct iir_param_table rad_param_table;
+
+enum { RAD_GAUSS_MAX = 3000, RAD_MAX_PATCHES = 200000, RAD_MAX_LIGHTS = 64 };
+
+/* ---- the solution (solution.c) ----
+ * The mesh, its form factors (from the cache or the hemicube) and B for the lights of the last
+ * update. Per patch i:  B_i = E_i + rho_i sum_j F_ij B_j,  E_i = pi Le_i + rho_i Ed_i, Ed_i the
+ * irradiance from the lights (the mean over light_samples points of the patch, one shadow ray
+ * each). A moving light changes only Ed: an update re-shoots it and re-solves with the cached F.
+ *
+ * Lookup. rad_solution_gather() makes a per-vertex irradiance H (area-weighted over the patches
+ * around a vertex), of which rad_solution_H() returns the Gouraud interpolation over a point's
+ * patch; diffuse light leaving x is rho_x H(x) / pi. H_i is either everything a patch receives,
+ * Ed_i + sum_j F_ij B_j, or (without direct) sum_j F_ij (B_j - pi Le_j), the light of one bounce
+ * or more, for a caller that computes direct light and emission per pixel. While progressive
+ * refinement has unshot power, B is shown with its ambient term. */
+typedef struct rad_solution {
+    const iir_scene *scene;
+    const iir_rt *rt;
+    rad_params o;
+    uint64_t seed; /* the light samples' */
+    rad_mesh mesh;
+    rad_ff ff;
+    iir_vec3 *Ed, *E, *B, *Bd, *H, *vH; /* per patch (Bd: B as displayed); vH per vertex */
+    float *vw;                          /* per vertex: the area around it */
+    rad_progressive prog;
+    bool converged;    /* progressive: unshot power below tolerance; the others: solved */
+    iir_light *lights; /* the lights of the last solve */
+    uint32_t num_lights;
+    bool solved;
+    bool warm; /* B holds a Gauss-Seidel solution to start the next solve from */
+} rad_solution;
+
+/* Meshes the scene, refuses gauss above RAD_GAUSS_MAX patches, and loads (or computes, with
+ * progress on stderr, and saves) the form factors. On failure s is freed. */
+iir_status rad_solution_init(rad_solution *s, const iir_scene *scene, const iir_rt *rt,
+                             const rad_params *o, uint64_t seed, iir_error *err);
+void rad_solution_free(rad_solution *s);
+/* Takes live parameters (the next update re-solves); false (keeping the old ones) when they ask
+ * gauss of too many patches. */
+bool rad_solution_set_params(rad_solution *s, const rad_params *o, uint64_t seed);
+/* Re-shoots direct light and re-solves (progressive: restarts and shoots one batch) when the
+ * lights differ from the last update's; *ms = the time it took (0 when nothing changed). */
+iir_status rad_solution_update(rad_solution *s, const iir_light *lights, uint32_t num_lights,
+                               iir_raystats *rays, double *ms, iir_error *err);
+/* Progressive: shoots another batch (true when it did); other solvers have nothing to do. */
+bool rad_solution_refine(rad_solution *s);
+/* H per vertex from the current B, with or without the patches' direct light (see above). */
+void rad_solution_gather(rad_solution *s, bool with_direct);
+/* H at Embree barycentrics (u, v) of scene triangle t, Gouraud over its patch's corners. */
+iir_vec3 rad_solution_H(const rad_solution *s, uint32_t t, float u, float v);
+/* Bytes a solution holds with o: form factors, patches, the solver's scratch. */
+uint64_t rad_solution_memory(const rad_params *o);
 
 #endif

@@ -1,0 +1,309 @@
+/* whitted_tree.c -- the Whitted ray tree (Whitted 1980) of the methods whitted and hybrid, and
+ * its parameters: a ray tree from each pixel centre, local shading with shadow rays to every light
+ * at diffuse surfaces, perfect mirror reflection and glass refraction (specular.h: Snell, total
+ * internal reflection, Fresnel weights) at specular ones, a tree depth limit and adaptive
+ * tree-depth control. No indirect diffuse light: an optional ambient term (default 0) stands in for
+ * it, as in Whitted's model. Not the optics (specular.h), not path tracing (pt.c) and not the
+ * methods (whitted.c, hybrid.c).
+ *
+ * The tree. A ray that hits a surface returns its emission (one-sided, as pt's), the light of the
+ * rectangular area lights it meets before the surface (they are not in the BVH), and:
+ *   diffuse: (rho / pi) sum over lights of Li cos / pdf (a shadow ray each; delta lights once,
+ *            area lights and the scene's emissive triangles with area_samples points each) plus
+ *            ambient rho (local shading), and the caller's diffuse hook (hybrid: radiosity);
+ *   mirror:  specular * L(R), R = V - 2 (V.N) N;
+ *   glass:   F L(R) + (1 - F) tint L(T), T by Snell's law, only R past the critical angle.
+ * A branch's weight is the product of the factors (F, 1 - F, tint, specular) on the way from the
+ * camera; it is followed only while its depth (specular bounces) is at most max_depth and, the
+ * adaptive control, its weight's largest channel is at least min_weight. A branch cut by the
+ * weight would add at most weight x (the radiance it would find), so the image changes by at most
+ * min_weight times the scene's largest radiance per cut branch; every cut is counted
+ * (iir_frame_stats.branches_cut: each saves its ray and the tree under it).
+ *
+ * Glass casts shadows (shadow rays stop at it): light through glass onto a diffuse surface, a
+ * caustic, is not in Whitted's model. Frames are deterministic (area samples draw from a stream
+ * hashed from the seed and the pixel), rendered by OpenMP over 16 x 16 tiles with no allocation
+ * per pixel; a frame is final (no refinement). */
+#include <math.h>
+#include <omp.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "iir/rng.h"
+#include "iir/timer.h"
+#include "specular.h"
+#include "surface.h"
+#include "whitted_tree.h"
+
+enum { TILE = 16 };
+
+/* ---- parameters ---- */
+
+static const iir_param ROWS[] = {
+    {"max_depth", IIR_PARAM_INT, offsetof(whitted_params, max_depth), 8, 0, 64, 0, NULL, "bounces",
+     "the ray tree's depth limit: specular bounces along a branch", IIR_PARAM_LIVE},
+    {"min_weight", IIR_PARAM_FLOAT, offsetof(whitted_params, min_weight), 0.01, 0, 1, 0, NULL, "",
+     "adaptive depth: a branch whose weight (largest channel) falls below this stops; 0 = full "
+     "tree",
+     IIR_PARAM_LIVE},
+    {"area_samples", IIR_PARAM_INT, offsetof(whitted_params, area_samples), 4, 1, 4096, 1024, NULL,
+     "points", "points per area light for its direct light", IIR_PARAM_LIVE},
+    {"ambient", IIR_PARAM_FLOAT, offsetof(whitted_params, ambient), 0, 0, 1e6, 0, NULL, "",
+     "ambient radiance (W/sr/m^2) times albedo at diffuse surfaces, Whitted's stand-in for "
+     "indirect light",
+     IIR_PARAM_LIVE},
+};
+const iir_param_table whitted_param_table = {"whitted: ray tree", ROWS,
+                                             sizeof ROWS / sizeof ROWS[0], NULL};
+
+/* ---- state ---- */
+
+struct whitted_tree {
+    const iir_scene *scene;
+    const iir_rt *rt;
+    iir_lightset *emitters; /* the scene's emissive triangles alone (no lights) */
+    bool has_emitters;
+    const whitted_frame *f;  /* during a render */
+    const iir_light *lights; /* the view's, during a render */
+    uint32_t num_lights;
+    iir_light_eval eval[64]; /* the first 64 delta lights, prepared; the rest evaluated per call */
+    iir_frame frames[64];    /* area lights' frames, likewise */
+    iir_camera_frame cam;
+    float eps;
+};
+
+/* One pixel's tree: the state, its random stream (area samples), its counters. */
+typedef struct tracer {
+    const whitted_tree *w;
+    iir_rng rng;
+    iir_raystats *st;
+    uint64_t cut; /* branches the adaptive control stopped */
+} tracer;
+
+/* ---- local shading ---- */
+
+/* Whether the segment from o to p (or along wi to infinity when dist is infinite) is blocked. */
+static bool blocked(const tracer *t, iir_vec3 o, iir_vec3 wi, float dist)
+{
+    float tfar = isinf(dist) ? INFINITY : dist - 2.f * t->w->eps;
+    if (!(tfar > 0.f)) return false;
+    iir_ray r = iir_make_ray(o, wi, 0.f, tfar);
+    return iir_rt_occluded(t->w->rt, &r, t->st, IIR_RAYS_SHADOW);
+}
+
+/* Irradiance-like sum Li cos from delta light i at sf (one shadow ray). */
+static iir_vec3 delta_light(const tracer *t, const iir_surface *sf, iir_vec3 o, uint32_t i)
+{
+    const iir_light *l = &t->w->lights[i];
+    iir_vec3 wi, Li;
+    float dist;
+    if (l->type == IIR_LIGHT_SUN) {
+        wi = iir_neg(iir_normalize(l->direction));
+        dist = INFINITY;
+        Li = l->intensity; /* E on a surface facing it */
+    } else {
+        iir_vec3 d = iir_sub(l->position, sf->p);
+        dist = iir_length(d);
+        if (!(dist > 0.f)) return iir_v3s(0.f);
+        wi = iir_scale(d, 1.f / dist);
+        iir_vec3 I = i < 64 ? iir_light_eval_intensity(&t->w->eval[i], iir_neg(wi))
+                            : iir_light_intensity(l, iir_neg(wi));
+        Li = iir_scale(I, 1.f / (dist * dist));
+    }
+    float cos_theta = iir_dot(sf->ns, wi);
+    if (cos_theta <= 0.f || iir_is_black(Li) || blocked(t, o, wi, dist)) return iir_v3s(0.f);
+    return iir_scale(Li, cos_theta);
+}
+
+/* Mean of Li cos / pdf over area_samples next-event samples (one shadow ray each). */
+static iir_vec3 sampled_light(tracer *t, const iir_surface *sf, iir_vec3 o, const iir_light *area)
+{
+    int n = t->w->f->p->area_samples;
+    iir_vec3 sum = iir_v3s(0.f);
+    for (int k = 0; k < n; k++) {
+        iir_vec2 u = iir_rng_uniform2(&t->rng);
+        iir_light_sample ls =
+            area ? iir_area_light_sample(area, sf->p, u)
+                 : iir_lightset_sample(t->w->emitters, sf->p, iir_rng_uniform(&t->rng), u);
+        float cos_theta = iir_dot(sf->ns, ls.wi);
+        if (ls.pdf <= 0.f || cos_theta <= 0.f || iir_is_black(ls.Li)) continue;
+        if (blocked(t, o, ls.wi, ls.dist)) continue;
+        sum = iir_add(sum, iir_scale(ls.Li, cos_theta / ls.pdf));
+    }
+    return iir_scale(sum, 1.f / (float)n);
+}
+
+/* Direct light reflected by diffuse sf towards the viewer, plus the ambient term and the
+ * caller's diffuse hook. */
+static iir_vec3 diffuse(tracer *t, const iir_surface *sf, const iir_hit *hit)
+{
+    const whitted_tree *w = t->w;
+    iir_vec3 extra = w->f->extra ? w->f->extra(w->f->extra_ctx, hit, sf->mat) : iir_v3s(0.f);
+    iir_vec3 o = iir_surface_offset(sf, w->eps), E = iir_v3s(w->f->p->ambient * IIR_PI);
+    for (uint32_t i = 0; w->f->local_direct && i < w->num_lights; i++) {
+        const iir_light *l = &w->lights[i];
+        iir_vec3 Ei =
+            l->type == IIR_LIGHT_AREA ? sampled_light(t, sf, o, l) : delta_light(t, sf, o, i);
+        E = iir_add(E, Ei);
+    }
+    if (w->f->local_direct && w->has_emitters) E = iir_add(E, sampled_light(t, sf, o, NULL));
+    return iir_madd(extra, iir_mul(sf->mat->albedo, E), IIR_INV_PI);
+}
+
+/* The radiance of the view's area lights that the ray meets from the front before t_max. */
+static iir_vec3 area_lights_seen(const whitted_tree *w, const iir_ray *ray, float t_max)
+{
+    iir_vec3 L = iir_v3s(0.f);
+    for (uint32_t i = 0; i < w->num_lights; i++) {
+        const iir_light *l = &w->lights[i];
+        if (l->type != IIR_LIGHT_AREA) continue;
+        float t = iir_area_light_hit(l, ray->org, ray->dir, t_max);
+        if (isinf(t)) continue;
+        iir_frame fr = i < 64 ? w->frames[i] : iir_spot_frame(l);
+        L = iir_add(L, iir_area_light_radiance_at(l, &fr, iir_madd(ray->org, ray->dir, t)));
+    }
+    return L;
+}
+
+/* ---- the tree ---- */
+
+static iir_vec3 trace(tracer *t, iir_ray ray, int depth, iir_vec3 weight);
+
+/* The branch leaving sf along wi with the given weight, or 0 when the depth limit or the adaptive
+ * control stops it (the latter counted). */
+static iir_vec3 branch(tracer *t, const iir_surface *sf, iir_vec3 wi, int depth, iir_vec3 weight)
+{
+    if (depth >= t->w->f->p->max_depth || iir_is_black(weight)) return iir_v3s(0.f);
+    if (iir_max_comp(weight) < t->w->f->p->min_weight) {
+        t->cut++;
+        return iir_v3s(0.f);
+    }
+    iir_vec3 side = iir_dot(wi, sf->n) < 0.f ? iir_neg(sf->n) : sf->n;
+    iir_ray ray = iir_make_ray(iir_madd(sf->p, side, t->w->eps), wi, 0.f, INFINITY);
+    return trace(t, ray, depth + 1, weight);
+}
+
+/* What a specular surface passes on: the mirror's reflection, glass's two Fresnel branches. */
+static iir_vec3 specular(tracer *t, const iir_surface *sf, iir_vec3 V, int depth, iir_vec3 weight)
+{
+    const iir_material *m = sf->mat;
+    if (m->kind == IIR_MATERIAL_MIRROR)
+        return iir_mul(m->specular,
+                       branch(t, sf, iir_reflect(V, sf->n), depth, iir_mul(weight, m->specular)));
+    iir_glass_split g = iir_glass_at(V, sf->n, m->ior);
+    iir_vec3 L = iir_scale(branch(t, sf, g.wr, depth, iir_scale(weight, g.F)), g.F);
+    if (!g.has_t) return L;
+    iir_vec3 kt = iir_scale(m->specular, 1.f - g.F);
+    return iir_add(L, iir_mul(kt, branch(t, sf, g.wt, depth, iir_mul(weight, kt))));
+}
+
+/* Radiance along ray, a branch `depth` specular bounces from the camera with weight `weight`. */
+static iir_vec3 trace(tracer *t, iir_ray ray, int depth, iir_vec3 weight)
+{
+    const whitted_tree *w = t->w;
+    iir_hit hit;
+    iir_ray_kind kind = depth == 0 ? IIR_RAYS_CAMERA : IIR_RAYS_BOUNCE;
+    bool found = iir_rt_intersect(w->rt, &ray, &hit, t->st, kind);
+    iir_vec3 L = area_lights_seen(w, &ray, found ? hit.t : INFINITY);
+    if (!found) return L;
+    iir_vec3 wo = iir_neg(ray.dir);
+    iir_surface sf = iir_surface_at(w->scene, &hit, wo);
+    L = iir_add(L, iir_surface_Le(&sf, wo));
+    if (sf.mat->kind == IIR_MATERIAL_DIFFUSE) return iir_add(L, diffuse(t, &sf, &hit));
+    return iir_add(L, specular(t, &sf, ray.dir, depth, weight));
+}
+
+/* ---- pixels and tiles ---- */
+
+static bool render_tile(const whitted_tree *w, int tile, iir_image *out, iir_raystats *st,
+                        uint64_t *cut)
+{
+    const iir_camera_frame *cam = &w->cam;
+    int tiles_x = (cam->width + TILE - 1) / TILE;
+    int x0 = (tile % tiles_x) * TILE, y0 = (tile / tiles_x) * TILE;
+    int x1 = x0 + TILE < cam->width ? x0 + TILE : cam->width;
+    int y1 = y0 + TILE < cam->height ? y0 + TILE : cam->height;
+    for (int y = y0; y < y1; y++) {
+        if (y > y0 && w->f->stop && w->f->stop(w->f->stop_ctx)) return false;
+        for (int x = x0; x < x1; x++) {
+            tracer t = {w, iir_rng_make(w->f->seed, iir_hash3((uint64_t)x, (uint64_t)y, 0)), st, 0};
+            iir_vec3 dir = iir_camera_dir(cam, (float)x + 0.5f, (float)y + 0.5f);
+            iir_vec3 L = trace(&t, iir_make_ray(cam->origin, dir, 0.f, INFINITY), 0, iir_v3s(1.f));
+            *iir_image_at(out, x, y) = iir_is_finite3(L) ? L : iir_v3s(0.f);
+            *cut += t.cut;
+        }
+    }
+    return true;
+}
+
+static iir_status render_tiles(const whitted_tree *w, iir_image *out, iir_frame_stats *stats,
+                               iir_error *err)
+{
+    int tiles = ((w->cam.width + TILE - 1) / TILE) * ((w->cam.height + TILE - 1) / TILE);
+    iir_raystats total = {0};
+    uint64_t cut_total = 0;
+    bool stopped = false;
+#pragma omp parallel
+    {
+        iir_raystats local = {0};
+        uint64_t cut = 0;
+#pragma omp for schedule(dynamic, 1)
+        for (int k = 0; k < tiles; k++) {
+            if ((w->f->stop && w->f->stop(w->f->stop_ctx)) ||
+                !render_tile(w, k, out, &local, &cut)) {
+#pragma omp atomic write
+                stopped = true;
+            }
+        }
+#pragma omp critical(iir_whitted_rays)
+        {
+            iir_raystats_add(&total, &local);
+            cut_total += cut;
+        }
+    }
+    stats->rays = total;
+    stats->branches_cut = cut_total;
+    if (stopped) return iir_fail(err, IIR_ERR_INTERRUPTED, "whitted: frame stopped early");
+    return IIR_OK;
+}
+
+/* ---- the tree's life ---- */
+
+whitted_tree *whitted_tree_create(const iir_scene *scene, const iir_rt *rt)
+{
+    whitted_tree *w = calloc(1, sizeof *w);
+    if (w) w->emitters = iir_lightset_create(scene, NULL, 0);
+    if (!w || !w->emitters) {
+        free(w);
+        return NULL;
+    }
+    w->scene = scene;
+    w->rt = rt;
+    w->has_emitters = !iir_lightset_empty(w->emitters);
+    return w;
+}
+
+void whitted_tree_destroy(whitted_tree *w)
+{
+    if (!w) return;
+    iir_lightset_destroy(w->emitters);
+    free(w);
+}
+
+iir_status whitted_tree_render(whitted_tree *w, const whitted_frame *f, const iir_view *view,
+                               iir_image *out, iir_frame_stats *stats, iir_error *err)
+{
+    w->f = f;
+    w->lights = view->lights;
+    w->num_lights = view->num_lights;
+    for (uint32_t i = 0; i < view->num_lights && i < 64; i++) {
+        w->eval[i] = iir_light_prepare(&view->lights[i]);
+        if (view->lights[i].type == IIR_LIGHT_AREA) w->frames[i] = iir_spot_frame(&view->lights[i]);
+    }
+    w->cam = iir_camera_setup(&view->camera, out->width, out->height);
+    w->eps = iir_rt_epsilon(w->rt);
+    iir_status st = render_tiles(w, out, stats, err);
+    w->lights = NULL, w->f = NULL;
+    return st;
+}
