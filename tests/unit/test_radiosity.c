@@ -412,6 +412,24 @@ static void test_gauss_limit(void **state)
     assert_null(m);
 }
 
+/* The mesh's patch limit: a patch_area that gives too many patches asks for a larger one; a scene
+ * with more triangles than the limit says that no patch_area helps. */
+static void test_patch_limit(void **state)
+{
+    const iir_test_cornell *c = *state;
+    rad_mesh m;
+    iir_error err = {0};
+    uint32_t tris = c->scene->num_triangles;
+    assert_int_equal(rad_mesh_build(&m, c->scene, 1e-6f, tris + 10, &err), IIR_ERR_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "raise patch_area"));
+    assert_int_equal(rad_mesh_build(&m, c->scene, 1e6f, tris - 1, &err), IIR_ERR_UNSUPPORTED);
+    assert_non_null(strstr(err.msg, "triangles"));
+    assert_null(strstr(err.msg, "raise patch_area"));
+    assert_int_equal(rad_mesh_build(&m, c->scene, 1e6f, tris, &err), IIR_OK);
+    assert_int_equal(m.num_patches, tris);
+    rad_mesh_free(&m);
+}
+
 /* Progressive refinement streams: each refine shoots another batch until converged, and the
  * converged image matches Gauss-Seidel's. */
 static void test_progressive_refine(void **state)
@@ -457,13 +475,10 @@ int main(void)
     snprintf(cache, sizeof cache, "%s/cache", tmp);
     setenv("IIR_CACHE_DIR", cache, 1);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ff_closed_forms),
-        cmocka_unit_test(test_ff_rows_and_reciprocity),
-        cmocka_unit_test(test_white_furnace),
-        cmocka_unit_test(test_cornell_against_pt),
-        cmocka_unit_test(test_cache),
-        cmocka_unit_test(test_gauss_limit),
-        cmocka_unit_test(test_progressive_refine),
+        cmocka_unit_test(test_ff_closed_forms), cmocka_unit_test(test_ff_rows_and_reciprocity),
+        cmocka_unit_test(test_white_furnace),   cmocka_unit_test(test_cornell_against_pt),
+        cmocka_unit_test(test_cache),           cmocka_unit_test(test_gauss_limit),
+        cmocka_unit_test(test_patch_limit),     cmocka_unit_test(test_progressive_refine),
     };
     return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

@@ -148,13 +148,21 @@ static void mesh_triangle(rad_mesh *m, const iir_scene *s, uint32_t t, uint32_t 
     }
 }
 
+/* Frees what the mesh holds and passes st on: a failed build leaves m empty. */
+static iir_status mesh_fail(rad_mesh *m, iir_status st)
+{
+    rad_mesh_free(m);
+    return st;
+}
+
 iir_status rad_mesh_build(rad_mesh *m, const iir_scene *s, float target_area, uint32_t max_patches,
                           iir_error *err)
 {
     memset(m, 0, sizeof *m);
     m->tri_first = malloc(((size_t)s->num_triangles + 1) * sizeof *m->tri_first);
     m->tri_n = malloc(((size_t)s->num_triangles + 1) * sizeof *m->tri_n);
-    if (!m->tri_first || !m->tri_n) return iir_fail(err, IIR_ERR_NOMEM, "radiosity: out of memory");
+    if (!m->tri_first || !m->tri_n)
+        return mesh_fail(m, iir_fail(err, IIR_ERR_NOMEM, "radiosity: out of memory"));
     uint64_t patches = 0, raw = 0;
     for (uint32_t t = 0; t < s->num_triangles; t++) {
         double r = sqrt((double)s->areas[t] / (double)target_area);
@@ -164,10 +172,17 @@ iir_status rad_mesh_build(rad_mesh *m, const iir_scene *s, float target_area, ui
         patches += (uint64_t)n * n;
         raw += (uint64_t)(n + 1) * (n + 2) / 2;
     }
+    if (s->num_triangles > max_patches) /* every triangle is a patch at least */
+        return mesh_fail(m, iir_fail(err, IIR_ERR_UNSUPPORTED,
+                                     "radiosity: the scene has %u triangles, each at least one "
+                                     "patch; radiosity takes at most %u patches (triangles are "
+                                     "not clustered into patches)",
+                                     s->num_triangles, max_patches));
     if (patches > max_patches)
-        return iir_fail(err, IIR_ERR_UNSUPPORTED,
-                        "radiosity: patch_area gives %llu patches, more than %u; raise patch_area",
-                        (unsigned long long)patches, max_patches);
+        return mesh_fail(m, iir_fail(err, IIR_ERR_UNSUPPORTED,
+                                     "radiosity: patch_area gives %llu patches, more than %u; "
+                                     "raise patch_area",
+                                     (unsigned long long)patches, max_patches));
     iir_vec3 *pos = malloc(raw * sizeof *pos), *nrm = malloc(raw * sizeof *nrm);
     uint32_t *remap = malloc(raw * sizeof *remap);
     bool ok = pos && nrm && remap && alloc_patches(m, (uint32_t)patches);
@@ -183,8 +198,9 @@ iir_status rad_mesh_build(rad_mesh *m, const iir_scene *s, float target_area, ui
         for (int a = 0; a < 3; a++) m->vert[k][a] = remap[m->vert[k][a]];
     free(pos), free(nrm), free(remap);
     if (!ok)
-        return iir_fail(err, IIR_ERR_NOMEM, "radiosity: out of memory meshing %llu patches",
-                        (unsigned long long)patches);
+        return mesh_fail(m, iir_fail(err, IIR_ERR_NOMEM,
+                                     "radiosity: out of memory meshing %llu patches",
+                                     (unsigned long long)patches));
     return IIR_OK;
 }
 

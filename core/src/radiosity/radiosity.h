@@ -36,7 +36,8 @@ typedef struct rad_mesh {
 } rad_mesh;
 
 /* Meshes scene to patches of at most target_area (world units^2). IIR_ERR_NOMEM, or
- * IIR_ERR_UNSUPPORTED when it would exceed max_patches (the message names the count). */
+ * IIR_ERR_UNSUPPORTED when it would exceed max_patches (the message names the count, or says that
+ * the scene has more triangles than that); a failed build leaves m empty. */
 iir_status rad_mesh_build(rad_mesh *m, const iir_scene *scene, float target_area,
                           uint32_t max_patches, iir_error *err);
 void rad_mesh_free(rad_mesh *m);
