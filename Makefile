@@ -65,7 +65,8 @@ test: deps web-deps format-check
 # standard set -- the Cornell box orbit with every method (a VPL sweep for iir, ir and ism, pt at
 # 1/4/16 spp: the time-against-error chart), its stress paths, the conference room's orbit, and
 # multiresolution shading (full against multires at 512x384, and at the paper's 1024x768), the
-# classics (radiosity at three patch sizes beside ir and iir against 8-bounce references; whitted,
+# classics (radiosity at three patch sizes beside ir and iir against 8-bounce references; iir and
+# ir at 2, 4 and 8 bounces; whitted,
 # hybrid, radiosity and pt on the mirror/glass box; radiosity's form-factor time and cache load at
 # each patch size) -- each
 # with references (cached in $(REFCACHE): a second run skips them), frames.csv, summary.json and
@@ -79,7 +80,7 @@ bench: build
 	mkdir -p out/bench/cornell-orbit out/bench/conference-orbit out/bench/cornell-multires \
 	    out/bench/cornell-multires-1024 out/bench/conference-multires-1024 \
 	    $(foreach p,teleport occluder $(STRESS),out/bench/cornell-$(p)) \
-	    out/bench/cornell-classics out/bench/cornell-spheres
+	    out/bench/cornell-classics out/bench/cornell-spheres out/bench/cornell-bounces
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods $(PEERS),pt \
@@ -100,6 +101,8 @@ bench: build
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods radiosity,ir,iir --bounces 8 \
 	    --sweep patch_area=0.008,0.002,0.0005 --sweep direct=pixels,patches --ref-spp 512 \
 	    --ref-every 25 --out out/bench/cornell-classics
+	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods iir,ir --sweep bounces=2,4,8 \
+	    --ref-spp 512 --ref-every 25 --out out/bench/cornell-bounces
 	$(BENCH) cornell_spheres --anim orbit --frames 0:100 --size 320x240 \
 	    --methods whitted,hybrid,radiosity,pt --bounces 8 --sweep spp=4,16 --ref-spp 512 \
 	    --ref-every 25 --save-images --out out/bench/cornell-spheres

@@ -45,6 +45,13 @@ static const iir_param COMMON_ROWS[] = {
 const iir_param_table iir_common_table = {"every method", COMMON_ROWS,
                                           sizeof COMMON_ROWS / sizeof COMMON_ROWS[0], NULL};
 
+/* Light bounces, one int wherever a method keeps it (pt, ir, iir). */
+static const iir_param BOUNCES_ROWS[] = {
+    {"bounces", IIR_PARAM_INT, 0, 2, 1, 1000, 8, NULL, "",
+     "light bounces: 1 = direct only, 2 = one diffuse bounce", IIR_PARAM_LIVE},
+};
+const iir_param_table iir_bounces_table = {"light bounces (pt, ir, iir)", BOUNCES_ROWS, 1, NULL};
+
 void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *stats)
 {
     stats->phase_ms[IIR_PHASE_GBUFFER] = t->gbuffer_ms;

@@ -16,6 +16,8 @@ typedef struct iir_method_common {
                           centre, as interactive frames do (false) */
 } iir_method_common;
 extern const iir_param_table iir_common_table;
+/* `bounces`, one int wherever a method keeps it (pt, ir, iir; method.c). */
+extern const iir_param_table iir_bounces_table;
 
 /* ---- multiresolution shading (table iir_multires_table, vpl_options.c; multires.h) ---- */
 typedef struct iir_multires_options {
@@ -77,7 +79,7 @@ typedef struct iir_method_table {
     size_t offset;
 } iir_method_table;
 
-enum { IIR_METHOD_MAX_TABLES = 8 };
+enum { IIR_METHOD_MAX_TABLES = 10 };
 
 typedef struct iir_method_ops {
     const char *name;

@@ -110,11 +110,10 @@ static void csv_header(FILE *f)
     for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, ",%s_ms", iir_phase_name((iir_phase)p));
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",rays_%s", iir_ray_kind_name((iir_ray_kind)k));
-    fprintf(
-        f,
-        ",vpls,vpls_valid,vpls_invalidated,vpls_deleted,vpls_inserted,vpls_null,"
-        "regenerated,shadowmaps,vpl_evals,recomputed,branches_cut,rss_mb,method_mb,mean_lum,rmse,"
-        "relmse,flicker\n");
+    fprintf(f, ",vpls,vpls_valid,vpls_invalidated,vpls_deleted,vpls_inserted,vpls_null,"
+               "regenerated,shadowmaps,vpls_desc,vpl_evals,recomputed,branches_cut,rss_mb,method_"
+               "mb,mean_lum,rmse,"
+               "relmse,flicker\n");
 }
 
 static void csv_number(FILE *f, double v, const char *end)
@@ -133,10 +132,10 @@ static void csv_row(FILE *f, const iird_bench_run *run, int frame, const iird_be
     for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, ",%.4f", s->phase_ms[p]);
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",%llu", (unsigned long long)s->rays.n[k]);
-    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%llu,%.4f,%llu,%.2f,%.3f,%.6g,", c->count, c->valid,
+    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%u,%llu,%.4f,%llu,%.2f,%.3f,%.6g,", c->count, c->valid,
             c->invalidated, c->deleted, c->inserted, c->null_samples, c->regenerated, c->shadowmaps,
-            (unsigned long long)s->vpl_evals, s->recomputed, (unsigned long long)s->branches_cut,
-            r->rss_mb, r->method_mb, r->mean_lum);
+            c->descendants, (unsigned long long)s->vpl_evals, s->recomputed,
+            (unsigned long long)s->branches_cut, r->rss_mb, r->method_mb, r->mean_lum);
     csv_number(f, r->rmse, ",");
     csv_number(f, r->relmse, ",");
     csv_number(f, r->flicker, "\n");

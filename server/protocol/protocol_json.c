@@ -335,7 +335,8 @@ cJSON *iird_json_vpl_counts(const iir_vpl_counts *v)
               iird_json_add_num(o, "inserted", v->inserted) &&
               iird_json_add_num(o, "null", v->null_samples) &&
               iird_json_add_num(o, "regenerated", v->regenerated) &&
-              iird_json_add_num(o, "shadowmaps", v->shadowmaps);
+              iird_json_add_num(o, "shadowmaps", v->shadowmaps) &&
+              iird_json_add_num(o, "descendants", v->descendants);
     return keep_if(o, ok);
 }
 

@@ -231,7 +231,8 @@ static char *domain_json(worker_state *w, const render_job *j, const iird_scene_
     for (uint32_t i = 0; i < n; i++) {
         project(&cf, sc->rt, v[i].position, w->vpl_px[i]);
         bool fresh = by_site ? (dom.sites[i].flags & IIR_SITE_NEW) != 0 : v[i].birth == newest;
-        w->vpl_flags[i] = (uint8_t)((fresh ? 1 : 0) | (v[i].null_sample ? 2 : 0));
+        w->vpl_flags[i] =
+            (uint8_t)((fresh ? 1 : 0) | (v[i].null_sample ? 2 : 0) | (v[i].generation > 0 ? 4 : 0));
     }
     return iird_json_domain(frame, (const float(*)[2])w->vpl_px, w->vpl_flags, n,
                             has_dom ? &dom : NULL);
@@ -344,8 +345,10 @@ static void publish(iird_session *s, const render_job *j, frame_info *f)
  * drew: what the stats mean stays the same from a frame to its refinement. */
 static iir_vpl_counts refined_vpl(const iir_vpl_counts *frame)
 {
-    return (iir_vpl_counts){
-        .count = frame->count, .valid = frame->count, .null_samples = frame->null_samples};
+    return (iir_vpl_counts){.count = frame->count,
+                            .valid = frame->count,
+                            .null_samples = frame->null_samples,
+                            .descendants = frame->descendants};
 }
 
 static iir_status render_frame(iird_session *s, const render_job *j, const iird_scene_entry *sc,
@@ -365,7 +368,8 @@ static iir_status render_frame(iird_session *s, const render_job *j, const iird_
     if (st == IIR_OK) st = iir_method_render(w->method, &view, w->img, &f->stats, err);
     w->have_frame = st == IIR_OK;
     w->pass = 0;
-    w->converged = false;
+    /* a frame converged at once (whitted, radiosity, hybrid) is final: not refined */
+    f->converged = w->converged = f->stats.converged;
     if (st != IIR_OK) return st;
     f->id = ++w->next_id;
     return IIR_OK;

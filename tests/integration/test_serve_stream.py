@@ -24,7 +24,8 @@ def param_keys(welcome, method):
     rows = next(m["params"] for m in welcome["methods"] if m["name"] == method)
     return {"method"} | {r["name"] for r in welcome["settings"]} | {r["name"] for r in rows}
 PHASES = {"trace", "vpls", "shadowmaps", "gbuffer", "direct", "indirect", "filter"}
-VPL_KEYS = {"count", "valid", "invalidated", "deleted", "inserted", "null", "regenerated", "shadowmaps"}
+VPL_KEYS = {"count", "valid", "invalidated", "deleted", "inserted", "null", "regenerated", "shadowmaps",
+            "descendants"}
 STATS_NUMBERS = ("frame", "pass", "total_ms", "encode_ms", "latency_ms", "fps", "bytes", "dropped", "memory_bytes")
 
 # Mean absolute 8-bit difference between the first and the last frame of the light path below.

@@ -1079,10 +1079,10 @@ static void test_json_replies(void **state)
     assert_int_equal(cJSON_GetArraySize(ph), IIR_PHASE_COUNT);
     assert_true(num(ph, "indirect") == 13.9);
     const cJSON *jv = cJSON_GetObjectItemCaseSensitive(o, "vpl");
-    const char *vk[] = {"count",    "valid", "invalidated", "deleted",
-                        "inserted", "null",  "regenerated", "shadowmaps"};
-    assert_int_equal(cJSON_GetArraySize(jv), 8);
-    for (int i = 0; i < 8; i++) assert_non_null(cJSON_GetObjectItemCaseSensitive(jv, vk[i]));
+    const char *vk[] = {"count", "valid",       "invalidated", "deleted",    "inserted",
+                        "null",  "regenerated", "shadowmaps",  "descendants"};
+    assert_int_equal(cJSON_GetArraySize(jv), 9);
+    for (int i = 0; i < 9; i++) assert_non_null(cJSON_GetObjectItemCaseSensitive(jv, vk[i]));
     assert_int_equal(num(jv, "count"), 256);
     assert_int_equal(num(jv, "null"), 3);
     const cJSON *jr = cJSON_GetObjectItemCaseSensitive(o, "rays");

@@ -224,9 +224,14 @@ export class View {
             const px = x * sx;
             const py = y * sy;
             o.beginPath();
-            o.arc(px, py, (flags & 1 ? 1.4 : 1) * r, 0, 2 * Math.PI);
+            o.arc(px, py, (flags & 1 ? 1.4 : 1) * (flags & 4 ? 0.75 : 1) * r, 0, 2 * Math.PI);
             if (flags & 2) {
                 o.strokeStyle = 'rgba(150,150,150,0.8)';
+                o.stroke();
+            } else if (flags & 4) { // a later bounce: drawn apart from the light's own VPLs
+                o.fillStyle = flags & 1 ? 'rgba(120,220,255,0.95)' : 'rgba(70,140,255,0.85)';
+                o.fill();
+                o.strokeStyle = 'rgba(0,0,0,0.6)';
                 o.stroke();
             } else if (flags & 1) {
                 o.fillStyle = 'rgba(80,255,140,0.95)';

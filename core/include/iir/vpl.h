@@ -57,18 +57,20 @@ static inline iir_vec3 iir_paraboloid_dir(iir_vec2 uv)
 /* ---- the VPL ---- */
 
 typedef struct iir_vpl {
-    uint32_t id;       /* unique within its set for the set's whole life; never reused */
-    bool null_sample;  /* the light's ray escaped or hit an emitter: holds its place, no light */
-    iir_vec3 position; /* on the surface */
-    iir_vec3 normal;   /* unit, on the side the light arrived from */
-    iir_frame frame;   /* iir_frame_from_normal(normal): the shadow map's axes */
-    iir_vec3 albedo;   /* rho at the VPL */
-    iir_vec3 flux;     /* Phi_i, the flux it re-emits (W, RGB) */
-    iir_vec2 disk;     /* its point in its light's domain (incremental step only) */
-    iir_vec2 emit;     /* area light: where on the emitter its birth ray started, in light-local
-                          coordinates [-1/2, 1/2]^2 (incremental step only) */
-    uint32_t birth;    /* frame number it was created in */
-    iir_smap smap;     /* owned by whoever owns the VPL */
+    uint32_t id;        /* unique within its set for the set's whole life; never reused */
+    bool null_sample;   /* the light's ray escaped or hit an emitter: holds its place, no light */
+    iir_vec3 position;  /* on the surface */
+    iir_vec3 normal;    /* unit, on the side the light arrived from */
+    iir_frame frame;    /* iir_frame_from_normal(normal): the shadow map's axes */
+    iir_vec3 albedo;    /* rho at the VPL */
+    iir_vec3 flux;      /* Phi_i, the flux it re-emits (W, RGB) */
+    iir_vec2 disk;      /* its point in its light's domain (incremental step only) */
+    iir_vec2 emit;      /* area light: where on the emitter its birth ray started, in light-local
+                           coordinates [-1/2, 1/2]^2 (incremental step only) */
+    uint32_t birth;     /* frame number it was created in */
+    uint8_t generation; /* 0: lit by the light; k: k diffuse bounces further along its light path
+                           (ir's later path vertices, iir's descendants: lineage.h) */
+    iir_smap smap;      /* owned by whoever owns the VPL */
 } iir_vpl;
 
 /* Fills the frame from the normal. */
@@ -93,6 +95,8 @@ typedef struct iir_vpl_counts {
     uint32_t null_samples; /* in the set: domain points whose rays escaped or hit an emitter */
     uint32_t regenerated;  /* 1 when the whole set was regenerated this frame */
     uint32_t shadowmaps;   /* shadow maps rendered this frame */
+    uint32_t descendants;  /* iir with bounces > 2: VPLs of later bounces carried by the set's
+                              (not in count; ir counts every bounce's VPLs in count) */
 } iir_vpl_counts;
 
 #ifdef __cplusplus

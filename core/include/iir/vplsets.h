@@ -22,9 +22,14 @@
  * of every update is set i (the view's lights keep their order); a different number of lights
  * than at the last update drops the sets past the end and starts the new ones.
  *
- * THE GATHERED ARRAY. Set i's VPLs in ascending id, set after set; a gathered VPL's id is
- * id * count + i (count = the number of lights), so ids are unique and, with one light, those of
- * the set. Deterministic as incremental.h. */
+ * DESCENDANTS. With bounces > 2 each set's VPLs carry the rest of their light paths (lineage.h),
+ * updated after the set, with ids hashed from their parent's.
+ *
+ * THE GATHERED ARRAY. Set i's VPLs in ascending id, then its descendants, set after set; a
+ * gathered VPL's id is
+ * id * count + i (count = the number of lights), so the sets' ids are unique and, with one light,
+ * those of the set (a descendant's hashed id may repeat another's: ids only pick interleave
+ * subsets and ISM point subsets). Deterministic as incremental.h. */
 #ifndef IIR_VPLSETS_H
 #define IIR_VPLSETS_H
 
@@ -60,6 +65,12 @@ iir_status iir_vplsets_update(iir_vplsets *g, const iir_light *lights, uint32_t 
 /* The number of lights of the last update, and light i's set (NULL while it is off). */
 uint32_t iir_vplsets_lights(const iir_vplsets *g);
 iir_incr *iir_vplsets_set(iir_vplsets *g, uint32_t i);
+/* Light i's descendants (lineage.h; none while bounces <= 2): the caller writes their shadow maps
+ * here too. */
+iir_vpl *iir_vplsets_descendants(iir_vplsets *g, uint32_t i, uint32_t *n);
+/* Light bounces as ir's: 2 (the default) = the sets alone; more = every parent carries up to
+ * bounces - 2 descendants (lineage.h), from the next update on. */
+void iir_vplsets_set_bounces(iir_vplsets *g, int bounces);
 /* Light i's target N_i in force (0 while off). */
 uint32_t iir_vplsets_target(const iir_vplsets *g, uint32_t i);
 

@@ -84,6 +84,7 @@ static iir_status hybrid_render(void *state, const iir_view *view, iir_image *ou
     stats->total_ms = iir_now_ms() - t0;
     stats->samples_per_pixel = 1;
     stats->converged = s->sol.converged;
+    stats->whole_sweeps = true;
     s->camera = view->camera;
     s->have_frame = true;
     return IIR_OK;
@@ -110,6 +111,7 @@ static iir_status hybrid_refine(void *state, iir_image *out, iir_frame_stats *st
     stats->total_ms = iir_now_ms() - t0;
     stats->samples_per_pixel = s->passes;
     stats->converged = s->sol.converged;
+    stats->whole_sweeps = true; /* every pass is a whole image: the browser shows each */
     return IIR_OK;
 }
 

@@ -2,7 +2,9 @@
  * across frames. Each frame runs the incremental step (core/src/vpls/incremental.c) for every light
  * of the view, each on its own domain with its share of the budget (vplsets.h), renders shadow maps
  * only for the VPLs born this frame (a map lives as long as its VPL: the scene is static), and
- * shades with the shared VPL renderer. One bounce by construction. Parameters: the incremental
+ * shades with the shared VPL renderer. With bounces > 2 every kept VPL carries the rest of its
+ * light path (lineage.h, through vplsets.h), whose VPLs get their maps at their birth too.
+ * Parameters: the incremental
  * step's (table below), the VPL shading's (vpl_options.c), the ISMs' (ism_options.c: with
  * visibility=ism a VPL's map is an imperfect one, also built at its birth) and every method's.
  * Direct light comes from every light of the view.
@@ -19,6 +21,7 @@
 
 #include "iir/method.h"
 #include "iir/ism.h"
+#include "iir/lineage.h"
 #include "iir/refine.h"
 #include "iir/rng.h"
 #include "iir/scene.h"
@@ -39,6 +42,7 @@ typedef struct iir_options {
     int kmin, kmax;        /* replacements per frame */
     iir_weights weights;   /* uniform or Voronoi cell areas */
     float regen_threshold; /* regenerate when more than this fraction dies */
+    int bounces;           /* 2: the kept set alone; more: its VPLs carry descendants */
 } iir_options;
 
 static const char *const WEIGHTS_CHOICES[] = {"uniform", "voronoi", NULL};
@@ -62,6 +66,12 @@ static iir_status iir_check(const void *opts, const iir_params *given, const iir
                             iir_error *err)
 {
     const iir_options *o = opts;
+    if (o->bounces < 2) {
+        *bad = iir_method_any_param("bounces");
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "bounces: iir keeps VPLs for indirect light, at least one bounce (2); "
+                        "for direct light alone use pt or ir with bounces 1");
+    }
     if (o->kmin > o->kmax) {
         *bad = &IIR_ROWS[iir_params_has(given, "kmin") || !iir_params_has(given, "kmax") ? 1 : 2];
         return iir_fail(err, IIR_ERR_INVALID, "%s: kmin %d must not exceed kmax %d", (*bad)->name,
@@ -133,6 +143,7 @@ static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const v
     s->params = *params;
     iir_incr_params ip = incr_params(params);
     iir_status st = iir_vplsets_create(scene, rt, &ip, &s->sets, err);
+    if (st == IIR_OK) iir_vplsets_set_bounces(s->sets, params->bounces);
     s->renderer = st == IIR_OK ? iir_renderer_create(scene, rt) : NULL;
     s->refine = st == IIR_OK ? iir_refine_create() : NULL;
     if (st == IIR_OK && (!s->renderer || !s->refine))
@@ -186,6 +197,21 @@ static void fill_counts(const iir_incr_stats *is, uint32_t maps, iir_vpl_counts 
     c->shadowmaps = maps;
 }
 
+/* The maps (exact or ISMs) of v[0..n) that have none, of light k's set; *built = how many. */
+static iir_status maps_of(iir_state *s, uint32_t k, iir_vpl *v, uint32_t n, iir_raystats *rays,
+                          uint32_t *built, iir_error *err)
+{
+    *built = 0;
+    if (!n) return IIR_OK;
+    if (s->params.vpl.visibility == IIR_VIS_SHADOWMAP) {
+        *built =
+            iir_smaps_build_until(v, n, s->rt, s->params.vpl.sm_res, rays, s->stop, s->stop_ctx);
+        return IIR_OK;
+    }
+    return iir_ism_maps_build(&s->ism, s->scene, s->rt, &s->params.ism, s->params.common.seed, k, v,
+                              n, s->stop, s->stop_ctx, built, err);
+}
+
 /* Shadow maps (exact or ISMs, as visibility says) for every set's new VPLs, on the sets' own
  * arrays (where maps live), until the stop hook says stop; *maps = how many were built. Fails
  * only when ISM's point set cannot be made. */
@@ -197,14 +223,12 @@ static iir_status build_maps(iir_state *s, iir_raystats *rays, uint32_t *maps, i
     for (uint32_t k = 0; vis != IIR_VIS_RAYS && st == IIR_OK && k < iir_vplsets_lights(s->sets);
          k++) {
         iir_incr *set = iir_vplsets_set(s->sets, k);
-        uint32_t n = 0, built = 0;
+        uint32_t n = 0, nd = 0, built = 0;
         iir_vpl *v = set ? iir_incr_vpls(set, &n) : NULL;
-        if (n && vis == IIR_VIS_SHADOWMAP)
-            built = iir_smaps_build_until(v, n, s->rt, s->params.vpl.sm_res, rays, s->stop,
-                                          s->stop_ctx);
-        else if (n)
-            st = iir_ism_maps_build(&s->ism, s->scene, s->rt, &s->params.ism, s->params.common.seed,
-                                    k, v, n, s->stop, s->stop_ctx, &built, err);
+        iir_vpl *d = iir_vplsets_descendants(s->sets, k, &nd);
+        st = maps_of(s, k, v, n, rays, &built, err);
+        *maps += built;
+        if (st == IIR_OK) st = maps_of(s, k, d, nd, rays, &built, err);
         *maps += built;
     }
     return st;
@@ -273,16 +297,29 @@ static const iir_vpl *iir_m_vpls(const void *state, uint32_t *n)
 
 /* ---- refinement ---- */
 
-/* Room in the fresh buffer for every set's target. */
+/* Room in the fresh buffer for every set's target and their descendants. */
 static iir_status fresh_room(iir_state *s, iir_error *err)
 {
-    uint32_t need = 0;
-    for (uint32_t k = 0; k < s->num_lights; k++) need += iir_vplsets_target(s->sets, k);
+    uint32_t need = 0, per = s->params.bounces > 2 ? (uint32_t)s->params.bounces - 1 : 1;
+    for (uint32_t k = 0; k < s->num_lights; k++) need += iir_vplsets_target(s->sets, k) * per;
     if (need <= s->fresh_cap) return IIR_OK;
     iir_vpl *f = realloc(s->fresh, need * sizeof *f);
     if (!f) return iir_fail(err, IIR_ERR_NOMEM, "out of memory for %u fresh VPLs", need);
     s->fresh = f, s->fresh_cap = need;
     return IIR_OK;
+}
+
+/* Appends the descendants of the fresh set out[0..m) after it (at most cap VPLs in all), traced
+ * from refinement's stream as the kept sets' are from the seed; returns how many. */
+static uint32_t fresh_descendants(iir_state *s, uint32_t k, uint64_t stream, iir_vpl *out,
+                                  uint32_t m, uint32_t cap, iir_raystats *st)
+{
+    uint32_t added = 0;
+    uint64_t seed = iir_hash3(s->params.common.seed, stream, k);
+    for (uint32_t j = 0; s->params.bounces > 2 && j < m; j++)
+        added += iir_lineage_trace(s->scene, s->rt, &out[j], s->params.bounces, seed, out[j].birth,
+                                   out + m + added, cap - m - added, st);
+    return added;
 }
 
 /* Sweep 0: the live sets; sweep s: for every light a fresh set sampled as a regeneration would,
@@ -305,6 +342,7 @@ static iir_status refine_vpls(void *ctx, uint32_t sweep, const iir_vpl **vpls, u
         iir_vpl *out = s->fresh + s->fresh_n;
         status = iir_incr_sample_set(set, &s->lights[k], stream, out, s->fresh_cap - s->fresh_n, &m,
                                      st, err);
+        m += fresh_descendants(s, k, stream, out, m, s->fresh_cap - s->fresh_n, st);
         for (uint32_t j = 0; j < m; j++) out[j].id = out[j].id * s->num_lights + k;
         s->fresh_n += m;
     }
@@ -359,6 +397,8 @@ static void release_maps(iir_state *s)
         uint32_t n = 0;
         iir_vpl *v = set ? iir_incr_vpls(set, &n) : NULL;
         for (uint32_t i = 0; i < n; i++) iir_smap_release(&v[i].smap);
+        v = iir_vplsets_descendants(s->sets, k, &n);
+        for (uint32_t i = 0; i < n; i++) iir_smap_release(&v[i].smap);
     }
 }
 
@@ -374,14 +414,15 @@ static void iir_m_update(void *state, const void *opts)
         release_maps(s);
     iir_incr_params ip = incr_params(&s->params);
     iir_error err;
-    iir_vplsets_set_params(s->sets, &ip, &err); /* same N: cannot fail once bound */
+    iir_vplsets_set_params(s->sets, &ip, &err);          /* same N: cannot fail once bound */
+    iir_vplsets_set_bounces(s->sets, s->params.bounces); /* new: descendants traced anew */
 }
 
 /* The set, its Voronoi weights' triangulation (~200 B a site) and refinement's fresh sets. */
 static uint64_t iir_m_memory(const void *opts, int width, int height)
 {
     const iir_options *o = opts;
-    uint64_t n = (uint64_t)o->vpls;
+    uint64_t n = (uint64_t)o->vpls * (uint64_t)(o->bounces > 2 ? o->bounces - 1 : 1);
     return iir_vpl_memory(&o->vpl, (uint32_t)n, width, height) + n * (sizeof(iir_vpl) + 200) +
            iir_ism_memory(&o->ism, o->vpl.visibility, (uint32_t)n);
 }
@@ -389,7 +430,8 @@ static uint64_t iir_m_memory(const void *opts, int width, int height)
 const iir_method_ops iir_method_iir = {
     .name = "iir",
     .summary = "incremental instant radiosity: VPLs kept across frames, few replaced per frame",
-    .tables = {{&IIR_TABLE, 0},
+    .tables = {{&iir_bounces_table, offsetof(iir_options, bounces)}, /* bound before iir_check */
+               {&IIR_TABLE, 0},
                {&iir_vis_table, offsetof(iir_options, vpl)},
                {&iir_vpl_table, offsetof(iir_options, vpl)},
                {&iir_ism_table, offsetof(iir_options, ism)},

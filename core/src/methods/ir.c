@@ -45,8 +45,6 @@ typedef iir_ir_options ir_options; /* method_internal.h: the ism method binds it
 static const iir_param IR_ROWS[] = {
     {"vpls", IIR_PARAM_INT, offsetof(ir_options, vpls), 256, 1, 16384, 4096, NULL, "paths",
      "light paths per frame (each diffuse vertex a VPL)", IIR_PARAM_RESTART},
-    {"bounces", IIR_PARAM_INT, offsetof(ir_options, bounces), 2, 1, 1000, 8, NULL, "",
-     "light bounces: 1 = direct only, 2 = one diffuse bounce", IIR_PARAM_RESTART},
     {"same_random", IIR_PARAM_BOOL, offsetof(ir_options, same_random), 0, 0, 1, 0, NULL, "",
      "the same random numbers every frame (default: fresh ones)", IIR_PARAM_RESTART},
 };
@@ -142,7 +140,8 @@ static bool trace_path(ir_state *ir, vpl_list *l, const iir_light *light, iir_ve
                      .position = sf.p,
                      .albedo = sf.mat->albedo,
                      .flux = iir_mul(beta, sf.mat->albedo),
-                     .birth = ir->frame};
+                     .birth = ir->frame,
+                     .generation = (uint8_t)(vertex - 1 < 255 ? vertex - 1 : 255)};
         iir_vpl_set_normal(&v, sf.ns);
         if (!push_vpl(l, &v)) return false;
         /* Continue: cosine sampling makes the throughput the albedo; roulette on it. */
@@ -353,7 +352,8 @@ static uint32_t ir_dropped(const iir_scene *scene, const iir_light *lights, uint
 const iir_method_ops iir_method_ir = {
     .name = "ir",
     .summary = "instant radiosity: VPLs from light paths, regenerated every frame",
-    .tables = {{&IR_TABLE, 0},
+    .tables = {{&iir_bounces_table, offsetof(ir_options, bounces)}, /* first, as iir's */
+               {&IR_TABLE, 0},
                {&iir_vis_table, offsetof(ir_options, vpl)},
                {&iir_vpl_table, offsetof(ir_options, vpl)},
                {&iir_ism_table, offsetof(ir_options, ism)},

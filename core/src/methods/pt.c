@@ -42,8 +42,6 @@ typedef struct pt_options {
 static const iir_param PT_ROWS[] = {
     {"spp", IIR_PARAM_INT, offsetof(pt_options, spp), 1, 1, 1 << 20, 64, NULL, "samples",
      "samples per pixel per frame and per refinement pass", IIR_PARAM_LIVE},
-    {"bounces", IIR_PARAM_INT, offsetof(pt_options, bounces), 2, 1, 1000, 8, NULL, "",
-     "light bounces: 1 = direct only, 2 = one diffuse bounce", IIR_PARAM_LIVE},
 };
 static const iir_param_table PT_TABLE = {"pt: path tracing", PT_ROWS,
                                          sizeof PT_ROWS / sizeof PT_ROWS[0], NULL};
@@ -380,7 +378,9 @@ static uint64_t pt_memory(const void *opts, int width, int height)
 const iir_method_ops iir_method_pt = {
     .name = "pt",
     .summary = "path tracer: the reference (next-event estimation, Russian roulette)",
-    .tables = {{&PT_TABLE, 0}, {&iir_common_table, offsetof(pt_options, common)}},
+    .tables = {{&PT_TABLE, 0},
+               {&iir_bounces_table, offsetof(pt_options, bounces)},
+               {&iir_common_table, offsetof(pt_options, common)}},
     .opts_size = sizeof(pt_options),
     .create = pt_create,
     .destroy = pt_destroy,

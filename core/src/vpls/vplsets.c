@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "iir/lineage.h"
 #include "iir/rng.h"
 #include "iir/scene.h"
 
@@ -24,6 +25,8 @@ struct iir_vplsets {
     uint32_t total;           /* the N the targets in force were split from */
     iir_vpl *all;             /* the gathered array */
     uint32_t all_cap;
+    int bounces;            /* > 2: each set's parents carry descendants (lineage.h) */
+    iir_lineage *lin[MAXL]; /* set i's descendants, while bounces > 2 */
 };
 
 iir_status iir_vplsets_create(const iir_scene *scene, const iir_rt *rt, const iir_incr_params *p,
@@ -34,7 +37,7 @@ iir_status iir_vplsets_create(const iir_scene *scene, const iir_rt *rt, const ii
     if (st != IIR_OK) return st;
     iir_vplsets *g = calloc(1, sizeof *g);
     if (!g) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the VPL sets");
-    g->scene = scene, g->rt = rt, g->p = *p;
+    g->scene = scene, g->rt = rt, g->p = *p, g->bounces = 2;
     *out = g;
     return IIR_OK;
 }
@@ -42,7 +45,9 @@ iir_status iir_vplsets_create(const iir_scene *scene, const iir_rt *rt, const ii
 static void drop_set(iir_vplsets *g, uint32_t i)
 {
     iir_incr_destroy(g->set[i]);
+    iir_lineage_destroy(g->lin[i]);
     g->set[i] = NULL;
+    g->lin[i] = NULL;
     g->sp[i].target = 0;
     g->flux[i] = 0.0;
 }
@@ -50,7 +55,7 @@ static void drop_set(iir_vplsets *g, uint32_t i)
 void iir_vplsets_destroy(iir_vplsets *g)
 {
     if (!g) return;
-    for (uint32_t i = 0; i < MAXL; i++) iir_incr_destroy(g->set[i]);
+    for (uint32_t i = 0; i < MAXL; i++) iir_incr_destroy(g->set[i]), iir_lineage_destroy(g->lin[i]);
     free(g->all);
     free(g);
 }
@@ -60,6 +65,11 @@ iir_status iir_vplsets_set_params(iir_vplsets *g, const iir_incr_params *p, iir_
     iir_status st = iir_incr_params_validate(p, err);
     if (st == IIR_OK) g->p = *p;
     return st;
+}
+
+void iir_vplsets_set_bounces(iir_vplsets *g, int bounces)
+{
+    g->bounces = bounces;
 }
 
 iir_incr_params iir_vplsets_get_params(const iir_vplsets *g)
@@ -75,6 +85,12 @@ uint32_t iir_vplsets_lights(const iir_vplsets *g)
 iir_incr *iir_vplsets_set(iir_vplsets *g, uint32_t i)
 {
     return i < g->n ? g->set[i] : NULL;
+}
+
+iir_vpl *iir_vplsets_descendants(iir_vplsets *g, uint32_t i, uint32_t *n)
+{
+    *n = 0;
+    return i < g->n && g->set[i] && g->lin[i] ? iir_lineage_vpls(g->lin[i], n) : NULL;
 }
 
 uint32_t iir_vplsets_target(const iir_vplsets *g, uint32_t i)
@@ -160,6 +176,7 @@ static void add_stats(iir_incr_stats *sum, const iir_incr_stats *s)
     a->count += b->count, a->valid += b->valid, a->invalidated += b->invalidated;
     a->deleted += b->deleted, a->inserted += b->inserted, a->null_samples += b->null_samples;
     a->regenerated |= b->regenerated;
+    a->descendants += b->descendants;
     sum->initial |= s->initial;
     for (int k = 0; k < IIR_INCR_PHASE_COUNT; k++) sum->phase_ms[k] += s->phase_ms[k];
     sum->total_ms += s->total_ms;
@@ -198,6 +215,26 @@ static iir_status prepare_set(iir_vplsets *g, uint32_t i, uint32_t t, iir_error 
     return st;
 }
 
+/* Set i's descendants after its update (lineage.h), with their rays and count in s; none (and
+ * their maps released) while bounces <= 2. */
+static iir_status update_lineage(iir_vplsets *g, uint32_t i, iir_incr_stats *s, iir_error *err)
+{
+    if (g->bounces <= 2) {
+        iir_lineage_destroy(g->lin[i]);
+        g->lin[i] = NULL;
+        return IIR_OK;
+    }
+    if (!g->lin[i] && !(g->lin[i] = iir_lineage_create(g->scene, g->rt)))
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the VPLs' descendants");
+    uint32_t n = 0;
+    const iir_vpl *v = iir_incr_vpls(g->set[i], &n);
+    iir_lineage_stats ls;
+    iir_status st =
+        iir_lineage_update(g->lin[i], v, n, g->bounces, g->sp[i].seed, &s->rays, &ls, err);
+    s->vpl.descendants = ls.count;
+    return st;
+}
+
 iir_status iir_vplsets_update(iir_vplsets *g, const iir_light *lights, uint32_t n,
                               iir_incr_stats *out, iir_error *err)
 {
@@ -220,6 +257,7 @@ iir_status iir_vplsets_update(iir_vplsets *g, const iir_light *lights, uint32_t 
         st = prepare_set(g, i, target[i], err);
         iir_incr_stats s;
         if (st == IIR_OK) st = iir_incr_update(g->set[i], &lights[i], &s, err);
+        if (st == IIR_OK) st = update_lineage(g, i, &s, err);
         if (st != IIR_OK) break;
         g->flux[i] = s.flux_in;
         add_stats(&sum, &s);
@@ -228,11 +266,18 @@ iir_status iir_vplsets_update(iir_vplsets *g, const iir_light *lights, uint32_t 
     return st;
 }
 
+static uint32_t set_descendants(iir_vplsets *g, uint32_t k)
+{
+    uint32_t m = 0;
+    iir_vplsets_descendants(g, k, &m);
+    return m;
+}
+
 const iir_vpl *iir_vplsets_gather(iir_vplsets *g, uint32_t *n)
 {
     uint32_t total = 0, k, m;
     for (k = 0; k < g->n; k++)
-        if (g->set[k]) total += (iir_incr_vpls(g->set[k], &m), m);
+        if (g->set[k]) total += (iir_incr_vpls(g->set[k], &m), m) + set_descendants(g, k);
     *n = 0;
     if (total > g->all_cap) {
         iir_vpl *a = realloc(g->all, total * sizeof *a);
@@ -242,6 +287,11 @@ const iir_vpl *iir_vplsets_gather(iir_vplsets *g, uint32_t *n)
     for (k = 0; k < g->n; k++) {
         if (!g->set[k]) continue;
         const iir_vpl *v = iir_incr_vpls(g->set[k], &m);
+        for (uint32_t j = 0; j < m; j++) {
+            g->all[*n] = v[j];
+            g->all[(*n)++].id = v[j].id * g->n + k;
+        }
+        v = iir_vplsets_descendants(g, k, &m);
         for (uint32_t j = 0; j < m; j++) {
             g->all[*n] = v[j];
             g->all[(*n)++].id = v[j].id * g->n + k;

@@ -1,0 +1,248 @@
+/* lineage.c -- the descendants of a kept VPL set (lineage.h): tracing a parent's path, and each
+ * frame carrying lineages over by parent id (an open-addressing table of the last frame's
+ * lineages), tracing the new ones and releasing the orphans. Not the parents (incremental.c). */
+#include "iir/lineage.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "iir/rng.h"
+#include "iir/scene.h"
+#include "../sampling.h"
+#include "../surface.h"
+
+/* One parent's lineage: its descendants are vpls[first .. first + count). */
+typedef struct lineage {
+    uint32_t parent;
+    uint32_t first, count;
+} lineage;
+
+/* A frame's lineages and their descendants (two of them: the last frame's and the new one). */
+typedef struct generation {
+    lineage *lin;
+    uint32_t num_lin, lin_cap;
+    iir_vpl *v;
+    iir_vec3 *T; /* each descendant's path throughput from its parent */
+    uint32_t n, cap;
+} generation;
+
+struct iir_lineage {
+    const iir_scene *scene;
+    const iir_rt *rt;
+    generation cur, next;
+    uint32_t *table; /* lineage index + 1 by hashed parent id; 0 = empty */
+    uint32_t table_cap;
+    uint8_t *used; /* per lineage of cur: carried over */
+    int bounces;
+};
+
+/* ---- one path ---- */
+
+static uint32_t descendant_id(uint32_t parent, int gen)
+{
+    return (uint32_t)iir_hash3(parent, (uint64_t)gen, 0x11ea9e);
+}
+
+/* Traces parent's path, writing at most cap descendants and their throughputs. */
+static uint32_t trace(const iir_scene *scene, const iir_rt *rt, const iir_vpl *parent, int bounces,
+                      uint64_t seed, uint32_t birth, iir_vpl *out, iir_vec3 *T, uint32_t cap,
+                      iir_raystats *rays)
+{
+    iir_rng rng = iir_rng_make(iir_hash3(seed, parent->id, 0x11ea9e), 0);
+    iir_vec3 albedo = parent->albedo, p = parent->position, nrm = parent->normal;
+    iir_vec3 throughput = iir_v3s(1.f);
+    iir_frame frame = parent->frame; /* about nrm */
+    float eps = iir_rt_epsilon(rt);
+    uint32_t n = 0;
+    for (int gen = 1; gen <= bounces - 2 && n < cap; gen++) {
+        float q = iir_max_comp(albedo) < 1.f ? iir_max_comp(albedo) : 1.f; /* roulette */
+        if (q <= 0.f || iir_rng_uniform(&rng) >= q) break;
+        iir_vec3 wi =
+            iir_frame_to_world(&frame, iir_sample_cosine_hemisphere(iir_rng_uniform2(&rng)));
+        iir_ray ray = iir_make_ray(iir_madd(p, nrm, eps), wi, 0.f, INFINITY);
+        iir_hit hit;
+        if (!iir_rt_intersect(rt, &ray, &hit, rays, IIR_RAYS_VPL)) break;
+        iir_surface sf = iir_surface_at(scene, &hit, iir_neg(wi));
+        if (!iir_is_black(sf.mat->emission) || iir_is_black(sf.mat->albedo)) break;
+        throughput = iir_scale(iir_mul(throughput, sf.mat->albedo), 1.f / q);
+        iir_vpl v = {.id = descendant_id(parent->id, gen),
+                     .position = sf.p,
+                     .albedo = sf.mat->albedo,
+                     .disk = parent->disk,
+                     .emit = parent->emit,
+                     .birth = birth,
+                     .generation = (uint8_t)(gen < 255 ? gen : 255)};
+        iir_vpl_set_normal(&v, sf.ns);
+        out[n] = v;
+        if (T) T[n] = throughput;
+        n++;
+        albedo = sf.mat->albedo, p = sf.p, nrm = sf.ns, frame = v.frame;
+    }
+    return n;
+}
+
+uint32_t iir_lineage_trace(const iir_scene *scene, const iir_rt *rt, const iir_vpl *parent,
+                           int bounces, uint64_t seed, uint32_t birth, iir_vpl *out, uint32_t cap,
+                           iir_raystats *rays)
+{
+    if (parent->null_sample) return 0;
+    iir_vec3 T[64];
+    uint32_t n = trace(scene, rt, parent, bounces, seed, birth, out, T, cap < 64 ? cap : 64, rays);
+    for (uint32_t k = 0; k < n; k++) out[k].flux = iir_mul(parent->flux, T[k]);
+    return n;
+}
+
+/* ---- the lineages ---- */
+
+iir_lineage *iir_lineage_create(const iir_scene *scene, const iir_rt *rt)
+{
+    iir_lineage *L = calloc(1, sizeof *L);
+    if (L) L->scene = scene, L->rt = rt, L->bounces = 2;
+    return L;
+}
+
+static void release_all(generation *g)
+{
+    for (uint32_t k = 0; k < g->n; k++) iir_smap_release(&g->v[k].smap);
+    g->n = 0, g->num_lin = 0;
+}
+
+static void generation_free(generation *g)
+{
+    release_all(g);
+    free(g->lin), free(g->v), free(g->T);
+    memset(g, 0, sizeof *g);
+}
+
+void iir_lineage_destroy(iir_lineage *L)
+{
+    if (!L) return;
+    generation_free(&L->cur);
+    generation_free(&L->next);
+    free(L->table), free(L->used);
+    free(L);
+}
+
+iir_vpl *iir_lineage_vpls(iir_lineage *L, uint32_t *n)
+{
+    *n = L->cur.n;
+    return L->cur.v;
+}
+
+/* Room for lin lineages and n descendants in g. */
+static bool reserve(generation *g, uint32_t lin, uint32_t n)
+{
+    if (lin > g->lin_cap) {
+        lineage *l = realloc(g->lin, lin * sizeof *l);
+        if (!l) return false;
+        g->lin = l, g->lin_cap = lin;
+    }
+    if (n > g->cap) {
+        iir_vpl *v = realloc(g->v, n * sizeof *v);
+        if (v) g->v = v;
+        iir_vec3 *T = realloc(g->T, n * sizeof *T);
+        if (T) g->T = T;
+        if (!v || !T) return false;
+        g->cap = n;
+    }
+    return true;
+}
+
+static uint32_t slot_of(uint32_t id, uint32_t cap)
+{
+    return (uint32_t)iir_mix64(id) & (cap - 1);
+}
+
+/* The table of cur's lineages by parent id, and its used flags cleared. */
+static bool index_lineages(iir_lineage *L)
+{
+    uint32_t want = 16;
+    while (want < 2 * L->cur.num_lin) want *= 2;
+    if (want > L->table_cap) {
+        uint32_t *t = realloc(L->table, want * sizeof *t);
+        uint8_t *u = realloc(L->used, want);
+        if (t) L->table = t;
+        if (u) L->used = u;
+        if (!t || !u) return false;
+        L->table_cap = want;
+    }
+    memset(L->table, 0, L->table_cap * sizeof *L->table);
+    memset(L->used, 0, L->table_cap);
+    for (uint32_t k = 0; k < L->cur.num_lin; k++) {
+        uint32_t s = slot_of(L->cur.lin[k].parent, L->table_cap);
+        while (L->table[s]) s = (s + 1) & (L->table_cap - 1);
+        L->table[s] = k + 1;
+    }
+    return true;
+}
+
+/* cur's lineage of parent id, or UINT32_MAX. */
+static uint32_t find(const iir_lineage *L, uint32_t id)
+{
+    for (uint32_t s = slot_of(id, L->table_cap);; s = (s + 1) & (L->table_cap - 1)) {
+        uint32_t k = L->table[s];
+        if (!k) return UINT32_MAX;
+        if (L->cur.lin[k - 1].parent == id) return k - 1;
+    }
+}
+
+/* Appends parent's lineage to next: cur's carried over, else traced. */
+static void carry_or_trace(iir_lineage *L, const iir_vpl *parent, uint64_t seed, iir_raystats *rays,
+                           iir_lineage_stats *st)
+{
+    generation *g = &L->next;
+    lineage *l = &g->lin[g->num_lin++];
+    l->parent = parent->id, l->first = g->n, l->count = 0;
+    uint32_t k = find(L, parent->id);
+    if (k != UINT32_MAX) {
+        const lineage *old = &L->cur.lin[k];
+        memcpy(&g->v[g->n], &L->cur.v[old->first], old->count * sizeof *g->v);
+        memcpy(&g->T[g->n], &L->cur.T[old->first], old->count * sizeof *g->T);
+        l->count = old->count;
+        L->used[k] = 1;
+        st->kept += old->count;
+    } else {
+        l->count = trace(L->scene, L->rt, parent, L->bounces, seed, parent->birth, &g->v[g->n],
+                         &g->T[g->n], (uint32_t)(L->bounces - 2), rays);
+        st->born += l->count;
+    }
+    for (uint32_t j = l->first; j < l->first + l->count; j++)
+        g->v[j].flux = iir_mul(parent->flux, g->T[j]);
+    g->n += l->count;
+}
+
+iir_status iir_lineage_update(iir_lineage *L, const iir_vpl *parents, uint32_t n, int bounces,
+                              uint64_t seed, iir_raystats *rays, iir_lineage_stats *st,
+                              iir_error *err)
+{
+    iir_lineage_stats local = {0};
+    if (!st) st = &local;
+    memset(st, 0, sizeof *st);
+    if (bounces != L->bounces) { /* other paths: every lineage traced again */
+        st->died += L->cur.n;
+        release_all(&L->cur);
+        L->bounces = bounces;
+    }
+    uint32_t per = bounces > 2 ? (uint32_t)(bounces - 2) : 0;
+    if (!index_lineages(L) || !reserve(&L->next, n, n * per)) {
+        st->died += L->cur.n;
+        release_all(&L->cur);
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the descendants of %u VPLs", n);
+    }
+    generation *g = &L->next;
+    g->n = 0, g->num_lin = 0;
+    for (uint32_t i = 0; per && i < n; i++)
+        if (!parents[i].null_sample) carry_or_trace(L, &parents[i], seed, rays, st);
+    for (uint32_t k = 0; k < L->cur.num_lin; k++) { /* orphans */
+        if (L->used[k]) continue;
+        const lineage *old = &L->cur.lin[k];
+        for (uint32_t j = old->first; j < old->first + old->count; j++)
+            iir_smap_release(&L->cur.v[j].smap);
+        st->died += old->count;
+    }
+    L->cur.n = 0, L->cur.num_lin = 0; /* their maps moved to next or were released */
+    generation t = L->cur;
+    L->cur = L->next, L->next = t;
+    st->count = L->cur.n;
+    return IIR_OK;
+}
