@@ -103,6 +103,11 @@ bench: build
 	    --ref-every 25 --out out/bench/cornell-classics
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods iir,ir --sweep bounces=2,4,8 \
 	    --ref-spp 512 --ref-every 25 --out out/bench/cornell-bounces
+	$(foreach p,grazing:4 void:4 sweep-fast:8,$(BENCH) --anim $(word 1,$(subst :, ,$(p))) \
+	    --size 256x192 --methods iir --insert-ms $(word 2,$(subst :, ,$(p))) --kmax 0 --ref-spp 64 \
+	    --ref-every 15 --out out/bench/cornell-$(word 1,$(subst :, ,$(p)))-budget &&) true
+	$(BENCH) conference --anim orbit --size 320x240 --methods iir --insert-ms 10 --kmax 0 \
+	    --sm-res 64 --ref-spp 256 --ref-every 100 --out out/bench/conference-orbit-budget
 	$(BENCH) cornell_spheres --anim orbit --frames 0:100 --size 320x240 \
 	    --methods whitted,hybrid,radiosity,pt --bounces 8 --sweep spp=4,16 --ref-spp 512 \
 	    --ref-every 25 --save-images --out out/bench/cornell-spheres

@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """live_bench.py -- measures `iird serve` as a user meets it, over a real WebSocket on loopback:
 input-to-frame latency while dragging the light at a steady rate and one move at a time, what a burst
-of 100 moves renders, memory per session, and the daemon's CPU once the frame has converged. Prints a
-table and writes JSON. Not a test: run it against a Release build (`make bench` does).
+of 100 moves renders, memory per session, and the daemon's CPU once the frame has converged; and the
+VPL set's size during a fast drag (the light swept across the scene and back three times in 3 s, as
+a user drags the Cornell box's spot across its ceiling). Prints a table and writes JSON. Not a test:
+run it against a Release build (`make bench` does).
 
     tools/live_bench.py --iird build/iird [--scene builtin] [--size 512x384] [--method iir]
-                        [--rate 60] [--seconds 10] [--out out/bench/live.json]
+                        [--rate 60] [--seconds 10] [--params '{"insert_ms": 4, "kmax": 0}']
+                        [--out out/bench/live.json]
 
 Latency of an input = arrival of the first frame whose header seq is >= the input's seq, minus the
 moment the input was sent; a frame time is the server's render time of the frames in the same run
@@ -97,6 +100,34 @@ async def drag(c, base, rate, seconds):
     return s
 
 
+def sweep_point(base, u, half_width):
+    """A light position swept along x across base and back, three times as u goes 0..1."""
+    return [base[0] + half_width * math.sin(2 * math.pi * 3 * u), base[1], base[2]]
+
+
+async def fast_drag(c, base, rate, seconds, half_width):
+    """Sweeps the light across the scene at `rate` Hz; the VPL counts the frames' stats report."""
+    at = c.mark()
+    t0 = time.monotonic()
+    n = int(rate * seconds)
+    seq = None
+    for i in range(n):
+        delay = t0 + i / rate - time.monotonic()
+        if delay > 0:
+            await asyncio.sleep(delay)
+        seq = c.next_seq()
+        await c.send({"type": "light", "seq": seq, "position": sweep_point(base, i / n, half_width)})
+    await c.wait_frame(since=at, min_seq=seq, timeout=30)
+    stats = [m for m in c.texts("stats", at) if m.get("pass") == 0]
+    counts = [m["vpl"]["count"] for m in stats]
+    total = [m["total_ms"] for m in stats]
+    return {"moves": n, "frames": len(stats), "half_width": half_width,
+            "vpls_min": min(counts) if counts else None,
+            "vpls_median": statistics.median(counts) if counts else None,
+            "frame_ms_median": round(statistics.median(total), 2) if total else None,
+            "counts": counts}
+
+
 async def one_at_a_time(c, base, count, gap):
     """One move, wait for its frame, pause `gap` s (below the 250 ms refinement delay), repeat."""
     sent = []
@@ -148,7 +179,8 @@ async def idle_cpu(c, pid, seconds=5.0, converge_timeout=120.0):
 async def run(args):
     w, h = (int(x) for x in args.size.split("x"))
     d = Daemon("--scenes", args.scenes, scenes=False) if args.scenes else Daemon()
-    result = {"scene": args.scene, "size": args.size, "method": args.method, "rate_hz": args.rate,
+    result = {"scene": args.scene, "size": args.size, "method": args.method, "params": json.loads(args.params),
+              "rate_hz": args.rate,
               "seconds": args.seconds, "cpus": os.cpu_count(), "iird": args.iird,
               "loadavg_before": os.getloadavg()}
     try:
@@ -156,9 +188,11 @@ async def run(args):
         c = await Client.connect(d)
         if args.scene != "builtin":
             await c.request({"type": "scene", "name": args.scene}, "state", timeout=120)
-        seq, st = await c.request({"type": "params", "width": w, "height": h, "method": args.method}, "state")
+        seq, st = await c.request({"type": "params", "width": w, "height": h, "method": args.method,
+                                   **json.loads(args.params)}, "state")
         await c.wait_frame(min_seq=seq, timeout=60)
         base = st["light"]["position"]
+        vpls = st["params"].get("vpls")
         await drag(c, base, args.rate, 1.0)  # warm-up: shadow maps, caches
         result["drag"] = await drag(c, base, args.rate, args.seconds)
         result["single"] = await one_at_a_time(c, base, args.single, 0.1)
@@ -166,6 +200,8 @@ async def run(args):
         result["single_no_refine"] = await one_at_a_time(c, base, args.single, 0.1)
         await c.request({"type": "params", "refine": True}, "state")
         result["burst"] = await burst(c, base)
+        result["fast_drag"] = await fast_drag(c, base, args.rate, 3.0, args.sweep)
+        result["fast_drag"]["vpls_target"] = vpls
         m = await asyncio.to_thread(metrics, d.port)
         sid = c.welcome["session"]
         result["memory"] = {
@@ -198,6 +234,10 @@ def table(r):
                    f"{s['server_latency_median_ms']:>8.1f}")
     b, m, i = r["burst"], r["memory"], r["idle"]
     out.append(f"drag frame rate {r['drag']['fps']} fps")
+    fd = r["fast_drag"]
+    out.append(f"fast drag (x +-{fd['half_width']}, 3 sweeps in 3 s at {r['rate_hz']:g} Hz): {fd['frames']} "
+               f"frames of median {fd['frame_ms_median']} ms, VPLs min {fd['vpls_min']} median "
+               f"{fd['vpls_median']} of {fd['vpls_target']}")
     out.append(f"burst of {b['moves']} moves: {b['frames_answering']} frames, last answers last seq: "
                f"{b['last_frame_seq_is_last']}, {b['ms_to_last_frame']} ms to it")
     mem = m["session_memory_bytes"]
@@ -220,6 +260,8 @@ def main():
     ap.add_argument("--rate", type=float, default=60.0)
     ap.add_argument("--seconds", type=float, default=10.0)
     ap.add_argument("--single", type=int, default=40, help="moves in the one-at-a-time run")
+    ap.add_argument("--params", default="{}", help="method parameters for the session, as JSON")
+    ap.add_argument("--sweep", type=float, default=0.45, help="fast drag: half the sweep's width (x)")
     ap.add_argument("--out", default="out/bench/live.json")
     args = ap.parse_args()
     iirserve.IIRD = os.path.abspath(args.iird)

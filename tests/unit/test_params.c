@@ -225,7 +225,7 @@ static void test_set_params_keeps_vpls(void **state)
 }
 
 /* What params accept renders (issue 15, finding 6): iir refuses a view without lights up front, and
- * kmax 0 (the incremental step needs at least one insertion) is out of range. */
+ * kmax 0 (no cap) is refused without insert_ms, the budget that then decides the insertions. */
 static void test_accepted_renders(void **state)
 {
     (void)state;
@@ -241,7 +241,12 @@ static void test_accepted_renders(void **state)
     assert_int_equal(iir_method_supports("nope", &point, 1, &err), IIR_ERR_INVALID);
     iir_params p = iir_params_default();
     assert_int_equal(iir_method_param_set(&p, "kmin", 0, &err), IIR_OK);
-    assert_int_equal(iir_method_param_set(&p, "kmax", 0, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_method_param_set(&p, "kmax", 0, &err), IIR_OK); /* in range... */
+    const iir_param *bad = NULL;
+    assert_int_equal(iir_method_params_validate("iir", &p, NULL, &bad, &err), IIR_ERR_INVALID);
+    assert_non_null(strstr(err.msg, "insert_ms")); /* ...but not without a budget */
+    assert_int_equal(iir_method_param_set(&p, "insert_ms", 2, &err), IIR_OK);
+    assert_int_equal(iir_method_params_validate("iir", &p, NULL, &bad, &err), IIR_OK);
 }
 
 int main(void)

@@ -15,6 +15,7 @@
  * The domain (iir_method_domain) of the light a user moves (the first spot, else the first light)
  * is drawn from its set's triangulation on demand into buffers of this file that grow with the set
  * and are reused; site ids are that set's own. */
+#include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,6 +44,7 @@ typedef struct iir_options {
     iir_weights weights;   /* uniform or Voronoi cell areas */
     float regen_threshold; /* regenerate when more than this fraction dies */
     int bounces;           /* 2: the kept set alone; more: its VPLs carry descendants */
+    float insert_ms;       /* > 0: time a frame for new VPLs and their maps (kmax caps, 0 none) */
 } iir_options;
 
 static const char *const WEIGHTS_CHOICES[] = {"uniform", "voronoi", NULL};
@@ -52,16 +54,20 @@ static const iir_param IIR_ROWS[] = {
      "the VPL set's size N", IIR_PARAM_RESTART},
     {"kmin", IIR_PARAM_INT, offsetof(iir_options, kmin), 4, 0, 16384, 4096, NULL, "VPLs",
      "VPLs replaced per frame at least (the crowded ones)", IIR_PARAM_LIVE},
-    {"kmax", IIR_PARAM_INT, offsetof(iir_options, kmax), 8,
-     1, /* the step inserts at least one VPL a frame */
-     16384, 4096, NULL, "VPLs", "VPLs inserted per frame at most", IIR_PARAM_LIVE},
+    {"kmax", IIR_PARAM_INT, offsetof(iir_options, kmax), 8, 0, 16384, 4096, NULL, "VPLs",
+     "VPLs inserted per frame at most (with insert_ms: the cap, 0 = none)", IIR_PARAM_LIVE},
+    {"insert_ms", IIR_PARAM_FLOAT, offsetof(iir_options, insert_ms), 0, 0, 1000, 0, NULL, "ms",
+     "time per frame for new VPLs and their shadow maps: as many as fit at their measured cost "
+     "(frames then depend on the machine's speed); 0 = kmax a frame",
+     IIR_PARAM_LIVE},
     {"weights", IIR_PARAM_ENUM, offsetof(iir_options, weights), IIR_WEIGHTS_VORONOI, 0, 1, 0,
      WEIGHTS_CHOICES, "", "VPL flux by Voronoi cell area or uniform (the paper's)", IIR_PARAM_LIVE},
     {"regen_threshold", IIR_PARAM_FLOAT, offsetof(iir_options, regen_threshold), 0.5, 1e-6, 1, 0,
      NULL, "", "regenerate the whole set when more than this fraction of it dies", IIR_PARAM_LIVE},
 };
 
-/* kmin <= kmax <= vpls, blaming the one the user gave (kmin, then kmax, when both or neither). */
+/* bounces >= 2; kmax 0 only with insert_ms; kmin <= kmax (when > 0) <= vpls, blaming the one the
+ * user gave (kmin, then kmax, when both or neither). */
 static iir_status iir_check(const void *opts, const iir_params *given, const iir_param **bad,
                             iir_error *err)
 {
@@ -72,7 +78,13 @@ static iir_status iir_check(const void *opts, const iir_params *given, const iir
                         "bounces: iir keeps VPLs for indirect light, at least one bounce (2); "
                         "for direct light alone use pt or ir with bounces 1");
     }
-    if (o->kmin > o->kmax) {
+    if (o->kmax == 0 && o->insert_ms <= 0.f) {
+        *bad = &IIR_ROWS[2];
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "kmax: 0 (no cap) needs insert_ms, the time budget that then decides how "
+                        "many VPLs a frame inserts");
+    }
+    if (o->kmax > 0 && o->kmin > o->kmax) {
         *bad = &IIR_ROWS[iir_params_has(given, "kmin") || !iir_params_has(given, "kmax") ? 1 : 2];
         return iir_fail(err, IIR_ERR_INVALID, "%s: kmin %d must not exceed kmax %d", (*bad)->name,
                         o->kmin, o->kmax);
@@ -103,7 +115,8 @@ typedef struct iir_state {
     uint32_t fresh_n, fresh_cap;
     uint32_t refine_frame; /* the frame being refined: the fresh sets' stream */
     iir_domain_draw dom;
-    iir_stop_fn stop; /* a live session's: frames and passes end early when it says so */
+    double insert_cost_ms; /* insert_ms: a running mean of one new VPL's cost with its maps */
+    iir_stop_fn stop;      /* a live session's: frames and passes end early when it says so */
     void *stop_ctx;
 } iir_state;
 
@@ -120,16 +133,55 @@ static void iir_m_destroy(void *state)
     free(s);
 }
 
-static iir_incr_params incr_params(const iir_options *p)
+/* The step's parameters with k_max VPLs inserted a frame at most (k_min no more than that). */
+/* ---- the insertion budget (insert_ms) ---- */
+
+/* VPLs the step may insert this frame: kmax (insert_ms 0), else as many as insert_ms buys at the
+ * measured cost of one with its maps, kmax (when > 0) and N the caps; at least one. Before the
+ * first measurement: kmax, or 8 without a cap. */
+static uint32_t insert_limit(const iir_state *s)
+{
+    const iir_options *o = &s->params;
+    if (o->insert_ms <= 0.f) return (uint32_t)o->kmax;
+    double n = s->insert_cost_ms > 0.0 ? floor(o->insert_ms / s->insert_cost_ms)
+               : o->kmax > 0           ? o->kmax
+                                       : 8;
+    if (o->kmax > 0 && n > o->kmax) n = o->kmax;
+    if (n > o->vpls) n = o->vpls;
+    return n < 1.0 ? 1u : (uint32_t)n;
+}
+
+/* One frame's cost per inserted VPL (the step's insertion and the new maps), into the running
+ * mean (weight 1/4: a few frames follow a change of scene or view). */
+static void measure_insert_cost(iir_state *s, const iir_incr_stats *is, double maps_ms)
+{
+    if (is->vpl.inserted == 0) return;
+    double c = (is->phase_ms[IIR_INCR_INSERT] + maps_ms) / is->vpl.inserted;
+    s->insert_cost_ms = s->insert_cost_ms > 0.0 ? 0.75 * s->insert_cost_ms + 0.25 * c : c;
+}
+
+/* The step's parameters with k_max VPLs inserted a frame at most. k_min is kmin, except that a
+ * budget's k_max at or below it leaves one insertion for growth (k_min = k_max - 1): the churn
+ * must not eat the whole budget of a set that is short of N. */
+static iir_incr_params incr_params(const iir_options *p, uint32_t k_max)
 {
     iir_incr_params ip = iir_incr_params_default();
     ip.target = (uint32_t)p->vpls;
-    ip.k_min = (uint32_t)p->kmin;
-    ip.k_max = (uint32_t)p->kmax;
+    ip.k_max = k_max;
+    ip.k_min = p->insert_ms > 0.f && (uint32_t)p->kmin >= k_max ? k_max - 1 : (uint32_t)p->kmin;
     ip.weights = p->weights;
     ip.regen_threshold = p->regen_threshold;
     ip.seed = p->common.seed;
     return ip;
+}
+
+/* The budget's k_max for the next update (the sets keep their VPLs: same N). */
+static void apply_insert_limit(iir_state *s)
+{
+    if (s->params.insert_ms <= 0.f) return;
+    iir_incr_params ip = incr_params(&s->params, insert_limit(s));
+    iir_error err;
+    iir_vplsets_set_params(s->sets, &ip, &err); /* valid by construction */
 }
 
 static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
@@ -141,7 +193,7 @@ static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const v
     s->scene = scene;
     s->rt = rt;
     s->params = *params;
-    iir_incr_params ip = incr_params(params);
+    iir_incr_params ip = incr_params(params, insert_limit(s));
     iir_status st = iir_vplsets_create(scene, rt, &ip, &s->sets, err);
     if (st == IIR_OK) iir_vplsets_set_bounces(s->sets, params->bounces);
     s->renderer = st == IIR_OK ? iir_renderer_create(scene, rt) : NULL;
@@ -251,6 +303,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     iir_incr_stats is;
     uint32_t nl =
         view->num_lights < IIR_VPLSETS_MAX_LIGHTS ? view->num_lights : IIR_VPLSETS_MAX_LIGHTS;
+    apply_insert_limit(s);
     st = iir_vplsets_update(s->sets, view->lights, nl, &is, err);
     if (st != IIR_OK) return st;
     iir_raystats_add(&stats->rays, &is.rays);
@@ -261,6 +314,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     if (s->stop && s->stop(s->stop_ctx)) /* the maps not built are built by the next frame */
         return s->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double t2 = iir_now_ms();
+    measure_insert_cost(s, &is, t2 - t1);
     uint32_t n = 0;
     const iir_vpl *vpls = iir_vplsets_gather(s->sets, &n);
     iir_indirect_params ind = iir_vpl_indirect(&s->params.vpl);
@@ -412,7 +466,7 @@ static void iir_m_update(void *state, const void *opts)
     if (was != s->params.vpl.visibility &&
         (was == IIR_VIS_ISM || s->params.vpl.visibility == IIR_VIS_ISM))
         release_maps(s);
-    iir_incr_params ip = incr_params(&s->params);
+    iir_incr_params ip = incr_params(&s->params, insert_limit(s));
     iir_error err;
     iir_vplsets_set_params(s->sets, &ip, &err);          /* same N: cannot fail once bound */
     iir_vplsets_set_bounces(s->sets, s->params.bounces); /* new: descendants traced anew */
