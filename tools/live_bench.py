@@ -4,7 +4,8 @@ input-to-frame latency while dragging the light at a steady rate and one move at
 of 100 moves renders, memory per session, and the daemon's CPU once the frame has converged; and the
 VPL set's size during a fast drag (the light swept across the scene and back three times in 3 s, as
 a user drags the Cornell box's spot across its ceiling). Prints a table and writes JSON. Not a test:
-run it against a Release build (`make bench` does).
+run it against a Release build (`make bench` does; `--params` gives the session method parameters,
+e.g. an insertion budget).
 
     tools/live_bench.py --iird build/iird [--scene builtin] [--size 512x384] [--method iir]
                         [--rate 60] [--seconds 10] [--params '{"insert_ms": 4, "kmax": 0}']
@@ -106,7 +107,12 @@ def sweep_point(base, u, half_width):
 
 
 async def fast_drag(c, base, rate, seconds, half_width):
-    """Sweeps the light across the scene at `rate` Hz; the VPL counts the frames' stats report."""
+    """Sweeps the light across the scene at `rate` Hz from where it rested 2 s (the set full again);
+    the VPL counts the frames' stats report."""
+    seq = c.next_seq()
+    await c.send({"type": "light", "seq": seq, "position": sweep_point(base, 0.0, half_width)})
+    await c.wait_frame(min_seq=seq, timeout=30)
+    await asyncio.sleep(2.0)
     at = c.mark()
     t0 = time.monotonic()
     n = int(rate * seconds)

@@ -116,6 +116,7 @@ typedef struct iir_state {
     uint32_t refine_frame; /* the frame being refined: the fresh sets' stream */
     iir_domain_draw dom;
     double insert_cost_ms; /* insert_ms: a running mean of one new VPL's cost with its maps */
+    uint32_t last_count;   /* the sets' VPLs after the last frame (descendants not counted) */
     iir_stop_fn stop;      /* a live session's: frames and passes end early when it says so */
     void *stop_ctx;
 } iir_state;
@@ -151,35 +152,43 @@ static uint32_t insert_limit(const iir_state *s)
     return n < 1.0 ? 1u : (uint32_t)n;
 }
 
-/* One frame's cost per inserted VPL (the step's insertion and the new maps), into the running
- * mean (weight 1/4: a few frames follow a change of scene or view). */
-static void measure_insert_cost(iir_state *s, const iir_incr_stats *is, double maps_ms)
+/* One frame's cost of a new VPL into the running mean (weight 1/4: a few frames follow a change of
+ * scene or view): the step's insertion time per VPL inserted, plus the time per map built times
+ * the maps a new VPL brings (itself and its descendants, 1 + descendants / count). Per map, not per
+ * VPL inserted: a frame also builds the maps an interrupted frame left. */
+static void measure_insert_cost(iir_state *s, const iir_incr_stats *is, uint32_t maps,
+                                double maps_ms)
 {
-    if (is->vpl.inserted == 0) return;
-    double c = (is->phase_ms[IIR_INCR_INSERT] + maps_ms) / is->vpl.inserted;
+    const iir_vpl_counts *v = &is->vpl;
+    if (v->inserted == 0 || maps == 0) return;
+    double per_vpl = 1.0 + (v->count ? (double)v->descendants / v->count : 0.0);
+    double c = is->phase_ms[IIR_INCR_INSERT] / v->inserted + maps_ms / maps * per_vpl;
     s->insert_cost_ms = s->insert_cost_ms > 0.0 ? 0.75 * s->insert_cost_ms + 0.25 * c : c;
 }
 
-/* The step's parameters with k_max VPLs inserted a frame at most. k_min is kmin, except that a
- * budget's k_max at or below it leaves one insertion for growth (k_min = k_max - 1): the churn
- * must not eat the whole budget of a set that is short of N. */
-static iir_incr_params incr_params(const iir_options *p, uint32_t k_max)
+/* The step's parameters with k_max VPLs inserted a frame at most and k_min replaced at least (no
+ * more than k_max). */
+static iir_incr_params incr_params(const iir_options *p, uint32_t k_max, uint32_t k_min)
 {
     iir_incr_params ip = iir_incr_params_default();
     ip.target = (uint32_t)p->vpls;
     ip.k_max = k_max;
-    ip.k_min = p->insert_ms > 0.f && (uint32_t)p->kmin >= k_max ? k_max - 1 : (uint32_t)p->kmin;
+    ip.k_min = k_min < k_max ? k_min : k_max;
     ip.weights = p->weights;
     ip.regen_threshold = p->regen_threshold;
     ip.seed = p->common.seed;
     return ip;
 }
 
-/* The budget's k_max for the next update (the sets keep their VPLs: same N). */
+/* The budget's k_max for the next update (the sets keep their VPLs: same N), and its k_min: kmin
+ * while the set is full, 0 while it is short of N (the budget goes to refilling it, not to churn;
+ * the churn resumes once it is full). */
 static void apply_insert_limit(iir_state *s)
 {
     if (s->params.insert_ms <= 0.f) return;
-    iir_incr_params ip = incr_params(&s->params, insert_limit(s));
+    bool short_of_n = s->last_count < (uint32_t)s->params.vpls;
+    iir_incr_params ip =
+        incr_params(&s->params, insert_limit(s), short_of_n ? 0 : (uint32_t)s->params.kmin);
     iir_error err;
     iir_vplsets_set_params(s->sets, &ip, &err); /* valid by construction */
 }
@@ -193,7 +202,7 @@ static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const v
     s->scene = scene;
     s->rt = rt;
     s->params = *params;
-    iir_incr_params ip = incr_params(params, insert_limit(s));
+    iir_incr_params ip = incr_params(params, insert_limit(s), (uint32_t)params->kmin);
     iir_status st = iir_vplsets_create(scene, rt, &ip, &s->sets, err);
     if (st == IIR_OK) iir_vplsets_set_bounces(s->sets, params->bounces);
     s->renderer = st == IIR_OK ? iir_renderer_create(scene, rt) : NULL;
@@ -314,7 +323,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     if (s->stop && s->stop(s->stop_ctx)) /* the maps not built are built by the next frame */
         return s->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double t2 = iir_now_ms();
-    measure_insert_cost(s, &is, t2 - t1);
+    measure_insert_cost(s, &is, maps, t2 - t1);
     uint32_t n = 0;
     const iir_vpl *vpls = iir_vplsets_gather(s->sets, &n);
     iir_indirect_params ind = iir_vpl_indirect(&s->params.vpl);
@@ -339,6 +348,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     iir_render_timing_to_stats(&rt, stats);
     stats->total_ms = iir_now_ms() - t0;
     fill_counts(&is, maps, &stats->vpl);
+    s->last_count = is.vpl.count;
     s->frame++;
     return st;
 }
@@ -466,7 +476,7 @@ static void iir_m_update(void *state, const void *opts)
     if (was != s->params.vpl.visibility &&
         (was == IIR_VIS_ISM || s->params.vpl.visibility == IIR_VIS_ISM))
         release_maps(s);
-    iir_incr_params ip = incr_params(&s->params, insert_limit(s));
+    iir_incr_params ip = incr_params(&s->params, insert_limit(s), (uint32_t)s->params.kmin);
     iir_error err;
     iir_vplsets_set_params(s->sets, &ip, &err);          /* same N: cannot fail once bound */
     iir_vplsets_set_bounces(s->sets, s->params.bounces); /* new: descendants traced anew */
