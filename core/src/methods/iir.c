@@ -153,16 +153,18 @@ static uint32_t insert_limit(const iir_state *s)
 }
 
 /* One frame's cost of a new VPL into the running mean (weight 1/4: a few frames follow a change of
- * scene or view): the step's insertion time per VPL inserted, plus the time per map built times
- * the maps a new VPL brings (itself and its descendants, 1 + descendants / count). Per map, not per
- * VPL inserted: a frame also builds the maps an interrupted frame left. */
+ * scene or view): the step's insertion time plus the new maps' time, per VPL inserted. The maps
+ * counted are at most what the inserted VPLs bring (each itself and its descendants, 1 +
+ * descendants / count; null samples none): a frame also builds the maps an interrupted frame left,
+ * which are not this frame's cost. */
 static void measure_insert_cost(iir_state *s, const iir_incr_stats *is, uint32_t maps,
                                 double maps_ms)
 {
     const iir_vpl_counts *v = &is->vpl;
-    if (v->inserted == 0 || maps == 0) return;
-    double per_vpl = 1.0 + (v->count ? (double)v->descendants / v->count : 0.0);
-    double c = is->phase_ms[IIR_INCR_INSERT] / v->inserted + maps_ms / maps * per_vpl;
+    if (v->inserted == 0) return;
+    double brought = v->inserted * (1.0 + (v->count ? (double)v->descendants / v->count : 0.0));
+    double own = maps > brought ? brought : (double)maps;
+    double c = (is->phase_ms[IIR_INCR_INSERT] + (maps ? maps_ms / maps * own : 0.0)) / v->inserted;
     s->insert_cost_ms = s->insert_cost_ms > 0.0 ? 0.75 * s->insert_cost_ms + 0.25 * c : c;
 }
 
