@@ -70,8 +70,8 @@ test: deps web-deps format-check
 # hybrid, radiosity and pt on the mirror/glass box; radiosity's form-factor time and cache load at
 # each patch size) -- each
 # with references (cached in $(REFCACHE): a second run skips them), frames.csv, summary.json and
-# charts in out/bench/<scene>-<path>/. Measured: 8 min 18 s on 2 quiet cores with an empty cache
-# before rsm, ism, hier and multires joined.
+# charts in out/bench/<scene>-<path>/. Measured: 6 min 44 s on 2 quiet cores with the references
+# already cached (2026-11-25); an empty cache adds their rendering (about 15 minutes more).
 REFCACHE ?= out/refcache
 BENCH     = $(BUILD)/iird bench --ref-cache $(REFCACHE)
 STRESS    = sweep-fast corner grazing void
