@@ -71,7 +71,7 @@ test: deps web-deps format-check
 # each patch size) -- each
 # with references (cached in $(REFCACHE): a second run skips them), frames.csv, summary.json and
 # charts in out/bench/<scene>-<path>/. Measured: 6 min 44 s on 2 quiet cores with the references
-# already cached (2026-11-25); an empty cache adds their rendering (about 15 minutes more).
+# already cached (2026-11-25); with an empty cache their rendering comes on top (not timed).
 REFCACHE ?= out/refcache
 BENCH     = $(BUILD)/iird bench --ref-cache $(REFCACHE)
 STRESS    = sweep-fast corner grazing void
