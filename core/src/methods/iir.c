@@ -3,11 +3,12 @@
  * of the view, each on its own domain with its share of the budget (vplsets.h), renders shadow maps
  * only for the VPLs born this frame (a map lives as long as its VPL: the scene is static), and
  * shades with the shared VPL renderer. With bounces > 2 every kept VPL carries the rest of its
- * light path (lineage.h, through vplsets.h), whose VPLs get their maps at their birth too.
- * Parameters: the incremental
- * step's (table below), the VPL shading's (vpl_options.c), the ISMs' (ism_options.c: with
- * visibility=ism a VPL's map is an imperfect one, also built at its birth) and every method's.
- * Direct light comes from every light of the view.
+ * light path (lineage.h, through vplsets.h), whose VPLs get their maps at their birth too. With
+ * insert_ms > 0 the step's k_max is set each frame to what the budget buys at the running cost of
+ * a new VPL with its maps ("the insertion budget" below). Parameters: the incremental step's
+ * (table below), light bounces (method.c), the VPL shading's (vpl_options.c), the ISMs'
+ * (ism_options.c: with visibility=ism a VPL's map is an imperfect one, also built at its birth)
+ * and every method's. Direct light comes from every light of the view.
  *
  * Refinement (refine.h; refine_passes, jitter, interleave, clamp): sweep 0 shades the live
  * set, sweep s >= 1 a fresh set sampled as a regeneration would (iir_incr_sample_set, stream
