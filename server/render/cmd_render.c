@@ -202,6 +202,9 @@ static void work_text(const render_opts *o, const iir_frame_stats *fs, char *buf
     else if (iir_method_find_param(o->method, "patch_area")) /* radiosity */
         snprintf(buf, n, "a radiosity solution, %llu refinement pass%s", done,
                  done == 1 ? "" : "es");
+    else if (fs->vpl.descendants > 0) /* iir with bounces > 2 */
+        snprintf(buf, n, "%llu refinement pass%s over %u VPLs (+%u of later bounces)", done,
+                 done == 1 ? "" : "es", fs->vpl.count, fs->vpl.descendants);
     else
         snprintf(buf, n, "%llu refinement pass%s over %u VPLs", done, done == 1 ? "" : "es",
                  fs->vpl.count);

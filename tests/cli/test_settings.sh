@@ -19,7 +19,11 @@ line=$(settings iir "$out")
 [ "$line" = "iir settings: bounces 2, vpls 16, kmin 4, kmax 8, insert-ms 0, weights voronoi, regen-threshold 0.5, visibility shadowmap, sm-res 32, sm-bias 0.005, interleave 4, ism-points 16384, ism-res 32, ism-points-per-vpl 1024, clamp 100, shading full, mr-levels 4, mr-depth 0.01, mr-normal 0.95, mr-window 16, seed 1, refine-passes 2, jitter true" ] ||
     fail "iir's settings line: $out"
 echo "$out" | grep -qE "spp" && fail "render --method iir prints settings iir does not read: $out"
-echo "$out" | grep -q "method iir, 2 refinement passes over 16 VPLs" || fail "iir's work: $out"
+echo "$out" | grep -q "method iir, 2 refinement passes over 16 VPLs," || fail "iir's work: $out"
+out=$("$iird" render --method iir --bounces 4 --size 32x24 --vpls 16 --sm-res 32 --refine-passes 2 \
+    --out "$tmp/iir4.png" 2>&1) || fail "render --method iir --bounces 4: $out"
+echo "$out" | grep -qE "method iir, 2 refinement passes over 16 VPLs \(\+[1-9][0-9]* of later bounces\)" ||
+    fail "iir's work with later bounces: $out"
 
 out=$("$iird" render --method ir --size 32x24 --vpls 16 --sm-res 32 --refine-passes 1 \
     --bounces 3 --out "$tmp/ir.png" 2>&1) || fail "render --method ir: $out"
