@@ -89,7 +89,7 @@ bench: build
 	$(foreach p,teleport occluder,$(BENCH) --anim $(p) --size 256x192 --methods $(PEERS) \
 	    --ref-spp 128 --ref-every 10 --out out/bench/cornell-$(p) &&) true
 	$(foreach p,$(STRESS),$(BENCH) --anim $(p) --size 256x192 --methods $(PEERS) \
-	    --ref-spp 64 --ref-every 15 --out out/bench/cornell-$(p) &&) true
+	    --ref-spp 64 --ref-every 2 --out out/bench/cornell-$(p) &&) true
 	$(BENCH) conference --anim orbit --size 320x240 --methods $(PEERS) --ref-spp 256 \
 	    --ref-every 100 --out out/bench/conference-orbit
 	$(BENCH) --anim orbit --frames 0:50 --size 512x384 --methods iir,ir,rsm \
@@ -105,7 +105,7 @@ bench: build
 	    --ref-spp 512 --ref-every 25 --out out/bench/cornell-bounces
 	$(foreach p,grazing:4 void:4 sweep-fast:8,$(BENCH) --anim $(word 1,$(subst :, ,$(p))) \
 	    --size 256x192 --methods iir --insert-ms $(word 2,$(subst :, ,$(p))) --kmax 0 --ref-spp 64 \
-	    --ref-every 15 --out out/bench/cornell-$(word 1,$(subst :, ,$(p)))-budget &&) true
+	    --ref-every 2 --out out/bench/cornell-$(word 1,$(subst :, ,$(p)))-budget &&) true
 	$(BENCH) conference --anim orbit --size 320x240 --methods iir --insert-ms 10 --kmax 0 \
 	    --sm-res 64 --ref-spp 256 --ref-every 100 --out out/bench/conference-orbit-budget
 	$(BENCH) cornell_spheres --anim orbit --frames 0:100 --size 320x240 \
