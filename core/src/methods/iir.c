@@ -117,7 +117,6 @@ typedef struct iir_state {
     uint32_t refine_frame; /* the frame being refined: the fresh sets' stream */
     iir_domain_draw dom;
     double insert_cost_ms; /* insert_ms: a running mean of one new VPL's cost with its maps */
-    uint32_t last_count;   /* the sets' VPLs after the last frame (descendants not counted) */
     iir_stop_fn stop;      /* a live session's: frames and passes end early when it says so */
     void *stop_ctx;
 } iir_state;
@@ -189,7 +188,14 @@ static iir_incr_params incr_params(const iir_options *p, uint32_t k_max, uint32_
 static void apply_insert_limit(iir_state *s)
 {
     if (s->params.insert_ms <= 0.f) return;
-    bool short_of_n = s->last_count < (uint32_t)s->params.vpls;
+    uint32_t count = 0;
+    for (uint32_t k = 0; k < iir_vplsets_lights(s->sets); k++) {
+        iir_incr *set = iir_vplsets_set(s->sets, k);
+        uint32_t n = 0;
+        if (set) iir_incr_vpls(set, &n);
+        count += n;
+    }
+    bool short_of_n = count < (uint32_t)s->params.vpls;
     iir_incr_params ip =
         incr_params(&s->params, insert_limit(s), short_of_n ? 0 : (uint32_t)s->params.kmin);
     iir_error err;
@@ -351,7 +357,6 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     iir_render_timing_to_stats(&rt, stats);
     stats->total_ms = iir_now_ms() - t0;
     fill_counts(&is, maps, &stats->vpl);
-    s->last_count = is.vpl.count;
     s->frame++;
     return st;
 }

@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../vpls/light_path.h"
 #include "iir/method.h"
 #include "iir/ism.h"
 #include "iir/refine.h"
@@ -144,13 +145,9 @@ static bool trace_path(ir_state *ir, vpl_list *l, const iir_light *light, iir_ve
                      .generation = (uint8_t)(vertex - 1 < 255 ? vertex - 1 : 255)};
         iir_vpl_set_normal(&v, sf.ns);
         if (!push_vpl(l, &v)) return false;
-        /* Continue: cosine sampling makes the throughput the albedo; roulette on it. */
-        float q = fminf(1.f, iir_max_comp(sf.mat->albedo));
-        if (q <= 0.f || iir_rng_uniform(rng) >= q) break;
+        float q;
+        if (!iir_light_path_continue(&v, eps, rng, &ray, &q)) break;
         beta = iir_scale(v.flux, 1.f / q);
-        iir_vec3 wi =
-            iir_frame_to_world(&v.frame, iir_sample_cosine_hemisphere(iir_rng_uniform2(rng)));
-        ray = iir_make_ray(iir_surface_offset(&sf, eps), wi, 0.f, INFINITY);
     }
     return true;
 }

@@ -8,8 +8,8 @@
 
 #include "iir/rng.h"
 #include "iir/scene.h"
-#include "../sampling.h"
 #include "../surface.h"
+#include "light_path.h"
 
 /* One parent's lineage: its descendants are vpls[first .. first + count). */
 typedef struct lineage {
@@ -49,20 +49,16 @@ static uint32_t trace(const iir_scene *scene, const iir_rt *rt, const iir_vpl *p
                       iir_raystats *rays)
 {
     iir_rng rng = iir_rng_make(iir_hash3(seed, parent->id, 0x11ea9e), 0);
-    iir_vec3 albedo = parent->albedo, p = parent->position, nrm = parent->normal;
     iir_vec3 throughput = iir_v3s(1.f);
-    iir_frame frame = parent->frame; /* about nrm */
-    float eps = iir_rt_epsilon(rt);
+    const iir_vpl *from = parent;
+    float eps = iir_rt_epsilon(rt), q;
     uint32_t n = 0;
+    iir_ray ray;
     for (int gen = 1; gen <= bounces - 2 && n < cap; gen++) {
-        float q = iir_max_comp(albedo) < 1.f ? iir_max_comp(albedo) : 1.f; /* roulette */
-        if (q <= 0.f || iir_rng_uniform(&rng) >= q) break;
-        iir_vec3 wi =
-            iir_frame_to_world(&frame, iir_sample_cosine_hemisphere(iir_rng_uniform2(&rng)));
-        iir_ray ray = iir_make_ray(iir_madd(p, nrm, eps), wi, 0.f, INFINITY);
+        if (!iir_light_path_continue(from, eps, &rng, &ray, &q)) break;
         iir_hit hit;
         if (!iir_rt_intersect(rt, &ray, &hit, rays, IIR_RAYS_VPL)) break;
-        iir_surface sf = iir_surface_at(scene, &hit, iir_neg(wi));
+        iir_surface sf = iir_surface_at(scene, &hit, iir_neg(ray.dir));
         if (!iir_is_black(sf.mat->emission) || iir_is_black(sf.mat->albedo)) break;
         throughput = iir_scale(iir_mul(throughput, sf.mat->albedo), 1.f / q);
         iir_vpl v = {.id = descendant_id(parent->id, gen),
@@ -74,9 +70,8 @@ static uint32_t trace(const iir_scene *scene, const iir_rt *rt, const iir_vpl *p
                      .generation = (uint8_t)(gen < 255 ? gen : 255)};
         iir_vpl_set_normal(&v, sf.ns);
         out[n] = v;
-        if (T) T[n] = throughput;
-        n++;
-        albedo = sf.mat->albedo, p = sf.p, nrm = sf.ns, frame = v.frame;
+        T[n] = throughput;
+        from = &out[n++];
     }
     return n;
 }
