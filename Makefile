@@ -80,7 +80,8 @@ bench: build
 	mkdir -p out/bench/cornell-orbit out/bench/conference-orbit out/bench/cornell-multires \
 	    out/bench/cornell-multires-1024 out/bench/conference-multires-1024 \
 	    $(foreach p,teleport occluder $(STRESS),out/bench/cornell-$(p)) \
-	    out/bench/cornell-classics out/bench/cornell-spheres out/bench/cornell-bounces
+	    out/bench/cornell-classics out/bench/cornell-spheres out/bench/cornell-bounces \
+	    out/bench/cornell-compensation out/bench/cornell-controller
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods $(PEERS),pt \
@@ -103,6 +104,11 @@ bench: build
 	    --ref-every 25 --out out/bench/cornell-classics
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods iir,ir --sweep bounces=2,4,8 \
 	    --ref-spp 512 --ref-every 25 --out out/bench/cornell-bounces
+	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods iir,ir \
+	    --sweep clamp_compensation=off,full,interleaved --ref-spp 1024 --ref-every 25 \
+	    --out out/bench/cornell-compensation
+	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods iir \
+	    --sweep target_fps=0,30,60,120 --ref-spp 1024 --ref-every 25 --out out/bench/cornell-controller
 	$(foreach p,grazing:4 void:4 sweep-fast:8,$(BENCH) --anim $(word 1,$(subst :, ,$(p))) \
 	    --size 256x192 --methods iir --insert-ms $(word 2,$(subst :, ,$(p))) --kmax 0 --ref-spp 64 \
 	    --ref-every 2 --out out/bench/cornell-$(word 1,$(subst :, ,$(p)))-budget &&) true

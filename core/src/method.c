@@ -61,13 +61,16 @@ void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *sta
     stats->vpl_evals = t->vpl_evals;
 }
 
-iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl_options *v)
+iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl_options *v,
+                                       int bounces)
 {
     iir_refine_params r = {
         .interleave = v->interleave,
         .max_passes = c->refine_passes,
         .jitter = c->jitter,
         .clamp = v->clamp,
+        .clamp_comp = v->clamp_comp != IIR_CLAMP_COMP_OFF,
+        .bounces = bounces,
         .seed = iir_hash3(c->seed, 0x4ef1, 0),
     };
     return r;

@@ -5,6 +5,7 @@
 
 #include <stddef.h>
 
+#include "iir/controller.h"
 #include "iir/method.h"
 #include "iir/refine.h"
 
@@ -35,8 +36,9 @@ typedef struct iir_vpl_options {
     float sm_bias;
     int interleave;
     float clamp;
-    iir_shading shading;     /* table iir_shading_table */
-    iir_multires_options mr; /* table iir_multires_table */
+    iir_clamp_comp clamp_comp; /* table iir_clamp_comp_table */
+    iir_shading shading;       /* table iir_shading_table */
+    iir_multires_options mr;   /* table iir_multires_table */
 } iir_vpl_options;
 extern const iir_param_table iir_vpl_table; /* sm_bias, interleave */
 /* visibility and sm_res, of the same struct (ism always uses ISMs: it does not list them) */
@@ -46,10 +48,29 @@ extern const iir_param_table iir_vis_table;
 extern const iir_param_table iir_shading_table;
 /* The geometry term's clamp, one float (the VPL methods list it at their float's offset). */
 extern const iir_param_table iir_clamp_table;
+/* `clamp_compensation`, bound to a whole iir_vpl_options after its shading (ir, iir, ism list it).
+ */
+extern const iir_param_table iir_clamp_comp_table;
 /* clamp / D^2 (D the scene's bounding-box diagonal), or INFINITY for clamp 0 (rsm.c). */
 float iir_clamp_g_max(const struct iir_scene *scene, float clamp);
 /* The reflective shadow maps' gather (rsm_map.c; rsm, hier): rsm_map.h's iir_rsm_options. */
 extern const iir_param_table iir_rsm_table;
+
+/* ---- the frame-time controller (table iir_ctl_table, control/ctl_options.c; controller.h) ---- */
+typedef struct iir_ctl_options {
+    float target_fps; /* 0: off (the fixed vpls, interleave and sm_res) */
+    int vpls_max;     /* ctl_vpls_max: the controller's N_max */
+} iir_ctl_options;
+extern const iir_param_table iir_ctl_table;
+/* Creates, reconfigures or destroys *ctl as o asks (target_fps 0: none), its main rungs at v's
+ * interleave and sm_res, a new one starting at start_vpls. On error *ctl is unchanged. */
+iir_status iir_ctl_follow(iir_ctl **ctl, const iir_ctl_options *o, const iir_vpl_options *v,
+                          int start_vpls, iir_error *err);
+/* One finished frame's measurement, rendered with setting `used`, from its stats. */
+iir_ctl_sample iir_ctl_sample_of(const iir_frame_stats *fs, iir_ctl_setting used);
+/* The most VPLs a method holds with these options: vpls, or the controller's N_max when it is on
+ * and larger (memory estimates). */
+int iir_ctl_vpls_bound(const iir_ctl_options *o, int vpls);
 
 /* ---- imperfect shadow maps as VPL visibility (table iir_ism_table, ism_options.c) ---- */
 typedef struct iir_ism_options {
@@ -79,7 +100,7 @@ typedef struct iir_method_table {
     size_t offset;
 } iir_method_table;
 
-enum { IIR_METHOD_MAX_TABLES = 10 };
+enum { IIR_METHOD_MAX_TABLES = 12 };
 
 typedef struct iir_method_ops {
     const char *name;
@@ -156,14 +177,15 @@ extern const iir_method_ops iir_method_hybrid;
 /* Shared by the VPL methods: validates the view (camera and lights), IIR_ERR_INVALID otherwise. */
 iir_status iir_view_validate(const iir_view *view, iir_error *err);
 
-/* The render.h settings the VPL options ask for. */
-iir_indirect_params iir_vpl_indirect(const iir_vpl_options *o);
+/* The render.h settings the VPL options ask for, for VPLs of a method's `bounces`. */
+iir_indirect_params iir_vpl_indirect(const iir_vpl_options *o, int bounces);
 
 /* Copies the renderer's phase times into the frame stats. */
 void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *stats);
 
-/* The refine.h settings the options ask for. */
-iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl_options *v);
+/* The refine.h settings the options ask for, for VPLs of a method's `bounces`. */
+iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl_options *v,
+                                       int bounces);
 
 /* A refinement pass's stats as frame stats (samples_per_pixel = passes, converged, phases). */
 void iir_refine_to_stats(const iir_refine_stats *rs, iir_frame_stats *stats);

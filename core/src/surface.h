@@ -1,8 +1,9 @@
 /* surface.h -- what shading needs at a ray hit: position, geometric normal facing the viewer,
- * material. Internal to libiircore; inline. */
+ * material; and the shadow ray from it to a light sample. Internal to libiircore; inline. */
 #ifndef IIR_SURFACE_H
 #define IIR_SURFACE_H
 
+#include "iir/light.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
 
@@ -36,6 +37,21 @@ static inline iir_vec3 iir_surface_Le(const iir_surface *sf, iir_vec3 wo)
 static inline iir_vec3 iir_surface_offset(const iir_surface *sf, float eps)
 {
     return iir_madd(sf->p, sf->ns, eps);
+}
+
+/* The shadow ray from o (the shading point lifted off its surface) to light sample ls taken at p:
+ * aimed at the sampled point itself and stopping 2 eps short of it, so that the lift does not
+ * carry a grazing ray through the light's own surface just before the point (an emissive triangle
+ * is geometry: aimed along ls.wi from o, a ray at 20 degrees above the emitter's plane met the
+ * emitter 3 eps early and most such samples counted as shadowed); a sun's goes along wi. */
+static inline iir_ray iir_light_sample_ray(iir_vec3 o, iir_vec3 p, const iir_light_sample *ls,
+                                           float eps)
+{
+    if (isinf(ls->dist)) return iir_make_ray(o, ls->wi, 0.f, INFINITY);
+    iir_vec3 d = iir_sub(iir_madd(p, ls->wi, ls->dist), o);
+    float len = iir_length(d);
+    if (!(len > 2.f * eps)) return iir_make_ray(o, ls->wi, 0.f, 0.f);
+    return iir_make_ray(o, iir_scale(d, 1.f / len), 0.f, len - 2.f * eps);
 }
 
 #endif

@@ -111,9 +111,9 @@ static void csv_header(FILE *f)
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",rays_%s", iir_ray_kind_name((iir_ray_kind)k));
     fprintf(f, ",vpls,vpls_valid,vpls_invalidated,vpls_deleted,vpls_inserted,vpls_null,"
-               "regenerated,shadowmaps,vpls_desc,vpl_evals,recomputed,branches_cut,rss_mb,method_"
-               "mb,mean_lum,rmse,"
-               "relmse,flicker\n");
+               "regenerated,shadowmaps,vpls_desc,vpl_evals,recomputed,branches_cut,ctl_target_ms,"
+               "ctl_vpls,ctl_interleave,ctl_sm_res,rss_mb,method_mb,mean_lum,rmse,relmse,"
+               "flicker\n");
 }
 
 static void csv_number(FILE *f, double v, const char *end)
@@ -132,10 +132,12 @@ static void csv_row(FILE *f, const iird_bench_run *run, int frame, const iird_be
     for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, ",%.4f", s->phase_ms[p]);
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",%llu", (unsigned long long)s->rays.n[k]);
-    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%u,%llu,%.4f,%llu,%.2f,%.3f,%.6g,", c->count, c->valid,
-            c->invalidated, c->deleted, c->inserted, c->null_samples, c->regenerated, c->shadowmaps,
-            c->descendants, (unsigned long long)s->vpl_evals, s->recomputed,
-            (unsigned long long)s->branches_cut, r->rss_mb, r->method_mb, r->mean_lum);
+    const iir_ctl_report *k = &s->ctl; /* zero without target_fps */
+    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%u,%llu,%.4f,%llu,%.3f,%d,%d,%d,%.2f,%.3f,%.6g,", c->count,
+            c->valid, c->invalidated, c->deleted, c->inserted, c->null_samples, c->regenerated,
+            c->shadowmaps, c->descendants, (unsigned long long)s->vpl_evals, s->recomputed,
+            (unsigned long long)s->branches_cut, k->target_ms, k->setting.vpls,
+            k->setting.interleave, k->setting.sm_res, r->rss_mb, r->method_mb, r->mean_lum);
     csv_number(f, r->rmse, ",");
     csv_number(f, r->relmse, ",");
     csv_number(f, r->flicker, "\n");

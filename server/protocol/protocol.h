@@ -244,6 +244,9 @@ char *iird_json_stats(const iird_stats_view *v);
  * VPL counts, rays by kind); render.json writes its frames with them too. Phase times are rounded
  * to 1/scale ms. NULL only on out-of-memory. */
 struct cJSON *iird_json_phases(const iir_frame_stats *st, double scale);
+/* The frame-time controller's state after the frame (target_ms, mean_ms, predicted_ms, reachable,
+ * vpls, interleave, sm_res, rung, rungs, moves), or JSON null when it had none (target_fps 0). */
+struct cJSON *iird_json_ctl(const iir_frame_stats *st);
 struct cJSON *iird_json_vpl_counts(const iir_vpl_counts *c);
 struct cJSON *iird_json_rays(const iir_raystats *r);
 

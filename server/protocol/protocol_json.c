@@ -349,6 +349,23 @@ cJSON *iird_json_rays(const iir_raystats *r)
     return keep_if(o, ok);
 }
 
+cJSON *iird_json_ctl(const iir_frame_stats *st)
+{
+    if (!st->controlled) return cJSON_CreateNull();
+    const iir_ctl_report *c = &st->ctl;
+    cJSON *o = cJSON_CreateObject();
+    bool ok = o && iird_json_add_num(o, "target_ms", rounded(c->target_ms, 1e3)) &&
+              iird_json_add_num(o, "mean_ms", rounded(c->mean_ms, 1e3)) &&
+              iird_json_add_num(o, "predicted_ms", rounded(c->predicted_ms, 1e3)) &&
+              add_bool(o, "reachable", c->reachable) &&
+              iird_json_add_num(o, "vpls", c->setting.vpls) &&
+              iird_json_add_num(o, "interleave", c->setting.interleave) &&
+              iird_json_add_num(o, "sm_res", c->setting.sm_res) &&
+              iird_json_add_num(o, "rung", c->rung) && iird_json_add_num(o, "rungs", c->rungs) &&
+              iird_json_add_num(o, "moves", c->moves);
+    return keep_if(o, ok);
+}
+
 char *iird_json_stats(const iird_stats_view *v)
 {
     iir_frame_stats zero;
@@ -369,6 +386,7 @@ char *iird_json_stats(const iird_stats_view *v)
               iird_json_add_u64(o, "vpl_evals", st->vpl_evals) &&
               iird_json_add_num(o, "recomputed", rounded(st->recomputed, 1e4)) &&
               iird_json_add_u64(o, "branches_cut", st->branches_cut) &&
+              add_item(o, "ctl", iird_json_ctl(st)) &&
               iird_json_add_u64(o, "dropped", v->dropped) &&
               iird_json_add_u64(o, "memory_bytes", v->memory_bytes);
     return iird_json_finish(keep_if(o, ok));

@@ -116,6 +116,7 @@ typedef struct anim_job {
     iird_render_run run;
     double start_ms, frames_start_ms, render_ms, last_log_ms;
     int black_frames, first_black; /* frames that came out entirely black */
+    iir_frame_stats last;          /* the last frame written (the controller's state) */
 } anim_job;
 
 /* The view of script frame f: the scene's camera and lights, every light the script animates
@@ -336,6 +337,7 @@ static iir_status write_frame(anim_job *j, int f, const iir_frame_stats *fs, iir
     iird_render_log_frame(j->log, f, iir_anim_frame_time(j->anim, f), name, fs, write_ms);
     j->run.done++;
     j->render_ms += fs->total_ms;
+    j->last = *fs;
     return j->video ? iird_video_frame(j->video, j->img, exposure, err) : IIR_OK;
 }
 
@@ -490,6 +492,12 @@ static void print_summary(const anim_job *j, int video_frames)
     if (o->video)
         printf("video %s: %d frames at %g fps (H.264)\n", o->video, video_frames,
                iir_anim_fps(j->anim));
+    const iir_ctl_report *c = &j->last.ctl;
+    if (n && j->last.controlled)
+        printf("frame-time controller: target %.2f ms, frames %.2f ms (running mean)%s; last "
+               "setting %d VPLs, interleave %d, sm_res %d after %u changes\n",
+               c->target_ms, c->mean_ms, c->reachable ? "" : ", not reachable", c->setting.vpls,
+               c->setting.interleave, c->setting.sm_res, c->moves);
     char settings[1024];
     iird_settings_text(o->method, &o->params, settings, sizeof settings);
     printf("%s settings: %s\n", o->method, settings);

@@ -27,6 +27,15 @@ function el(tag, attrs = {}, ...children) {
     return e;
 }
 
+// The frame-time controller's state (stats.ctl, null when target_fps is 0): the rate it holds
+// against its target, and its choice.
+function describeController(c) {
+    if (!c) return 'off';
+    const held = c.mean_ms > 0 ? (1000 / c.mean_ms).toFixed(0) : '–';
+    const miss = c.reachable ? '' : ' (unreachable)';
+    return `${held}/${(1000 / c.target_ms).toFixed(0)} fps${miss} · N ${c.vpls} · n ${c.interleave} · ${c.sm_res}²`;
+}
+
 export class Panel {
     // handlers: {scene(name), params(fields), light(fields) (of the selected light),
     // selectLight(index), lightOn(index, on), camera(fields), snapshot(format), record(), fitSize(),
@@ -333,6 +342,7 @@ export class Panel {
         set('st-regen', vpl.count ? String(vpl.regenerated || 0) : '–');
         set('st-dropped', String(s.dropped || 0));
         set('st-memory', s.memory_bytes ? `${(s.memory_bytes / 1048576).toFixed(1)} MiB` : '–');
+        if (!s.pass) set('st-ctl', describeController(s.ctl));
         this.tickRecording();
     }
 }

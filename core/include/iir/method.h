@@ -9,6 +9,7 @@
 #include <stdint.h>
 
 #include "iir/camera.h"
+#include "iir/controller.h"
 #include "iir/image.h"
 #include "iir/incremental.h"
 #include "iir/light.h"
@@ -60,6 +61,9 @@ typedef struct iir_frame_stats {
                               that gathered their own light (their four nodes disagreed); 0 else */
     uint64_t branches_cut; /* whitted: ray-tree branches the adaptive depth control stopped (each
                               saves its ray and the tree under it); 0 else */
+    bool controlled;       /* target_fps set: ctl is the frame-time controller's state after the
+                              frame (its setting is the next frame's; controller.h) */
+    iir_ctl_report ctl;    /* zero when not controlled */
 } iir_frame_stats;
 
 const char *iir_phase_name(iir_phase phase);

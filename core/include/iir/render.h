@@ -88,6 +88,15 @@ typedef enum iir_shading {
                             apply per level */
 } iir_shading;
 
+/* What the geometry term's clamp removed, given back (Kollig & Keller 2004; render_compensate.c).
+ */
+typedef enum iir_clamp_comp {
+    IIR_CLAMP_COMP_OFF,        /* the clamped estimate: darker near contacts and corners */
+    IIR_CLAMP_COMP_FULL,       /* one cosine ray per pixel estimates the residual */
+    IIR_CLAMP_COMP_INTERLEAVED /* rays from one diagonal of the n x n lattice (n times fewer),
+                                  weighted n, gathered by the filter */
+} iir_clamp_comp;
+
 typedef struct iir_indirect_params {
     iir_visibility visibility;
     iir_shading shading; /* full or multires (refinement passes are always full) */
@@ -106,6 +115,9 @@ typedef struct iir_indirect_params {
                             [0, inf) */
     float sm_bias;       /* shadow maps: constant bias as a fraction of the VPL-receiver distance,
                             added to the slope term (shadowmap.h). [0, 1], default 0.005 */
+    iir_clamp_comp clamp_comp; /* compensation of the clamp (shading full only); default off */
+    int bounces;         /* the light bounces the VPLs stand for (the methods' `bounces`, >= 2):
+                            compensation adds no light of more bounces. Default 2 */
     float filter_normal; /* filter: minimum cosine between the normals. [-1, 1], default 0.9 */
     float filter_depth;  /* filter: maximum relative depth difference. (0, inf), default 0.05 */
 } iir_indirect_params;
@@ -194,6 +206,8 @@ typedef struct iir_pass_params {
     uint32_t shift;  /* [0, n^2) */
     iir_vec2 jitter; /* in [0, 1]^2; (0.5, 0.5) = the pixel centre */
     float clamp;     /* as iir_indirect_params.clamp */
+    bool clamp_comp; /* compensation at every pixel (any rate of a frame: passes average it) */
+    int bounces;     /* as iir_indirect_params.bounces */
 } iir_pass_params;
 
 /* The hook (status.h) that lets a frame or a pass end early: polled between phases and before each

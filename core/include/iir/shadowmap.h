@@ -80,6 +80,10 @@ uint32_t iir_smaps_build(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, i
  * absent, never half-written). */
 uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res,
                                iir_raystats *st, iir_stop_fn stop, void *ctx);
+/* The same for the VPLs that have no map at all (res 0): maps of another resolution are kept (the
+ * frame-time controller's new resolution is for new VPLs; every lookup uses its map's own res). */
+uint32_t iir_smaps_build_missing(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res,
+                                 iir_raystats *st, iir_stop_fn stop, void *ctx);
 
 /* ---- looking points up ---- */
 

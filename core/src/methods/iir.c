@@ -46,6 +46,7 @@ typedef struct iir_options {
     float regen_threshold; /* regenerate when more than this fraction dies */
     int bounces;           /* 2: the kept set alone; more: its VPLs carry descendants */
     float insert_ms;       /* > 0: time a frame for new VPLs and their maps (kmax caps, 0 none) */
+    iir_ctl_options ctl;   /* target_fps > 0: the controller sets vpls, interleave and sm_res */
 } iir_options;
 
 static const char *const WEIGHTS_CHOICES[] = {"uniform", "voronoi", NULL};
@@ -104,7 +105,9 @@ static const iir_param_table IIR_TABLE = {"iir: the incremental step", IIR_ROWS,
 typedef struct iir_state {
     const iir_scene *scene;
     const iir_rt *rt;
-    iir_options params;
+    iir_options asked;  /* the parameters given */
+    iir_options params; /* the ones in use: asked, with the controller's setting when it is on */
+    iir_ctl *ctl;       /* target_fps > 0: the frame-time controller; else NULL */
     iir_renderer *renderer;
     iir_vplsets *sets;
     iir_ism_points *ism; /* visibility=ism: the scene's point set, made on first use */
@@ -128,6 +131,7 @@ static void iir_m_destroy(void *state)
     iir_renderer_destroy(s->renderer);
     iir_refine_destroy(s->refine);
     iir_vplsets_destroy(s->sets);
+    iir_ctl_destroy(s->ctl);
     iir_ism_points_destroy(s->ism);
     free(s->fresh);
     iir_domain_draw_free(&s->dom);
@@ -202,6 +206,40 @@ static void apply_insert_limit(iir_state *s)
     iir_vplsets_set_params(s->sets, &ip, &err); /* valid by construction */
 }
 
+/* ---- the frame-time controller (target_fps; controller.h) ---- */
+
+/* The options in use: the asked ones, with the controller's vpls, interleave and sm_res when it is
+ * on (kmin and kmax no more than its N). */
+static iir_options controlled(const iir_state *s)
+{
+    iir_options o = s->asked;
+    if (!s->ctl) return o;
+    iir_ctl_setting c = iir_ctl_current(s->ctl);
+    o.vpls = c.vpls;
+    o.vpl.interleave = c.interleave;
+    o.vpl.sm_res = c.sm_res;
+    if (o.kmax > o.vpls) o.kmax = o.vpls;
+    if (o.kmin > o.vpls) o.kmin = o.vpls;
+    return o;
+}
+
+/* After a finished frame: its measurement to the controller, and the next setting in use. The sets
+ * keep their VPLs under a new N (they grow by insertions, shrink by deletions of the crowded ones);
+ * maps of a new resolution are for new VPLs only (maps_of). */
+static void control(iir_state *s, iir_frame_stats *stats)
+{
+    if (!s->ctl) return;
+    iir_ctl_sample m = iir_ctl_sample_of(stats, iir_ctl_current(s->ctl));
+    if (iir_ctl_update(s->ctl, &m)) {
+        s->params = controlled(s);
+        iir_incr_params ip = incr_params(&s->params, insert_limit(s), (uint32_t)s->params.kmin);
+        iir_error err;
+        iir_vplsets_set_params(s->sets, &ip, &err); /* valid by construction */
+    }
+    stats->controlled = true;
+    iir_ctl_get_report(s->ctl, &stats->ctl);
+}
+
 static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
                                void **state, iir_error *err)
 {
@@ -210,10 +248,12 @@ static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const v
     if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating iir");
     s->scene = scene;
     s->rt = rt;
-    s->params = *params;
-    iir_incr_params ip = incr_params(params, insert_limit(s), (uint32_t)params->kmin);
-    iir_status st = iir_vplsets_create(scene, rt, &ip, &s->sets, err);
-    if (st == IIR_OK) iir_vplsets_set_bounces(s->sets, params->bounces);
+    s->asked = *params;
+    iir_status st = iir_ctl_follow(&s->ctl, &params->ctl, &params->vpl, params->vpls, err);
+    s->params = controlled(s);
+    iir_incr_params ip = incr_params(&s->params, insert_limit(s), (uint32_t)s->params.kmin);
+    if (st == IIR_OK) st = iir_vplsets_create(scene, rt, &ip, &s->sets, err);
+    if (st == IIR_OK) iir_vplsets_set_bounces(s->sets, s->params.bounces);
     s->renderer = st == IIR_OK ? iir_renderer_create(scene, rt) : NULL;
     s->refine = st == IIR_OK ? iir_refine_create() : NULL;
     if (st == IIR_OK && (!s->renderer || !s->refine))
@@ -275,7 +315,7 @@ static iir_status maps_of(iir_state *s, uint32_t k, iir_vpl *v, uint32_t n, iir_
     if (!n) return IIR_OK;
     if (s->params.vpl.visibility == IIR_VIS_SHADOWMAP) {
         *built =
-            iir_smaps_build_until(v, n, s->rt, s->params.vpl.sm_res, rays, s->stop, s->stop_ctx);
+            iir_smaps_build_missing(v, n, s->rt, s->params.vpl.sm_res, rays, s->stop, s->stop_ctx);
         return IIR_OK;
     }
     return iir_ism_maps_build(&s->ism, s->scene, s->rt, &s->params.ism, s->params.common.seed, k, v,
@@ -335,7 +375,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     measure_insert_cost(s, &is, maps, t2 - t1);
     uint32_t n = 0;
     const iir_vpl *vpls = iir_vplsets_gather(s->sets, &n);
-    iir_indirect_params ind = iir_vpl_indirect(&s->params.vpl);
+    iir_indirect_params ind = iir_vpl_indirect(&s->params.vpl, s->params.bounces);
     iir_render_timing rt;
     iir_render_input in = {.camera = &view->camera,
                            .lights = view->lights,
@@ -344,7 +384,8 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
                            .num_vpls = n,
                            .seed = iir_frame_direct_seed(s->params.common.seed)};
     st = iir_renderer_frame(s->renderer, &in, &ind, out, &rt, &stats->rays, err);
-    iir_refine_params rp = iir_refine_params_of(&s->params.common, &s->params.vpl);
+    iir_refine_params rp =
+        iir_refine_params_of(&s->params.common, &s->params.vpl, s->params.bounces);
     if (st == IIR_OK)
         st = iir_refine_begin(s->refine, &view->camera, view->lights, view->num_lights, out->width,
                               out->height, &rp, err);
@@ -357,6 +398,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     iir_render_timing_to_stats(&rt, stats);
     stats->total_ms = iir_now_ms() - t0;
     fill_counts(&is, maps, &stats->vpl);
+    if (st == IIR_OK) control(s, stats);
     s->frame++;
     return st;
 }
@@ -480,13 +522,18 @@ static void iir_m_update(void *state, const void *opts)
 {
     iir_state *s = state;
     iir_visibility was = s->params.vpl.visibility;
-    s->params = *(const iir_options *)opts;
+    s->asked = *(const iir_options *)opts;
+    iir_error err;
+    if (iir_ctl_follow(&s->ctl, &s->asked.ctl, &s->asked.vpl, s->params.vpls, &err) != IIR_OK) {
+        iir_ctl_destroy(s->ctl); /* out of memory: the fixed settings */
+        s->ctl = NULL;
+    }
+    s->params = controlled(s);
     if (was != s->params.vpl.visibility &&
         (was == IIR_VIS_ISM || s->params.vpl.visibility == IIR_VIS_ISM))
         release_maps(s);
     iir_incr_params ip = incr_params(&s->params, insert_limit(s), (uint32_t)s->params.kmin);
-    iir_error err;
-    iir_vplsets_set_params(s->sets, &ip, &err);          /* same N: cannot fail once bound */
+    iir_vplsets_set_params(s->sets, &ip, &err); /* valid once bound (N: the sets follow it) */
     iir_vplsets_set_bounces(s->sets, s->params.bounces); /* new: descendants traced anew */
 }
 
@@ -494,7 +541,8 @@ static void iir_m_update(void *state, const void *opts)
 static uint64_t iir_m_memory(const void *opts, int width, int height)
 {
     const iir_options *o = opts;
-    uint64_t n = (uint64_t)o->vpls * (uint64_t)(o->bounces > 2 ? o->bounces - 1 : 1);
+    uint64_t N = (uint64_t)iir_ctl_vpls_bound(&o->ctl, o->vpls);
+    uint64_t n = N * (uint64_t)(o->bounces > 2 ? o->bounces - 1 : 1);
     return iir_vpl_memory(&o->vpl, (uint32_t)n, width, height) + n * (sizeof(iir_vpl) + 200) +
            iir_ism_memory(&o->ism, o->vpl.visibility, (uint32_t)n);
 }
@@ -509,7 +557,9 @@ const iir_method_ops iir_method_iir = {
                {&iir_ism_table, offsetof(iir_options, ism)},
                {&iir_clamp_table, offsetof(iir_options, vpl.clamp)},
                {&iir_shading_table, offsetof(iir_options, vpl.shading)},
+               {&iir_clamp_comp_table, offsetof(iir_options, vpl)}, /* after shading */
                {&iir_multires_table, offsetof(iir_options, vpl.mr)},
+               {&iir_ctl_table, offsetof(iir_options, ctl)},
                {&iir_common_table, offsetof(iir_options, common)}},
     .opts_size = sizeof(iir_options),
     .create = iir_m_create,

@@ -256,7 +256,7 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
     if (ir->stop && ir->stop(ir->stop_ctx))
         return ir->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double t2 = iir_now_ms();
-    iir_indirect_params ind = iir_vpl_indirect(&ir->params.vpl);
+    iir_indirect_params ind = iir_vpl_indirect(&ir->params.vpl, ir->params.bounces);
     iir_render_timing rt;
     iir_render_input in = {.camera = &view->camera,
                            .lights = view->lights,
@@ -265,7 +265,8 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
                            .num_vpls = ir->live.n,
                            .seed = iir_frame_direct_seed(seed)};
     st = iir_renderer_frame(ir->renderer, &in, &ind, out, &rt, &stats->rays, err);
-    iir_refine_params rp = iir_refine_params_of(&ir->params.common, &ir->params.vpl);
+    iir_refine_params rp =
+        iir_refine_params_of(&ir->params.common, &ir->params.vpl, ir->params.bounces);
     if (st == IIR_OK)
         st = iir_refine_begin(ir->refine, &view->camera, view->lights, view->num_lights, out->width,
                               out->height, &rp, err);
@@ -356,6 +357,7 @@ const iir_method_ops iir_method_ir = {
                {&iir_ism_table, offsetof(ir_options, ism)},
                {&iir_clamp_table, offsetof(ir_options, vpl.clamp)},
                {&iir_shading_table, offsetof(ir_options, vpl.shading)},
+               {&iir_clamp_comp_table, offsetof(ir_options, vpl)}, /* after shading */
                {&iir_multires_table, offsetof(ir_options, vpl.mr)},
                {&iir_common_table, offsetof(ir_options, common)}},
     .opts_size = sizeof(ir_options),

@@ -91,6 +91,7 @@ const iir_method_ops iir_method_ism = {
                {&iir_ism_table, offsetof(iir_ir_options, ism)},
                {&iir_clamp_table, offsetof(iir_ir_options, vpl.clamp)},
                {&iir_shading_table, offsetof(iir_ir_options, vpl.shading)},
+               {&iir_clamp_comp_table, offsetof(iir_ir_options, vpl)}, /* after shading */
                {&iir_multires_table, offsetof(iir_ir_options, vpl.mr)},
                {&iir_common_table, offsetof(iir_ir_options, common)}},
     .opts_size = sizeof(iir_ir_options),

@@ -81,20 +81,6 @@ static float power_heuristic(float pdf_a, float pdf_b)
 
 /* ---- the estimator ---- */
 
-/* The shadow ray from o (the shading point lifted off its surface) to light sample ls taken at p:
- * aimed at the sampled point itself and stopping 2 eps short of it, so that the lift does not
- * carry a grazing ray through the light's own surface just before the point (an emissive triangle
- * is geometry: aimed along ls.wi from o, a ray at 20 degrees above the emitter's plane met the
- * emitter 3 eps early and most such samples counted as shadowed); a sun's goes along wi. */
-static iir_ray shadow_ray(iir_vec3 o, iir_vec3 p, const iir_light_sample *ls, float eps)
-{
-    if (isinf(ls->dist)) return iir_make_ray(o, ls->wi, 0.f, INFINITY);
-    iir_vec3 d = iir_sub(iir_madd(p, ls->wi, ls->dist), o);
-    float len = iir_length(d);
-    if (!(len > 2.f * eps)) return iir_make_ray(o, ls->wi, 0.f, 0.f);
-    return iir_make_ray(o, iir_scale(d, 1.f / len), 0.f, len - 2.f * eps);
-}
-
 /* Direct light at sf by sampling one light: f * Li * cos / pdf, MIS-weighted against the BSDF. */
 static iir_vec3 estimate_direct(const pt_state *pt, const iir_surface *sf, iir_rng *rng,
                                 iir_raystats *st)
@@ -106,7 +92,7 @@ static iir_vec3 estimate_direct(const pt_state *pt, const iir_surface *sf, iir_r
     if (cos_theta <= 0.f) return iir_v3s(0.f);
 
     float eps = iir_rt_epsilon(pt->rt);
-    iir_ray shadow = shadow_ray(iir_surface_offset(sf, eps), sf->p, &ls, eps);
+    iir_ray shadow = iir_light_sample_ray(iir_surface_offset(sf, eps), sf->p, &ls, eps);
     if (iir_rt_occluded(pt->rt, &shadow, st, IIR_RAYS_SHADOW)) return iir_v3s(0.f);
 
     iir_vec3 f = iir_scale(sf->mat->albedo, IIR_INV_PI);

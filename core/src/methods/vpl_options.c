@@ -1,7 +1,7 @@
 /* vpl_options.c -- the parameters of the VPL shading that ir, iir and ism share (visibility and
- * shadow maps; bias and interleaving; shading and its hierarchy; clamping) as tables, what they ask
- * of the renderer, and the memory the VPL renderer and a VPL set take. Not how VPLs are chosen (the
- * methods) or shaded (render.h). */
+ * shadow maps; bias and interleaving; shading and its hierarchy; clamping and its compensation) as
+ * tables, what they ask of the renderer, and the memory the VPL renderer and a VPL set take. Not
+ * how VPLs are chosen (the methods) or shaded (render.h). */
 #include <stddef.h>
 
 #include "iir/vpl.h"
@@ -10,6 +10,8 @@
 static const char *const VISIBILITY_CHOICES[] = {"shadowmap", "rays", "ism", NULL};
 
 static const char *const SHADING_CHOICES[] = {"full", "multires", NULL};
+
+static const char *const CLAMP_COMP_CHOICES[] = {"off", "full", "interleaved", NULL};
 
 static const iir_param VIS_ROWS[] = {
     {"visibility", IIR_PARAM_ENUM, offsetof(iir_vpl_options, visibility), IIR_VIS_SHADOWMAP, 0, 2,
@@ -78,12 +80,43 @@ static const iir_param CLAMP_ROWS[] = {
 const iir_param_table iir_clamp_table = {"VPL clamping (ir, iir, rsm)", CLAMP_ROWS,
                                          sizeof CLAMP_ROWS / sizeof CLAMP_ROWS[0], NULL};
 
-iir_indirect_params iir_vpl_indirect(const iir_vpl_options *o)
+/* Bound to the whole iir_vpl_options after its shading (ir, iir and ism): compensation adds to
+ * every pixel's own indirect light, which multires shading does not have. */
+static const iir_param CLAMP_COMP_ROWS[] = {
+    {"clamp_compensation", IIR_PARAM_ENUM, offsetof(iir_vpl_options, clamp_comp),
+     IIR_CLAMP_COMP_OFF, 0, 2, 0, CLAMP_COMP_CHOICES, "",
+     "give back what the clamp removes near corners (Kollig & Keller): a cosine ray from every "
+     "pixel (full) or from n times fewer, gathered by the interleave filter (interleaved); needs "
+     "shading full",
+     IIR_PARAM_LIVE},
+};
+
+static iir_status clamp_comp_check(const void *opts, const iir_params *given, const iir_param **bad,
+                                   iir_error *err)
+{
+    const iir_vpl_options *o = opts;
+    if (o->clamp_comp == IIR_CLAMP_COMP_OFF || o->shading != IIR_SHADING_MULTIRES) return IIR_OK;
+    bool blame_shading =
+        iir_params_has(given, "shading") && !iir_params_has(given, "clamp_compensation");
+    *bad = blame_shading ? iir_method_any_param("shading") : &CLAMP_COMP_ROWS[0];
+    return iir_fail(err, IIR_ERR_INVALID,
+                    "%s: clamp_compensation needs shading full (multires shades coarse texels, "
+                    "not every pixel's own indirect light)",
+                    (*bad)->name);
+}
+
+const iir_param_table iir_clamp_comp_table = {
+    "clamping compensation (ir, iir, ism)", CLAMP_COMP_ROWS,
+    sizeof CLAMP_COMP_ROWS / sizeof CLAMP_COMP_ROWS[0], clamp_comp_check};
+
+iir_indirect_params iir_vpl_indirect(const iir_vpl_options *o, int bounces)
 {
     iir_indirect_params ind = iir_indirect_params_default();
     ind.visibility = o->visibility == IIR_VIS_ISM ? IIR_VIS_SHADOWMAP : o->visibility; /* ism.h */
     ind.interleave = o->interleave;
     ind.clamp = o->clamp;
+    ind.clamp_comp = o->clamp_comp;
+    ind.bounces = bounces;
     ind.sm_bias = o->sm_bias;
     ind.shading = o->shading;
     ind.mr_levels = o->mr.mr_levels;

@@ -187,8 +187,12 @@ iir_status iir_refine_pass(iir_refine *rf, iir_renderer *r, iir_refine_vpls_fn v
         s = sweep_set(rf, i / n2, vpls, ctx, &st, err);
     }
     if (work && s == IIR_OK) {
-        iir_pass_params pp = {p->interleave, i % n2,
-                              p->jitter ? iir_refine_jitter(i) : iir_v2(0.5f, 0.5f), p->clamp};
+        iir_pass_params pp = {.interleave = p->interleave,
+                              .shift = i % n2,
+                              .jitter = p->jitter ? iir_refine_jitter(i) : iir_v2(0.5f, 0.5f),
+                              .clamp = p->clamp,
+                              .clamp_comp = p->clamp_comp,
+                              .bounces = p->bounces};
         iir_render_input in = {.camera = &rf->camera,
                                .lights = rf->lights,
                                .num_lights = rf->num_lights,

@@ -17,6 +17,7 @@ iir_indirect_params iir_indirect_params_default(void)
     iir_params_defaults(&iir_vis_table, &o);
     iir_params_defaults(&iir_vpl_table, &o);
     iir_params_defaults(&iir_clamp_table, &o.clamp);
+    iir_params_defaults(&iir_clamp_comp_table, &o);
     iir_params_defaults(&iir_shading_table, &o.shading);
     iir_params_defaults(&iir_multires_table, &o.mr);
     iir_indirect_params p = {
@@ -25,6 +26,8 @@ iir_indirect_params iir_indirect_params_default(void)
         .filter = true,
         .clamp = o.clamp,
         .sm_bias = o.sm_bias,
+        .clamp_comp = o.clamp_comp,
+        .bounces = 2,
         .shading = o.shading,
         .mr_levels = o.mr.mr_levels,
         .mr_depth = o.mr.mr_depth,
@@ -69,6 +72,14 @@ iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error 
     if (!(p->filter_depth > 0.f) || isinf(p->filter_depth))
         return iir_fail(err, IIR_ERR_INVALID, "indirect filter_depth %g must be finite and > 0",
                         (double)p->filter_depth);
+    if (p->clamp_comp < IIR_CLAMP_COMP_OFF || p->clamp_comp > IIR_CLAMP_COMP_INTERLEAVED)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "indirect clamp_comp %d is not off, full or interleaved",
+                        (int)p->clamp_comp);
+    if (p->clamp_comp != IIR_CLAMP_COMP_OFF && p->shading == IIR_SHADING_MULTIRES)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "clamp compensation needs shading full (multires has no per-pixel "
+                        "indirect light to add it to)");
     if (p->shading != IIR_SHADING_FULL && p->shading != IIR_SHADING_MULTIRES)
         return iir_fail(err, IIR_ERR_INVALID, "indirect shading %d is neither full nor multires",
                         (int)p->shading);
@@ -105,6 +116,7 @@ void iir_renderer_destroy(iir_renderer *r)
 {
     if (!r) return;
     iir_lightset_destroy(r->area_lights);
+    iir_lightset_destroy(r->comp_lights);
     iir_multires_destroy(r->mr);
     iir_gbuffer_free(&r->gb);
     free(r->raw);
@@ -183,21 +195,12 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
     return IIR_OK;
 }
 
-/* What the shading phases of a frame or a pass work on, besides the renderer's G-buffer and VPL
- * subsets. */
-typedef struct shade_job {
-    const iir_light *lights;
-    uint32_t num_lights;
-    const iir_indirect_params *p;
-    uint32_t shift; /* added to every pixel's VPL subset (mod n^2) */
-    uint64_t seed;  /* of the direct light's samples */
-    iir_image *out;
-} shade_job;
-
 /* The shading phases on the current G-buffer, timed into tm, rays added to rays: direct light,
- * indirect light from the VPL subsets, then the filter into job->out. Returns true when a
+ * indirect light from the VPL subsets and the clamp's compensation (timed as indirect), then the
+ * filter into job->out. Returns true when a
  * phase stopped early at r->stop's request (out is then incomplete). */
-static bool shade(iir_renderer *r, const shade_job *job, iir_render_timing *tm, iir_raystats *rays)
+static bool shade(iir_renderer *r, const iir_shade_job *job, iir_render_timing *tm,
+                  iir_raystats *rays)
 {
     double t0 = iir_now_ms();
     bool stopped = iir_render_direct(r, job->lights, job->num_lights, job->seed, job->out, rays);
@@ -206,6 +209,7 @@ static bool shade(iir_renderer *r, const shade_job *job, iir_render_timing *tm, 
         stopped = iir_render_indirect_coarse(r, job->p, true, rays, &tm->vpl_evals);
     else if (!stopped)
         stopped = iir_render_indirect(r, job->p, job->shift, true, rays, &tm->vpl_evals);
+    if (!stopped && r->comp_lights) stopped = iir_render_compensate(r, job, rays);
     double t2 = iir_now_ms();
     if (!stopped) iir_render_filter(r, job->p, job->out);
     tm->direct_ms = t1 - t0;
@@ -231,6 +235,20 @@ static iir_status multires_phase(iir_renderer *r, const iir_indirect_params *p,
     return s;
 }
 
+/* Clamp compensation samples the frame's lights at the points its rays hit: their light set,
+ * rebuilt every frame (lights move), or none when compensation is off. */
+static iir_status compensation_phase(iir_renderer *r, const iir_render_input *in,
+                                     const iir_indirect_params *p, iir_error *err)
+{
+    iir_lightset_destroy(r->comp_lights);
+    r->comp_lights = NULL;
+    if (p->clamp_comp == IIR_CLAMP_COMP_OFF || p->clamp <= 0.f) return IIR_OK;
+    r->comp_lights = iir_lightset_create(r->scene, in->lights, in->num_lights);
+    return r->comp_lights
+               ? IIR_OK
+               : iir_fail(err, IIR_ERR_NOMEM, "out of memory for the clamp compensation");
+}
+
 static bool stop_requested(const iir_renderer *r)
 {
     return r->stop && r->stop(r->stop_ctx);
@@ -246,7 +264,8 @@ iir_status iir_renderer_frame(iir_renderer *r, const iir_render_input *in,
     if (s == IIR_OK) s = iir_render_subsets(r, in->vpls, in->num_vpls, p, false, err);
     if (s == IIR_OK) s = gbuffer_phase(r, in->camera, out->width, out->height, &tm, &rays, err);
     if (s == IIR_OK) s = multires_phase(r, p, &tm, err);
-    shade_job job = {
+    if (s == IIR_OK) s = compensation_phase(r, in, p, err);
+    iir_shade_job job = {
         .lights = in->lights, .num_lights = in->num_lights, .p = p, .seed = in->seed, .out = out};
     bool stopped = s == IIR_OK && stop_requested(r);
     double mr_ms = tm.indirect_ms;
@@ -313,17 +332,20 @@ iir_status iir_renderer_pass(iir_renderer *r, const iir_render_input *in, const 
     ind.interleave = p->interleave;
     ind.filter = false;
     ind.clamp = p->clamp;
+    ind.clamp_comp = p->clamp_comp ? IIR_CLAMP_COMP_FULL : IIR_CLAMP_COMP_OFF;
+    ind.bounces = p->bounces;
     iir_status s = check_pass(p, err);
     if (s == IIR_OK) s = check_inputs(in->camera, in->lights, in->num_lights, &ind, out, err);
     if (s == IIR_OK) s = iir_render_subsets(r, in->vpls, in->num_vpls, &ind, true, err);
     if (s == IIR_OK)
         s = pass_gbuffer(r, in->camera, p->jitter, out->width, out->height, &tm, &rays, err);
-    shade_job job = {.lights = in->lights,
-                     .num_lights = in->num_lights,
-                     .p = &ind,
-                     .shift = p->shift,
-                     .seed = in->seed,
-                     .out = out};
+    if (s == IIR_OK) s = compensation_phase(r, in, &ind, err);
+    iir_shade_job job = {.lights = in->lights,
+                         .num_lights = in->num_lights,
+                         .p = &ind,
+                         .shift = p->shift,
+                         .seed = in->seed,
+                         .out = out};
     bool stopped = s == IIR_OK && stop_requested(r);
     if (s == IIR_OK && !stopped) stopped = shade(r, &job, &tm, &rays);
     if (stopped) s = iir_fail(err, IIR_ERR_INTERRUPTED, "refinement pass stopped early");

@@ -99,8 +99,8 @@ static void punctual_lane(const iir_renderer *r, const iir_light_eval *e, block 
 }
 
 /* Lane k's shadow ray from p (normal n) to the point sampled by ls: from the lifted point aimed at
- * the sampled point itself, stopping 2 eps short (pt.c's shadow_ray: along wi from the lifted
- * point, a grazing ray met an emissive triangle just before the point). */
+ * the sampled point itself, stopping 2 eps short (surface.h's iir_light_sample_ray: along wi from
+ * the lifted point, a grazing ray met an emissive triangle just before the point). */
 static void aim_lane(const iir_renderer *r, block *b, int k, iir_vec3 p, iir_vec3 n,
                      const iir_light_sample *ls)
 {

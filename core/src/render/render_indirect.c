@@ -63,6 +63,7 @@ static iir_shade_vpl shade_vpl(const iir_vpl *v, float scale, float eps)
     s.org = iir_madd(v->position, v->frame.f, eps);
     s.power = iir_scale(v->flux, IIR_INV_PI * scale);
     s.smap = &v->smap;
+    s.generation = v->generation;
     return s;
 }
 
@@ -161,21 +162,28 @@ static inline vpl_geometry geometry(const iir_shade_vpl *v, iir_vec3 x, iir_vec3
     return g;
 }
 
-/* Lane k of a packet: the occlusion ray from x lifted along n to the VPL's lifted position. False
- * (lane left invalid) when the two are closer than the lifts: nothing can lie between them. */
+/* The occlusion ray from x lifted along n to the VPL's lifted position. False when the two are
+ * closer than the lifts: nothing can lie between them. */
+static bool lifted_ray(float eps, const iir_shade_vpl *v, iir_vec3 x, iir_vec3 n, iir_ray *ray)
+{
+    iir_vec3 org = iir_madd(x, n, eps), d = iir_sub(v->org, org);
+    float len = iir_length(d);
+    if (len <= 2.f * eps) return false;
+    *ray = iir_make_ray(org, iir_scale(d, 1.f / len), 0.f, len - 2.f * eps);
+    return true;
+}
+
+/* Lane k of a packet: lifted_ray's ray (lane left invalid when there is none). */
 static bool visibility_ray(const indirect_ctx *c, const iir_shade_vpl *v, iir_vec3 x, iir_vec3 n,
                            iir_ray8 *rays, int k)
 {
-    float eps = c->r->eps;
-    iir_vec3 org = iir_madd(x, n, eps), d = iir_sub(v->org, org);
-    float len = iir_length(d);
+    iir_ray ray;
     rays->valid[k] = 0;
-    if (len <= 2.f * eps) return false;
-    d = iir_scale(d, 1.f / len);
-    rays->ox[k] = org.x, rays->oy[k] = org.y, rays->oz[k] = org.z;
-    rays->dx[k] = d.x, rays->dy[k] = d.y, rays->dz[k] = d.z;
-    rays->tnear[k] = 0.f;
-    rays->tfar[k] = len - 2.f * eps;
+    if (!lifted_ray(c->r->eps, v, x, n, &ray)) return false;
+    rays->ox[k] = ray.org.x, rays->oy[k] = ray.org.y, rays->oz[k] = ray.org.z;
+    rays->dx[k] = ray.dir.x, rays->dy[k] = ray.dir.y, rays->dz[k] = ray.dir.z;
+    rays->tnear[k] = ray.tnear;
+    rays->tfar[k] = ray.tfar;
     rays->valid[k] = 1;
     return true;
 }
@@ -417,6 +425,32 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
     iir_raystats_add(st, &total);
     *evals += sum;
     return skipped > 0;
+}
+
+/* ---- one point: the clamp compensation's hits (render_compensate.c) ---- */
+
+iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_params *p, uint32_t k,
+                                 iir_vec3 x, iir_vec3 n, int max_generation, iir_raystats *st)
+{
+    float g_max = p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY;
+    iir_vec3 E = iir_v3s(0.f);
+    for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++) {
+        const iir_shade_vpl *v = &r->vpl[i];
+        if (v->generation > max_generation) continue;
+        vpl_geometry g = geometry(v, x, n, g_max);
+        if (!g.lit) continue;
+        float V = 1.f;
+        iir_ray ray;
+        if (p->visibility == IIR_VIS_SHADOWMAP) {
+            iir_smap_probe probe = iir_smap_probe_make(v->smap, p->sm_bias, r->eps);
+            V = iir_smap_probe_visibility(&probe, iir_dot(g.w, v->r), iir_dot(g.w, v->u), g.ci,
+                                          sqrtf(g.d2), g.cx);
+        } else if (lifted_ray(r->eps, v, x, n, &ray)) {
+            V = iir_rt_occluded(r->rt, &ray, st, IIR_RAYS_VISIBILITY) ? 0.f : 1.f;
+        }
+        E = iir_madd(E, v->power, g.G * V);
+    }
+    return E;
 }
 
 /* ---- multires: the VPL sum at the hierarchy's texels and level-0 pixels (multires.h's client)

@@ -24,6 +24,7 @@ typedef struct iir_shade_vpl {
     iir_vec3 org;        /* p lifted by eps along n: the end of exact visibility rays */
     iir_vec3 power;      /* Phi_i / pi * N / |subset| */
     const iir_smap *smap;
+    int generation; /* iir_vpl.generation: its light has generation + 1 bounces */
 } iir_shade_vpl;
 
 struct iir_renderer {
@@ -32,6 +33,8 @@ struct iir_renderer {
     float eps;                 /* iir_rt_epsilon */
     float diag2;               /* squared bounding-box diagonal D^2 */
     iir_lightset *area_lights; /* the scene's emissive triangles; NULL when it has none */
+    iir_lightset *comp_lights; /* this frame's lights and emissive triangles for the clamp
+                                  compensation; NULL when it is off */
 
     iir_gbuffer gb;
     bool gb_valid;          /* gb matches gb_camera and the frame size */
@@ -85,6 +88,17 @@ static inline iir_tile iir_tile_at(int width, int height, int size, int t)
 
 /* ---- phases ---- */
 
+/* What the shading phases of a frame or a pass work on, besides the renderer's G-buffer and VPL
+ * subsets. */
+typedef struct iir_shade_job {
+    const iir_light *lights;
+    uint32_t num_lights;
+    const iir_indirect_params *p;
+    uint32_t shift; /* added to every pixel's VPL subset (mod n^2) */
+    uint64_t seed;  /* of the direct light's samples (and the compensation's) */
+    iir_image *out;
+} iir_shade_job;
+
 /* render_gbuffer.c. Resize keeps the contents only when the size is unchanged; on failure the
  * G-buffer is freed (width 0) and IIR_ERR_NOMEM returned. Render shoots pixel (x, y)'s camera ray
  * through (x + jitter.x, y + jitter.y); (0.5, 0.5) is the pixel centre of interactive frames. */
@@ -115,6 +129,17 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
  * upsampled values the filter phase reads. Same stop rule and counts as iir_render_indirect. */
 bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, bool stoppable,
                                 iir_raystats *st, uint64_t *evals);
+
+/* render_indirect.c, one point: the light of subset k's VPLs of generation <= max_generation at x
+ * (normal n), as a pixel of that subset gets it (flux scaled, G clamped, the frame's visibility);
+ * demodulated like r->raw. */
+iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_params *p, uint32_t k,
+                                 iir_vec3 x, iir_vec3 n, int max_generation, iir_raystats *st);
+
+/* render_compensate.c: adds to r->raw (full shading) what the clamp of the geometry term removed,
+ * at the rate job->p->clamp_comp asks for. Same stop rule as iir_render_indirect (always
+ * stoppable). */
+bool iir_render_compensate(iir_renderer *r, const iir_shade_job *job, iir_raystats *st);
 
 /* render_filter.c: out += rho / pi * (filtered or raw) r->raw; with r->level set only its level-0
  * pixels are filtered (the others take their upsampled value, iir_multires_upsample_span, and count

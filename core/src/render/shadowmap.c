@@ -62,8 +62,10 @@ uint32_t iir_smaps_build(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, i
     return iir_smaps_build_until(vpls, n, rt, res, st, NULL, NULL);
 }
 
-uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res,
-                               iir_raystats *st, iir_stop_fn stop, void *ctx)
+/* The maps of the non-null VPLs that need one: any map of another resolution than res, or (keep)
+ * only those with none. */
+static uint32_t build(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, bool keep,
+                      iir_raystats *st, iir_stop_fn stop, void *ctx)
 {
     uint32_t built = 0;
     iir_raystats total = {0};
@@ -73,7 +75,8 @@ uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int 
 #pragma omp for schedule(dynamic, 1)
         for (int64_t i = 0; i < (int64_t)n; i++) {
             iir_vpl *v = &vpls[i];
-            if (v->null_sample || v->smap.res == res || (stop && stop(ctx))) continue;
+            bool has = keep ? v->smap.res != 0 : v->smap.res == res;
+            if (v->null_sample || has || (stop && stop(ctx))) continue;
             built += iir_smap_render(&v->smap, rt, v, res, &local);
         }
 #pragma omp critical(iir_smap_rays)
@@ -81,4 +84,16 @@ uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int 
     }
     if (st) iir_raystats_add(st, &total);
     return built;
+}
+
+uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res,
+                               iir_raystats *st, iir_stop_fn stop, void *ctx)
+{
+    return build(vpls, n, rt, res, false, st, stop, ctx);
+}
+
+uint32_t iir_smaps_build_missing(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res,
+                                 iir_raystats *st, iir_stop_fn stop, void *ctx)
+{
+    return build(vpls, n, rt, res, true, st, stop, ctx);
 }
