@@ -322,6 +322,47 @@ static void print_ratios(const iird_bench *b, const run_summary *s, FILE *f)
     }
 }
 
+/* Where method `m`'s error stops falling along a sweep of vpls alone (settings "vpls=N"): the
+ * smallest N whose relMSE is within 10% of the sweep's best, with at least three Ns measured; 0
+ * when there is no such sweep. The frame-time controller's ctl_vpls_max (docs/cli.md). */
+static int error_knee(const iird_bench *b, const run_summary *s, const char *m)
+{
+    const iir_param *row = iir_method_find_param(m, "vpls");
+    double best = INFINITY;
+    int n = 0, knee = 0;
+    for (int r = 0; row && r < b->num_runs; r++) {
+        const char *set = b->runs[r].setting;
+        if (strcmp(b->runs[r].method, m) || strncmp(set, "vpls=", 5) || strchr(set, ';') ||
+            !isfinite(s[r].relmse))
+            continue;
+        best = fmin(best, s[r].relmse);
+        n++;
+    }
+    for (int r = 0; n >= 3 && r < b->num_runs; r++) {
+        const char *set = b->runs[r].setting;
+        if (strcmp(b->runs[r].method, m) || strncmp(set, "vpls=", 5) || strchr(set, ';') ||
+            !(s[r].relmse <= 1.1 * best))
+            continue;
+        int v = (int)iir_method_param_value(row, &b->runs[r].params);
+        if (!knee || v < knee) knee = v;
+    }
+    return knee;
+}
+
+static void print_knees(const iird_bench *b, const run_summary *s, FILE *f)
+{
+    for (int r = 0; r < b->num_runs; r++) {
+        bool first = true;
+        for (int q = 0; q < r; q++) first = first && strcmp(b->runs[q].method, b->runs[r].method);
+        int knee = first ? error_knee(b, s, b->runs[r].method) : 0;
+        if (knee)
+            fprintf(f,
+                    "%s: relMSE within 10%% of the sweep's best from vpls %d on (iir's "
+                    "--ctl-vpls-max for --target-fps)\n",
+                    b->runs[r].method, knee);
+    }
+}
+
 /* The parameters each method read, from its first run (the setting column gives swept values). */
 static void print_settings(const iird_bench *b, FILE *f)
 {
@@ -359,6 +400,7 @@ void iird_bench_summary(const iird_bench *b, FILE *f)
         fputc('\n', f);
     }
     print_ratios(b, s, f);
+    print_knees(b, s, f);
     print_settings(b, f);
 }
 

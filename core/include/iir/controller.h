@@ -1,7 +1,7 @@
 /* controller.h -- the frame-time controller: picks the VPL count N, the interleave n and the
  * shadow-map resolution of a VPL method's next frame so that its frames take a target time. It
  * decides from measurements only; it does not render, and which method applies its choice (and
- * how) is the method's business (iir.c and ir.c, parameter target_fps).
+ * how) is the method's business (iir.c, parameter target_fps).
  *
  * The settings form a ladder of (N, n) rungs ordered by cost and quality:
  *  - the bottom: N_min with the interleave n + 2, n + 1 (fewer VPLs per pixel);
@@ -19,13 +19,15 @@
  * P the pixels shaded (evaluations * n^2 / VPLs in the set), a the time of one pixel-VPL
  * evaluation, b of one shadow-map texel, maps the maps built per frame, c the filter's per-tap
  * time, d the incremental step's time per VPL; every unit is a running mean (weight 1/5) of the
- * frames measured, so the model follows the machine, the scene and the motion. A rung is predicted
+ * frames measured after the first (which builds a whole set and the G-buffer: no rate of later
+ * frames), so the model follows the machine, the scene and the motion. A rung is predicted
  * from the model at its setting, whatever the set holds at the moment (a growing set's frames still
  * price N correctly).
  *
  * The rule. The current rung stays while its prediction is within 108% of the target and the next
  * rung's is not within 97% (a dead band), or while the set holds less than 90% of its N (it grows
- * by insertions over frames); otherwise the wanted rung is the highest predicted within 97%. A
+ * by insertions over frames); otherwise the wanted rung is the highest predicted within 97% (the
+ * cheapest when none is: a wider interleave costs the filter more). A
  * cheaper setting is taken after 2 frames that want one, a dearer one after `patience` frames (4,
  * doubling up to 128 whenever a move undoes the move before it within 30 frames, halving again
  * after 100 quiet frames); a dearer move climbs at most 8 rungs (one doubling of N); after any move
@@ -78,8 +80,8 @@ typedef struct iir_ctl_report {
     int rung, rungs;         /* its place on the ladder, [0, rungs) */
     double target_ms;
     double predicted_ms; /* the model's time of the setting; 0 before the first measurement */
-    double mean_ms;      /* running mean (weight 1/4) of the measured frame times */
-    bool reachable;      /* false when even the lowest rung is predicted above the target */
+    double mean_ms;      /* running mean (weight 1/5) of the measured frame times */
+    bool reachable;      /* false when even the cheapest setting is predicted above the target */
     uint32_t moves;      /* setting changes so far */
 } iir_ctl_report;
 

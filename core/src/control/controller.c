@@ -1,5 +1,5 @@
 /* controller.c -- the frame-time controller (controller.h): the ladder, the cost model and the
- * move rule. Not how a method applies a setting (iir.c, ir.c). */
+ * move rule. Not how a method applies a setting (iir.c). */
 #include <math.h>
 #include <stdlib.h>
 
@@ -261,9 +261,9 @@ static void move_to(iir_ctl *c, int rung, int shift, int dir)
 bool iir_ctl_update(iir_ctl *c, const iir_ctl_sample *s)
 {
     if (!(s->total_ms > 0.0) || !isfinite(s->total_ms)) return false;
-    c->frame++;
-    measure(&c->m, s);
+    if (c->frame++ > 0) measure(&c->m, s); /* the first makes a whole set and G-buffer */
     mean_in(&c->mean_ms, &c->have_mean, s->total_ms);
+    if (!c->m.have_rest) return false;
     if (c->frame - c->last_undo > QUIET_FRAMES && c->patience > PATIENCE_MIN) {
         c->patience /= 2;
         c->last_undo = c->frame;

@@ -1,0 +1,78 @@
+// test_controller.mjs -- the frame-time controller in the browser (issue 13), against a real
+// `iird serve` on the built-in Cornell box: the Stats panel says "off" until target_fps is set in
+// the method panel; with a target every machine reaches (2 fps) and ctl_vpls_max 64, a drag of the
+// spot gives the controller interactive frames, and the panel shows the rate it holds against the
+// target, its N (64: the most it may use) and the narrower interleave it climbs to with the time to
+// spare, while the stats' VPL set holds that N; target_fps 0 turns it off again. What is tested is
+// the path through the panel, the protocol, the daemon and the method, not the machine's speed (the
+// controller's convergence is test_controller's, its timing docs/experiments.md's).
+// Screenshot: browser_controller.png in the working directory.
+//
+// Usage (as ctest runs it): node tests/browser/test_controller.mjs IIRD SOURCE_DIR
+
+import path from 'node:path';
+import * as H from './harness.mjs';
+
+const [IIRD, SRC] = process.argv.slice(2);
+const { check, log } = H;
+
+// Sets method parameter `name` through its panel field and waits for the state to carry it.
+async function setParam(page, name, value) {
+    const input = page.locator(`#param-${name}`);
+    await input.fill(String(value));
+    await input.press('Enter');
+    await input.blur();
+    await H.waitFor(page, ([n, v]) => window.iir.state.params[n] === v, [name, value]);
+}
+
+// A shift-drag of the spot across the image and back, `moves` moves: interactive frames.
+async function drag(page, moves) {
+    const box = await page.locator('#frame').boundingBox();
+    const cx = box.x + box.width * 0.5;
+    const cy = box.y + box.height * 0.3;
+    await page.keyboard.down('Shift');
+    await page.mouse.move(cx, cy);
+    await page.mouse.down();
+    for (let i = 1; i <= moves; i++) {
+        await page.mouse.move(cx + box.width * 0.2 * Math.sin((2 * Math.PI * i) / 40), cy);
+        await H.sleep(40);
+    }
+    await page.mouse.up();
+    await page.keyboard.up('Shift');
+}
+
+const ctlText = (page) => page.locator('#st-ctl').textContent();
+
+async function main() {
+    const chromium = await H.prerequisites(IIRD, SRC);
+    const { daemon, url } = await H.startDaemon(IIRD, ['--size', '256x192', '--sm-res', '64', ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
+    log(`daemon at ${url} (${daemon.cmd})`);
+    const browser = await H.launch(chromium);
+    const page = await H.newPage(browser);
+    await H.open(page, url);
+    await H.settle(page, 1);
+    check((await ctlText(page)) === 'off', `the controller shows off without a target: ${await ctlText(page)}`);
+
+    await setParam(page, 'ctl_vpls_max', 64);
+    await setParam(page, 'target_fps', 2);
+    let text = '';
+    for (let round = 0; round < 6 && !/N 64 · n 2 ·/.test(text); round++) {
+        await drag(page, 40);
+        await H.settle(page, 1);
+        text = await ctlText(page);
+        log(`after drag ${round + 1}: controller ${text}`);
+    }
+    check(/^\d+\/2 fps · N 64 · n 2 · \d+²$/.test(text), `the controller holds its target with N 64 and interleave 2: ${text}`);
+    const count = await page.evaluate(() => window.iir.vplChart.filter((r) => r[1] !== null).at(-1)[1]);
+    check(count === 64, `the VPL set holds the controller's N: ${count}`);
+    await page.screenshot({ path: path.resolve('browser_controller.png') });
+
+    await setParam(page, 'target_fps', 0);
+    await drag(page, 5);
+    await H.settle(page, 1);
+    check((await ctlText(page)) === 'off', `target_fps 0 turns it off: ${await ctlText(page)}`);
+    check(page.problems.length === 0, `no console errors${page.problems.length ? `:\n  ${page.problems.join('\n  ')}` : ''}`);
+    await daemon.stop();
+}
+
+H.run(main);
