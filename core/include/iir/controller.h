@@ -17,7 +17,8 @@
  * The model. A frame's time is split by its phases into parts proportional to what they do:
  *     t = rest + a * P * N / n^2 + b * maps * res^2 + c * n^2 + d * N
  * P the pixels shaded (evaluations * n^2 / VPLs in the set), a the time of one pixel-VPL
- * evaluation, b of one shadow-map texel, maps the maps built per frame, c the filter's per-tap
+ * evaluation, b of one shadow-map texel, maps the maps built per frame to replace VPLs (not those
+ * that grow the set towards a raised N: paid once), c the filter's per-tap
  * time, d the incremental step's time per VPL; every unit is a running mean (weight 1/5) of the
  * frames measured after the first (which builds a whole set and the G-buffer: no rate of later
  * frames), so the model follows the machine, the scene and the motion. A rung is predicted
@@ -71,6 +72,7 @@ typedef struct iir_ctl_sample {
     double vpls;      /* VPLs in the frame's set (null samples included) */
     double vpl_evals; /* pixel-VPL evaluations */
     double maps;      /* shadow maps built */
+    double inserted;  /* VPLs inserted: replacements, or growth towards a raised N */
     bool regenerated; /* the set was made anew (its maps are not a rate per frame) */
 } iir_ctl_sample;
 

@@ -43,11 +43,12 @@ struct iir_ctl {
     cost_model m;
     double mean_ms;
     bool have_mean;
-    int want_streak; /* consecutive frames wanting a dearer (+) or cheaper (-) setting */
-    int held;        /* frames left holding the current setting */
-    int patience;    /* frames wanting a dearer setting before taking it */
-    int last_dir;    /* direction of the last move (+1 dearer, -1 cheaper, 0 none) */
-    uint64_t frame;  /* measured frames */
+    double prev_vpls; /* the last sample's set size: growth is not a rate of maps */
+    int want_streak;  /* consecutive frames wanting a dearer (+) or cheaper (-) setting */
+    int held;         /* frames left holding the current setting */
+    int patience;     /* frames wanting a dearer setting before taking it */
+    int last_dir;     /* direction of the last move (+1 dearer, -1 cheaper, 0 none) */
+    uint64_t frame;   /* measured frames */
     uint64_t last_move, last_undo;
     uint32_t moves;
 };
@@ -167,7 +168,17 @@ static void mean_in(double *m, bool *have, double x)
     *have = true;
 }
 
-static void measure(cost_model *m, const iir_ctl_sample *s)
+/* The maps a frame built to replace VPLs, not to grow the set towards a raised N (those are paid
+ * once): maps times the inserted VPLs that did not add to the set's size. */
+static double replacement_maps(const iir_ctl_sample *s, double prev_vpls)
+{
+    double growth = s->vpls > prev_vpls ? s->vpls - prev_vpls : 0.0;
+    if (!(s->inserted > 0.0) || growth <= 0.0) return s->maps;
+    double kept = s->inserted > growth ? (s->inserted - growth) / s->inserted : 0.0;
+    return s->maps * kept;
+}
+
+static void measure(cost_model *m, const iir_ctl_sample *s, double prev_vpls)
 {
     double n2 = (double)s->setting.interleave * s->setting.interleave;
     double res2 = (double)s->setting.sm_res * s->setting.sm_res;
@@ -181,7 +192,7 @@ static void measure(cost_model *m, const iir_ctl_sample *s)
     if (s->maps > 0.0) mean_in(&m->texel_ms, &m->have_texel, s->shadowmap_ms / (s->maps * res2));
     mean_in(&m->tap_ms, &m->have_tap, s->filter_ms / n2);
     if (s->regenerated) return; /* a whole new set: its maps and step are no rate per frame */
-    m->maps += ALPHA * (s->maps - m->maps);
+    m->maps += ALPHA * (replacement_maps(s, prev_vpls) - m->maps);
     if (s->vpls > 0.0) mean_in(&m->step_ms, &m->have_step, s->step_ms / s->vpls);
 }
 
@@ -261,7 +272,8 @@ static void move_to(iir_ctl *c, int rung, int shift, int dir)
 bool iir_ctl_update(iir_ctl *c, const iir_ctl_sample *s)
 {
     if (!(s->total_ms > 0.0) || !isfinite(s->total_ms)) return false;
-    if (c->frame++ > 0) measure(&c->m, s); /* the first makes a whole set and G-buffer */
+    if (c->frame++ > 0) measure(&c->m, s, c->prev_vpls); /* the first: a whole set, G-buffer */
+    c->prev_vpls = s->vpls;
     mean_in(&c->mean_ms, &c->have_mean, s->total_ms);
     if (!c->m.have_rest) return false;
     if (c->frame - c->last_undo > QUIET_FRAMES && c->patience > PATIENCE_MIN) {

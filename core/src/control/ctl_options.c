@@ -48,6 +48,7 @@ iir_ctl_sample iir_ctl_sample_of(const iir_frame_stats *fs, iir_ctl_setting used
                         .vpls = (double)fs->vpl.count, /* N: descendants ride on it */
                         .vpl_evals = (double)fs->vpl_evals,
                         .maps = (double)fs->vpl.shadowmaps,
+                        .inserted = (double)fs->vpl.inserted,
                         .regenerated = fs->vpl.regenerated != 0};
     return s;
 }

@@ -186,12 +186,9 @@ static iir_incr_params incr_params(const iir_options *p, uint32_t k_max, uint32_
     return ip;
 }
 
-/* The budget's k_max for the next update (the sets keep their VPLs: same N), and its k_min: kmin
- * while the set is full, 0 while it is short of N (the budget goes to refilling it, not to churn;
- * the churn resumes once it is full). */
-static void apply_insert_limit(iir_state *s)
+/* VPLs in the sets (every light's), null samples included. */
+static uint32_t set_count(iir_state *s)
 {
-    if (s->params.insert_ms <= 0.f) return;
     uint32_t count = 0;
     for (uint32_t k = 0; k < iir_vplsets_lights(s->sets); k++) {
         iir_incr *set = iir_vplsets_set(s->sets, k);
@@ -199,9 +196,28 @@ static void apply_insert_limit(iir_state *s)
         if (set) iir_incr_vpls(set, &n);
         count += n;
     }
-    bool short_of_n = count < (uint32_t)s->params.vpls;
-    iir_incr_params ip =
-        incr_params(&s->params, insert_limit(s), short_of_n ? 0 : (uint32_t)s->params.kmin);
+    return count;
+}
+
+enum { GROW_FRAMES = 4 }; /* the controller's new N: reached in about this many frames */
+
+/* The step's budgets for the next update (the sets keep their VPLs). With insert_ms: k_max what
+ * the budget buys, k_min kmin while the set is full and 0 while it is short of N (the budget goes
+ * to refilling it, not to churn; the churn resumes once it is full). With the frame-time controller
+ * and a set short of its N: kmax plus a quarter of the shortfall, so that a raised N is reached in
+ * GROW_FRAMES frames (the controller does not climb further meanwhile). */
+static void apply_insert_limit(iir_state *s)
+{
+    if (s->params.insert_ms <= 0.f && !s->ctl) return;
+    uint32_t count = set_count(s), N = (uint32_t)s->params.vpls;
+    bool short_of_n = count < N;
+    uint32_t k_max = insert_limit(s), k_min = (uint32_t)s->params.kmin;
+    if (s->params.insert_ms > 0.f && short_of_n) k_min = 0;
+    if (s->params.insert_ms <= 0.f && short_of_n) {
+        k_max += (N - count + GROW_FRAMES - 1) / GROW_FRAMES;
+        if (k_max > N) k_max = N;
+    }
+    iir_incr_params ip = incr_params(&s->params, k_max, k_min);
     iir_error err;
     iir_vplsets_set_params(s->sets, &ip, &err); /* valid by construction */
 }
