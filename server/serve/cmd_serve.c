@@ -32,7 +32,9 @@ static void serve_usage(FILE *f)
         "usage: iird serve [SCENE] [options]\n"
         "\n"
         "Serves the web client and live frames over WebSockets (docs/protocol.md) until\n"
-        "Ctrl-C or SIGTERM. Prints 'iird: serving URL (scene)' on stdout once listening.\n"
+        "Ctrl-C or SIGTERM (which drains first: --drain-seconds). Prints\n"
+        "'iird: serving URL (scene)' on stdout once listening. GET /healthz answers 200 ok,\n"
+        "or 503 full (at --max-sessions) or draining; GET /livez always 200.\n"
         "SCENE (or --scene) is what new sessions show: a name in the scenes directory, a\n"
         "folder or a file; without it, the built-in Cornell box.\n"
         "\n"
@@ -61,6 +63,13 @@ static void serve_usage(FILE *f)
         "  --tls-cert F --tls-key F  serve https/wss with this PEM certificate and key\n"
         "  --method NAME        a new session's method: %s (default iir)\n"
         "  --size WxH           a new session's frame size (default 512x384)\n"
+        "  --drain-seconds S    after SIGTERM keep serving the open sessions up to S seconds\n"
+        "                       (until they leave) while /healthz answers 503 draining and\n"
+        "                       new sessions are refused; a second SIGTERM or Ctrl-C stops\n"
+        "                       at once (default 10; 0 = stop at once)\n"
+        "  --trust-proxy ADDR   a load balancer's address: its connections count as the\n"
+        "                       client in the last X-Forwarded-For entry (per-address\n"
+        "                       limits, logs); see deploy/haproxy.cfg\n"
         "  --verbose            libwebsockets notices on stderr\n"
         "  -h, --help           this text\n"
         "\n"
@@ -94,6 +103,8 @@ enum {
     OPT_MAX_SESSION_MEMORY,
     OPT_RENDER_SLOTS,
     OPT_ALLOW_SAVE,
+    OPT_DRAIN_SECONDS,
+    OPT_TRUST_PROXY,
 };
 
 static iir_status parse_host(const char *arg, const char **out, iir_error *err)
@@ -138,6 +149,10 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
                              &cfg->max_sessions_per_address, err);
     case OPT_RENDER_SLOTS:
         return parse_int_opt(arg, "--render-slots", 1, 64, &cfg->render_slots, err);
+    case OPT_DRAIN_SECONDS:
+        return parse_int_opt(arg, "--drain-seconds", 0, 3600, &cfg->drain_seconds, err);
+    case OPT_TRUST_PROXY:
+        return parse_host(arg, &cfg->trust_proxy, err);
     case OPT_ALLOW_SAVE:
         return cfg->limits.allow_save = true, IIR_OK;
     case OPT_IDLE_TIMEOUT:
@@ -313,6 +328,8 @@ int iird_cmd_serve(int argc, char **argv)
         {"max-session-memory", required_argument, 0, OPT_MAX_SESSION_MEMORY},
         {"render-slots", required_argument, 0, OPT_RENDER_SLOTS},
         {"allow-save", no_argument, 0, OPT_ALLOW_SAVE},
+        {"drain-seconds", required_argument, 0, OPT_DRAIN_SECONDS},
+        {"trust-proxy", required_argument, 0, OPT_TRUST_PROXY},
         {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     static const iird_command cmd = {"serve", longopts, serve_usage, parse_option, NULL};
@@ -320,6 +337,7 @@ int iird_cmd_serve(int argc, char **argv)
                             .port = 8080,
                             .max_sessions = 8,
                             .idle_timeout_s = 1800,
+                            .drain_seconds = 10,
                             .limits = iird_limits_default(),
                             .defaults = iird_settings_default()}};
     const char *positional = NULL;

@@ -147,14 +147,14 @@ char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session 
     return text;
 }
 
-char *iird_metrics_healthz(const iird_metrics *m)
+char *iird_metrics_healthz(const iird_metrics *m, const char *status)
 {
     char *text = NULL;
     size_t size = 0;
     FILE *f = open_memstream(&text, &size);
     if (!f) return NULL;
-    fprintf(f, "{\"status\":\"ok\",\"sessions\":%d,\"uptime_s\":%.3f}\n", atomic_load(&m->sessions),
-            (iir_now_ms() - m->start_ms) / 1e3);
+    fprintf(f, "{\"status\":\"%s\",\"sessions\":%d,\"uptime_s\":%.3f}\n", status,
+            atomic_load(&m->sessions), (iir_now_ms() - m->start_ms) / 1e3);
     if (fclose(f) != 0) {
         free(text);
         return NULL;

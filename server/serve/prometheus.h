@@ -46,8 +46,8 @@ char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session 
                               size_t num_sessions, const iird_sched_stats *sched,
                               size_t scenes_loaded);
 
-/* The /healthz JSON: {"status":"ok","sessions":N,"uptime_s":S}; malloc'd, NULL when out of
- * memory. */
-char *iird_metrics_healthz(const iird_metrics *m);
+/* The /healthz and /livez JSON: {"status":STATUS,"sessions":N,"uptime_s":S} (STATUS "ok", "full",
+ * "draining" or "alive"); malloc'd, NULL when out of memory. */
+char *iird_metrics_healthz(const iird_metrics *m, const char *status);
 
 #endif

@@ -44,7 +44,7 @@
 #include "session.h"
 
 /* Why a connection was refused a session (it gets one busy error, then close 1013). */
-typedef enum busy_reason { NOT_BUSY, BUSY_SERVER, BUSY_ADDRESS } busy_reason;
+typedef enum busy_reason { NOT_BUSY, BUSY_SERVER, BUSY_ADDRESS, BUSY_DRAINING } busy_reason;
 
 enum { ADDR_BYTES = 64 };
 
@@ -85,6 +85,8 @@ typedef struct server {
     int active; /* sessions whose worker has not returned: open ones and closing ones */
     uint32_t next_id;
     atomic_int stop;
+    atomic_int draining;         /* set by the signal thread at the first SIGTERM */
+    double drain_until;          /* ms: the drain's end (0 until the service loop sees it) */
     int port;                    /* the listening port (cfg->port may be 0) */
     lws_sorted_usec_list_t tick; /* bounds each lws_service wait during shutdown */
     char web_dir[PATH_MAX];
@@ -211,10 +213,28 @@ static void refuse_busy(conn *c, busy_reason why)
     lws_callback_on_writable(c->wsi);
 }
 
+/* The client's address: the peer's, or behind the trusted balancer (--trust-proxy) the last entry
+ * of X-Forwarded-For (the one the balancer appended; earlier ones are the client's own word). */
+static void client_address(const server *srv, struct lws *wsi, char addr[ADDR_BYTES])
+{
+    lws_get_peer_simple(wsi, addr, ADDR_BYTES);
+    const char *proxy = srv->cfg->trust_proxy;
+    char xff[512];
+    if (!proxy || strcmp(addr, proxy) != 0 ||
+        lws_hdr_copy(wsi, xff, sizeof xff, WSI_TOKEN_X_FORWARDED_FOR) <= 0)
+        return;
+    const char *last = strrchr(xff, ',');
+    last = last ? last + 1 : xff;
+    while (*last == ' ') last++;
+    size_t n = strcspn(last, " ");
+    if (n > 0 && n < ADDR_BYTES) memcpy(addr, last, n), addr[n] = '\0';
+}
+
 static void on_established(server *srv, conn *c, struct lws *wsi)
 {
     link_conn(srv, c, wsi);
-    lws_get_peer_simple(wsi, c->addr, sizeof c->addr);
+    client_address(srv, wsi, c->addr);
+    if (atomic_load(&srv->draining)) return refuse_busy(c, BUSY_DRAINING);
     if (srv->active >= srv->cfg->max_sessions) return refuse_busy(c, BUSY_SERVER);
     if (sessions_from(srv, c->addr) >= srv->cfg->max_sessions_per_address)
         return refuse_busy(c, BUSY_ADDRESS);
@@ -304,7 +324,11 @@ static void on_wake(server *srv)
 static int write_busy(server *srv, conn *c, struct lws *wsi)
 {
     iird_proto_error e = {.seq = IIRD_NO_SEQ};
-    if (c->busy == BUSY_ADDRESS)
+    if (c->busy == BUSY_DRAINING)
+        iird_proto_fail(&e, IIRD_E_BUSY, NULL,
+                        "the server is shutting down (draining its sessions): connect again to "
+                        "reach another");
+    else if (c->busy == BUSY_ADDRESS)
         iird_proto_fail(&e, IIRD_E_BUSY, NULL,
                         "this address has its maximum of %d sessions open "
                         "(--max-sessions-per-address)",
@@ -400,14 +424,30 @@ static char *metrics_text(server *srv)
                                    iird_scene_cache_loaded(srv->scenes));
 }
 
+/* What /healthz says to a balancer: "draining" after SIGTERM and "full" at --max-sessions (503:
+ * send no new session here), else "ok"; /livez (for systemd and liveness probes) is always 200
+ * "alive" while the process serves. */
+static const char *health(const server *srv, bool live, int *status)
+{
+    *status = HTTP_STATUS_OK;
+    if (live) return "alive";
+    *status = HTTP_STATUS_SERVICE_UNAVAILABLE;
+    if (atomic_load(&srv->draining)) return "draining";
+    if (srv->active >= srv->cfg->max_sessions) return "full";
+    *status = HTTP_STATUS_OK;
+    return "ok";
+}
+
 /* Builds the body and sends the headers; the body follows on HTTP_WRITEABLE. Only the exact
- * paths /healthz and /metrics: anything below them is 404. */
+ * paths /healthz, /livez and /metrics: anything below them is 404. */
 static int http_start(server *srv, struct lws *wsi, http_req *r, const char *path)
 {
-    bool metrics = !strcmp(path, "/metrics");
-    if (!metrics && strcmp(path, "/healthz") != 0)
+    bool metrics = !strcmp(path, "/metrics"), live = !strcmp(path, "/livez");
+    if (!metrics && !live && strcmp(path, "/healthz") != 0)
         return lws_return_http_status(wsi, HTTP_STATUS_NOT_FOUND, NULL), -1;
-    char *text = metrics ? metrics_text(srv) : iird_metrics_healthz(&srv->metrics);
+    int status = HTTP_STATUS_OK;
+    const char *word = metrics ? NULL : health(srv, live, &status);
+    char *text = metrics ? metrics_text(srv) : iird_metrics_healthz(&srv->metrics, word);
     if (!text) return lws_return_http_status(wsi, HTTP_STATUS_INTERNAL_SERVER_ERROR, NULL), -1;
     r->len = strlen(text);
     r->body = malloc(LWS_PRE + r->len);
@@ -416,7 +456,7 @@ static int http_start(server *srv, struct lws *wsi, http_req *r, const char *pat
     if (!r->body) return -1;
     unsigned char hdr[LWS_PRE + 512], *start = hdr + LWS_PRE, *p = start, *end = hdr + sizeof hdr;
     const char *type = metrics ? "text/plain; version=0.0.4" : "application/json";
-    if (lws_add_http_common_headers(wsi, HTTP_STATUS_OK, type, r->len, &p, end) ||
+    if (lws_add_http_common_headers(wsi, (unsigned)status, type, r->len, &p, end) ||
         lws_add_http_header_by_token(wsi, WSI_TOKEN_HTTP_CACHE_CONTROL, (unsigned char *)"no-store",
                                      8, &p, end) ||
         lws_finalize_write_http_header(wsi, start, &p, end))
@@ -439,7 +479,7 @@ static int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void
                          size_t len)
 {
     http_req *r = user;
-    char path[16] = ""; /* longer than "/healthz" and "/metrics": a path that does not fit is 404 */
+    char path[16] = ""; /* longer than "/healthz", "/metrics": a path that does not fit is 404 */
     switch (reason) {
     case LWS_CALLBACK_HTTP:
         if (lws_hdr_copy(wsi, path, sizeof path, WSI_TOKEN_GET_URI) <= 0) path[0] = '\0';
@@ -464,21 +504,23 @@ static const struct lws_protocols protocols[] = {
     {"http", http_callback, sizeof(http_req), 0, 0, NULL, 0},
     {NULL, NULL, 0, 0, 0, NULL, 0}};
 
-static void make_mounts(const server *srv, struct lws_http_mount m[3])
+enum { MOUNTS = 4 };
+
+static void make_mounts(const server *srv, struct lws_http_mount m[MOUNTS])
 {
-    memset(m, 0, 3 * sizeof *m);
-    m[0].mountpoint = "/healthz";
-    m[0].protocol = "http";
-    m[0].origin_protocol = LWSMPRO_CALLBACK;
-    m[0].mount_next = &m[1];
-    m[1] = m[0];
-    m[1].mountpoint = "/metrics";
-    m[1].mount_next = &m[2];
-    m[2].mountpoint = "/";
-    m[2].origin = srv->web_dir;
-    m[2].def = "index.html";
-    m[2].origin_protocol = LWSMPRO_FILE;
-    for (int i = 0; i < 3; i++) m[i].mountpoint_len = (unsigned char)strlen(m[i].mountpoint);
+    static const char *const callbacks[] = {"/healthz", "/livez", "/metrics"};
+    memset(m, 0, MOUNTS * sizeof *m);
+    for (int i = 0; i < 3; i++) {
+        m[i].mountpoint = callbacks[i];
+        m[i].protocol = "http";
+        m[i].origin_protocol = LWSMPRO_CALLBACK;
+        m[i].mount_next = &m[i + 1];
+    }
+    m[3].mountpoint = "/";
+    m[3].origin = srv->web_dir;
+    m[3].def = "index.html";
+    m[3].origin_protocol = LWSMPRO_FILE;
+    for (int i = 0; i < MOUNTS; i++) m[i].mountpoint_len = (unsigned char)strlen(m[i].mountpoint);
 }
 
 static struct lws_context *create_context(server *srv, const struct lws_http_mount *mounts)
@@ -536,7 +578,8 @@ static void *signal_main(void *arg)
         sigwait(&set, &sig);
         if (atomic_load(&st->quit)) return NULL;
         if (sig == SIGUSR1 || sig == SIGUSR2) continue;
-        atomic_store(&st->srv->stop, 1);
+        bool drain = sig == SIGTERM && st->srv->cfg->drain_seconds > 0;
+        if (!drain || atomic_exchange(&st->srv->draining, 1)) atomic_store(&st->srv->stop, 1);
         pthread_mutex_lock(&st->srv->ctx_lock);
         if (st->srv->ctx) lws_cancel_service(st->srv->ctx);
         pthread_mutex_unlock(&st->srv->ctx_lock);
@@ -605,6 +648,24 @@ static void shut_down(server *srv)
     reap_closing(srv, true);
 }
 
+/* Whether a drain (the first SIGTERM) is over: every session gone, or --drain-seconds passed.
+ * While it lasts, a 100 ms tick bounds each lws_service wait so that the deadline is seen. */
+static bool drained(server *srv)
+{
+    if (!atomic_load(&srv->draining)) return false;
+    double now = iir_now_ms();
+    if (srv->drain_until == 0.0) {
+        srv->drain_until = now + 1e3 * srv->cfg->drain_seconds;
+        fprintf(stderr,
+                "iird serve: SIGTERM: draining %d session%s for up to %d s (/healthz: draining; "
+                "SIGTERM again to stop now)\n",
+                srv->active, srv->active == 1 ? "" : "s", srv->cfg->drain_seconds);
+    }
+    if (srv->active == 0 || now >= srv->drain_until) return true;
+    lws_sul_schedule(srv->ctx, 0, &srv->tick, tick_cb, 100 * LWS_US_PER_MS);
+    return false;
+}
+
 static void print_url(const server *srv)
 {
     const iird_server_config *cfg = srv->cfg;
@@ -645,7 +706,7 @@ static int serve(server *srv)
                 srv->cfg->port, strerror(bind_err));
         return 1;
     }
-    struct lws_http_mount mounts[3];
+    struct lws_http_mount mounts[MOUNTS];
     make_mounts(srv, mounts);
     struct lws_context *ctx = create_context(srv, mounts);
     pthread_mutex_lock(&srv->ctx_lock);
@@ -662,7 +723,7 @@ static int serve(server *srv)
     struct lws_vhost *vh = lws_get_vhost_by_name(srv->ctx, "default");
     srv->port = vh ? lws_get_vhost_listen_port(vh) : srv->cfg->port;
     print_url(srv);
-    while (!atomic_load(&srv->stop))
+    while (!atomic_load(&srv->stop) && !drained(srv))
         if (lws_service(srv->ctx, 0) < 0) break;
     shut_down(srv);
     pthread_mutex_lock(&srv->ctx_lock);

@@ -35,13 +35,20 @@ typedef struct iird_server_config {
     iird_settings defaults;         /* the state of a new session */
     struct iird_budget *budget;     /* memory limits and reservations (budget.h); NULL: none */
     bool verbose;                   /* libwebsockets notices on stderr */
+    int drain_seconds;       /* after SIGTERM: keep serving the open sessions this long (or until
+                                they leave) while /healthz says draining; 0: stop at once */
+    const char *trust_proxy; /* NULL, or a balancer's address: connections from it are counted
+                                (per-address limits, logs) by the last X-Forwarded-For entry */
 } iird_server_config;
 
 /* Loads the startup scene, starts listening, prints "iird: serving URL (scene)" on stdout, and
- * serves until SIGINT, SIGTERM, SIGHUP or SIGQUIT (SIGUSR1 and SIGUSR2 are ignored); then closes
- * every session (about a second of service at most, whatever the clients do), stops every worker
- * and frees everything. Returns the process exit code (0 after a signal; 1, 2 or 3 when start-up
- * fails, with the reason on stderr). */
+ * serves until SIGINT, SIGTERM, SIGHUP or SIGQUIT (SIGUSR1 and SIGUSR2 are ignored). The first
+ * SIGTERM with drain_seconds > 0 drains first: new sessions are refused (busy), /healthz answers
+ * 503 "draining", and the open sessions are served until they leave or drain_seconds pass (another
+ * SIGTERM, or any other of those signals, ends it at once). Then it closes every session (about a
+ * second of service at most, whatever the clients do), stops every worker and frees everything.
+ * Returns the process exit code (0 after a signal; 1, 2 or 3 when start-up fails, with the reason
+ * on stderr). */
 int iird_server_run(const iird_server_config *cfg);
 
 #endif

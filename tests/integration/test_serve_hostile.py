@@ -213,7 +213,7 @@ class StopTest(unittest.IsolatedAsyncioTestCase):
         return secs
 
     async def test_sigterm_with_a_client_that_stopped_reading(self):
-        d = self.start()
+        d = self.start("--drain-seconds", "0")  # stop at once: no drain (test_serve_drain drains)
         msgs = [{"type": "hello", "seq": 1},
                 {"type": "params", "seq": 2, "width": 1280, "height": 960, "quality": 100, "method": "pt", "spp": 1}]
         msgs += [{"type": "light", "seq": 3 + i, "cone_angle": 30 + i} for i in range(20)]

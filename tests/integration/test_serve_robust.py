@@ -139,7 +139,7 @@ class OwnOriginOnLoopbackTest(DaemonTest):
 
 class ShutdownTest(unittest.IsolatedAsyncioTestCase):
     async def stop_while_rendering(self, sig):
-        d = Daemon()
+        d = Daemon("--drain-seconds", "1")  # SIGTERM drains 1 s (the clients stay), then stops
         try:
             clients = []
             for method in ("iir", "pt"):
