@@ -1,6 +1,6 @@
 # Makefile -- thin wrapper over CMake. `make run` and `make test` do all set-up on a fresh Debian 12:
 # they install missing packages (apt-get; sudo only when not root), configure, build, then run.
-.PHONY: all deps web-deps build run still test bench fuzz soak docs format format-check clean
+.PHONY: all deps web-deps build run still test test-deploy bench fuzz soak docs format format-check clean
 
 BUILD      ?= build
 TEST_BUILD ?= build-asan
@@ -12,7 +12,7 @@ PACKAGES := build-essential cmake pkg-config git clang-format \
             libembree-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev \
             libwebsockets-dev libssl-dev libcap-dev zlib1g-dev \
             libassimp-dev libcjson-dev libturbojpeg0-dev libopenexr-dev libpng-dev \
-            libcmocka-dev ffmpeg openssl python3 python3-matplotlib python3-websockets python3-pil chromium \
+            libcmocka-dev ffmpeg openssl haproxy python3 python3-matplotlib python3-websockets python3-pil chromium \
             clang libclang-rt-14-dev libomp-14-dev
 # Node.js and npm only where no node/npm is on the PATH: a machine may have its own, and Debian's npm
 # installed over another npm can break it.
@@ -60,6 +60,11 @@ test: deps web-deps format-check
 	cmake --build $(TEST_BUILD) -j $(JOBS)
 	cd $(TEST_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	    ctest --output-on-failure -j $(JOBS)
+
+# Three daemons behind a real HAProxy from deploy/haproxy.cfg, on loopback (docs/deploy.md); also
+# part of `make test` (about 10 s).
+test-deploy: build
+	cd $(BUILD) && ctest -R integration_test_deploy --output-on-failure
 
 # Benchmarks (not tests; docs/experiments.md reads them): ray rates, then `iird bench` over the
 # standard set -- the Cornell box orbit with every method (a VPL sweep for iir, ir and ism, pt at
