@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# test_docs.sh -- every iird command that README.md and docs/cli.md show runs as written: the lines
-# of their ```sh blocks that start with `build/iird` or `iird` (trailing comments dropped), with
+# test_docs.sh -- every iird command that README.md, docs/cli.md and docs/deploy.md show runs as
+# written: the lines of their ```sh blocks that start with `build/iird` or `iird` (trailing comments dropped), with
 # the binary under test, from a scratch folder that looks like a fresh clone (a `scenes` link, no
 # out/), so relative paths resolve as for a reader. Each is made quick, otherwise unchanged: the
 # values of --size, --spp, --ref-spp, --frames and --rays are replaced, and --size, --frames,
@@ -95,7 +95,7 @@ run_serve() {
 }
 
 total=0
-for doc in README.md docs/cli.md; do
+for doc in README.md docs/cli.md docs/deploy.md; do
     [ -f "$src/$doc" ] || {
         fail "$doc is missing"
         continue
