@@ -19,8 +19,9 @@ static void render_usage(FILE *f)
     fprintf(
         f,
         "usage: iird render [SCENE] --out FILE.{png,exr,pfm} [options]\n"
-        "       iird render [SCENE] --anim PATH --out DIR [--frames A:B] [--format F]\n"
-        "                   [--video FILE.mp4] [options]\n"
+        "       iird render [SCENE] --anim PATH --out DIR [--frames A:B | --segment I/N]\n"
+        "                   [--format F] [--video FILE.mp4] [options]\n"
+        "       iird render --merge DIR [--video FILE.mp4]\n"
         "\n"
         "Renders one still, or with --anim every frame of an animation script in order.\n"
         "SCENE is a name in the scenes directory, a scene folder or a file (.obj, .gltf, .glb,\n"
@@ -38,6 +39,12 @@ static void render_usage(FILE *f)
         "                       scene's sidecar names\n"
         "  --frames A:B         with --anim: script frames A..B-1 (B excluded); A: = to the end.\n"
         "                       Frames before A are re-rendered small, unwritten, to warm up\n"
+        "  --segment I/N        with --anim: the I-th (from 0) of N contiguous shares of the\n"
+        "                       frames, warmed up as --frames; its log is\n"
+        "                       DIR/render.part-I-of-N.json (a farm's array task; resumes)\n"
+        "  --merge DIR          check a directory's segments (every part there, the same\n"
+        "                       settings, every frame once) and write DIR/render.json (and\n"
+        "                       with --video the video)\n"
         "  --format F           with --anim: png | exr | pfm (default png)\n"
         "  --video FILE.mp4     with --anim: also an H.264 video of the frames (needs ffmpeg)\n"
         "  --scenes DIR         where scene names are looked up (default ./scenes)\n"
@@ -56,7 +63,9 @@ enum {
     OPT_ANIM,
     OPT_FRAMES,
     OPT_FORMAT,
-    OPT_VIDEO
+    OPT_VIDEO,
+    OPT_SEGMENT,
+    OPT_MERGE
 };
 
 static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err)
@@ -87,6 +96,13 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
         o->frames_arg = arg;
         st = iird_parse_frame_range(arg, &o->first, &o->end, err);
         break;
+    case OPT_SEGMENT:
+        o->segment_arg = arg;
+        st = iird_parse_segment(arg, &o->segment, &o->segments, err);
+        break;
+    case OPT_MERGE:
+        o->merge = arg;
+        break;
     case OPT_FORMAT:
         o->format_arg = arg;
         st = iird_parse_format(arg, &o->format, err);
@@ -106,6 +122,25 @@ static const char *render_method(const void *ctx)
     return o->method ? o->method : o->anim ? "iir" : "pt";
 }
 
+/* --merge DIR takes only --video: -1 when that holds, else the usage exit code. */
+static int check_merge(const render_opts *o)
+{
+    const char *other = o->out            ? "--out"
+                        : o->anim         ? "--anim"
+                        : o->frames_arg   ? "--frames"
+                        : o->segment_arg  ? "--segment"
+                        : o->format_arg   ? "--format"
+                        : o->scene        ? "SCENE"
+                        : o->params.count ? "method parameters"
+                                          : NULL;
+    if (!other) return -1;
+    fprintf(stderr,
+            "iird render: --merge DIR takes no %s (only --video): the parts' render.json "
+            "files hold the settings\n",
+            other);
+    return IIRD_EXIT_USAGE;
+}
+
 /* Returns -1 when parsing succeeded, else the exit code. */
 static int parse_args(int argc, char **argv, render_opts *o)
 {
@@ -118,19 +153,32 @@ static int parse_args(int argc, char **argv, render_opts *o)
                                              {"frames", required_argument, 0, OPT_FRAMES},
                                              {"format", required_argument, 0, OPT_FORMAT},
                                              {"video", required_argument, 0, OPT_VIDEO},
+                                             {"segment", required_argument, 0, OPT_SEGMENT},
+                                             {"merge", required_argument, 0, OPT_MERGE},
                                              {"help", no_argument, 0, 'h'},
                                              {0, 0, 0, 0}};
     static const iird_command cmd = {"render", longopts, render_usage, parse_option, render_method};
     int rc = iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
     if (rc >= 0) return rc;
+    if (o->merge) return check_merge(o);
     if (!o->out) {
         fprintf(stderr, "iird render: --out %s is required (see iird render --help)\n",
                 o->anim ? "DIR" : "FILE");
         return IIRD_EXIT_USAGE;
     }
-    const char *anim_only = o->frames_arg ? "--frames" : o->format_arg ? "--format" : "--video";
-    if (!o->anim && (o->frames_arg || o->format_arg || o->video)) {
+    const char *anim_only = o->frames_arg    ? "--frames"
+                            : o->segment_arg ? "--segment"
+                            : o->format_arg  ? "--format"
+                                             : "--video";
+    if (!o->anim && (o->frames_arg || o->segment_arg || o->format_arg || o->video)) {
         fprintf(stderr, "iird render: %s needs --anim (see iird render --help)\n", anim_only);
+        return IIRD_EXIT_USAGE;
+    }
+    if (o->segment_arg && (o->frames_arg || o->video)) {
+        fprintf(stderr, "iird render: --segment %s: %s\n", o->segment_arg,
+                o->frames_arg ? "give --frames or --segment, not both"
+                              : "the video comes from the merge: iird render --merge DIR --video "
+                                "FILE.mp4");
         return IIRD_EXIT_USAGE;
     }
     o->method = render_method(o);
@@ -239,6 +287,7 @@ int iird_cmd_render(int argc, char **argv)
                      .params = iir_params_default()};
     int rc = parse_args(argc, argv, &o);
     if (rc >= 0) return rc;
+    if (o.merge) return iird_render_merge(&o);
     if (o.anim) return iird_render_anim(&o);
 
     iir_error err = {0};

@@ -70,6 +70,21 @@ iir_status iird_parse_frame_range(const char *text, int *first, int *end, iir_er
     return IIR_OK;
 }
 
+iir_status iird_parse_segment(const char *text, int *index, int *count, iir_error *err)
+{
+    const char *slash = strchr(text, '/');
+    int i = 0, n = 0;
+    if (!slash || !parse_index(text, (size_t)(slash - text), &i) ||
+        !parse_index(slash + 1, strlen(slash + 1), &n) || n < 1 || n > 100000 || i >= n)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "--segment '%s' must be I/N with 0 <= I < N <= 100000 (the I-th of N "
+                        "shares, from 0)",
+                        text);
+    *index = i;
+    *count = n;
+    return IIR_OK;
+}
+
 static const char *const FORMAT_EXT[] = {"png", "exr", "pfm"};
 
 iir_status iird_parse_format(const char *text, iird_format *format, iir_error *err)
@@ -117,6 +132,7 @@ typedef struct anim_job {
     double start_ms, frames_start_ms, render_ms, last_log_ms;
     int black_frames, first_black; /* frames that came out entirely black */
     iir_frame_stats last;          /* the last frame written (the controller's state) */
+    char log_name[64];             /* render.json, or a segment's render.part-I-of-N.json */
 } anim_job;
 
 /* The view of script frame f: the scene's camera and lights, every light the script animates
@@ -183,6 +199,18 @@ static iir_status set_range(anim_job *j, iir_error *err)
     j->count = iir_anim_frame_count(j->anim);
     j->first = o->first;
     j->end = o->end < 0 ? j->count : o->end;
+    if (o->segments) { /* the I-th of N contiguous shares, by the same integer rule everywhere */
+        j->first = (int)((long long)o->segment * j->count / o->segments);
+        j->end = (int)((long long)(o->segment + 1) * j->count / o->segments);
+        snprintf(j->log_name, sizeof j->log_name, "render.part-%d-of-%d.json", o->segment,
+                 o->segments);
+        if (j->first == j->end)
+            return iir_fail(err, IIR_ERR_INVALID,
+                            "--segment %s: the script %s has only %d frames, fewer than %d "
+                            "segments",
+                            o->segment_arg, j->script, j->count, o->segments);
+        return IIR_OK;
+    }
     if (j->first >= j->count || j->end > j->count)
         return iir_fail(err, IIR_ERR_INVALID,
                         "--frames %s: the script %s has %d frames (0:%d at most)", o->frames_arg,
@@ -259,7 +287,12 @@ static iir_status prepare(anim_job *j, iir_error *err)
                                .width = o->width,
                                .height = o->height,
                                .exposure = frame_exposure(j, 0),
-                               .params = &o->params};
+                               .params = &o->params,
+                               .log_name = j->log_name,
+                               .segment = o->segment,
+                               .segments = o->segments,
+                               .segment_first = j->first,
+                               .segment_end = j->end};
     j->run = (iird_render_run){.first = j->first,
                                .end = j->end,
                                .status = "running",
@@ -272,6 +305,21 @@ static iir_status prepare(anim_job *j, iir_error *err)
     if (st == IIR_OK && o->video)
         st = iird_video_open(o->video, o->width, o->height, iir_anim_fps(j->anim), &j->video, err);
     return st;
+}
+
+/* A segment run again (a farm's failed task) starts at its first frame its part file lacks (the
+ * frames before it are warmed up as for --frames); *done when it has every frame already. */
+static void resume_segment(anim_job *j, bool *done)
+{
+    const char *file;
+    float exposure;
+    int f = j->first;
+    while (j->o->segments && f < j->end && iird_render_log_entry(j->log, f, &file, &exposure)) f++;
+    if (f > j->first)
+        fprintf(stderr, "iird render: %s has frames %d..%d already: going on from frame %d\n",
+                j->log_name, j->first, f - 1, f);
+    j->run.first = j->first = f;
+    *done = f == j->end;
 }
 
 /* Frames 0..first-1, small and unwritten, so the method's state reaches frame `first` as in an
@@ -334,7 +382,7 @@ static iir_status write_frame(anim_job *j, int f, const iir_frame_stats *fs, iir
     }
     double write_ms = iir_now_ms() - t0;
     if (iird_image_black(j->img) && j->black_frames++ == 0) j->first_black = f;
-    iird_render_log_frame(j->log, f, iir_anim_frame_time(j->anim, f), name, fs, write_ms);
+    iird_render_log_frame(j->log, f, iir_anim_frame_time(j->anim, f), name, exposure, fs, write_ms);
     j->run.done++;
     j->render_ms += fs->total_ms;
     j->last = *fs;
@@ -430,8 +478,10 @@ static void resume_command(const anim_job *j, int from, char *buf, size_t n)
     }
     char range[64];
     snprintf(range, sizeof range, "%d:%d", from, j->end);
-    append_arg(buf, n, "--frames");
-    append_arg(buf, n, range);
+    if (!o->segments) { /* a segment resumes where its part file stops: the same command */
+        append_arg(buf, n, "--frames");
+        append_arg(buf, n, range);
+    }
     memmove(buf, buf + 1, strlen(buf)); /* the leading space */
 }
 
@@ -487,7 +537,7 @@ static void print_summary(const anim_job *j, int video_frames)
            wall > 0 ? 1000 / wall : 0, j->run.wall_ms / 1e3);
     if (j->run.warmup_frames)
         printf(" (warm-up of frames 0..%d: %.1f s)", j->first - 1, j->run.warmup_ms / 1e3);
-    printf("\nrender.json: %d of %d frames%s\n", iird_render_log_count(j->log), j->count,
+    printf("\n%s: %d of %d frames%s\n", j->log_name, iird_render_log_count(j->log), j->count,
            iird_render_log_kept(j->log) ? " (earlier runs' frames kept)" : "");
     if (o->video)
         printf("video %s: %d frames at %g fps (H.264)\n", o->video, video_frames,
@@ -543,15 +593,16 @@ static void free_job(anim_job *j)
 
 int iird_render_anim(const iird_render_opts *o)
 {
-    anim_job j = {.opts = *o, .start_ms = iir_now_ms()};
+    anim_job j = {.opts = *o, .start_ms = iir_now_ms(), .log_name = "render.json"};
     j.o = &j.opts;
     iir_error err = {0};
     iird_catch_interrupts();
     iir_status st = load(&j, &err);
     if (st == IIR_OK) st = prepare(&j, &err);
-    bool started = st == IIR_OK;
-    if (st == IIR_OK) st = warm_up(&j, &err);
-    if (st == IIR_OK) st = render_frames(&j, &err);
+    bool started = st == IIR_OK, done = false;
+    if (st == IIR_OK) resume_segment(&j, &done);
+    if (st == IIR_OK && !done) st = warm_up(&j, &err);
+    if (st == IIR_OK && !done) st = render_frames(&j, &err);
     if (started) st = finish(&j, st, &err);
     int rc = iir_status_exit_code(st);
     if (started && st != IIR_OK && j.run.done < j.end - j.first)

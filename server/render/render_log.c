@@ -20,7 +20,8 @@ struct iird_render_log {
     cJSON **by_frame; /* script_frames entries, owned, NULL where a frame has none */
     int frames, kept;
     char scene_source[1024], script_label[4096];
-    const iird_render_run *run;
+    const iird_render_run *run;        /* the current run; NULL for a loaded or merged log */
+    int seg, segs, seg_first, seg_end; /* --segment I/N and its frames (segs 0: none) */
 };
 
 /* ---- settings ---- */
@@ -105,7 +106,7 @@ static iir_status check_settings(const char *path, const cJSON *was, const cJSON
     return IIR_OK;
 }
 
-/* ---- reading an earlier render.json ---- */
+/* ---- reading an earlier log ---- */
 
 /* The whole file, NUL-terminated, malloc'ed; NULL with errno set when unreadable. */
 static char *read_text(const char *path)
@@ -181,8 +182,11 @@ iir_status iird_render_log_open(const char *dir, const iird_render_setup *setup,
     *out = NULL;
     iird_render_log *l = calloc(1, sizeof *l);
     if (!l) return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
-    snprintf(l->path, sizeof l->path, "%s/render.json", dir);
+    snprintf(l->path, sizeof l->path, "%s/%s", dir,
+             setup->log_name ? setup->log_name : "render.json");
     snprintf(l->tmp, sizeof l->tmp, "%s.part", l->path);
+    l->seg = setup->segment, l->segs = setup->segments;
+    l->seg_first = setup->segment_first, l->seg_end = setup->segment_end;
     snprintf(l->scene_source, sizeof l->scene_source, "%s", setup->scene_source);
     snprintf(l->script_label, sizeof l->script_label, "%s", setup->script_label);
     l->frames = setup->script_frames;
@@ -216,12 +220,13 @@ int iird_render_log_count(const iird_render_log *l)
 /* ---- entries ---- */
 
 void iird_render_log_frame(iird_render_log *l, int f, double time_s, const char *file,
-                           const iir_frame_stats *fs, double write_ms)
+                           float exposure, const iir_frame_stats *fs, double write_ms)
 {
     cJSON *e = cJSON_CreateObject();
     cJSON_AddNumberToObject(e, "frame", f);
     cJSON_AddNumberToObject(e, "time_s", time_s);
     cJSON_AddStringToObject(e, "file", file);
+    cJSON_AddNumberToObject(e, "exposure", float_value(exposure));
     cJSON_AddNumberToObject(e, "total_ms", r4(fs->total_ms));
     cJSON_AddNumberToObject(e, "write_ms", r4(write_ms));
     cJSON_AddItemToObject(e, "phase_ms", iird_json_phases(fs, 1e4));
@@ -304,9 +309,17 @@ static cJSON *document(const iird_render_log *l)
     cJSON_AddItemReferenceToObject(root, "settings", l->settings);
     cJSON_AddStringToObject(root, "scene_source", l->scene_source);
     cJSON_AddStringToObject(root, "script", l->script_label);
+    if (l->segs) {
+        cJSON *seg = cJSON_AddObjectToObject(root, "segment");
+        cJSON_AddNumberToObject(seg, "index", l->seg);
+        cJSON_AddNumberToObject(seg, "of", l->segs);
+        cJSON *range = cJSON_AddArrayToObject(seg, "frames");
+        cJSON_AddItemToArray(range, cJSON_CreateNumber(l->seg_first));
+        cJSON_AddItemToArray(range, cJSON_CreateNumber(l->seg_end));
+    }
     cJSON *runs = cJSON_AddArrayToObject(root, "runs");
     for (cJSON *r = l->old_runs->child; r; r = r->next) cJSON_AddItemReferenceToArray(runs, r);
-    cJSON_AddItemToArray(runs, run_json(l->run));
+    if (l->run) cJSON_AddItemToArray(runs, run_json(l->run));
     cJSON *frames = cJSON_AddArrayToObject(root, "frames");
     for (int f = 0; f < l->frames; f++)
         if (l->by_frame[f]) cJSON_AddItemReferenceToArray(frames, l->by_frame[f]);
@@ -339,4 +352,135 @@ void iird_render_log_destroy(iird_render_log *l)
     cJSON_Delete(l->settings);
     cJSON_Delete(l->old_runs);
     free(l);
+}
+
+/* ---- merging segments ---- */
+
+/* The segment object of a part file into l (none when absent); false when malformed. */
+static bool read_segment(iird_render_log *l, const cJSON *seg)
+{
+    if (!seg) return true;
+    const cJSON *range = cJSON_GetObjectItemCaseSensitive(seg, "frames");
+    double i = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(seg, "index"));
+    double n = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(seg, "of"));
+    if (!cJSON_IsArray(range) || cJSON_GetArraySize(range) != 2 || !(n >= 1 && n <= 100000) ||
+        !(i >= 0 && i < n))
+        return false;
+    l->seg = (int)i, l->segs = (int)n;
+    l->seg_first = (int)cJSON_GetNumberValue(cJSON_GetArrayItem(range, 0));
+    l->seg_end = (int)cJSON_GetNumberValue(cJSON_GetArrayItem(range, 1));
+    return l->seg_first >= 0 && l->seg_first < l->seg_end && l->seg_end <= l->frames;
+}
+
+static iir_status load_document(iird_render_log *l, cJSON *root, iir_error *err)
+{
+    cJSON *settings = cJSON_GetObjectItemCaseSensitive(root, "settings");
+    cJSON *frames = cJSON_GetObjectItemCaseSensitive(root, "frames");
+    cJSON *runs = cJSON_GetObjectItemCaseSensitive(root, "runs");
+    const cJSON *script = cJSON_GetObjectItemCaseSensitive(settings, "script");
+    double n = cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(script, "frames"));
+    if (!cJSON_IsObject(settings) || !cJSON_IsArray(frames) || !cJSON_IsArray(runs) ||
+        !(n >= 1 && n <= 1e7))
+        return iir_fail(err, IIR_ERR_FORMAT,
+                        "%s is not a render log of iird render --anim (no settings, frames and "
+                        "runs)",
+                        l->path);
+    l->frames = (int)n;
+    l->settings = cJSON_DetachItemViaPointer(root, settings);
+    l->old_runs = cJSON_DetachItemViaPointer(root, runs);
+    if (!(l->by_frame = calloc((size_t)l->frames, sizeof(cJSON *))))
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
+    const char *src = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(root, "scene_source"));
+    const char *lab = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(root, "script"));
+    snprintf(l->scene_source, sizeof l->scene_source, "%s", src ? src : "");
+    snprintf(l->script_label, sizeof l->script_label, "%s", lab ? lab : "");
+    if (!read_segment(l, cJSON_GetObjectItemCaseSensitive(root, "segment")))
+        return iir_fail(err, IIR_ERR_FORMAT, "%s: a bad \"segment\" (index, of, frames)", l->path);
+    iir_status st = adopt_frames(l, frames, err);
+    l->kept = 0;
+    return st;
+}
+
+iir_status iird_render_log_load(const char *path, iird_render_log **out, iir_error *err)
+{
+    *out = NULL;
+    iird_render_log *l = calloc(1, sizeof *l);
+    if (!l) return iir_fail(err, IIR_ERR_NOMEM, "out of memory");
+    snprintf(l->path, sizeof l->path, "%s", path);
+    errno = 0;
+    char *text = read_text(path);
+    cJSON *root = text ? cJSON_Parse(text) : NULL;
+    free(text);
+    iir_status st = !text && !root ? iir_fail(err, IIR_ERR_IO, "cannot read %s: %s", path,
+                                              strerror(errno ? errno : EIO))
+                    : root         ? load_document(l, root, err)
+                                   : iir_fail(err, IIR_ERR_FORMAT, "%s is not JSON", path);
+    cJSON_Delete(root);
+    if (st != IIR_OK) {
+        iird_render_log_destroy(l);
+        return st;
+    }
+    *out = l;
+    return IIR_OK;
+}
+
+void iird_render_log_segment(const iird_render_log *l, int *index, int *segments, int *first,
+                             int *end)
+{
+    *index = l->seg, *segments = l->segs, *first = l->seg_first, *end = l->seg_end;
+}
+
+iir_status iird_render_log_absorb(iird_render_log *l, const iird_render_log *part, iir_error *err)
+{
+    iir_status st = check_settings(part->path, l->settings, part->settings, err);
+    if (st == IIR_OK && part->frames != l->frames)
+        st = iir_fail(err, IIR_ERR_INVALID, "%s: the script has %d frames there, %d elsewhere",
+                      part->path, part->frames, l->frames);
+    for (int f = 0; st == IIR_OK && f < l->frames; f++) {
+        if (!part->by_frame[f]) continue;
+        if (l->by_frame[f])
+            return iir_fail(err, IIR_ERR_INVALID,
+                            "frame %d is in %s and in another part: the segments overlap", f,
+                            part->path);
+        l->by_frame[f] = cJSON_Duplicate(part->by_frame[f], true);
+    }
+    for (const cJSON *r = part->old_runs->child; st == IIR_OK && r; r = r->next)
+        cJSON_AddItemToArray(l->old_runs, cJSON_Duplicate(r, true));
+    return st;
+}
+
+bool iird_render_log_entry(const iird_render_log *l, int f, const char **file, float *exposure)
+{
+    const cJSON *e = f >= 0 && f < l->frames ? l->by_frame[f] : NULL;
+    if (!e) return false;
+    *file = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(e, "file"));
+    const cJSON *x = cJSON_GetObjectItemCaseSensitive(e, "exposure");
+    *exposure = cJSON_IsNumber(x) ? (float)x->valuedouble : 0.f;
+    return *file != NULL;
+}
+
+int iird_render_log_frames(const iird_render_log *l)
+{
+    return l->frames;
+}
+
+double iird_render_log_fps(const iird_render_log *l)
+{
+    const cJSON *script = cJSON_GetObjectItemCaseSensitive(l->settings, "script");
+    return cJSON_GetNumberValue(cJSON_GetObjectItemCaseSensitive(script, "fps"));
+}
+
+const char *iird_render_log_format(const iird_render_log *l)
+{
+    return cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(l->settings, "format"));
+}
+
+iir_status iird_render_log_save(iird_render_log *l, const char *dir, const char *name,
+                                iir_error *err)
+{
+    snprintf(l->path, sizeof l->path, "%s/%s", dir, name);
+    snprintf(l->tmp, sizeof l->tmp, "%s.part", l->path);
+    l->segs = 0;
+    l->run = NULL;
+    return iird_render_log_write(l, err);
 }
