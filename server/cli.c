@@ -54,6 +54,22 @@ iir_status iird_parse_int(const char *text, const char *what, long lo, long hi, 
     return IIR_OK;
 }
 
+iir_status iird_parse_segment(const char *text, int *index, int *count, iir_error *err)
+{
+    const char *slash = strchr(text, '/');
+    char *end = NULL;
+    long i = slash && slash > text && isdigit((unsigned char)text[0]) ? strtol(text, &end, 10) : -1;
+    long n = end == slash && isdigit((unsigned char)slash[1]) ? strtol(slash + 1, &end, 10) : -1;
+    if (i < 0 || n < 1 || n > 100000 || i >= n || *end)
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "--segment '%s' must be I/N with 0 <= I < N <= 100000 (the I-th of N "
+                        "shares, from 0)",
+                        text);
+    *index = (int)i;
+    *count = (int)n;
+    return IIR_OK;
+}
+
 iir_status iird_parse_u64(const char *text, const char *what, uint64_t *out, iir_error *err)
 {
     char *end = NULL;

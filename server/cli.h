@@ -81,6 +81,9 @@ iir_status iird_parse_param(const char *name, const char *text, iir_params *p, i
 /* Parses "WxH" with 1 <= W, H <= max_dim. */
 iir_status iird_parse_size(const char *text, int max_dim, int *w, int *h, iir_error *err);
 /* Parses an integer in [lo, hi]; `what` names the option in the error. */
+/* Parses --segment "I/N" (0 <= I < N <= 100000): the I-th (from 0) of N contiguous shares of some
+ * work (render's frames, bench's references). IIR_ERR_INVALID naming --segment otherwise. */
+iir_status iird_parse_segment(const char *text, int *index, int *count, iir_error *err);
 iir_status iird_parse_int(const char *text, const char *what, long lo, long hi, long *out,
                           iir_error *err);
 iir_status iird_parse_u64(const char *text, const char *what, uint64_t *out, iir_error *err);

@@ -42,6 +42,9 @@ typedef struct iird_bench_opts {
     bool save_images;  /* write reference-frame images (PFM) into out_dir */
     bool ref_aa;       /* box-filtered references (and pt runs) instead of pixel-centred */
     bool no_charts;    /* do not call tools/plot_bench.py */
+    bool refs_only; /* --refs-only: render this share of the references into the cache, no runs */
+    const char *segment_arg; /* --segment I/N as given (with --refs-only), or NULL */
+    int segment, segments;   /* the share: references [I T / N, (I + 1) T / N) of the T needed */
     int num_sweeps;
     iird_bench_sweep sweeps[IIRD_BENCH_MAX_SWEEPS];
     iir_params params;
@@ -92,6 +95,7 @@ typedef struct iird_bench {
     char cache_dir[4096];        /* "" = no cache */
     iird_bench_row *rows;        /* num_runs x frames */
     double refs_s;               /* seconds spent on references (cache reads included) */
+    int ref_job;                 /* references visited so far, in order (the shares' index) */
     double wall_s;               /* whole run, for summary.json */
 } iird_bench;
 

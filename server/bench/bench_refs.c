@@ -164,6 +164,16 @@ static iir_status reference(iird_bench *b, iird_bench_refset *rs, const iir_para
     return st;
 }
 
+/* Whether reference number j (in the order they are visited) is this run's: all of them, or with
+ * --refs-only --segment I/N the I-th of N contiguous shares of the refs_total. */
+static bool in_share(const iird_bench *b, int j)
+{
+    const iird_bench_opts *o = b->o;
+    if (!o->segments) return true;
+    long long T = b->refs_total;
+    return j >= o->segment * T / o->segments && j < (o->segment + 1) * T / o->segments;
+}
+
 static iir_status refset_render(iird_bench *b, iird_bench_refset *rs, iird_progress *bar, int *done,
                                 iir_error *err)
 {
@@ -174,10 +184,11 @@ static iir_status refset_render(iird_bench *b, iird_bench_refset *rs, iird_progr
     if (st == IIR_OK) st = iir_params_set(&p, iir_method_any_param("jitter"), b->o->ref_aa, err);
     iir_method *pt = NULL;
     for (int i = 0; st == IIR_OK && i < b->frames; i++) {
-        if (!iird_bench_is_ref_frame(b, i)) continue;
+        if (!iird_bench_is_ref_frame(b, i) || !in_share(b, b->ref_job++)) continue;
         if (iird_interrupted()) st = iir_fail(err, IIR_ERR_INTERRUPTED, "interrupted");
         if (st == IIR_OK) st = reference(b, rs, &p, &pt, i, err);
         if (st == IIR_OK) st = save_image(b, rs, i, err);
+        if (b->o->refs_only) iir_image_destroy(rs->img[i]), rs->img[i] = NULL; /* cached */
         ++*done;
         double rate = iird_progress_rate(bar, *done, iir_now_ms());
         iird_progress_set_after(bar, "bench", iird_bench_after_s(b, -1, rate * 1e3));
@@ -194,6 +205,10 @@ iir_status iird_bench_references(iird_bench *b, iir_error *err)
     choose_cache_dir(b);
     for (int i = 0; i < b->frames; i++) b->refs_total += iird_bench_is_ref_frame(b, i);
     b->refs_total *= b->num_refsets;
+    if (b->o->refs_only && !b->cache_dir[0])
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "--refs-only renders into the reference cache, which is off: give "
+                        "--ref-cache DIR (a shared folder on a farm)");
     int done = 0;
     iird_progress bar;
     iird_progress_start(&bar, "references", b->refs_total);

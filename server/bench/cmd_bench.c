@@ -42,6 +42,9 @@ static void bench_usage(FILE *f)
             "  --out DIR            write DIR/frames.csv, DIR/summary.json and charts (the\n"
             "                       directory is created if missing)\n"
             "  --no-charts          do not run tools/plot_bench.py\n"
+            "  --refs-only          only render the references into the cache (no runs,\n"
+            "                       no --out): a farm's work before one bench finds them\n"
+            "  --segment I/N        with --refs-only: the I-th (from 0) of N shares of them\n"
             "  --save-images        also write DIR/ref_NNNNN.pfm and DIR/<method>[_<setting>]_\n"
             "                       NNNNN.pfm at the reference frames\n"
             "  --scenes DIR         where scene names are looked up\n"
@@ -62,7 +65,9 @@ enum {
     OPT_SWEEP,
     OPT_REF_CACHE,
     OPT_NO_REF_CACHE,
-    OPT_NO_CHARTS
+    OPT_NO_CHARTS,
+    OPT_REFS_ONLY,
+    OPT_SEGMENT
 };
 
 /* --frames N (= 0:N) or A:B, half-open, at least two frames. */
@@ -168,6 +173,13 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
     case OPT_NO_CHARTS:
         o->no_charts = true;
         break;
+    case OPT_REFS_ONLY:
+        o->refs_only = true;
+        break;
+    case OPT_SEGMENT:
+        o->segment_arg = arg;
+        st = iird_parse_segment(arg, &o->segment, &o->segments, err);
+        break;
     case OPT_SWEEP:
         st = parse_sweep(o, arg, err);
         break;
@@ -226,11 +238,34 @@ static int parse_args(int argc, char **argv, iird_bench_opts *o)
                                              {"ref-aa", no_argument, 0, OPT_REF_AA},
                                              {"anim", required_argument, 0, OPT_ANIM},
                                              {"sweep", required_argument, 0, OPT_SWEEP},
+                                             {"refs-only", no_argument, 0, OPT_REFS_ONLY},
+                                             {"segment", required_argument, 0, OPT_SEGMENT},
                                              {"help", no_argument, 0, 'h'},
                                              {0, 0, 0, 0}};
     static const iird_command cmd = {"bench", longopts, bench_usage, parse_option, bench_methods};
     o->argc = argc, o->argv = argv;
-    return iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
+    int rc = iird_parse_command(&cmd, argc, argv, o, &o->params, &o->scene);
+    if (rc >= 0) return rc;
+    const char *bad = o->segment_arg && !o->refs_only ? "--segment needs --refs-only"
+                      : o->refs_only && o->out_dir
+                          ? "--refs-only writes only the reference cache: no --out"
+                      : o->refs_only && o->ref_spp == 0 ? "--refs-only needs --ref-spp above 0"
+                                                        : NULL;
+    if (bad) fprintf(stderr, "iird bench: %s (see iird bench --help)\n", bad);
+    return bad ? IIRD_EXIT_USAGE : -1;
+}
+
+/* --refs-only: what this share did. */
+static void print_refs_only(const iird_bench *b)
+{
+    const iird_bench_opts *o = b->o;
+    int mine = 0;
+    for (int j = 0; j < b->refs_total; j++)
+        mine += !o->segments || (j >= (long long)o->segment * b->refs_total / o->segments &&
+                                 j < (long long)(o->segment + 1) * b->refs_total / o->segments);
+    printf("references%s%s: %d of the %d needed; %d rendered, %d already in %s (%.1f s)\n",
+           o->segments ? " share " : "", o->segments ? o->segment_arg : "", mine, b->refs_total,
+           b->refs_rendered, b->refs_cached, b->cache_dir, b->refs_s);
 }
 
 int iird_cmd_bench(int argc, char **argv)
@@ -252,6 +287,12 @@ int iird_cmd_bench(int argc, char **argv)
     if (st == IIR_OK) st = iird_bench_setup(&run, &o, &err);
     if (st == IIR_OK && o.out_dir) st = iird_prepare_dir(o.out_dir, "--out", &err);
     if (st == IIR_OK) st = iird_bench_references(&run, &err);
+    if (o.refs_only) {
+        if (st == IIR_OK) print_refs_only(&run);
+        rc = st == IIR_OK ? 0 : iird_report("bench", &err);
+        iird_bench_free(&run);
+        return rc;
+    }
     for (int r = 0; st == IIR_OK && r < run.num_runs; r++) st = iird_bench_run_one(&run, r, &err);
     if (st == IIR_OK) iird_bench_warn_black(&run);
     run.wall_s = (iir_now_ms() - t0) / 1e3;

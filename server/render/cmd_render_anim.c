@@ -70,21 +70,6 @@ iir_status iird_parse_frame_range(const char *text, int *first, int *end, iir_er
     return IIR_OK;
 }
 
-iir_status iird_parse_segment(const char *text, int *index, int *count, iir_error *err)
-{
-    const char *slash = strchr(text, '/');
-    int i = 0, n = 0;
-    if (!slash || !parse_index(text, (size_t)(slash - text), &i) ||
-        !parse_index(slash + 1, strlen(slash + 1), &n) || n < 1 || n > 100000 || i >= n)
-        return iir_fail(err, IIR_ERR_INVALID,
-                        "--segment '%s' must be I/N with 0 <= I < N <= 100000 (the I-th of N "
-                        "shares, from 0)",
-                        text);
-    *index = i;
-    *count = n;
-    return IIR_OK;
-}
-
 static const char *const FORMAT_EXT[] = {"png", "exr", "pfm"};
 
 iir_status iird_parse_format(const char *text, iird_format *format, iir_error *err)

@@ -35,9 +35,6 @@ typedef struct iird_render_opts {
  * naming --frames otherwise; the outputs are then unchanged. */
 iir_status iird_parse_frame_range(const char *text, int *first, int *end, iir_error *err);
 
-/* Parses --segment "I/N" (0 <= I < N <= 100000); IIR_ERR_INVALID naming --segment otherwise. */
-iir_status iird_parse_segment(const char *text, int *index, int *count, iir_error *err);
-
 /* Parses --format png|exr|pfm; IIR_ERR_INVALID naming --format otherwise. */
 iir_status iird_parse_format(const char *text, iird_format *format, iir_error *err);
 

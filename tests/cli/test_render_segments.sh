@@ -5,6 +5,8 @@
 # one render.json holding every frame and every part's run, and the video; a segment run again after
 # a failed task goes on from the first frame its part file lacks; the merge refuses, naming what to
 # re-run, a missing part, a missing frame image, parts of different settings, and bad arguments.
+# And `iird bench --refs-only --segment I/N`: two shares fill one reference cache, and a bench then
+# renders no reference.
 # Usage: test_render_segments.sh IIRD SOURCE_DIR
 set -u
 iird=$1
@@ -64,8 +66,22 @@ expect 64 "the video comes from the merge" -- "$iird" render --anim "$orbit" --o
 expect 2 "--segment '2/2' must be I/N" -- "$iird" render --anim "$orbit" --out "$tmp/x" --segment 2/2
 expect 64 "--segment needs --anim" -- "$iird" render --out "$tmp/x.png" --segment 0/2
 
+# bench's references as shares (--refs-only --segment I/N) into one cache: a later bench renders none
+bench=(--frames 0:12 --size 32x24 --ref-spp 4 --ref-every 4 --methods iir,ir --sweep bounces=2,3)
+for i in 1 0; do
+    out=$("$iird" bench --refs-only --segment $i/2 --ref-cache "$tmp/refs" "${bench[@]}" 2>&1) ||
+        fail "references share $i/2: $out"
+    echo "$out" | grep -q "share $i/2: 6 of the 12 needed; 6 rendered" || fail "share $i/2: $out"
+done
+out=$("$iird" bench --ref-cache "$tmp/refs" "${bench[@]}" --out "$tmp/bench" --no-charts 2>&1) ||
+    fail "bench after the shares: $out"
+echo "$out" | grep -q "references: 12 at 4 spp, 12 from the cache" || fail "a reference was rendered again: $out"
+expect 64 "--segment needs --refs-only" -- "$iird" bench --segment 0/2 "${bench[@]}"
+expect 64 "no --out" -- "$iird" bench --refs-only --out "$tmp/x" "${bench[@]}"
+expect 2 "the reference cache, which is off" -- "$iird" bench --refs-only --no-ref-cache "${bench[@]}"
+
 if [ $failures -gt 0 ]; then
     echo "$failures failure(s)"
     exit 1
 fi
-echo "ok: 4 segments byte-identical to one process, merged, resumed, refusals"
+echo "ok: 4 segments byte-identical to one process, merged, resumed, refusals; reference shares"
