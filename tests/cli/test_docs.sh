@@ -59,7 +59,7 @@ shrink() {
     render)
         set_opt size 64x48 add
         set_opt spp 4
-        has_opt anim && set_opt frames 0:3 add
+        has_opt anim && ! has_opt segment && set_opt frames 0:3 add
         ;;
     bench)
         set_opt size 64x48 add
