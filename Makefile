@@ -1,6 +1,6 @@
 # Makefile -- thin wrapper over CMake. `make run` and `make test` do all set-up on a fresh Debian 12:
 # they install missing packages (apt-get; sudo only when not root), configure, build, then run.
-.PHONY: all deps web-deps build run still test test-deploy bench fuzz soak docs format format-check clean
+.PHONY: all deps web-deps build run still test test-deploy test-cluster bench fuzz soak docs format format-check clean
 
 BUILD      ?= build
 TEST_BUILD ?= build-asan
@@ -65,6 +65,21 @@ test: deps web-deps format-check
 # part of `make test` (about 10 s).
 test-deploy: build
 	cd $(BUILD) && ctest -R integration_test_deploy --output-on-failure
+
+# The offline half of docs/deploy.md on a real one-node Slurm cluster started in a temporary
+# directory (tests/cluster/test_cluster.sh; about 40 s). Not part of `make test`: it installs
+# Debian's slurm-wlm and munge first. Exit 77 from the script (Slurm cannot start here) is reported
+# as a skip.
+CLUSTER_PACKAGES := slurm-wlm munge
+test-cluster: build
+	@missing=$$(for p in $(CLUSTER_PACKAGES); do \
+	    dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'install ok installed' || echo $$p; done); \
+	if [ -n "$$missing" ]; then \
+	    echo "Installing: $$missing"; \
+	    DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
+	fi
+	@bash tests/cluster/test_cluster.sh $(BUILD)/iird . ; rc=$$?; \
+	if [ $$rc = 77 ]; then echo "test-cluster: skipped (see the SKIP line above)"; exit 0; fi; exit $$rc
 
 # Benchmarks (not tests; docs/experiments.md reads them): ray rates, then `iird bench` over the
 # standard set -- the Cornell box orbit with every method (a VPL sweep for iir, ir and ism, pt at
