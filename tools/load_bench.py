@@ -22,13 +22,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "tests", "integration"))
 import iirserve  # noqa: E402  (the integration tests' daemon and client harness)
 from iirserve import Client, Daemon  # noqa: E402
 
-CLK_TCK = os.sysconf("SC_CLK_TCK")
-
-
-def cpu_seconds(pid):
-    with open(f"/proc/{pid}/stat") as f:
-        fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / CLK_TCK
+from live_bench import cpu_seconds  # noqa: E402  (the daemon's CPU time, from /proc)
 
 
 async def drag(c, k, rate, seconds):

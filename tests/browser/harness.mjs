@@ -253,6 +253,15 @@ export async function open(page, url) {
     await page.waitForFunction(() => window.iir && window.iir.framesDrawn > 0, null, { timeout: WAIT_MS });
 }
 
+// Sets method parameter `name` through its panel field and waits for the state to carry it.
+export async function setParam(page, name, value) {
+    const input = page.locator(`#param-${name}`);
+    await input.fill(String(value));
+    await input.press('Enter');
+    await input.blur();
+    await waitFor(page, ([n, v]) => window.iir.state.params[n] === v, [name, value]);
+}
+
 // Waits until every input the page sent is answered by a drawn frame, and then for `more` frames
 // or until no frame came for `quietMs` (the session has converged and idles).
 export async function settle(page, more = 2, quietMs = 2000) {

@@ -16,15 +16,6 @@ import * as H from './harness.mjs';
 const [IIRD, SRC] = process.argv.slice(2);
 const { check, log } = H;
 
-// Sets method parameter `name` through its panel field and waits for the state to carry it.
-async function setParam(page, name, value) {
-    const input = page.locator(`#param-${name}`);
-    await input.fill(String(value));
-    await input.press('Enter');
-    await input.blur();
-    await H.waitFor(page, ([n, v]) => window.iir.state.params[n] === v, [name, value]);
-}
-
 // A shift-drag of the spot across the image and back, `moves` moves: interactive frames.
 async function drag(page, moves) {
     const box = await page.locator('#frame').boundingBox();
@@ -53,10 +44,10 @@ async function main() {
     await H.settle(page, 1);
     check((await ctlText(page)) === 'off', `the controller shows off without a target: ${await ctlText(page)}`);
 
-    await setParam(page, 'ctl_vpls_max', 64);
-    await setParam(page, 'target_fps', 2);
+    await H.setParam(page, 'ctl_vpls_max', 64);
+    await H.setParam(page, 'target_fps', 2);
     let text = '';
-    for (let round = 0; round < 6 && !/N 64 · n 2 ·/.test(text); round++) {
+    for (let round = 0; round < 12 && !/N 64 · n 2 ·/.test(text); round++) {
         await drag(page, 40);
         await H.settle(page, 1);
         text = await ctlText(page);
@@ -67,7 +58,7 @@ async function main() {
     check(count === 64, `the VPL set holds the controller's N: ${count}`);
     await page.screenshot({ path: path.resolve('browser_controller.png') });
 
-    await setParam(page, 'target_fps', 0);
+    await H.setParam(page, 'target_fps', 0);
     await drag(page, 5);
     await H.settle(page, 1);
     check((await ctlText(page)) === 'off', `target_fps 0 turns it off: ${await ctlText(page)}`);

@@ -16,15 +16,6 @@ import * as H from './harness.mjs';
 const [IIRD, SRC] = process.argv.slice(2);
 const { check, log } = H;
 
-// Sets method parameter `name` through its panel field and waits for the state to carry it.
-async function setParam(page, name, value) {
-    const input = page.locator(`#param-${name}`);
-    await input.fill(String(value));
-    await input.press('Enter');
-    await input.blur();
-    await H.waitFor(page, ([n, v]) => window.iir.state.params[n] === v, [name, value]);
-}
-
 async function main() {
     const chromium = await H.prerequisites(IIRD, SRC);
     const { daemon, url } = await H.startDaemon(IIRD, ['--size', '256x192', '--sm-res', '64', ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
@@ -35,8 +26,8 @@ async function main() {
     await H.settle(page, 1);
     const N = await page.evaluate(() => window.iir.state.params.vpls);
 
-    await setParam(page, 'insert_ms', 1000);
-    await setParam(page, 'kmax', 0);
+    await H.setParam(page, 'insert_ms', 1000);
+    await H.setParam(page, 'kmax', 0);
     await H.settle(page, 1);
     const before = await page.evaluate(() => window.iir.vplChart.length);
 
