@@ -16,7 +16,8 @@ on the built-in Cornell box):
     circles on the floor, each client at its own phase) for --seconds, reading frames. Per client:
     frames per second, input-to-frame latency (arrival of the first frame whose header seq is >= the
     input's seq, minus the send time; as tools/live_bench.py), the longest gap between frames.
-    A sampler process (so the clients' Python work does not skew it) GETs /healthz every second and
+    A sampler process (so the clients' Python work does not skew it) GETs /livez (not /healthz,
+    which answers 503 "full" while the soak fills every session slot) every second and
     reads VmRSS, /proc/PID/task and /proc/PID/fd every --rss-every seconds, through every phase.
  3. the clients leave: /metrics' iird_sessions must come back to 0, RSS to the baseline.
  4. cycles: K WebSocket connect/close cycles (close handshake, no hello), then K hello-then-vanish
@@ -61,7 +62,7 @@ NO_SEQ = 0xFFFFFFFF
 # Pass thresholds.
 # - fps_ratio: slowest client's frame rate over the fastest's (the brief: at least a quarter).
 # - slice_s: "frames throughout" = every client gets at least one frame in every slice of the run.
-# - healthz_p99_ms: /healthz round trip from a separate process, over every phase of the soak.
+# - healthz_p99_ms: /livez round trip from a separate process, over every phase of the soak.
 # - rss_flat: RSS growth over the last 2/3 of the run (max of the window over its first sample).
 # - rss_back: RSS after the clients left (and after the cycles) at most this much above the baseline,
 #   plus a slack of one session's memory (the largest iird_session_memory_bytes of the run: ~18 MiB at
@@ -75,7 +76,7 @@ NO_SEQ = 0xFFFFFFFF
 #   thread and one render worker (+ its OpenMP team) per session, and its fds the listening socket,
 #   the lws event fds and one socket per connection, so with no session left they must be back
 #   exactly (we wait up to settle_s for closing sessions to be reaped; the sampler is stopped first,
-#   so its /healthz connection is not counted).
+#   so its /livez connection is not counted).
 STRICT = {"name": "strict", "fps_ratio": 0.25, "slice_s": 5.0, "healthz_p99_ms": 50.0, "rss_flat": 0.05,
           "rss_back": 0.10, "threads_tol": 0, "fds_tol": 0, "settle_s": 15.0, "first_frame_s": 30.0}
 # RELAXED (ASan + UBSan build, and the short ctest run on a busy 2-core machine): ASan makes a frame
@@ -83,7 +84,7 @@ STRICT = {"name": "strict", "fps_ratio": 0.25, "slice_s": 5.0, "healthz_p99_ms":
 # the quarantine is full; the soak caps it with quarantine_size_mb, see start_daemon), other builds share
 # the cores so the scheduler can starve one client's worker for a while, and a 10 s run has few RSS
 # samples. Still meaningful: every client must keep getting frames (1/8 of the fastest, and one in
-# every 5 s), /healthz must answer within a quarter of a second, RSS must not grow by more than a
+# every 5 s), /livez must answer within a quarter of a second, RSS must not grow by more than a
 # quarter in the run nor end more than a third (+ one session) above the baseline, threads and fds are
 # exact.
 RELAXED = {"name": "relaxed", "fps_ratio": 0.125, "slice_s": 5.0, "healthz_p99_ms": 250.0, "rss_flat": 0.25,
@@ -136,7 +137,7 @@ def malloc_trim(pid):
 
 
 def traced_trim(r, pid):
-    """malloc_trim, noting when the daemon was stopped by gdb: /healthz samples then are left out."""
+    """malloc_trim, noting when the daemon was stopped by gdb: /livez samples then are left out."""
     t0 = time.monotonic()
     v = malloc_trim(pid)
     r.setdefault("trim_windows", []).append((t0, time.monotonic()))
@@ -144,7 +145,7 @@ def traced_trim(r, pid):
 
 
 def sampler_main(port, pid, rss_every, out_path):
-    """The sampler process: /healthz every second, /proc every rss_every seconds, JSON lines to
+    """The sampler process: /livez every second, /proc every rss_every seconds, JSON lines to
     out_path (flushed each line) until SIGTERM."""
     stop = []
     signal.signal(signal.SIGTERM, lambda *a: stop.append(1))
@@ -159,7 +160,7 @@ def sampler_main(port, pid, rss_every, out_path):
             t = time.monotonic()
             rec = {"t": t}
             try:
-                status, _, body = iirserve.http_get(port, "/healthz", timeout=10.0)
+                status, _, body = iirserve.http_get(port, "/livez", timeout=10.0)
                 rec["healthz_ms"] = (time.monotonic() - t) * 1000.0
                 rec["status"] = status
                 rec["sessions"] = json.loads(body).get("sessions") if status == 200 else None
@@ -740,7 +741,7 @@ def evaluate(r, samples, phases, th):
     r["healthz"] = {"samples": len(ms), "failed": len(bad), "p50_ms": round(pct(ms, 50), 2),
                     "p99_ms": round(pct(ms, 99), 2), "max_ms": round(max(ms), 2) if ms else None,
                     "run_p99_ms": round(pct(run_ms, 99), 2)}
-    check(f"/healthz p99 < {th['healthz_p99_ms']:g} ms (every phase), all answered 200",
+    check(f"/livez p99 < {th['healthz_p99_ms']:g} ms (every phase), all answered 200",
           ms and not bad and pct(ms, 99) < th["healthz_p99_ms"],
           f"p50 {r['healthz']['p50_ms']} ms, p99 {r['healthz']['p99_ms']} ms, max {r['healthz']['max_ms']} ms "
           f"over {len(ms)} samples ({len(bad)} failed" + (f"; {n_all - len(ms)} left out: taken while gdb held "
