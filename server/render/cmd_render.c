@@ -125,14 +125,16 @@ static const char *render_method(const void *ctx)
 /* --merge DIR takes only --video: -1 when that holds, else the usage exit code. */
 static int check_merge(const render_opts *o)
 {
-    const char *other = o->out            ? "--out"
-                        : o->anim         ? "--anim"
-                        : o->frames_arg   ? "--frames"
-                        : o->segment_arg  ? "--segment"
-                        : o->format_arg   ? "--format"
-                        : o->scene        ? "SCENE"
-                        : o->params.count ? "method parameters"
-                                          : NULL;
+    const char *other = o->out              ? "--out"
+                        : o->anim           ? "--anim"
+                        : o->frames_arg     ? "--frames"
+                        : o->segment_arg    ? "--segment"
+                        : o->format_arg     ? "--format"
+                        : o->size_given     ? "--size"
+                        : o->exposure_given ? "--exposure"
+                        : o->scene          ? "SCENE"
+                        : o->params.count   ? "method parameters"
+                                            : NULL;
     if (!other) return -1;
     fprintf(stderr,
             "iird render: --merge DIR takes no %s (only --video): the parts' render.json "

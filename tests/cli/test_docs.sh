@@ -57,7 +57,7 @@ has_opt() { [ -n "$(opt_value "$1")" ]; }
 shrink() {
     case "${args[0]:-}" in
     render)
-        set_opt size 64x48 add
+        has_opt merge || set_opt size 64x48 add
         set_opt spp 4
         has_opt anim && ! has_opt segment && set_opt frames 0:3 add
         ;;

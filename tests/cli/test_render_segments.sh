@@ -61,6 +61,7 @@ expect 3 "frame_00180.png \(frame 180, segment 3 of 4\) is missing" -- "$iird" r
 expect 2 "--vpls differs" -- "$iird" render --merge "$tmp/mixed"
 expect 2 "no render.part-I-of-N.json" -- "$iird" render --merge "$tmp/one"
 expect 64 "--merge DIR takes no --out" -- "$iird" render --merge "$tmp/parts" --out "$tmp/x"
+expect 64 "--merge DIR takes no --size" -- "$iird" render --merge "$tmp/parts" --size 64x48
 expect 64 "give --frames or --segment" -- "$iird" render --anim "$orbit" --out "$tmp/x" --segment 0/2 --frames 0:4
 expect 64 "the video comes from the merge" -- "$iird" render --anim "$orbit" --out "$tmp/x" --segment 0/2 --video "$tmp/x.mp4"
 expect 2 "--segment '2/2' must be I/N" -- "$iird" render --anim "$orbit" --out "$tmp/x" --segment 2/2
