@@ -70,6 +70,12 @@ iir_status iird_parse_segment(const char *text, int *index, int *count, iir_erro
     return IIR_OK;
 }
 
+void iird_segment_range(int index, int count, int total, int *first, int *end)
+{
+    *first = (int)((long long)index * total / count);
+    *end = (int)((long long)(index + 1) * total / count);
+}
+
 iir_status iird_parse_u64(const char *text, const char *what, uint64_t *out, iir_error *err)
 {
     char *end = NULL;

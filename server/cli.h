@@ -84,6 +84,9 @@ iir_status iird_parse_size(const char *text, int max_dim, int *w, int *h, iir_er
 /* Parses --segment "I/N" (0 <= I < N <= 100000): the I-th (from 0) of N contiguous shares of some
  * work (render's frames, bench's references). IIR_ERR_INVALID naming --segment otherwise. */
 iir_status iird_parse_segment(const char *text, int *index, int *count, iir_error *err);
+/* Share `index` of `count` over total items: [index total / count, (index + 1) total / count),
+ * the one rule every --segment follows (render's frames, bench's references). */
+void iird_segment_range(int index, int count, int total, int *first, int *end);
 iir_status iird_parse_int(const char *text, const char *what, long lo, long hi, long *out,
                           iir_error *err);
 iir_status iird_parse_u64(const char *text, const char *what, uint64_t *out, iir_error *err);

@@ -96,6 +96,7 @@ typedef struct iird_bench {
     iird_bench_row *rows;        /* num_runs x frames */
     double refs_s;               /* seconds spent on references (cache reads included) */
     int ref_job;                 /* references visited so far, in order (the shares' index) */
+    int share_first, share_end;  /* the references of this run: all, or --segment's share */
     double wall_s;               /* whole run, for summary.json */
 } iird_bench;
 

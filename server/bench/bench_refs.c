@@ -164,14 +164,10 @@ static iir_status reference(iird_bench *b, iird_bench_refset *rs, const iir_para
     return st;
 }
 
-/* Whether reference number j (in the order they are visited) is this run's: all of them, or with
- * --refs-only --segment I/N the I-th of N contiguous shares of the refs_total. */
+/* Whether reference number j (in the order they are visited) is this run's. */
 static bool in_share(const iird_bench *b, int j)
 {
-    const iird_bench_opts *o = b->o;
-    if (!o->segments) return true;
-    long long T = b->refs_total;
-    return j >= o->segment * T / o->segments && j < (o->segment + 1) * T / o->segments;
+    return j >= b->share_first && j < b->share_end;
 }
 
 static iir_status refset_render(iird_bench *b, iird_bench_refset *rs, iird_progress *bar, int *done,
@@ -205,6 +201,10 @@ iir_status iird_bench_references(iird_bench *b, iir_error *err)
     choose_cache_dir(b);
     for (int i = 0; i < b->frames; i++) b->refs_total += iird_bench_is_ref_frame(b, i);
     b->refs_total *= b->num_refsets;
+    b->share_first = 0, b->share_end = b->refs_total; /* all, or the I-th of N shares of them */
+    if (b->o->segments)
+        iird_segment_range(b->o->segment, b->o->segments, b->refs_total, &b->share_first,
+                           &b->share_end);
     if (b->o->refs_only && !b->cache_dir[0])
         return iir_fail(err, IIR_ERR_INVALID,
                         "--refs-only renders into the reference cache, which is off: give "

@@ -259,10 +259,7 @@ static int parse_args(int argc, char **argv, iird_bench_opts *o)
 static void print_refs_only(const iird_bench *b)
 {
     const iird_bench_opts *o = b->o;
-    int mine = 0;
-    for (int j = 0; j < b->refs_total; j++)
-        mine += !o->segments || (j >= (long long)o->segment * b->refs_total / o->segments &&
-                                 j < (long long)(o->segment + 1) * b->refs_total / o->segments);
+    int mine = b->share_end - b->share_first;
     printf("references%s%s: %d of the %d needed; %d rendered, %d already in %s (%.1f s)\n",
            o->segments ? " share " : "", o->segments ? o->segment_arg : "", mine, b->refs_total,
            b->refs_rendered, b->refs_cached, b->cache_dir, b->refs_s);

@@ -184,9 +184,8 @@ static iir_status set_range(anim_job *j, iir_error *err)
     j->count = iir_anim_frame_count(j->anim);
     j->first = o->first;
     j->end = o->end < 0 ? j->count : o->end;
-    if (o->segments) { /* the I-th of N contiguous shares, by the same integer rule everywhere */
-        j->first = (int)((long long)o->segment * j->count / o->segments);
-        j->end = (int)((long long)(o->segment + 1) * j->count / o->segments);
+    if (o->segments) { /* the I-th of N contiguous shares of the script */
+        iird_segment_range(o->segment, o->segments, j->count, &j->first, &j->end);
         snprintf(j->log_name, sizeof j->log_name, "render.part-%d-of-%d.json", o->segment,
                  o->segments);
         if (j->first == j->end)

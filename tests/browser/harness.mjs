@@ -253,6 +253,36 @@ export async function open(page, url) {
     await page.waitForFunction(() => window.iir && window.iir.framesDrawn > 0, null, { timeout: WAIT_MS });
 }
 
+// A daemon on the built-in Cornell box with small frames (256x192, 64^2 shadow maps) and a page on
+// it, settled: where a test that drives one session through the page starts.
+export async function openSmallSession(IIRD, SRC) {
+    const chromium = await prerequisites(IIRD, SRC);
+    const { daemon, url } = await startDaemon(IIRD, ['--size', '256x192', '--sm-res', '64', ...webArgs(IIRD, path.join(SRC, 'web'))]);
+    log(`daemon at ${url} (${daemon.cmd})`);
+    const browser = await launch(chromium);
+    const page = await newPage(browser);
+    await open(page, url);
+    await settle(page, 1);
+    return { daemon, page };
+}
+
+// A shift-drag of the spot (the light in the view plane) from 30% down the middle of the frame:
+// `moves` moves `delayMs` apart, x swinging by +-amp of the frame's width, `turns` times.
+export async function shiftDrag(page, { moves, amp, turns, delayMs }) {
+    const box = await page.locator('#frame').boundingBox();
+    const cx = box.x + box.width * 0.5;
+    const cy = box.y + box.height * 0.3;
+    await page.keyboard.down('Shift');
+    await page.mouse.move(cx, cy);
+    await page.mouse.down();
+    for (let i = 1; i <= moves; i++) {
+        await page.mouse.move(cx + box.width * amp * Math.sin((2 * Math.PI * turns * i) / moves), cy);
+        await sleep(delayMs);
+    }
+    await page.mouse.up();
+    await page.keyboard.up('Shift');
+}
+
 // Sets method parameter `name` through its panel field and waits for the state to carry it.
 export async function setParam(page, name, value) {
     const input = page.locator(`#param-${name}`);

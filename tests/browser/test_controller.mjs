@@ -17,31 +17,12 @@ const [IIRD, SRC] = process.argv.slice(2);
 const { check, log } = H;
 
 // A shift-drag of the spot across the image and back, `moves` moves: interactive frames.
-async function drag(page, moves) {
-    const box = await page.locator('#frame').boundingBox();
-    const cx = box.x + box.width * 0.5;
-    const cy = box.y + box.height * 0.3;
-    await page.keyboard.down('Shift');
-    await page.mouse.move(cx, cy);
-    await page.mouse.down();
-    for (let i = 1; i <= moves; i++) {
-        await page.mouse.move(cx + box.width * 0.2 * Math.sin((2 * Math.PI * i) / 40), cy);
-        await H.sleep(40);
-    }
-    await page.mouse.up();
-    await page.keyboard.up('Shift');
-}
+const drag = (page, moves) => H.shiftDrag(page, { moves, amp: 0.2, turns: moves / 40, delayMs: 40 });
 
 const ctlText = (page) => page.locator('#st-ctl').textContent();
 
 async function main() {
-    const chromium = await H.prerequisites(IIRD, SRC);
-    const { daemon, url } = await H.startDaemon(IIRD, ['--size', '256x192', '--sm-res', '64', ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
-    log(`daemon at ${url} (${daemon.cmd})`);
-    const browser = await H.launch(chromium);
-    const page = await H.newPage(browser);
-    await H.open(page, url);
-    await H.settle(page, 1);
+    const { daemon, page } = await H.openSmallSession(IIRD, SRC);
     check((await ctlText(page)) === 'off', `the controller shows off without a target: ${await ctlText(page)}`);
 
     await H.setParam(page, 'ctl_vpls_max', 64);

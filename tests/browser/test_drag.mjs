@@ -17,13 +17,7 @@ const [IIRD, SRC] = process.argv.slice(2);
 const { check, log } = H;
 
 async function main() {
-    const chromium = await H.prerequisites(IIRD, SRC);
-    const { daemon, url } = await H.startDaemon(IIRD, ['--size', '256x192', '--sm-res', '64', ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
-    log(`daemon at ${url} (${daemon.cmd})`);
-    const browser = await H.launch(chromium);
-    const page = await H.newPage(browser);
-    await H.open(page, url);
-    await H.settle(page, 1);
+    const { daemon, page } = await H.openSmallSession(IIRD, SRC);
     const N = await page.evaluate(() => window.iir.state.params.vpls);
 
     await H.setParam(page, 'insert_ms', 1000);
@@ -32,18 +26,7 @@ async function main() {
     const before = await page.evaluate(() => window.iir.vplChart.length);
 
     // the drag: shift-drag (the light in the view plane), 3 sweeps of +-35% of the width in ~2 s
-    const box = await page.locator('#frame').boundingBox();
-    const cx = box.x + box.width * 0.5;
-    const cy = box.y + box.height * 0.3;
-    await page.keyboard.down('Shift');
-    await page.mouse.move(cx, cy);
-    await page.mouse.down();
-    for (let i = 1; i <= 120; i++) {
-        await page.mouse.move(cx + box.width * 0.35 * Math.sin((2 * Math.PI * 3 * i) / 120), cy);
-        await H.sleep(16);
-    }
-    await page.mouse.up();
-    await page.keyboard.up('Shift');
+    await H.shiftDrag(page, { moves: 120, amp: 0.35, turns: 3, delayMs: 16 });
     await H.settle(page, 1);
 
     const rows = (await page.evaluate(() => window.iir.vplChart)).slice(before).filter((r) => r[1] !== null);
