@@ -654,6 +654,7 @@ static bool drained(server *srv)
 {
     if (!atomic_load(&srv->draining)) return false;
     double now = iir_now_ms();
+    if (srv->active == 0) return true; /* nothing to drain: stop now, quietly */
     if (srv->drain_until == 0.0) {
         srv->drain_until = now + 1e3 * srv->cfg->drain_seconds;
         fprintf(stderr,
@@ -661,7 +662,7 @@ static bool drained(server *srv)
                 "SIGTERM again to stop now)\n",
                 srv->active, srv->active == 1 ? "" : "s", srv->cfg->drain_seconds);
     }
-    if (srv->active == 0 || now >= srv->drain_until) return true;
+    if (now >= srv->drain_until) return true;
     lws_sul_schedule(srv->ctx, 0, &srv->tick, tick_cb, 100 * LWS_US_PER_MS);
     return false;
 }
