@@ -291,8 +291,9 @@ iir_status iir_method_supports(const char *name, const iir_light *lights, uint32
     return ops->supports ? ops->supports(lights, num_lights, err) : IIR_OK;
 }
 
-iir_status iir_method_create(const char *name, const iir_scene *scene, const iir_rt *rt,
-                             const iir_params *params, iir_method **out, iir_error *err)
+iir_status iir_method_create_stoppable(const char *name, const iir_scene *scene, const iir_rt *rt,
+                                       const iir_params *params, iir_stop_fn stop, void *ctx,
+                                       iir_method **out, iir_error *err)
 {
     *out = NULL;
     const iir_method_ops *ops = find_ops(name);
@@ -303,15 +304,25 @@ iir_status iir_method_create(const char *name, const iir_scene *scene, const iir
     m->params = *params;
     m->scene = scene;
     m->rt = rt;
+    m->stop_fn = stop;
+    m->stop_ctx = ctx;
     m->opts = bind_opts(ops, params, NULL, NULL, err);
-    iir_status st = m->opts ? ops->create(scene, rt, m->opts, &m->state, err) : err->status;
+    const iir_stop hook = {stop, ctx};
+    iir_status st = m->opts ? ops->create(scene, rt, m->opts, &hook, &m->state, err) : err->status;
     if (st != IIR_OK) {
         free(m->opts);
         free(m);
         return st;
     }
+    if (ops->set_stop) ops->set_stop(m->state, stop, ctx);
     *out = m;
     return IIR_OK;
+}
+
+iir_status iir_method_create(const char *name, const iir_scene *scene, const iir_rt *rt,
+                             const iir_params *params, iir_method **out, iir_error *err)
+{
+    return iir_method_create_stoppable(name, scene, rt, params, NULL, NULL, out, err);
 }
 
 const iir_params *iir_method_params(const iir_method *m)
@@ -347,7 +358,8 @@ iir_status iir_method_set_params(iir_method *m, const iir_params *p, bool *resta
         m->ops->update(m->state, opts);
     } else {
         void *state = NULL;
-        iir_status st = m->ops->create(m->scene, m->rt, opts, &state, err);
+        const iir_stop hook = {m->stop_fn, m->stop_ctx};
+        iir_status st = m->ops->create(m->scene, m->rt, opts, &hook, &state, err);
         if (st != IIR_OK) return free(opts), st;
         m->ops->destroy(m->state);
         m->state = state;

@@ -107,9 +107,12 @@ typedef struct iir_method_ops {
     const char *summary;
     iir_method_table tables[IIR_METHOD_MAX_TABLES]; /* up to the first NULL table */
     size_t opts_size;                               /* the method's options struct */
-    /* opts: the method's options struct, bound from its tables; copy what you keep. */
+    /* opts: the method's options struct, bound from its tables; copy what you keep. stop (never
+     * NULL; its fn may be) is polled at least every few milliseconds of the work creation does
+     * (meshing, form factors, voxels, point sets): once it says stop, create frees what it built
+     * and fails with IIR_ERR_INTERRUPTED. Keep it as the render hook too (set_stop may follow). */
     iir_status (*create)(const struct iir_scene *scene, const iir_rt *rt, const void *opts,
-                         void **state, iir_error *err);
+                         const iir_stop *stop, void **state, iir_error *err);
     void (*destroy)(void *state);
     iir_status (*render)(void *state, const iir_view *view, iir_image *out, iir_frame_stats *stats,
                          iir_error *err);

@@ -77,7 +77,10 @@ typedef struct worker_state {
     iir_method *method;
     char method_name[16];
     const iird_scene_entry *method_scene;
-    bool refining;      /* the method call under way is a refinement pass (the stop hook) */
+    bool refining; /* the method call under way is a refinement pass (the stop hook) */
+    const iird_scene_entry *creating; /* the method is being created (or re-created by new
+                                         parameters) for this scene, for job `last` (the stop
+                                         hook's creation rule); NULL otherwise */
     double started_ms;  /* the session's render time (scheduler.h) when the call under way
                            started: patience counts its turns on the cores, not its waits */
     double patience_ms; /* how long newer input lets the frame under way run (see should_stop) */

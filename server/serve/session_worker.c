@@ -93,17 +93,34 @@ static bool same_view(const worker_state *w, const render_job *j)
            iir_params_equal(&a->settings.params, &j->settings.params);
 }
 
-/* The method's stop hook (called from its threads without the lock, per tile): new input or the
- * session closing ends the frame or pass under way within a tile, so input never waits for a
- * whole frame and a closing session frees its worker at once. w.last is the job being rendered or
- * refined. It is also where the session hands the cores to another whose turn it is (scheduler.h).
- */
+/* Whether the method being created (w.creating) is no longer the one the session asks for: a
+ * scene switch is waiting, or the newest method, parameters or scene differ from the job's. New
+ * input that only moves lights or the camera lets the creation finish (it would start over
+ * otherwise, and never finish while a light is dragged). Takes the lock briefly. */
+static bool creation_obsolete(iird_session *s)
+{
+    const worker_state *w = &s->w;
+    pthread_mutex_lock(&s->lock);
+    bool gone = s->scene_pending || s->scene != w->creating ||
+                strcmp(s->settings.method, w->last.settings.method) != 0 ||
+                !iir_params_equal(&s->settings.params, &w->last.settings.params);
+    pthread_mutex_unlock(&s->lock);
+    return gone;
+}
+
+/* The method's stop hook (called from its threads without the lock, per tile and every few
+ * milliseconds of a creation): new input or the session closing ends the frame or pass under way
+ * within a tile, so input never waits for a whole frame and a closing session frees its worker at
+ * once; a creation ends when the session closes or asks for another method (creation_obsolete).
+ * w.last is the job being created, rendered or refined. It is also where the session hands the
+ * cores to another whose turn it is (scheduler.h). */
 static bool should_stop(void *ctx)
 {
     iird_session *s = ctx;
     iird_sched_yield(s->env->sched, &s->sched); /* the cores may go to another session first */
     if (atomic_load_explicit(&s->stop, memory_order_relaxed)) return true;
     if (atomic_load_explicit(&s->version, memory_order_relaxed) == s->w.last.version) return false;
+    if (s->w.creating) return creation_obsolete(s);
     return s->w.refining ||
            iird_sched_used_ms(s->env->sched, &s->sched) - s->w.started_ms > s->w.patience_ms;
 }
@@ -117,16 +134,19 @@ static iir_status ensure_method(iird_session *s, const render_job *j, const iird
     const iird_settings *st = &j->settings;
     bool same = w->method && w->method_scene == sc && !strcmp(w->method_name, st->method);
     if (same && iir_params_equal(iir_method_params(w->method), &st->params)) return IIR_OK;
+    w->have_frame = false;
+    w->creating = sc; /* the stop hook's creation rule, until this returns */
     if (same) {
-        w->have_frame = false;
-        return iir_method_set_params(w->method, &st->params, NULL, err);
+        iir_status rc = iir_method_set_params(w->method, &st->params, NULL, err);
+        w->creating = NULL;
+        return rc;
     }
     iir_method_destroy(w->method);
     w->method = NULL;
-    w->have_frame = false;
-    iir_status rc = iir_method_create(st->method, sc->scene, sc->rt, &st->params, &w->method, err);
+    iir_status rc = iir_method_create_stoppable(st->method, sc->scene, sc->rt, &st->params,
+                                                should_stop, s, &w->method, err);
+    w->creating = NULL;
     if (rc != IIR_OK) return rc;
-    iir_method_set_stop(w->method, should_stop, s);
     snprintf(w->method_name, sizeof w->method_name, "%s", st->method);
     w->method_scene = sc;
     return IIR_OK;

@@ -74,7 +74,7 @@ static void build(const loaded *l, float area, int res, rad_mesh *m, rad_ff *ff)
 {
     iir_error err = {0};
     if (rad_mesh_build(m, l->scene, area, 1000000, &err) != IIR_OK) fail_msg("%s", err.msg);
-    if (rad_ff_compute(ff, m, l->scene, l->rt, res, NULL, NULL, &err) != IIR_OK)
+    if (rad_ff_compute(ff, m, l->scene, l->rt, res, NULL, NULL, NULL, &err) != IIR_OK)
         fail_msg("%s", err.msg);
 }
 
@@ -226,13 +226,14 @@ static void test_white_furnace(void **state)
     for (uint32_t i = 0; i < n; i++) rho[i] = iir_v3s(.5f), E[i] = iir_v3s(1.f), m.rho[i] = rho[i];
     iir_error err = {0};
     const float tol = 1e-5f;
-    assert_int_equal(rad_solve_gauss(&ff, rho, E, B[0], &err), IIR_OK);
-    int sweeps = rad_solve_gauss_seidel(&ff, rho, E, B[1], 1000, tol, false);
+    assert_int_equal(rad_solve_gauss(&ff, rho, E, B[0], NULL, &err), IIR_OK);
+    int sweeps = rad_solve_gauss_seidel(&ff, rho, E, B[1], 1000, tol, false, NULL);
     rad_progressive p = {0};
-    assert_true(rad_progressive_init(&p, &m, &ff, E, B[2]));
-    bool done = false;
+    assert_int_equal(rad_progressive_init(&p, &m, &ff, E, B[2], NULL), IIR_OK);
+    bool done = false, cut = false;
     for (int batch = 0; batch < 1000 && !done; batch++)
-        done = rad_progressive_shoot(&p, &m, B[2], 64, tol);
+        done = rad_progressive_shoot(&p, &m, B[2], 64, tol, NULL, &cut);
+    assert_false(cut);
     assert_true(done);
     double worst[3] = {0, 0, 0}, gs_vs_gauss = 0, pr_vs_gauss = 0, deficit = 0;
     for (uint32_t i = 0; i < n; i++) {

@@ -40,7 +40,7 @@ static iir_voxels *voxelize(const iir_scene *s, int res)
 {
     iir_voxels *v = NULL;
     iir_error err = {0};
-    if (iir_voxels_build(s, res, &v, &err) != IIR_OK) fail_msg("%s", err.msg);
+    if (iir_voxels_build(s, res, NULL, &v, &err) != IIR_OK) fail_msg("%s", err.msg);
     return v;
 }
 
@@ -214,9 +214,9 @@ static void test_bad_resolution(void **state)
     const iir_test_cornell *f = *state;
     iir_voxels *v = (iir_voxels *)1;
     iir_error err = {0};
-    assert_int_equal(iir_voxels_build(f->scene, 0, &v, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_voxels_build(f->scene, 0, NULL, &v, &err), IIR_ERR_INVALID);
     assert_null(v);
-    assert_int_equal(iir_voxels_build(f->scene, 5000, &v, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_voxels_build(f->scene, 5000, NULL, &v, &err), IIR_ERR_INVALID);
 }
 
 int main(void)

@@ -142,6 +142,13 @@ uint32_t iir_method_dropped(const char *name, const struct iir_scene *scene,
  * IIR_ERR_INVALID for an unknown name (the message lists the known ones) or bad parameters. */
 iir_status iir_method_create(const char *name, const struct iir_scene *scene, const iir_rt *rt,
                              const iir_params *params, iir_method **out, iir_error *err);
+/* The same, polling stop(ctx) as iir_method_set_stop says from the creation's first instruction
+ * (meshing, form factors, voxels and point sets check it every few milliseconds of work): once it
+ * returns true creation frees what it built and fails with IIR_ERR_INTERRUPTED. A created method
+ * keeps the hook for its renders, refinements and set_params. */
+iir_status iir_method_create_stoppable(const char *name, const struct iir_scene *scene,
+                                       const iir_rt *rt, const iir_params *params, iir_stop_fn stop,
+                                       void *ctx, iir_method **out, iir_error *err);
 void iir_method_destroy(iir_method *m);
 const char *iir_method_name(const iir_method *m);
 /* The parameters the method was created with or last given (iir_method_set_params). */
@@ -149,8 +156,9 @@ const iir_params *iir_method_params(const iir_method *m);
 
 /* Gives a live method new parameters. When every changed parameter is IIR_PARAM_LIVE (and the
  * method can take them) its state -- VPLs, shadow maps, G-buffer -- is kept and *restarted is
- * false; otherwise the method starts over with the new parameters (*restarted true; may be NULL).
- * On error (bad parameters, out of memory) the method is unchanged. */
+ * false; otherwise the method starts over with the new parameters (*restarted true; may be NULL),
+ * its new state created under the method's stop hook. On error (bad parameters, out of memory,
+ * IIR_ERR_INTERRUPTED) the method is unchanged. */
 iir_status iir_method_set_params(iir_method *m, const iir_params *p, bool *restarted,
                                  iir_error *err);
 

@@ -45,6 +45,19 @@ int iir_status_exit_code(iir_status status);
  * returns true the work skips what remains and fails with IIR_ERR_INTERRUPTED. */
 typedef bool (*iir_stop_fn)(void *ctx);
 
+/* A stop hook with its context, handed to work that has no method state to keep it in (a method's
+ * creation, a radiosity solve); fn NULL = never stop. */
+typedef struct iir_stop {
+    iir_stop_fn fn;
+    void *ctx;
+} iir_stop;
+
+/* Whether the work under way should end now (s may be NULL). */
+static inline bool iir_stop_now(const iir_stop *s)
+{
+    return s && s->fn && s->fn(s->ctx);
+}
+
 #ifdef __cplusplus
 }
 #endif

@@ -24,9 +24,9 @@ typedef struct iir_voxels iir_voxels;
 
 /* Voxelizes the scene into cubic cells, `res` along the longest side of its bounds (res in
  * [1, 1024]; the other sides get as many as cover them). IIR_ERR_INVALID for res out of range,
- * IIR_ERR_NOMEM. */
-iir_status iir_voxels_build(const struct iir_scene *scene, int res, iir_voxels **out,
-                            iir_error *err);
+ * IIR_ERR_NOMEM, IIR_ERR_INTERRUPTED (nothing kept) once stop (may be NULL) says stop. */
+iir_status iir_voxels_build(const struct iir_scene *scene, int res, const iir_stop *stop,
+                            iir_voxels **out, iir_error *err);
 void iir_voxels_destroy(iir_voxels *v);
 
 /* The grid: cells along x, y, z, the cell's side and the grid's lower corner. */

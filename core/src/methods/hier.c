@@ -153,8 +153,9 @@ static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *s
 static iir_status render_maps(hier_state *s, const iir_view *view, iir_frame_stats *stats,
                               iir_error *err)
 {
+    const iir_stop stop = {s->stop, s->stop_ctx};
     iir_status st = rsm_maps_render(s->maps, &s->num_maps, s->o.rsm.res, view->lights,
-                                    view->num_lights, s->scene, s->rt, "hier", stats, err);
+                                    view->num_lights, s->scene, s->rt, "hier", &stop, stats, err);
     return st;
 }
 
@@ -248,14 +249,14 @@ static void apply(hier_state *s, const hier_options *o)
 }
 
 static iir_status hier_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
-                              void **state, iir_error *err)
+                              const iir_stop *stop, void **state, iir_error *err)
 {
     const hier_options *o = opts;
     hier_state *s = calloc(1, sizeof *s);
     if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating hier");
     s->scene = scene;
     s->rt = rt;
-    iir_status st = iir_voxels_build(scene, o->voxel_res, &s->grid, err);
+    iir_status st = iir_voxels_build(scene, o->voxel_res, stop, &s->grid, err);
     s->renderer = iir_renderer_create(scene, rt);
     s->mr = iir_multires_create();
     if (st == IIR_OK &&

@@ -51,7 +51,8 @@ static iir_status trace(hybrid_state *s, const iir_view *view, iir_image *out,
 {
     const bool pixels = s->o.r.direct == RAD_DIRECT_PIXELS;
     double t0 = iir_now_ms();
-    rad_solution_gather(&s->sol, !pixels);
+    iir_status st = rad_solution_gather(&s->sol, !pixels, err);
+    if (st != IIR_OK) return st;
     double t1 = iir_now_ms();
     whitted_frame f = {.p = &s->o.w,
                        .seed = s->o.common.seed,
@@ -60,7 +61,7 @@ static iir_status trace(hybrid_state *s, const iir_view *view, iir_image *out,
                        .extra_ctx = &s->sol,
                        .stop = s->stop,
                        .stop_ctx = s->stop_ctx};
-    iir_status st = whitted_tree_render(s->tree, &f, view, out, stats, err);
+    st = whitted_tree_render(s->tree, &f, view, out, stats, err);
     stats->phase_ms[IIR_PHASE_INDIRECT] = t1 - t0;
     stats->phase_ms[IIR_PHASE_TRACE] = iir_now_ms() - t1;
     return st;
@@ -97,7 +98,9 @@ static iir_status hybrid_refine(void *state, iir_image *out, iir_frame_stats *st
     if (!s->have_frame) return iir_fail(err, IIR_ERR_INVALID, "hybrid: no frame to refine");
     memset(stats, 0, sizeof *stats);
     double t0 = iir_now_ms();
-    bool shot = rad_solution_refine(&s->sol);
+    bool shot;
+    iir_status rs = rad_solution_refine(&s->sol, &shot, err);
+    if (rs != IIR_OK) return rs; /* its whole shots stand, uncounted: the next pass shows them */
     stats->phase_ms[IIR_PHASE_VPLS] = iir_now_ms() - t0;
     if (shot) {
         s->passes++;
@@ -125,7 +128,7 @@ static void hybrid_destroy(void *state)
 }
 
 static iir_status hybrid_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
-                                void **state, iir_error *err)
+                                const iir_stop *stop, void **state, iir_error *err)
 {
     hybrid_state *s = calloc(1, sizeof *s);
     if (s) s->tree = whitted_tree_create(scene, rt);
@@ -134,7 +137,7 @@ static iir_status hybrid_create(const iir_scene *scene, const iir_rt *rt, const 
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the hybrid method");
     }
     s->o = *(const hybrid_options *)opts;
-    iir_status st = rad_solution_init(&s->sol, scene, rt, &s->o.r, s->o.common.seed, err);
+    iir_status st = rad_solution_init(&s->sol, scene, rt, &s->o.r, s->o.common.seed, stop, err);
     if (st != IIR_OK) {
         whitted_tree_destroy(s->tree);
         free(s);
@@ -156,6 +159,7 @@ static void hybrid_set_stop(void *state, iir_stop_fn fn, void *ctx)
 {
     hybrid_state *s = state;
     s->stop = fn, s->stop_ctx = ctx;
+    rad_solution_set_stop(&s->sol, fn, ctx);
 }
 
 static uint64_t hybrid_memory(const void *opts, int width, int height)

@@ -257,8 +257,9 @@ static void control(iir_state *s, iir_frame_stats *stats)
 }
 
 static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
-                               void **state, iir_error *err)
+                               const iir_stop *stop, void **state, iir_error *err)
 {
+    (void)stop; /* allocations only: nothing here takes long enough to poll */
     const iir_options *params = opts;
     iir_state *s = calloc(1, sizeof *s);
     if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating iir");

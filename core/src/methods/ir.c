@@ -186,8 +186,9 @@ static iir_status generate_vpls(ir_state *ir, vpl_list *l, const iir_light *ligh
 /* ---- the method interface ---- */
 
 static iir_status ir_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
-                            void **state, iir_error *err)
+                            const iir_stop *stop, void **state, iir_error *err)
 {
+    (void)stop; /* allocations only: nothing here takes long enough to poll */
     ir_state *ir = calloc(1, sizeof *ir);
     if (!ir) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating ir");
     ir->scene = scene;

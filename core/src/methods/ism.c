@@ -29,10 +29,10 @@ static iir_ir_options as_ir(const void *opts)
 }
 
 static iir_status ism_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
-                             void **state, iir_error *err)
+                             const iir_stop *stop, void **state, iir_error *err)
 {
     iir_ir_options o = as_ir(opts);
-    return iir_method_ir.create(scene, rt, &o, state, err);
+    return iir_method_ir.create(scene, rt, &o, stop, state, err);
 }
 
 static void ism_update(void *state, const void *opts)

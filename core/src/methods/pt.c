@@ -285,8 +285,9 @@ static void resolve(const pt_state *pt, iir_image *out)
 /* ---- the method interface ---- */
 
 static iir_status pt_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
-                            void **state, iir_error *err)
+                            const iir_stop *stop, void **state, iir_error *err)
 {
+    (void)stop; /* allocations only: nothing here takes long enough to poll */
     pt_state *pt = calloc(1, sizeof *pt);
     if (!pt) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the path tracer");
     pt->scene = scene;

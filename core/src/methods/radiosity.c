@@ -111,13 +111,14 @@ static void tri_barycentrics(const iir_scene *sc, uint32_t t, iir_vec3 x, float 
 }
 
 /* out = base + rho_x H(x) / pi per pixel; base is the renderer's frame (pixels) or the G-buffer's
- * emission (patches). */
-static void shade(rad_state *s, iir_image *out)
+ * emission (patches). IIR_ERR_INTERRUPTED when the gather was stopped. */
+static iir_status shade(rad_state *s, iir_image *out, iir_error *err)
 {
     const iir_gbuffer *gb = iir_renderer_gbuffer(s->renderer);
     const bool pixels = s->o.r.direct == RAD_DIRECT_PIXELS;
     const int n = gb->width * gb->height;
-    rad_solution_gather(&s->sol, !pixels);
+    iir_status st = rad_solution_gather(&s->sol, !pixels, err);
+    if (st != IIR_OK) return st;
 #pragma omp parallel for schedule(dynamic, 256)
     for (int q = 0; q < n; q++) {
         iir_vec3 L = pixels ? s->direct[q] : gb->emission[q];
@@ -129,6 +130,7 @@ static void shade(rad_state *s, iir_image *out)
         }
         out->pixels[q] = L;
     }
+    return IIR_OK;
 }
 
 /* ---- the frame ---- */
@@ -172,7 +174,8 @@ static iir_status rad_render(void *state, const iir_view *view, iir_image *out,
     if (st == IIR_OK) st = render_direct(s, view, out, stats, err);
     if (st != IIR_OK) return st;
     double t1 = iir_now_ms();
-    shade(s, out);
+    st = shade(s, out, err);
+    if (st != IIR_OK) return st;
     stats->phase_ms[IIR_PHASE_VPLS] = solve_ms;
     stats->phase_ms[IIR_PHASE_INDIRECT] = iir_now_ms() - t1;
     stats->total_ms = iir_now_ms() - t0;
@@ -189,12 +192,16 @@ static iir_status rad_refine(void *state, iir_image *out, iir_frame_stats *stats
     if (!s->have_frame) return iir_fail(err, IIR_ERR_INVALID, "radiosity: no frame to refine");
     memset(stats, 0, sizeof *stats);
     double t0 = iir_now_ms();
-    if (rad_solution_refine(&s->sol)) s->passes++;
+    bool shot;
+    iir_status st = rad_solution_refine(&s->sol, &shot, err);
+    if (st != IIR_OK) return st; /* its whole shots stand, uncounted: the next pass shows them */
+    s->passes += shot;
     /* converged: counts as the still's refine_passes, so iird render stops here */
     if (s->sol.converged && s->passes < (uint64_t)s->o.common.refine_passes)
         s->passes = (uint64_t)s->o.common.refine_passes;
     double t1 = iir_now_ms();
-    shade(s, out);
+    st = shade(s, out, err);
+    if (st != IIR_OK) return st;
     stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
     stats->phase_ms[IIR_PHASE_INDIRECT] = iir_now_ms() - t1;
     stats->total_ms = iir_now_ms() - t0;
@@ -217,7 +224,7 @@ static void rad_destroy(void *state)
 }
 
 static iir_status rad_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
-                             void **state, iir_error *err)
+                             const iir_stop *stop, void **state, iir_error *err)
 {
     rad_state *s = calloc(1, sizeof *s);
     if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating radiosity");
@@ -227,7 +234,7 @@ static iir_status rad_create(const iir_scene *scene, const iir_rt *rt, const voi
         free(s);
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating radiosity");
     }
-    iir_status st = rad_solution_init(&s->sol, scene, rt, &s->o.r, s->o.common.seed, err);
+    iir_status st = rad_solution_init(&s->sol, scene, rt, &s->o.r, s->o.common.seed, stop, err);
     if (st != IIR_OK) {
         iir_renderer_destroy(s->renderer);
         free(s);
@@ -249,6 +256,7 @@ static void rad_set_stop(void *state, iir_stop_fn fn, void *ctx)
 {
     rad_state *s = state;
     iir_renderer_set_stop(s->renderer, fn, ctx);
+    rad_solution_set_stop(&s->sol, fn, ctx);
 }
 
 /* The solution, and the frame: G-buffer and scratch as the VPL renderer's, plus the direct-light

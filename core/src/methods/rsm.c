@@ -82,6 +82,7 @@ typedef struct rsm_state {
     size_t lit_cap;
     iir_stop_fn stop;
     void *stop_ctx;
+    bool stopped; /* the frame's gathers were told to stop (row_stop) */
 } rsm_state;
 
 static bool grow(void **p, size_t *cap, size_t need, size_t size)
@@ -132,12 +133,25 @@ static bool node_agrees(const iir_gbuffer *gb, size_t i, size_t j, const iir_ind
     return plane <= f->filter_depth * gb->depth[i];
 }
 
+/* Whether the frame should end now: polled per row of the gathers (a row at the live limits is
+ * ~2k pixels x 1024 samples, a few milliseconds). Once true it stays true for the frame. */
+static bool row_stop(rsm_state *s)
+{
+    bool quit;
+#pragma omp atomic read
+    quit = s->stopped;
+    if (quit || !s->stop || !s->stop(s->stop_ctx)) return quit;
+#pragma omp atomic write
+    s->stopped = true;
+    return true;
+}
+
 static void gather_nodes(rsm_state *s, const iir_gbuffer *gb, int nx, int ny)
 {
     const int L = s->o.lowres;
 #pragma omp parallel for schedule(dynamic, 1)
     for (int j = 0; j < ny; j++)
-        for (int i = 0; i < nx; i++) {
+        for (int i = 0; i < nx && !row_stop(s); i++) {
             int x = node_pixel(i, gb->width, L), y = node_pixel(j, gb->height, L);
             s->node[(size_t)j * nx + i] = gather(s, gb, (size_t)y * gb->width + x);
         }
@@ -178,12 +192,13 @@ static iir_status shade_lowres(rsm_state *s, const iir_gbuffer *gb, iir_image *o
     const int nx = nodes_along(W, L), ny = nodes_along(H, L);
     if (!grow((void **)&s->node, &s->node_cap, (size_t)nx * (size_t)ny, sizeof *s->node))
         return iir_fail(err, IIR_ERR_NOMEM, "rsm: out of memory for the interpolation nodes");
+    s->stopped = false;
     if (L > 1) gather_nodes(s, gb, nx, ny);
     const iir_indirect_params f = iir_indirect_params_default();
     long gathered = 0;
 #pragma omp parallel for schedule(dynamic, 4) reduction(+ : gathered)
     for (int y = 0; y < H; y++)
-        for (int x = 0; x < W; x++) {
+        for (int x = 0; x < W && !(x % 256 == 0 && row_stop(s)); x++) {
             size_t p = (size_t)y * W + x;
             if (!isfinite(gb->depth[p])) continue;
             iir_vec3 e;
@@ -197,6 +212,7 @@ static iir_status shade_lowres(rsm_state *s, const iir_gbuffer *gb, iir_image *o
             }
             out->pixels[p] = iir_madd(out->pixels[p], iir_mul(gb->albedo[p], e), 1.f / (float)M_PI);
         }
+    if (s->stopped) return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     uint64_t per_gather = (uint64_t)s->num_maps * (uint64_t)s->pattern.m;
     uint64_t nodes = L > 1 ? (uint64_t)nx * (uint64_t)ny : 0;
     stats->vpl_evals = ((uint64_t)gathered + nodes) * per_gather;
@@ -280,8 +296,9 @@ static bool collect_lit(rsm_state *s)
 static iir_status render_maps(rsm_state *s, const iir_view *view, iir_frame_stats *stats,
                               iir_error *err)
 {
+    const iir_stop stop = {s->stop, s->stop_ctx};
     iir_status st = rsm_maps_render(s->maps, &s->num_maps, s->o.map.res, view->lights,
-                                    view->num_lights, s->scene, s->rt, "rsm", stats, err);
+                                    view->num_lights, s->scene, s->rt, "rsm", &stop, stats, err);
     if (st == IIR_OK && !collect_lit(s))
         st = iir_fail(err, IIR_ERR_NOMEM, "rsm: out of memory for the texels");
     return st;
@@ -338,8 +355,9 @@ static void rsm_destroy(void *state)
 }
 
 static iir_status rsm_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
-                             void **state, iir_error *err)
+                             const iir_stop *stop, void **state, iir_error *err)
 {
+    (void)stop; /* allocations only: nothing here takes long enough to poll */
     rsm_state *s = calloc(1, sizeof *s);
     if (!s) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating rsm");
     s->scene = scene;

@@ -83,7 +83,7 @@ static iir_vpl texel_at(const rsm_map *m, uint32_t k, iir_vec2 t, const iir_scen
 }
 
 iir_status rsm_map_render(rsm_map *m, const iir_light *l, const iir_scene *scene, const iir_rt *rt,
-                          iir_raystats *st, iir_error *err)
+                          const iir_stop *stop, iir_raystats *st, iir_error *err)
 {
     m->light = *l;
     iir_status s = iir_light_domain_make(&m->light, &m->dom, err);
@@ -94,8 +94,17 @@ iir_status rsm_map_render(rsm_map *m, const iir_light *l, const iir_scene *scene
     const int res = m->res;
     uint32_t lit = 0, in_disk = 0;
     iir_raystats rays = {0};
+    bool stopped = false;
 #pragma omp parallel for schedule(dynamic, 4) reduction(+ : lit, in_disk)
     for (int y = 0; y < res; y++) {
+        bool quit;
+#pragma omp atomic read
+        quit = stopped;
+        if (quit) continue;
+        if (iir_stop_now(stop)) {
+#pragma omp atomic write
+            stopped = true;
+        }
         iir_raystats local = {0};
         for (int x = 0; x < res; x++) {
             uint32_t k = (uint32_t)(y * res + x);
@@ -111,7 +120,7 @@ iir_status rsm_map_render(rsm_map *m, const iir_light *l, const iir_scene *scene
     m->lit = lit;
     m->in_disk = in_disk;
     if (st) iir_raystats_add(st, &rays);
-    return IIR_OK;
+    return stopped ? iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early") : IIR_OK;
 }
 
 iir_vec2 rsm_map_project(const rsm_map *m, iir_vec3 x)
@@ -130,7 +139,8 @@ iir_vec2 rsm_map_project(const rsm_map *m, iir_vec3 x)
 
 iir_status rsm_maps_render(rsm_map *maps, uint32_t *num_maps, int res, const iir_light *lights,
                            uint32_t num_lights, const iir_scene *scene, const iir_rt *rt,
-                           const char *method, iir_frame_stats *stats, iir_error *err)
+                           const char *method, const iir_stop *stop, iir_frame_stats *stats,
+                           iir_error *err)
 {
     uint32_t n = num_lights < IIR_VPLSETS_MAX_LIGHTS ? num_lights : IIR_VPLSETS_MAX_LIGHTS;
     for (uint32_t l = *num_maps; l < n; l++) {
@@ -141,7 +151,7 @@ iir_status rsm_maps_render(rsm_map *maps, uint32_t *num_maps, int res, const iir
     *num_maps = n;
     stats->vpl = (iir_vpl_counts){.regenerated = 1};
     for (uint32_t l = 0; l < n; l++) {
-        iir_status st = rsm_map_render(&maps[l], &lights[l], scene, rt, &stats->rays, err);
+        iir_status st = rsm_map_render(&maps[l], &lights[l], scene, rt, stop, &stats->rays, err);
         if (st != IIR_OK) return st;
         stats->vpl.count += maps[l].in_disk;
         stats->vpl.inserted += maps[l].in_disk;

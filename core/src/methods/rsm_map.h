@@ -37,17 +37,19 @@ typedef struct rsm_map {
 bool rsm_map_alloc(rsm_map *m, int res);
 void rsm_map_free(rsm_map *m);
 
-/* Renders map m (allocated) for light l with one Embree ray per texel (OpenMP over rows).
- * IIR_ERR_INVALID for a light that fails iir_light_validate. */
+/* Renders map m (allocated) for light l with one Embree ray per texel (OpenMP over rows, stop
+ * polled per row: IIR_ERR_INTERRUPTED with m unusable). IIR_ERR_INVALID for a light that fails
+ * iir_light_validate. */
 iir_status rsm_map_render(rsm_map *m, const iir_light *l, const iir_scene *scene, const iir_rt *rt,
-                          iir_raystats *st, iir_error *err);
+                          const iir_stop *stop, iir_raystats *st, iir_error *err);
 
 /* The maps of a frame's lights (up to IIR_VPLSETS_MAX_LIGHTS; maps[] holds that many): allocates
  * res^2 texels for lights not seen before, renders every map, and counts the texels on the
  * domains as the frame's VPLs (*num_maps: the maps in use). `method` names the caller in errors. */
 iir_status rsm_maps_render(rsm_map *maps, uint32_t *num_maps, int res, const iir_light *lights,
                            uint32_t num_lights, const iir_scene *scene, const iir_rt *rt,
-                           const char *method, iir_frame_stats *stats, iir_error *err);
+                           const char *method, const iir_stop *stop, iir_frame_stats *stats,
+                           iir_error *err);
 
 /* iir_method_dropped's entries of a method that renders maps for the first lights only (rsm,
  * hier): the lights beyond them, then the emissive materials. */

@@ -22,8 +22,9 @@ typedef struct whitted_state {
 } whitted_state;
 
 static iir_status whitted_create(const iir_scene *scene, const iir_rt *rt, const void *opts,
-                                 void **state, iir_error *err)
+                                 const iir_stop *stop, void **state, iir_error *err)
 {
+    (void)stop; /* allocations only: nothing here takes long enough to poll */
     whitted_state *s = calloc(1, sizeof *s);
     if (s) s->tree = whitted_tree_create(scene, rt);
     if (!s || !s->tree) {

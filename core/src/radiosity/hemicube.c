@@ -65,13 +65,19 @@ static int cmp_u32(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* Casts patch i's hemicube rays and accumulates their delta form factors in sc. */
-static void trace_row(const rad_mesh *m, const iir_scene *scene, const iir_rt *rt,
-                      const hemicube *hc, uint32_t i, row_scratch *sc, iir_raystats *st)
+/* Cells between two looks at the stop hook: 4096 rays, well under a millisecond. */
+enum { STOP_CELLS = 4096 };
+
+/* Casts patch i's hemicube rays and accumulates their delta form factors in sc; false (sc partly
+ * filled) once stop says stop. */
+static bool trace_row(const rad_mesh *m, const iir_scene *scene, const iir_rt *rt,
+                      const hemicube *hc, uint32_t i, row_scratch *sc, iir_raystats *st,
+                      const iir_stop *stop)
 {
     const iir_frame fr = iir_frame_from_normal(m->normal[i]);
     const iir_vec3 o = iir_madd(m->centre[i], m->normal[i], iir_rt_epsilon(rt));
     for (uint32_t c0 = 0; c0 < hc->cells; c0 += 8) {
+        if (c0 % STOP_CELLS == 0 && iir_stop_now(stop)) return false;
         iir_ray8 r;
         iir_vec3 d[8];
         for (int l = 0; l < 8; l++) {
@@ -92,6 +98,7 @@ static void trace_row(const rad_mesh *m, const iir_scene *scene, const iir_rt *r
             sc->acc[j] += hc->dF[c0 + (uint32_t)l];
         }
     }
+    return true;
 }
 
 /* Moves sc's row into freshly allocated col / val (sorted by column), clearing sc. */
@@ -131,7 +138,8 @@ static bool gather_csr(rad_ff *ff, uint32_t n, uint32_t **cols, float **vals, co
 }
 
 iir_status rad_ff_compute(rad_ff *ff, const rad_mesh *m, const iir_scene *scene, const iir_rt *rt,
-                          int res, rad_progress_fn progress, void *ctx, iir_error *err)
+                          int res, const iir_stop *stop, rad_progress_fn progress, void *ctx,
+                          iir_error *err)
 {
     memset(ff, 0, sizeof *ff);
     const uint32_t n = m->num_patches;
@@ -143,6 +151,7 @@ iir_status rad_ff_compute(rad_ff *ff, const rad_mesh *m, const iir_scene *scene,
     if (ok) rad_hemicube_cells(res, hc.dF, hc.dir);
     const bool ready = ok;
     uint32_t done = 0;
+    bool stopped = false;
 #pragma omp parallel
     {
         row_scratch sc = {calloc(n ? n : 1, sizeof(float)), malloc((n ? n : 1) * sizeof(uint32_t)),
@@ -155,8 +164,14 @@ iir_status rad_ff_compute(rad_ff *ff, const rad_mesh *m, const iir_scene *scene,
         }
 #pragma omp for schedule(dynamic, 4)
         for (uint32_t i = 0; i < n; i++) {
-            if (!mine) continue;
-            trace_row(m, scene, rt, &hc, i, &sc, &st);
+            bool quit;
+#pragma omp atomic read
+            quit = stopped;
+            if (!mine || quit) continue;
+            if (!trace_row(m, scene, rt, &hc, i, &sc, &st, stop)) {
+#pragma omp atomic write
+                stopped = true;
+            }
             if (!take_row(&sc, &cols[i], &vals[i], &len[i])) {
 #pragma omp atomic write
                 ok = false;
@@ -169,9 +184,13 @@ iir_status rad_ff_compute(rad_ff *ff, const rad_mesh *m, const iir_scene *scene,
         }
         free(sc.acc), free(sc.touched);
     }
-    ok = ok && gather_csr(ff, n, cols, vals, len);
+    ok = ok && !stopped && gather_csr(ff, n, cols, vals, len);
     for (uint32_t i = 0; cols && vals && i < n; i++) free(cols[i]), free(vals[i]);
     free(cols), free(vals), free(len), free(hc.dF), free(hc.dir);
+    if (stopped) {
+        rad_ff_free(ff);
+        return iir_fail(err, IIR_ERR_INTERRUPTED, "radiosity: form factors stopped");
+    }
     if (!ok) {
         rad_ff_free(ff);
         return iir_fail(err, IIR_ERR_NOMEM, "radiosity: out of memory for the form factors");

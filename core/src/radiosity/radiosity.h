@@ -62,9 +62,11 @@ typedef void (*rad_progress_fn)(void *ctx, uint32_t done, uint32_t total);
 /* F_ij for every patch by the hemicube of res x res cells on top (sides res x res / 2), each cell
  * one ray from the patch centre through its centre (8-wide packets; OpenMP over patches); the
  * delta form factors are normalised to sum to 1 over the hemicube. Hits on a patch's back face
- * count for nothing. IIR_ERR_NOMEM. */
+ * count for nothing. stop (may be NULL) is polled every few thousand rays: IIR_ERR_INTERRUPTED
+ * with ff empty. IIR_ERR_NOMEM. */
 iir_status rad_ff_compute(rad_ff *ff, const rad_mesh *m, const iir_scene *scene, const iir_rt *rt,
-                          int res, rad_progress_fn progress, void *ctx, iir_error *err);
+                          int res, const iir_stop *stop, rad_progress_fn progress, void *ctx,
+                          iir_error *err);
 void rad_ff_free(rad_ff *ff);
 /* The delta form factor of every cell, in ray order (top face rows, then the four sides); writes
  * the cells' hemicube directions (frame-local, z along the normal) to dir when not NULL. Returns
@@ -95,14 +97,16 @@ bool rad_ff_save(const rad_ff *ff, const char *dir, uint64_t key, iir_error *err
 typedef enum rad_solver { RAD_GAUSS, RAD_GAUSS_SEIDEL, RAD_PROGRESSIVE } rad_solver;
 
 /* Gauss elimination with partial pivoting on the dense (I - rho F) B = E, per channel, in double.
- * IIR_ERR_NOMEM (n^2 doubles), IIR_ERR_INVALID for a singular system. */
+ * IIR_ERR_NOMEM (n^2 doubles), IIR_ERR_INVALID for a singular system, IIR_ERR_INTERRUPTED once
+ * stop (may be NULL; polled per pivot) says stop. */
 iir_status rad_solve_gauss(const rad_ff *ff, const iir_vec3 *rho, const iir_vec3 *E, iir_vec3 *B,
-                           iir_error *err);
+                           const iir_stop *stop, iir_error *err);
 /* Gauss-Seidel sweeps from B = E (warm: from B as given, e.g. the last frame's solution) until
  * the largest change of a sweep is below tol times the largest B (or max_iter sweeps); the sweeps
- * done. */
+ * done, or -1 once stop (may be NULL; polled every few hundred rows) says stop (B then holds a
+ * partial sweep: a start as good as any for the next solve). */
 int rad_solve_gauss_seidel(const rad_ff *ff, const iir_vec3 *rho, const iir_vec3 *E, iir_vec3 *B,
-                           int max_iter, float tol, bool warm);
+                           int max_iter, float tol, bool warm, const iir_stop *stop);
 
 /* Progressive refinement (Cohen et al. 1988): state between batches of shots. */
 typedef struct rad_progressive {
@@ -113,18 +117,19 @@ typedef struct rad_progressive {
     double emitted; /* sum E_i A_i (luminance), the scale of the tolerance */
     uint64_t shots;
 } rad_progressive;
-/* Starts over with B = unshot = E; keeps (or first builds) the transpose of ff. False when out of
- * memory. */
-bool rad_progressive_init(rad_progressive *p, const rad_mesh *m, const rad_ff *ff,
-                          const iir_vec3 *E, iir_vec3 *B);
+/* Starts over with B = unshot = E; keeps (or first builds, polling stop) the transpose of ff.
+ * IIR_ERR_NOMEM, or IIR_ERR_INTERRUPTED (no transpose kept) once stop says stop. */
+iir_status rad_progressive_init(rad_progressive *p, const rad_mesh *m, const rad_ff *ff,
+                                const iir_vec3 *E, iir_vec3 *B, const iir_stop *stop);
 void rad_progressive_free(rad_progressive *p);
 /* Shoots up to `shots` times the patch i with the most unshot power: dB_j += rho_j F_ji dB_i for
  * every j (F_ji read from the transpose, not F_ij A_i / A_j: the hemicube's F is not exactly
  * reciprocal, and with F_ji shooting is Southwell relaxation of the very system gauss and
  * gauss_seidel solve, so all three agree). True once the unshot power (luminance) is below tol
- * times the emitted power. */
-bool rad_progressive_shoot(rad_progressive *p, const rad_mesh *m, iir_vec3 *B, int shots,
-                           float tol);
+ * times the emitted power. stop (may be NULL) is polled per shot: *stopped says it ended the batch
+ * (every shot before it is whole). */
+bool rad_progressive_shoot(rad_progressive *p, const rad_mesh *m, iir_vec3 *B, int shots, float tol,
+                           const iir_stop *stop, bool *stopped);
 /* The ambient term (Cohen et al. 1988): rho_avg-weighted unshot radiosity, added as rho_i * it. */
 iir_vec3 rad_progressive_ambient(const rad_progressive *p, const rad_mesh *m);
 
@@ -172,25 +177,34 @@ typedef struct rad_solution {
     iir_light *lights; /* the lights of the last solve */
     uint32_t num_lights;
     bool solved;
-    bool warm; /* B holds a Gauss-Seidel solution to start the next solve from */
+    bool warm;     /* B holds a Gauss-Seidel solution to start the next solve from */
+    iir_stop stop; /* polled by every step that takes time: form factors, shooting, solving */
 } rad_solution;
 
 /* Meshes the scene, refuses gauss above RAD_GAUSS_MAX patches, and loads (or computes, with
- * progress on stderr, and saves) the form factors. On failure s is freed. */
+ * progress on stderr, and saves) the form factors. stop (may be NULL) is kept as the solution's
+ * hook (rad_solution_set_stop changes it): IIR_ERR_INTERRUPTED once it says stop. On failure s is
+ * freed. */
 iir_status rad_solution_init(rad_solution *s, const iir_scene *scene, const iir_rt *rt,
-                             const rad_params *o, uint64_t seed, iir_error *err);
+                             const rad_params *o, uint64_t seed, const iir_stop *stop,
+                             iir_error *err);
+/* The hook the solution's updates, refinements and gathers poll (fn NULL: never stop). */
+void rad_solution_set_stop(rad_solution *s, iir_stop_fn fn, void *ctx);
 void rad_solution_free(rad_solution *s);
 /* Takes live parameters (the next update re-solves); false (keeping the old ones) when they ask
  * gauss of too many patches. */
 bool rad_solution_set_params(rad_solution *s, const rad_params *o, uint64_t seed);
 /* Re-shoots direct light and re-solves (progressive: restarts and shoots one batch) when the
- * lights differ from the last update's; *ms = the time it took (0 when nothing changed). */
+ * lights differ from the last update's; *ms = the time it took (0 when nothing changed).
+ * IIR_ERR_INTERRUPTED when stopped: the next update solves again. */
 iir_status rad_solution_update(rad_solution *s, const iir_light *lights, uint32_t num_lights,
                                iir_raystats *rays, double *ms, iir_error *err);
-/* Progressive: shoots another batch (true when it did); other solvers have nothing to do. */
-bool rad_solution_refine(rad_solution *s);
-/* H per vertex from the current B, with or without the patches' direct light (see above). */
-void rad_solution_gather(rad_solution *s, bool with_direct);
+/* Progressive: shoots another batch (*shot true when it did; a stopped batch keeps its whole
+ * shots and fails with IIR_ERR_INTERRUPTED); other solvers have nothing to do. */
+iir_status rad_solution_refine(rad_solution *s, bool *shot, iir_error *err);
+/* H per vertex from the current B, with or without the patches' direct light (see above);
+ * IIR_ERR_INTERRUPTED (H unusable until the next gather) when stopped. */
+iir_status rad_solution_gather(rad_solution *s, bool with_direct, iir_error *err);
 /* H at Embree barycentrics (u, v) of scene triangle t, Gouraud over its patch's corners. */
 iir_vec3 rad_solution_H(const rad_solution *s, uint32_t t, float u, float v);
 /* Bytes a solution holds with o: form factors, patches, the solver's scratch. */

@@ -57,10 +57,15 @@ static iir_vec3 light_irradiance(const iir_rt *rt, const iir_light *l, const iir
     return iir_rt_occluded(rt, &r, st, IIR_RAYS_SHADOW) ? iir_v3s(0.f) : E;
 }
 
-/* Ed_i for every patch and E_i = pi Le_i + rho_i Ed_i. */
-static void shoot_direct(rad_solution *s, const iir_light *lights, uint32_t num_lights,
+/* Patches between two looks at the stop hook (a few hundred shadow rays and more). */
+enum { STOP_PATCHES = 64 };
+
+/* Ed_i for every patch and E_i = pi Le_i + rho_i Ed_i; false (E partial) once the stop hook says
+ * stop. */
+static bool shoot_direct(rad_solution *s, const iir_light *lights, uint32_t num_lights,
                          iir_raystats *rays)
 {
+    bool stopped = false;
     const rad_mesh *m = &s->mesh;
     const int S = s->o.light_samples;
     iir_light_eval ev[RAD_MAX_LIGHTS];
@@ -71,6 +76,14 @@ static void shoot_direct(rad_solution *s, const iir_light *lights, uint32_t num_
         iir_raystats st = {0};
 #pragma omp for schedule(dynamic, 64)
         for (uint32_t p = 0; p < m->num_patches; p++) {
+            bool quit;
+#pragma omp atomic read
+            quit = stopped;
+            if (quit) continue;
+            if (p % STOP_PATCHES == 0 && iir_stop_now(&s->stop)) {
+#pragma omp atomic write
+                stopped = true;
+            }
             iir_vec3 Ed = iir_v3s(0.f);
             for (uint32_t l = 0; l < nl; l++)
                 for (int k = 0; k < S; k++) {
@@ -87,9 +100,15 @@ static void shoot_direct(rad_solution *s, const iir_light *lights, uint32_t num_
 #pragma omp critical
         iir_raystats_add(rays, &st);
     }
+    return !stopped;
 }
 
 /* ---- solving ---- */
+
+static iir_status stop_error(iir_error *err)
+{
+    return iir_fail(err, IIR_ERR_INTERRUPTED, "radiosity: stopped");
+}
 
 /* Solves for B with the current E (progressive: restarts and shoots one batch). */
 static iir_status solve(rad_solution *s, iir_error *err)
@@ -99,18 +118,24 @@ static iir_status solve(rad_solution *s, iir_error *err)
     switch (s->o.solver) {
     case RAD_GAUSS:
         s->warm = false;
-        return rad_solve_gauss(&s->ff, m->rho, s->E, s->B, err);
-    case RAD_GAUSS_SEIDEL:
-        rad_solve_gauss_seidel(&s->ff, m->rho, s->E, s->B, s->o.iterations, s->o.tolerance,
-                               s->warm);
+        return rad_solve_gauss(&s->ff, m->rho, s->E, s->B, &s->stop, err);
+    case RAD_GAUSS_SEIDEL: {
+        int sweeps = rad_solve_gauss_seidel(&s->ff, m->rho, s->E, s->B, s->o.iterations,
+                                            s->o.tolerance, s->warm, &s->stop);
         s->warm = true;
-        return IIR_OK;
-    case RAD_PROGRESSIVE:
+        return sweeps < 0 ? stop_error(err) : IIR_OK;
+    }
+    case RAD_PROGRESSIVE: {
         s->warm = false;
-        if (!rad_progressive_init(&s->prog, m, &s->ff, s->E, s->B))
-            return iir_fail(err, IIR_ERR_NOMEM, "radiosity: out of memory");
-        s->converged = rad_progressive_shoot(&s->prog, m, s->B, s->o.shoot_batch, s->o.tolerance);
-        return IIR_OK;
+        iir_status st = rad_progressive_init(&s->prog, m, &s->ff, s->E, s->B, &s->stop);
+        if (st != IIR_OK)
+            return st == IIR_ERR_INTERRUPTED ? stop_error(err)
+                                             : iir_fail(err, st, "radiosity: out of memory");
+        bool cut;
+        s->converged = rad_progressive_shoot(&s->prog, m, s->B, s->o.shoot_batch, s->o.tolerance,
+                                             &s->stop, &cut);
+        return cut ? stop_error(err) : IIR_OK;
+    }
     }
     return iir_fail(err, IIR_ERR_INVALID, "radiosity: unknown solver");
 }
@@ -130,8 +155,7 @@ iir_status rad_solution_update(rad_solution *s, const iir_light *lights, uint32_
         return iir_fail(err, IIR_ERR_INVALID, "radiosity: at most %d lights", RAD_MAX_LIGHTS);
     s->solved = false;
     double t0 = iir_now_ms();
-    shoot_direct(s, lights, num_lights, rays);
-    iir_status st = solve(s, err);
+    iir_status st = shoot_direct(s, lights, num_lights, rays) ? solve(s, err) : stop_error(err);
     if (st != IIR_OK) return st;
     if (num_lights) memcpy(s->lights, lights, num_lights * sizeof *s->lights);
     s->num_lights = num_lights;
@@ -140,12 +164,15 @@ iir_status rad_solution_update(rad_solution *s, const iir_light *lights, uint32_
     return IIR_OK;
 }
 
-bool rad_solution_refine(rad_solution *s)
+iir_status rad_solution_refine(rad_solution *s, bool *shot, iir_error *err)
 {
-    if (s->converged || s->o.solver != RAD_PROGRESSIVE) return false;
-    s->converged =
-        rad_progressive_shoot(&s->prog, &s->mesh, s->B, s->o.shoot_batch, s->o.tolerance);
-    return true;
+    *shot = false;
+    if (s->converged || s->o.solver != RAD_PROGRESSIVE) return IIR_OK;
+    bool cut;
+    s->converged = rad_progressive_shoot(&s->prog, &s->mesh, s->B, s->o.shoot_batch, s->o.tolerance,
+                                         &s->stop, &cut);
+    *shot = true; /* whole shots before a stop stand: the next pass goes on from them */
+    return cut ? stop_error(err) : IIR_OK;
 }
 
 /* ---- lookup ---- */
@@ -160,19 +187,29 @@ static void display_B(const rad_solution *s, iir_vec3 *Bd)
     for (uint32_t j = 0; j < m->num_patches; j++) Bd[j] = iir_add(s->B[j], iir_mul(m->rho[j], amb));
 }
 
-void rad_solution_gather(rad_solution *s, bool with_direct)
+iir_status rad_solution_gather(rad_solution *s, bool with_direct, iir_error *err)
 {
     const rad_mesh *m = &s->mesh;
+    bool cut = false;
     display_B(s, s->Bd);
     for (uint32_t j = 0; !with_direct && j < m->num_patches; j++)
         s->Bd[j] = iir_sub(s->Bd[j], m->emit[j]);
 #pragma omp parallel for schedule(dynamic, 64)
     for (uint32_t i = 0; i < m->num_patches; i++) {
+        bool quit;
+#pragma omp atomic read
+        quit = cut;
+        if (quit) continue;
+        if (i % (4 * STOP_PATCHES) == 0 && iir_stop_now(&s->stop)) {
+#pragma omp atomic write
+            cut = true;
+        }
         iir_vec3 h = with_direct ? s->Ed[i] : iir_v3s(0.f);
         for (uint64_t k = s->ff.row[i]; k < s->ff.row[i + 1]; k++)
             h = iir_madd(h, s->Bd[s->ff.col[k]], s->ff.val[k]);
         s->H[i] = h;
     }
+    if (cut) return stop_error(err);
     memset(s->vH, 0, m->num_vertices * sizeof *s->vH);
     memset(s->vw, 0, m->num_vertices * sizeof *s->vw);
     for (uint32_t i = 0; i < m->num_patches; i++)
@@ -183,6 +220,7 @@ void rad_solution_gather(rad_solution *s, bool with_direct)
         }
     for (uint32_t v = 0; v < m->num_vertices; v++)
         if (s->vw[v] > 0.f) s->vH[v] = iir_scale(s->vH[v], 1.f / s->vw[v]);
+    return IIR_OK;
 }
 
 iir_vec3 rad_solution_H(const rad_solution *s, uint32_t t, float u, float v)
@@ -237,7 +275,7 @@ static iir_status form_factors(rad_solution *s, iir_error *err)
     }
     if (*dir && why && strcmp(why, "no file") != 0)
         fprintf(stderr, "radiosity: cached form factors unusable (%s); recomputing\n", why);
-    iir_status st = rad_ff_compute(&s->ff, &s->mesh, s->scene, s->rt, s->o.hemicube_res,
+    iir_status st = rad_ff_compute(&s->ff, &s->mesh, s->scene, s->rt, s->o.hemicube_res, &s->stop,
                                    s->mesh.num_patches >= 1000 ? log_progress : NULL, NULL, err);
     if (st != IIR_OK) return st;
     fprintf(stderr, "radiosity: form factors of %u patches (%llu non-zeros) computed in %.1f ms\n",
@@ -281,10 +319,12 @@ static float target_area(const iir_scene *sc, float frac)
 }
 
 iir_status rad_solution_init(rad_solution *s, const iir_scene *scene, const iir_rt *rt,
-                             const rad_params *o, uint64_t seed, iir_error *err)
+                             const rad_params *o, uint64_t seed, const iir_stop *stop,
+                             iir_error *err)
 {
     memset(s, 0, sizeof *s);
     s->scene = scene, s->rt = rt, s->o = *o, s->seed = seed;
+    if (stop) s->stop = *stop;
     iir_status st =
         rad_mesh_build(&s->mesh, scene, target_area(scene, o->patch_area), RAD_MAX_PATCHES, err);
     if (st == IIR_OK && o->solver == RAD_GAUSS && s->mesh.num_patches > RAD_GAUSS_MAX)
@@ -297,6 +337,11 @@ iir_status rad_solution_init(rad_solution *s, const iir_scene *scene, const iir_
     if (st == IIR_OK) st = form_factors(s, err);
     if (st != IIR_OK) rad_solution_free(s);
     return st;
+}
+
+void rad_solution_set_stop(rad_solution *s, iir_stop_fn fn, void *ctx)
+{
+    s->stop = (iir_stop){fn, ctx};
 }
 
 bool rad_solution_set_params(rad_solution *s, const rad_params *o, uint64_t seed)

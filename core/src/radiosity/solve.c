@@ -23,14 +23,16 @@ static void set_comp(iir_vec3 *v, int c, float x)
 
 /* ---- Gauss elimination ---- */
 
-/* Solves the dense n x n system a x = b in place (partial pivoting); false when singular. */
-static bool gauss_dense(double *a, double *b, uint32_t n)
+/* Solves the dense n x n system a x = b in place (partial pivoting): IIR_ERR_INVALID when
+ * singular, IIR_ERR_INTERRUPTED once stop says stop (polled per pivot: n^2 operations). */
+static iir_status gauss_dense(double *a, double *b, uint32_t n, const iir_stop *stop)
 {
     for (uint32_t k = 0; k < n; k++) {
+        if (iir_stop_now(stop)) return IIR_ERR_INTERRUPTED;
         uint32_t p = k;
         for (uint32_t i = k + 1; i < n; i++)
             if (fabs(a[(size_t)i * n + k]) > fabs(a[(size_t)p * n + k])) p = i;
-        if (fabs(a[(size_t)p * n + k]) < 1e-12) return false;
+        if (fabs(a[(size_t)p * n + k]) < 1e-12) return IIR_ERR_INVALID;
         if (p != k) {
             for (uint32_t j = 0; j < n; j++) {
                 double t = a[(size_t)k * n + j];
@@ -40,6 +42,7 @@ static bool gauss_dense(double *a, double *b, uint32_t n)
             b[k] = b[p], b[p] = t;
         }
         for (uint32_t i = k + 1; i < n; i++) {
+            if ((i - k) % 512 == 0 && iir_stop_now(stop)) return IIR_ERR_INTERRUPTED;
             double f = a[(size_t)i * n + k] / a[(size_t)k * n + k];
             if (f == 0.0) continue;
             for (uint32_t j = k; j < n; j++) a[(size_t)i * n + j] -= f * a[(size_t)k * n + j];
@@ -51,11 +54,11 @@ static bool gauss_dense(double *a, double *b, uint32_t n)
         for (uint32_t j = i + 1; j < n; j++) s -= a[(size_t)i * n + j] * b[j];
         b[i] = s / a[(size_t)i * n + i];
     }
-    return true;
+    return IIR_OK;
 }
 
 iir_status rad_solve_gauss(const rad_ff *ff, const iir_vec3 *rho, const iir_vec3 *E, iir_vec3 *B,
-                           iir_error *err)
+                           const iir_stop *stop, iir_error *err)
 {
     const uint32_t n = ff->n;
     double *a = malloc((size_t)n * n * sizeof *a), *b = malloc((n ? n : 1) * sizeof *b);
@@ -65,16 +68,21 @@ iir_status rad_solve_gauss(const rad_ff *ff, const iir_vec3 *rho, const iir_vec3
     }
     for (int c = 0; c < 3; c++) {
         /* (I - rho F) B = E */
-        memset(a, 0, (size_t)n * n * sizeof *a);
-        for (uint32_t i = 0; i < n; i++) {
+        iir_status st = IIR_OK;
+        for (uint32_t i = 0; st == IIR_OK && i < n; i++) {
+            if (i % 256 == 0 && iir_stop_now(stop)) st = IIR_ERR_INTERRUPTED;
+            memset(a + (size_t)i * n, 0, n * sizeof *a);
             a[(size_t)i * n + i] = 1.0;
             for (uint64_t k = ff->row[i]; k < ff->row[i + 1]; k++)
                 a[(size_t)i * n + ff->col[k]] -= (double)comp(rho[i], c) * ff->val[k];
             b[i] = comp(E[i], c);
         }
-        if (!gauss_dense(a, b, n)) {
+        if (st == IIR_OK) st = gauss_dense(a, b, n, stop);
+        if (st != IIR_OK) {
             free(a), free(b);
-            return iir_fail(err, IIR_ERR_INVALID, "radiosity: singular system (rho = 1?)");
+            return st == IIR_ERR_INTERRUPTED
+                       ? iir_fail(err, st, "radiosity: solve stopped")
+                       : iir_fail(err, st, "radiosity: singular system (rho = 1?)");
         }
         for (uint32_t i = 0; i < n; i++) set_comp(&B[i], c, (float)b[i]);
     }
@@ -93,8 +101,11 @@ static iir_vec3 gather(const rad_ff *ff, uint32_t i, const iir_vec3 *B)
     return s;
 }
 
+/* Rows of a sweep between two looks at the stop hook. */
+enum { STOP_ROWS = 256 };
+
 int rad_solve_gauss_seidel(const rad_ff *ff, const iir_vec3 *rho, const iir_vec3 *E, iir_vec3 *B,
-                           int max_iter, float tol, bool warm)
+                           int max_iter, float tol, bool warm, const iir_stop *stop)
 {
     const uint32_t n = ff->n;
     if (!warm) memcpy(B, E, n * sizeof *B);
@@ -102,6 +113,7 @@ int rad_solve_gauss_seidel(const rad_ff *ff, const iir_vec3 *rho, const iir_vec3
     while (it < max_iter) {
         float change = 0.f, big = 0.f;
         for (uint32_t i = 0; i < n; i++) {
+            if (i % STOP_ROWS == 0 && iir_stop_now(stop)) return -1;
             iir_vec3 b = iir_add(E[i], iir_mul(rho[i], gather(ff, i, B)));
             change = fmaxf(change, iir_max_comp(iir_sub(b, B[i])));
             change = fmaxf(change, iir_max_comp(iir_sub(B[i], b)));
@@ -116,8 +128,9 @@ int rad_solve_gauss_seidel(const rad_ff *ff, const iir_vec3 *rho, const iir_vec3
 
 /* ---- progressive refinement ---- */
 
-/* t = the transpose of f (columns ascend within t's rows). */
-static bool transpose(rad_ff *t, const rad_ff *f)
+/* t = the transpose of f (columns ascend within t's rows): IIR_ERR_NOMEM, or IIR_ERR_INTERRUPTED
+ * (t empty) once stop says stop. */
+static iir_status transpose(rad_ff *t, const rad_ff *f, const iir_stop *stop)
 {
     t->n = f->n, t->nnz = f->nnz;
     t->row = calloc((size_t)f->n + 1, sizeof *t->row);
@@ -127,27 +140,31 @@ static bool transpose(rad_ff *t, const rad_ff *f)
     bool ok = t->row && t->col && t->val && fill;
     for (uint64_t k = 0; ok && k < f->nnz; k++) t->row[f->col[k] + 1]++;
     for (uint32_t j = 0; ok && j < f->n; j++) t->row[j + 1] += t->row[j], fill[j] = t->row[j];
-    for (uint32_t i = 0; ok && i < f->n; i++)
-        for (uint64_t k = f->row[i]; k < f->row[i + 1]; k++) {
+    bool stopped = false;
+    for (uint32_t i = 0; ok && !stopped && i < f->n; i++) {
+        stopped = i % STOP_ROWS == 0 && iir_stop_now(stop);
+        for (uint64_t k = f->row[i]; !stopped && k < f->row[i + 1]; k++) {
             uint64_t q = fill[f->col[k]]++;
             t->col[q] = i, t->val[q] = f->val[k];
         }
+    }
     free(fill);
-    if (!ok) rad_ff_free(t);
-    return ok;
+    if (!ok || stopped) rad_ff_free(t);
+    return !ok ? IIR_ERR_NOMEM : stopped ? IIR_ERR_INTERRUPTED : IIR_OK;
 }
 
-bool rad_progressive_init(rad_progressive *p, const rad_mesh *m, const rad_ff *ff,
-                          const iir_vec3 *E, iir_vec3 *B)
+iir_status rad_progressive_init(rad_progressive *p, const rad_mesh *m, const rad_ff *ff,
+                                const iir_vec3 *E, iir_vec3 *B, const iir_stop *stop)
 {
     const uint32_t n = m->num_patches;
     rad_ff Ft = p->Ft;
     free(p->dB);
     memset(p, 0, sizeof *p);
     p->Ft = Ft;
-    if (!p->Ft.row && !transpose(&p->Ft, ff)) return false;
+    iir_status st = p->Ft.row ? IIR_OK : transpose(&p->Ft, ff, stop);
+    if (st != IIR_OK) return st;
     p->dB = malloc((n ? n : 1) * sizeof *p->dB);
-    if (!p->dB) return false;
+    if (!p->dB) return IIR_ERR_NOMEM;
     memcpy(p->dB, E, n * sizeof *E);
     memcpy(B, E, n * sizeof *E);
     double rho_a[3] = {0, 0, 0};
@@ -158,7 +175,7 @@ bool rad_progressive_init(rad_progressive *p, const rad_mesh *m, const rad_ff *f
     }
     for (int c = 0; c < 3; c++)
         p->rho_avg[c] = p->area_total > 0 ? (float)(rho_a[c] / p->area_total) : 0.f;
-    return true;
+    return IIR_OK;
 }
 
 void rad_progressive_free(rad_progressive *p)
@@ -182,10 +199,16 @@ static uint32_t brightest(const rad_progressive *p, const rad_mesh *m, double *p
     return best;
 }
 
-bool rad_progressive_shoot(rad_progressive *p, const rad_mesh *m, iir_vec3 *B, int shots, float tol)
+bool rad_progressive_shoot(rad_progressive *p, const rad_mesh *m, iir_vec3 *B, int shots, float tol,
+                           const iir_stop *stop, bool *stopped)
 {
     double unshot = 0.0;
+    *stopped = false;
     for (int s = 0; s < shots; s++) {
+        if (iir_stop_now(stop)) {
+            *stopped = true;
+            return false;
+        }
         uint32_t i = brightest(p, m, &unshot);
         if (unshot <= (double)tol * p->emitted || m->num_patches == 0) return true;
         const iir_vec3 dBi = p->dB[i];

@@ -185,8 +185,12 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
     t->gbuffer_cached = r->gb_valid && same_camera(cam, &r->gb_camera);
     if (!t->gbuffer_cached) {
         iir_camera_frame cf = iir_camera_setup(cam, w, h);
-        iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, iir_v2(0.5f, 0.5f), st);
+        const iir_stop stop = {r->stop, r->stop_ctx};
         r->gb_serial++;
+        if (!iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, iir_v2(0.5f, 0.5f), &stop, st)) {
+            r->gb_valid = false;
+            return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
+        }
         r->gb_camera = *cam;
         r->gb_shift = iir_v2(0.f, 0.f);
         r->gb_valid = true;
@@ -305,9 +309,11 @@ static iir_status pass_gbuffer(iir_renderer *r, const iir_camera *cam, iir_vec2 
     iir_status s = resize(r, w, h, err);
     if (s != IIR_OK) return s;
     iir_camera_frame cf = iir_camera_setup(cam, w, h);
-    iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, jitter, st);
+    const iir_stop stop = {r->stop, r->stop_ctx};
     r->gb_serial++;
     r->gb_valid = false;
+    if (!iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, jitter, &stop, st))
+        return iir_fail(err, IIR_ERR_INTERRUPTED, "refinement pass stopped early");
     r->gb_camera = *cam; /* the area lights' camera rays go through the same jittered points */
     r->gb_shift = iir_v2(jitter.x - 0.5f, jitter.y - 0.5f);
     t->gbuffer_ms = iir_now_ms() - t0;

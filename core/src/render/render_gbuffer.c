@@ -89,16 +89,27 @@ static void render_block(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *
     }
 }
 
-void iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
-                        const iir_camera_frame *cf, iir_vec2 jitter, iir_raystats *st)
+bool iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
+                        const iir_camera_frame *cf, iir_vec2 jitter, const iir_stop *stop,
+                        iir_raystats *st)
 {
     int tiles = iir_tile_count(gb->width, gb->height, IIR_RENDER_TILE);
     iir_raystats total = {0};
+    bool stopped = false;
 #pragma omp parallel
     {
         iir_raystats local = {0};
 #pragma omp for schedule(dynamic, 1)
         for (int t = 0; t < tiles; t++) {
+            bool quit;
+#pragma omp atomic read
+            quit = stopped;
+            if (quit) continue;
+            if (iir_stop_now(stop)) {
+#pragma omp atomic write
+                stopped = true;
+                continue;
+            }
             iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_RENDER_TILE, t);
             for (int y = tl.y0; y < tl.y1; y += BLOCK_H)
                 for (int x = tl.x0; x < tl.x1; x += BLOCK_W)
@@ -108,4 +119,5 @@ void iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *r
         iir_raystats_add(&total, &local);
     }
     iir_raystats_add(st, &total);
+    return !stopped;
 }

@@ -104,8 +104,10 @@ typedef struct iir_shade_job {
  * through (x + jitter.x, y + jitter.y); (0.5, 0.5) is the pixel centre of interactive frames. */
 iir_status iir_gbuffer_resize(iir_gbuffer *gb, int width, int height, iir_error *err);
 void iir_gbuffer_free(iir_gbuffer *gb);
-void iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
-                        const iir_camera_frame *cf, iir_vec2 jitter, iir_raystats *st);
+/* Render polls stop per tile: false once it says stop (the G-buffer is then incomplete). */
+bool iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
+                        const iir_camera_frame *cf, iir_vec2 jitter, const iir_stop *stop,
+                        iir_raystats *st);
 
 /* render_direct.c: out = emission + direct light (every pixel written). Each tile first polls
  * r->stop (when set) and is skipped once it said stop; returns true when that happened (out is then

@@ -60,8 +60,9 @@ static int cell_of(const iir_voxels *v, float p, int k)
     return c < 0 ? 0 : c >= v->n[k] ? v->n[k] - 1 : c;
 }
 
-/* Marks every cell triangle t touches (cells of its bounds that it meets). */
-static void mark_triangle(iir_voxels *v, const iir_vec3 t[3])
+/* Marks every cell triangle t touches (cells of its bounds that it meets); false once stop says
+ * stop (polled per slice of its bounds: at most res^2 cells). */
+static bool mark_triangle(iir_voxels *v, const iir_vec3 t[3], const iir_stop *stop)
 {
     int lo[3], hi[3];
     for (int k = 0; k < 3; k++) {
@@ -70,7 +71,10 @@ static void mark_triangle(iir_voxels *v, const iir_vec3 t[3])
         hi[k] = cell_of(v, fmaxf(a, fmaxf(b, c)), k);
     }
     const float r0 = 0.5f * v->h * (1.f + 1e-4f); /* a hair larger: conservative */
-    for (int z = lo[2]; z <= hi[2]; z++)
+    const bool big =
+        (int64_t)(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > 4096;
+    for (int z = lo[2]; z <= hi[2]; z++) {
+        if (big && iir_stop_now(stop)) return false;
         for (int y = lo[1]; y <= hi[1]; y++)
             for (int x = lo[0]; x <= hi[0]; x++) {
                 iir_vec3 c = iir_add(
@@ -80,6 +84,8 @@ static void mark_triangle(iir_voxels *v, const iir_vec3 t[3])
                 uint64_t i = cell_index(v, x, y, z);
                 __atomic_fetch_or(&v->bits[i >> 6], 1ull << (i & 63), __ATOMIC_RELAXED);
             }
+    }
+    return true;
 }
 
 /* Cells of side h covering the extent, res along its longest side. */
@@ -102,7 +108,8 @@ uint64_t iir_voxels_memory(iir_vec3 extent, int res)
     return (cells + 63) / 64 * 8 + sizeof(iir_voxels);
 }
 
-iir_status iir_voxels_build(const iir_scene *scene, int res, iir_voxels **out, iir_error *err)
+iir_status iir_voxels_build(const iir_scene *scene, int res, const iir_stop *stop, iir_voxels **out,
+                            iir_error *err)
 {
     *out = NULL;
     if (res < 1 || res > 1024)
@@ -122,12 +129,24 @@ iir_status iir_voxels_build(const iir_scene *scene, int res, iir_voxels **out, i
                         (unsigned long long)cells);
     }
     const long num = (long)scene->num_triangles;
+    bool stopped = false;
 #pragma omp parallel for schedule(dynamic, 64)
     for (long i = 0; i < num; i++) {
+        bool quit;
+#pragma omp atomic read
+        quit = stopped;
+        if (quit || (i % 256 == 0 && iir_stop_now(stop))) quit = true;
         const uint32_t *idx = &scene->indices[3 * i];
         const iir_vec3 t[3] = {scene->positions[idx[0]], scene->positions[idx[1]],
                                scene->positions[idx[2]]};
-        mark_triangle(v, t);
+        if (quit || !mark_triangle(v, t, stop)) {
+#pragma omp atomic write
+            stopped = true;
+        }
+    }
+    if (stopped) {
+        iir_voxels_destroy(v);
+        return iir_fail(err, IIR_ERR_INTERRUPTED, "voxel grid stopped");
     }
     for (uint64_t w = 0; w < (cells + 63) / 64; w++)
         v->count += (uint64_t)__builtin_popcountll(v->bits[w]);
