@@ -149,7 +149,7 @@ bench: build
 # timeouts to out/fuzz/TARGET-*. Fails when any target found something.
 FUZZ_BUILD   ?= build-fuzz
 FUZZ_SECONDS ?= 600
-FUZZ_TARGETS ?= protocol anim sidecar scene pfm
+FUZZ_TARGETS ?= protocol anim sidecar scene pfm ffcache
 FUZZ_DICT     = protocol anim sidecar
 fuzz: deps
 	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIIR_WERROR=ON \

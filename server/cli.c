@@ -19,6 +19,9 @@
 
 #include <cjson/cJSON.h>
 
+#include "iir/ffcache.h"
+#include "serve/budget.h" /* iird_parse_bytes: one syntax for every size option */
+
 iir_status iird_parse_size(const char *text, int max_dim, int *w, int *h, iir_error *err)
 {
     char *end = NULL;
@@ -395,6 +398,19 @@ iir_status iird_check_output(const char *path, iir_error *err)
         return iir_fail(err, IIR_ERR_INVALID, "--out %s: the name must end in .png, .exr or .pfm",
                         path);
     return iird_prepare_parent(path, "--out", err);
+}
+
+iir_status iird_set_cache_max(const char *arg, iir_error *err)
+{
+    uint64_t bytes = 0;
+    char text[32];
+    if (!iird_parse_bytes(arg, &bytes) || bytes < (1u << 20))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "--cache-max '%s' is not a size of at least 1M (bytes, or with K, M, G, T)",
+                        arg);
+    snprintf(text, sizeof text, "%llu", (unsigned long long)bytes);
+    setenv(IIR_FFCACHE_MAX_ENV, text, 1); /* read by the cache's saves (iir/ffcache.h) */
+    return IIR_OK;
 }
 
 const char *iird_scenes_dir(const char *option)

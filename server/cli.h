@@ -101,6 +101,14 @@ iir_status iird_check_output(const char *path, iir_error *err);
  */
 const char *iird_scenes_dir(const char *option);
 
+/* --cache-max SIZE (serve, render, bench): the radiosity form-factor cache's cap, parsed as
+ * --max-session-memory is (bytes, or with K, M, G, T; at least 1M) and handed to the cache through
+ * the environment ($IIR_CACHE_MAX, iir/ffcache.h) -- before any thread starts. */
+#define IIRD_CACHE_MAX_HELP                                                                        \
+    "  --cache-max SIZE     the radiosity form-factor cache's cap: least recently used\n"          \
+    "                       files go past it (default 512M, or $IIR_CACHE_MAX)\n"
+iir_status iird_set_cache_max(const char *arg, iir_error *err);
+
 /* Finds and loads the animation script that --anim ARG names for scene (both iird render and
  * iird bench use it; docs/scene-format.md section 5): an existing file, or any ARG with a '/' or
  * ending in ".json", is loaded as a file; otherwise ARG must be a bare name listed in the scene

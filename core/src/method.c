@@ -29,7 +29,8 @@ struct iir_method {
 /* ======================== the options every method has ======================== */
 
 static const iir_param COMMON_ROWS[] = {
-    {"seed", IIR_PARAM_U64, offsetof(iir_method_common, seed), 1, 0, 9007199254740992.0, 0, NULL,
+    /* at most 2^53 - 1: every integer up to it is exact in a double (and in JSON readers) */
+    {"seed", IIR_PARAM_U64, offsetof(iir_method_common, seed), 1, 0, 9007199254740991.0, 0, NULL,
      "", "random seed: the same seed gives the same images", IIR_PARAM_RESTART},
     /* 4 sweeps of the default 4x4 interleave: every pixel sees 4 independent VPL sets (the VPL
        noise halves against one set) through 64 jittered points (edges within ~1/64 of their
@@ -279,6 +280,24 @@ uint64_t iir_method_memory(const char *name, const iir_params *p, int width, int
     uint64_t bytes = opts && ops->memory ? ops->memory(opts, width, height) : 0;
     free(opts);
     return bytes;
+}
+
+uint64_t iir_method_memory_on(const char *name, const iir_scene *scene, const iir_rt *rt,
+                              const iir_params *p, int width, int height)
+{
+    const iir_method_ops *ops = find_ops(name);
+    if (!ops || !ops->memory_on) return iir_method_memory(name, p, width, height);
+    iir_error err;
+    void *opts = bind_opts(ops, p, NULL, NULL, &err);
+    uint64_t bytes = opts ? ops->memory_on(opts, scene, rt, width, height) : 0;
+    free(opts);
+    return bytes;
+}
+
+uint64_t iir_method_memory_held(const iir_method *m, int width, int height)
+{
+    if (!m->ops->held) return m->ops->memory ? m->ops->memory(m->opts, width, height) : 0;
+    return m->ops->held(m->state, width, height);
 }
 
 /* ======================== the interface ======================== */

@@ -131,6 +131,12 @@ typedef struct iir_method_ops {
     iir_status (*supports)(const iir_light *lights, uint32_t num_lights, iir_error *err);
     /* Bytes the method holds with opts for a width x height frame, beyond the output image. */
     uint64_t (*memory)(const void *opts, int width, int height);
+    /* NULL when memory's estimate does not depend on the scene. Else the same from the scene's
+     * real counts (meshing counts, sampled rays: milliseconds, not the build itself), and the
+     * bytes a created state holds by its real counts. */
+    uint64_t (*memory_on)(const void *opts, const struct iir_scene *scene, const iir_rt *rt,
+                          int width, int height);
+    uint64_t (*held)(const void *state, int width, int height);
     /* samples_per_pixel at which refinement converges (iir_method_converged_at). NULL: the
      * refine_passes parameter (one pass per refine call). */
     uint64_t (*converged_at)(const void *opts);

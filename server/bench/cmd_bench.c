@@ -47,7 +47,7 @@ static void bench_usage(FILE *f)
             "  --segment I/N        with --refs-only: the I-th (from 0) of N shares of them\n"
             "  --save-images        also write DIR/ref_NNNNN.pfm and DIR/<method>[_<setting>]_\n"
             "                       NNNNN.pfm at the reference frames\n"
-            "  --scenes DIR         where scene names are looked up\n"
+            "  --scenes DIR         where scene names are looked up\n" IIRD_CACHE_MAX_HELP
             "  -h, --help           this text (with --methods: their parameters only)\n");
 }
 
@@ -67,7 +67,8 @@ enum {
     OPT_NO_REF_CACHE,
     OPT_NO_CHARTS,
     OPT_REFS_ONLY,
-    OPT_SEGMENT
+    OPT_SEGMENT,
+    OPT_CACHE_MAX
 };
 
 /* --frames N (= 0:N) or A:B, half-open, at least two frames. */
@@ -155,6 +156,8 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
     case OPT_SCENES:
         o->scenes_dir = arg;
         break;
+    case OPT_CACHE_MAX:
+        return iird_set_cache_max(arg, err);
     case OPT_SAVE:
         o->save_images = true;
         break;
@@ -234,6 +237,7 @@ static int parse_args(int argc, char **argv, iird_bench_opts *o)
                                              {"out", required_argument, 0, OPT_OUT},
                                              {"no-charts", no_argument, 0, OPT_NO_CHARTS},
                                              {"scenes", required_argument, 0, OPT_SCENES},
+                                             {"cache-max", required_argument, 0, OPT_CACHE_MAX},
                                              {"save-images", no_argument, 0, OPT_SAVE},
                                              {"ref-aa", no_argument, 0, OPT_REF_AA},
                                              {"anim", required_argument, 0, OPT_ANIM},

@@ -33,6 +33,7 @@ typedef enum iird_msg_type {
     IIRD_MSG_SNAPSHOT,
     IIRD_MSG_RECORD,
     IIRD_MSG_SAVE,
+    IIRD_MSG_SCENES, /* the whole list of scene names (welcome's may leave saved ones out) */
 } iird_msg_type;
 
 /* Error codes, in the order of docs/protocol.md's table; names via iird_err_name. */
@@ -223,9 +224,15 @@ struct cJSON *iird_json_param_table(const iir_param_table *t);
  * name: enums as their names, booleans as booleans, numbers as numbers. render.json and `state`. */
 struct cJSON *iird_json_method_params(const char *method, const iir_params *p);
 char *iird_json_state(const iird_state_view *s, int64_t seq);
-/* scenes: NULL-terminated names; methods: iir_method_names(). */
+/* The reply to a `scene` replaced by a newer one before its load began: the state as it is, with
+ * "superseded": true (the switch was not made; the newer request gets its own reply). */
+char *iird_json_state_superseded(const iird_state_view *s, int64_t seq);
+/* scenes: NULL-terminated names, scenes_more: saved scenes left out of them (sent as
+ * "scenes_more" when not 0; a `scenes` request lists them); methods: iir_method_names(). */
 char *iird_json_welcome(const iird_state_view *s, uint32_t session, const char *const *scenes,
-                        const iird_limits *limits, int64_t seq);
+                        size_t scenes_more, const iird_limits *limits, int64_t seq);
+/* The `scenes` reply: every name a client may ask for (NULL-terminated). */
+char *iird_json_scenes(const char *const *scenes, int64_t seq);
 
 typedef struct iird_stats_view {
     uint32_t frame;
@@ -305,9 +312,9 @@ typedef struct iird_sidecar_view {
 /* The sidecar as indented JSON text, for the file (malloc'd; NULL on out-of-memory). */
 char *iird_sidecar_text(const iird_sidecar_view *v);
 /* The `save` reply: the sidecar, and with a name (NULL: none) that name and the scene names a
- * client may now ask for (scenes: NULL-terminated). */
+ * client may now ask for (scenes: NULL-terminated; scenes_more as in iird_json_welcome). */
 char *iird_json_save(const iird_sidecar_view *v, int64_t seq, const char *name,
-                     const char *const *scenes);
+                     const char *const *scenes, size_t scenes_more);
 
 /* ---- binary frames ---- */
 typedef struct iird_frame_header {

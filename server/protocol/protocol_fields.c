@@ -140,7 +140,7 @@ bool iird_get_int(const iird_pctx *c, const cJSON *v, const char *name, double l
                                path, d);
     if (d < lo || d > hi)
         return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, path,
-                               "%s must be in [%.15g, %.15g], got %.15g", path, lo, hi, d);
+                               "%s must be in [%.17g, %.17g], got %.17g", path, lo, hi, d);
     *out = (int64_t)d;
     return true;
 }

@@ -264,6 +264,12 @@ char *iird_json_state(const iird_state_view *s, int64_t seq)
     return iird_json_finish(keep_if(o, o && add_state(o, s)));
 }
 
+char *iird_json_state_superseded(const iird_state_view *s, int64_t seq)
+{
+    cJSON *o = reply("state", seq);
+    return iird_json_finish(keep_if(o, o && add_bool(o, "superseded", true) && add_state(o, s)));
+}
+
 /* Per method its name, summary and parameters (each of its tables' rows, in order). */
 static cJSON *methods_json(void)
 {
@@ -295,18 +301,34 @@ static cJSON *limits_json(const iird_limits *lim)
     return keep_if(o, ok);
 }
 
+static cJSON *names_json(const char *const *scenes)
+{
+    cJSON *names = cJSON_CreateArray();
+    bool ok = names != NULL;
+    for (const char *const *n = scenes; ok && n && *n; n++)
+        ok = add_item(names, NULL, cJSON_CreateString(*n));
+    return keep_if(names, ok);
+}
+
+char *iird_json_scenes(const char *const *scenes, int64_t seq)
+{
+    cJSON *o = cJSON_CreateObject();
+    bool ok = o && add_str(o, "type", "scenes") && add_seq(o, seq) &&
+              add_item(o, "scenes", names_json(scenes));
+    return iird_json_finish(keep_if(o, ok));
+}
+
 char *iird_json_welcome(const iird_state_view *s, uint32_t session, const char *const *scenes,
-                        const iird_limits *limits, int64_t seq)
+                        size_t scenes_more, const iird_limits *limits, int64_t seq)
 {
     iird_limits lim = limits ? *limits : iird_limits_default();
-    cJSON *o = cJSON_CreateObject(), *names = NULL, *state = NULL;
+    cJSON *o = cJSON_CreateObject(), *state = NULL;
     bool ok = o && add_str(o, "type", "welcome") &&
               iird_json_add_num(o, "protocol", IIRD_PROTOCOL_VERSION) &&
               add_str(o, "server", "iird " IIR_VERSION) &&
               iird_json_add_num(o, "session", session) && add_seq(o, seq) &&
-              add_item(o, "scenes", (names = cJSON_CreateArray()));
-    for (const char *const *n = scenes; ok && n && *n; n++)
-        ok = add_item(names, NULL, cJSON_CreateString(*n));
+              add_item(o, "scenes", names_json(scenes)) &&
+              (!scenes_more || iird_json_add_num(o, "scenes_more", (double)scenes_more));
     ok = ok && add_item(o, "methods", methods_json()) &&
          add_item(o, "settings", iird_json_param_table(&iird_stream_table)) &&
          add_item(o, "limits", limits_json(&lim)) &&

@@ -88,9 +88,10 @@ static cJSON *row_json(const iir_param *row)
     bool ok = o && add(o, "name", cJSON_CreateString(row->name)) &&
               add(o, "type", cJSON_CreateString(iir_param_type_name(row->type))) &&
               add(o, "default", iird_json_param_value(row, row->def));
-    if (ok && row->type != IIR_PARAM_BOOL && row->type != IIR_PARAM_ENUM)
-        ok = iird_json_add_num(o, "min", row->lo) && iird_json_add_num(o, "max", row->hi) &&
-             iird_json_add_num(o, "live_max", iir_param_max(row, true));
+    if (ok && row->type != IIR_PARAM_BOOL && row->type != IIR_PARAM_ENUM) /* exact digits */
+        ok = add(o, "min", iird_json_param_value(row, row->lo)) &&
+             add(o, "max", iird_json_param_value(row, row->hi)) &&
+             add(o, "live_max", iird_json_param_value(row, iir_param_max(row, true)));
     if (ok && row->type == IIR_PARAM_ENUM) {
         ok = add(o, "choices", (choices = cJSON_CreateArray()));
         for (int i = 0; ok && row->choices[i]; i++)

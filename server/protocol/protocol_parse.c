@@ -51,6 +51,7 @@ static const char *const PICK_FIELDS[] = {"x", "y", NULL};
 static const char *const SNAPSHOT_FIELDS[] = {"format", NULL};
 static const char *const RECORD_FIELDS[] = {"action", "fps", NULL};
 static const char *const SAVE_FIELDS[] = {"name", NULL};
+static const char *const SCENES_FIELDS[] = {NULL};
 
 static const char *const FORMAT_NAMES[] = {"png", "exr", NULL};
 static const char *const ACTION_NAMES[] = {"start", "stop", NULL};
@@ -315,6 +316,14 @@ static bool parse_save(const iird_pctx *c, const cJSON *const *f, const iird_lim
     return true;
 }
 
+/* `scenes` has no fields of its own. */
+static bool parse_scenes(const iird_pctx *c, const cJSON *const *f, const iird_limits *lim,
+                         iird_msg *out)
+{
+    (void)c, (void)f, (void)lim, (void)out;
+    return true;
+}
+
 /* ======================== the message ======================== */
 
 typedef bool (*parse_fn)(const iird_pctx *c, const cJSON *const *f, const iird_limits *lim,
@@ -335,6 +344,7 @@ static const struct msg_kind {
     {"snapshot", IIRD_MSG_SNAPSHOT, SNAPSHOT_FIELDS, parse_snapshot},
     {"record", IIRD_MSG_RECORD, RECORD_FIELDS, parse_record},
     {"save", IIRD_MSG_SAVE, SAVE_FIELDS, parse_save},
+    {"scenes", IIRD_MSG_SCENES, SCENES_FIELDS, parse_scenes},
 };
 enum { NUM_KINDS = sizeof KINDS / sizeof KINDS[0] };
 

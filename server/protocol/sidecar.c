@@ -126,12 +126,14 @@ static bool add_names(cJSON *o, const char *const *scenes)
 }
 
 char *iird_json_save(const iird_sidecar_view *v, int64_t seq, const char *name,
-                     const char *const *scenes)
+                     const char *const *scenes, size_t scenes_more)
 {
     cJSON *o = cJSON_CreateObject(), *sidecar = sidecar_json(v);
-    bool ok = o && sidecar && cJSON_AddStringToObject(o, "type", "save") &&
-              (seq < 0 || iird_json_add_num(o, "seq", (double)seq)) &&
-              (!name || (cJSON_AddStringToObject(o, "name", name) && add_names(o, scenes)));
+    bool ok =
+        o && sidecar && cJSON_AddStringToObject(o, "type", "save") &&
+        (seq < 0 || iird_json_add_num(o, "seq", (double)seq)) &&
+        (!name || (cJSON_AddStringToObject(o, "name", name) && add_names(o, scenes) &&
+                   (!scenes_more || iird_json_add_num(o, "scenes_more", (double)scenes_more))));
     if (ok) ok = cJSON_AddItemToObject(o, "sidecar", sidecar);
     if (!ok) {
         if (!o || !cJSON_GetObjectItemCaseSensitive(o, "sidecar")) cJSON_Delete(sidecar);

@@ -47,7 +47,8 @@ static void render_usage(FILE *f)
         "                       with --video the video)\n"
         "  --format F           with --anim: png | exr | pfm (default png)\n"
         "  --video FILE.mp4     with --anim: also an H.264 video of the frames (needs ffmpeg)\n"
-        "  --scenes DIR         where scene names are looked up (default ./scenes)\n"
+        "  --scenes DIR         where scene names are looked up (default "
+        "./scenes)\n" IIRD_CACHE_MAX_HELP
         "  -h, --help           this text (with --method M: M's parameters only)\n"
         "\n"
         "Exit codes: 0 ok, 2 bad input, 3 file error, 4 unsupported, 64 usage, 130 interrupted.\n",
@@ -65,7 +66,8 @@ enum {
     OPT_FORMAT,
     OPT_VIDEO,
     OPT_SEGMENT,
-    OPT_MERGE
+    OPT_MERGE,
+    OPT_CACHE_MAX
 };
 
 static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err)
@@ -81,6 +83,9 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
         break;
     case OPT_SCENES:
         o->scenes_dir = arg;
+        break;
+    case OPT_CACHE_MAX:
+        st = iird_set_cache_max(arg, err);
         break;
     case OPT_SIZE:
         st = iird_parse_size(arg, IIR_IMAGE_MAX_DIM, &o->width, &o->height, err);
@@ -151,6 +156,7 @@ static int parse_args(int argc, char **argv, render_opts *o)
                                              {"size", required_argument, 0, OPT_SIZE},
                                              {"exposure", required_argument, 0, OPT_EXPOSURE},
                                              {"scenes", required_argument, 0, OPT_SCENES},
+                                             {"cache-max", required_argument, 0, OPT_CACHE_MAX},
                                              {"anim", required_argument, 0, OPT_ANIM},
                                              {"frames", required_argument, 0, OPT_FRAMES},
                                              {"format", required_argument, 0, OPT_FORMAT},

@@ -14,6 +14,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "budget.h"
+#include "scene_save.h"
 #include "server.h"
 #include "session.h"
 #include "session.h"
@@ -42,8 +43,12 @@ static void serve_usage(FILE *f)
         "  --port N             TCP port (default 8080; 0 = any free port)\n"
         "  --scene NAME|PATH    the startup scene\n"
         "  --scenes DIR         where clients' scene names are looked up (default ./scenes)\n"
+        "  --scenes-follow-links  let scene names lead outside --scenes through symbolic\n"
+        "                       links (by default such scenes are neither listed nor loaded)\n"
         "  --allow-save         clients may save their lights and camera as a new scene in\n"
         "                       the scenes directory (save with a name; never over a scene)\n"
+        "  --max-saved-scenes N  saved scenes the scenes directory may hold (default 200)\n"
+        "  --save-rate N        saves one client address may make a minute (default 12)\n"
         "  --web DIR            the web client's folder (default $IIR_WEB, ./web, the source's)\n"
         "  --max-sessions N     open WebSocket sessions at most (default 8)\n"
         "  --max-sessions-per-address N  sessions one client address may hold (default\n"
@@ -70,7 +75,7 @@ static void serve_usage(FILE *f)
         "  --trust-proxy ADDR   a load balancer's address: its connections count as the\n"
         "                       client in the last X-Forwarded-For entry (per-address\n"
         "                       limits, logs); see deploy/haproxy.cfg\n"
-        "  --verbose            libwebsockets notices on stderr\n"
+        "  --verbose            libwebsockets notices on stderr\n" IIRD_CACHE_MAX_HELP
         "  -h, --help           this text\n"
         "\n"
         "Exit codes: 0 stopped by a signal, 1 cannot listen, 2 bad input, 3 file error,\n"
@@ -105,6 +110,10 @@ enum {
     OPT_ALLOW_SAVE,
     OPT_DRAIN_SECONDS,
     OPT_TRUST_PROXY,
+    OPT_MAX_SAVED_SCENES,
+    OPT_SAVE_RATE,
+    OPT_CACHE_MAX,
+    OPT_SCENES_FOLLOW_LINKS,
 };
 
 static iir_status parse_host(const char *arg, const char **out, iir_error *err)
@@ -155,6 +164,14 @@ static iir_status parse_option(void *ctx, int c, const char *arg, iir_error *err
         return parse_host(arg, &cfg->trust_proxy, err);
     case OPT_ALLOW_SAVE:
         return cfg->limits.allow_save = true, IIR_OK;
+    case OPT_MAX_SAVED_SCENES:
+        return parse_int_opt(arg, "--max-saved-scenes", 0, 1000000, &cfg->max_saved_scenes, err);
+    case OPT_SAVE_RATE:
+        return parse_int_opt(arg, "--save-rate", 1, 100000, &cfg->save_rate, err);
+    case OPT_CACHE_MAX:
+        return iird_set_cache_max(arg, err);
+    case OPT_SCENES_FOLLOW_LINKS:
+        return cfg->scenes_follow_links = true, IIR_OK;
     case OPT_IDLE_TIMEOUT:
         return parse_int_opt(arg, "--idle-timeout", 0, 7 * 86400, &cfg->idle_timeout_s, err);
     case OPT_MAX_SIZE:
@@ -312,6 +329,7 @@ int iird_cmd_serve(int argc, char **argv)
         {"port", required_argument, 0, OPT_PORT},
         {"scene", required_argument, 0, OPT_SCENE},
         {"scenes", required_argument, 0, OPT_SCENES},
+        {"scenes-follow-links", no_argument, 0, OPT_SCENES_FOLLOW_LINKS},
         {"web", required_argument, 0, OPT_WEB},
         {"max-sessions", required_argument, 0, OPT_MAX_SESSIONS},
         {"max-sessions-per-address", required_argument, 0, OPT_MAX_SESSIONS_PER_ADDRESS},
@@ -330,6 +348,9 @@ int iird_cmd_serve(int argc, char **argv)
         {"allow-save", no_argument, 0, OPT_ALLOW_SAVE},
         {"drain-seconds", required_argument, 0, OPT_DRAIN_SECONDS},
         {"trust-proxy", required_argument, 0, OPT_TRUST_PROXY},
+        {"max-saved-scenes", required_argument, 0, OPT_MAX_SAVED_SCENES},
+        {"save-rate", required_argument, 0, OPT_SAVE_RATE},
+        {"cache-max", required_argument, 0, OPT_CACHE_MAX},
         {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     static const iird_command cmd = {"serve", longopts, serve_usage, parse_option, NULL};
@@ -338,6 +359,8 @@ int iird_cmd_serve(int argc, char **argv)
                             .max_sessions = 8,
                             .idle_timeout_s = 1800,
                             .drain_seconds = 10,
+                            .max_saved_scenes = IIRD_SAVED_DEFAULT,
+                            .save_rate = IIRD_SAVE_RATE_DEFAULT,
                             .limits = iird_limits_default(),
                             .defaults = iird_settings_default()}};
     const char *positional = NULL;

@@ -1,22 +1,57 @@
-/* prometheus.c -- the daemon's counters and the /metrics and /healthz texts; not the stats message.
- */
+/* prometheus.c -- the daemon's counters and the /metrics and /healthz texts, and the form-factor
+ * cache folder's size and deletions (inotify); not the stats message. */
 #include "prometheus.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/inotify.h>
 #include <unistd.h>
 
+#include "iir/ffcache.h"
 #include "iir/timer.h"
 
 static const double frame_bucket_s[IIRD_FRAME_BUCKETS] = {0.005, 0.01, 0.025, 0.05, 0.1,
                                                           0.25,  0.5,  1.0,   2.5};
+
+/* ---- the form-factor cache ---- */
+
+/* A cache file's name: 16 hex digits and ".ff" (what a trim evicts). */
+static bool is_cache_file(const char *name)
+{
+    return strlen(name) == 19 && strspn(name, "0123456789abcdefABCDEF") == 16 &&
+           !strcmp(name + 16, ".ff");
+}
+
+/* Counts the cache files deleted since the last look (the watch starts once the folder exists;
+ * a full kernel queue loses some: the count is then low). */
+static void count_evictions(iird_metrics *m)
+{
+    if (m->ffcache_watch < 0 && m->ffcache_dir[0]) {
+        int fd = inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
+        if (fd >= 0 && inotify_add_watch(fd, m->ffcache_dir, IN_DELETE) < 0) close(fd), fd = -1;
+        m->ffcache_watch = fd;
+        return;
+    }
+    char buf[8192] __attribute__((aligned(__alignof__(struct inotify_event))));
+    ssize_t len;
+    while (m->ffcache_watch >= 0 && (len = read(m->ffcache_watch, buf, sizeof buf)) > 0)
+        for (char *p = buf; p < buf + len;) {
+            const struct inotify_event *e = (const struct inotify_event *)p;
+            if ((e->mask & IN_DELETE) && e->len && is_cache_file(e->name)) m->ffcache_evictions++;
+            if (e->mask & IN_IGNORED) close(m->ffcache_watch), m->ffcache_watch = -1;
+            p += sizeof *e + e->len;
+        }
+}
 
 void iird_metrics_init(iird_metrics *m)
 {
     memset(m, 0, sizeof *m);
     m->start_ms = iir_now_ms();
     atomic_init(&m->sessions, 0);
+    iir_ffcache_config(m->ffcache_dir, sizeof m->ffcache_dir, &m->ffcache_max);
+    m->ffcache_watch = -1;
+    count_evictions(m); /* starts the watch when the folder exists */
 }
 
 void iird_metrics_frame_sent(iird_metrics *m, double render_ms)
@@ -123,7 +158,25 @@ static void section_process(FILE *f)
     fprintf(f, "process_resident_memory_bytes %llu\n", resident * (unsigned long long)page);
 }
 
-char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session *sessions,
+static void section_ffcache(FILE *f, iird_metrics *m)
+{
+    count_evictions(m);
+    uint64_t bytes = 0, files = 0;
+    if (m->ffcache_dir[0]) iir_ffcache_usage(m->ffcache_dir, &bytes, &files);
+    metric_head(f, "iird_ffcache_bytes", "gauge", "Bytes of the form-factor cache's files.");
+    fprintf(f, "iird_ffcache_bytes %llu\n", (unsigned long long)bytes);
+    metric_head(f, "iird_ffcache_files", "gauge", "Files in the form-factor cache.");
+    fprintf(f, "iird_ffcache_files %llu\n", (unsigned long long)files);
+    metric_head(f, "iird_ffcache_max_bytes", "gauge",
+                "The form-factor cache's cap (--cache-max): least recently used files go.");
+    fprintf(f, "iird_ffcache_max_bytes %llu\n", (unsigned long long)m->ffcache_max);
+    metric_head(
+        f, "iird_ffcache_evictions_total", "counter",
+        "Form-factor cache files deleted from the folder since start (evicted by the cap).");
+    fprintf(f, "iird_ffcache_evictions_total %llu\n", (unsigned long long)m->ffcache_evictions);
+}
+
+char *iird_metrics_prometheus(iird_metrics *m, const iird_metrics_session *sessions,
                               size_t num_sessions, const iird_sched_stats *sched,
                               size_t scenes_loaded)
 {
@@ -137,6 +190,7 @@ char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session 
     section_traffic(f, m);
     metric_head(f, "iird_scenes_loaded", "gauge", "Scenes in memory.");
     fprintf(f, "iird_scenes_loaded %zu\n", scenes_loaded);
+    section_ffcache(f, m);
     metric_head(f, "iird_uptime_seconds", "gauge", "Seconds since start.");
     fprintf(f, "iird_uptime_seconds %.3f\n", (iir_now_ms() - m->start_ms) / 1e3);
     section_process(f);

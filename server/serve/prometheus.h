@@ -26,6 +26,11 @@ typedef struct iird_metrics {
     atomic_uint_fast64_t errors[IIRD_E_COUNT];
     atomic_uint_fast64_t frame_buckets[IIRD_FRAME_BUCKETS + 1]; /* per bucket, not cumulative */
     atomic_uint_fast64_t frame_us_sum;                          /* sum of render times, us */
+    /* the form-factor cache's folder (iir/ffcache.h), read at each /metrics (service thread) */
+    char ffcache_dir[1024];
+    uint64_t ffcache_max;
+    int ffcache_watch;          /* inotify on the folder's deletions, -1 until it exists */
+    uint64_t ffcache_evictions; /* cache files deleted from the folder since start */
 } iird_metrics;
 
 /* One open session as the memory gauge reports it. */
@@ -35,14 +40,17 @@ typedef struct iird_metrics_session {
     double render_s; /* render time it has used (scheduler.h) */
 } iird_metrics_session;
 
+/* Zeroes m; takes the form-factor cache's folder and cap from the environment (after
+ * --cache-max set it). */
 void iird_metrics_init(iird_metrics *m);
 
 /* Counts one sent frame that took `render_ms` to render. */
 void iird_metrics_frame_sent(iird_metrics *m, double render_ms);
 void iird_metrics_error(iird_metrics *m, iird_err code);
 
-/* The /metrics text: malloc'd, NUL-terminated; NULL only when out of memory. */
-char *iird_metrics_prometheus(const iird_metrics *m, const iird_metrics_session *sessions,
+/* The /metrics text: malloc'd, NUL-terminated; NULL only when out of memory. Counts the cache
+ * folder's deletions since the last call first (service thread). */
+char *iird_metrics_prometheus(iird_metrics *m, const iird_metrics_session *sessions,
                               size_t num_sessions, const iird_sched_stats *sched,
                               size_t scenes_loaded);
 

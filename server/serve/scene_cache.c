@@ -26,6 +26,8 @@ typedef struct cache_slot {
 
 struct iird_scene_cache {
     char *dir;
+    char dir_real[PATH_MAX]; /* dir's canonical path ("" when it does not exist) */
+    bool follow_links;       /* names may resolve outside dir (--scenes-follow-links) */
     char **names; /* NULL-terminated; guarded by lock. Only the service thread adds names (a saved
                      scene), so it may read them without the lock. */
     pthread_mutex_t lock;
@@ -34,8 +36,6 @@ struct iird_scene_cache {
     const cache_slot *startup; /* pinned before any session exists; its name may come from a path
                                   outside dir */
 };
-
-/* ======================== the list of names ======================== */
 
 static int cmp_names(const void *a, const void *b)
 {
@@ -49,9 +49,45 @@ static bool is_scene_file(const char *name)
                    !strcasecmp(dot, ".glb") || strstr(name, ".scene.json"));
 }
 
-/* Folders and scene files directly in dir, as bare names. */
-static bool list_dir(const char *dir, char ***names, size_t *n)
+/* ======================== staying inside the scenes directory ======================== */
+
+/* Whether path resolves (symbolic links followed) outside the scenes directory. A path that does
+ * not resolve stays: loading it fails on its own. */
+static bool path_leaves(const iird_scene_cache *c, const char *path)
 {
+    char real[PATH_MAX];
+    if (!c->dir_real[0] || !realpath(path, real)) return false;
+    size_t n = strlen(c->dir_real);
+    if (n == 1) return false; /* the scenes directory is / */
+    return strncmp(real, c->dir_real, n) != 0 || (real[n] != '/' && real[n] != '\0');
+}
+
+/* Whether scene `name` of the scenes directory, or a file directly in its folder (what the loader
+ * picks), resolves outside the directory; never with --scenes-follow-links. */
+static bool scene_leaves(const iird_scene_cache *c, const char *name)
+{
+    char path[PATH_MAX];
+    if (c->follow_links) return false;
+    snprintf(path, sizeof path, "%s/%s", c->dir, name);
+    if (path_leaves(c, path)) return true;
+    DIR *d = opendir(path);
+    bool leaves = false;
+    for (struct dirent *de; d && !leaves && (de = readdir(d));) {
+        char inner[PATH_MAX];
+        if (de->d_name[0] == '.') continue;
+        int n = snprintf(inner, sizeof inner, "%s/%s", path, de->d_name);
+        leaves = n > 0 && n < (int)sizeof inner && path_leaves(c, inner);
+    }
+    if (d) closedir(d);
+    return leaves;
+}
+
+/* ======================== the list of names ======================== */
+
+/* Folders and scene files directly in c's dir, as bare names; none that leaves the directory. */
+static bool list_dir(const iird_scene_cache *c, char ***names, size_t *n)
+{
+    const char *dir = c->dir;
     DIR *d = opendir(dir);
     if (!d) return true; /* no scenes folder: only the built-in box */
     size_t cap = *n + 1;
@@ -61,6 +97,13 @@ static bool list_dir(const char *dir, char ***names, size_t *n)
         struct stat sb;
         snprintf(path, sizeof path, "%s/%s", dir, de->d_name);
         if (stat(path, &sb) != 0 || (!S_ISDIR(sb.st_mode) && !is_scene_file(de->d_name))) continue;
+        if (scene_leaves(c, de->d_name)) {
+            fprintf(stderr,
+                    "iird serve: scene %s: not listed: it leads outside the scenes directory %s "
+                    "(--scenes-follow-links allows it)\n",
+                    de->d_name, dir);
+            continue;
+        }
         if (*n + 2 > cap) {
             cap = 2 * cap + 8;
             char **grown = realloc(*names, cap * sizeof *grown);
@@ -73,13 +116,13 @@ static bool list_dir(const char *dir, char ***names, size_t *n)
     return true;
 }
 
-static char **scene_names(const char *dir)
+static char **scene_names(const iird_scene_cache *c)
 {
     size_t n = 0;
     char **names = malloc(2 * sizeof *names);
     if (!names) return NULL;
     names[n++] = strdup("builtin");
-    list_dir(dir, &names, &n);
+    list_dir(c, &names, &n);
     qsort(names + 1, n - 1, sizeof *names, cmp_names);
     names[n] = NULL;
     return names;
@@ -87,12 +130,14 @@ static char **scene_names(const char *dir)
 
 /* ======================== the cache ======================== */
 
-iird_scene_cache *iird_scene_cache_create(const char *scenes_dir)
+iird_scene_cache *iird_scene_cache_create(const char *scenes_dir, bool follow_links)
 {
     iird_scene_cache *c = calloc(1, sizeof *c);
     if (!c) return NULL;
     c->dir = strdup(scenes_dir ? scenes_dir : ".");
-    c->names = scene_names(c->dir);
+    c->follow_links = follow_links;
+    if (c->dir && !realpath(c->dir, c->dir_real)) c->dir_real[0] = '\0';
+    c->names = c->dir ? scene_names(c) : NULL;
     pthread_mutex_init(&c->lock, NULL);
     pthread_cond_init(&c->loaded, NULL);
     if (!c->dir || !c->names) {
@@ -186,6 +231,11 @@ static iir_status resolve(const iird_scene_cache *c, const char *arg, char *key,
     char path[PATH_MAX];
     if (iird_scene_cache_has(c, arg)) {
         /* a listed name: always the scenes folder's, never a file of the same name elsewhere */
+        if (scene_leaves(c, arg))
+            return iir_fail(err, IIR_ERR_INVALID,
+                            "scene %s leads outside the scenes directory (a symbolic link): "
+                            "refused (iird serve --scenes-follow-links allows it)",
+                            arg);
         snprintf(path, sizeof path, "%s/%s", c->dir, arg);
         snprintf(name, 130, "%s", arg);
     } else {
@@ -282,13 +332,43 @@ static iir_status add_slot_locked(iird_scene_cache *c, const char *key, const ch
     return st;
 }
 
+/* Replaces every path in msg (a word holding a '/': what a client must not learn of the server's
+ * files) with the scene's name. */
+static void hide_paths(char *msg, size_t cap, const char *name)
+{
+    char out[sizeof((iir_error *)0)->msg];
+    size_t o = 0;
+    for (const char *p = msg; *p && o + 1 < sizeof out;) {
+        size_t w = strcspn(p, " \t\n'\"(),;");
+        size_t keep = w > 0 && p[w - 1] == ':' ? w - 1 : w; /* "PATH: why" keeps its colon */
+        bool path = memchr(p, '/', keep) != NULL;
+        int k = path ? snprintf(out + o, sizeof out - o, "%s%.*s", name, (int)(w - keep), p + keep)
+                     : snprintf(out + o, sizeof out - o, "%.*s", (int)w, p);
+        o = k < 0 ? o : o + (size_t)k < sizeof out ? o + (size_t)k : sizeof out - 1;
+        p += w;
+        if (*p && o + 1 < sizeof out) out[o++] = *p++;
+    }
+    out[o] = '\0';
+    snprintf(msg, cap, "%s", out);
+}
+
+/* A scene that does not load: the whole reason goes to the log, the caller (and so the client)
+ * gets it with every path replaced by the scene's name. */
+static iir_status failed(const char *name, iir_status st, iir_error *err)
+{
+    if (!err) return st;
+    fprintf(stderr, "iird serve: scene %s: %s\n", name, err->msg);
+    hide_paths(err->msg, sizeof err->msg, name);
+    return st;
+}
+
 iir_status iird_scene_cache_acquire(iird_scene_cache *c, const char *name_or_path,
                                     const iird_scene_entry **out, iir_error *err)
 {
     char key[PATH_MAX], name[130];
     *out = NULL;
     iir_status st = resolve(c, name_or_path, key, name, err);
-    if (st != IIR_OK) return st;
+    if (st != IIR_OK) return failed(name_or_path ? base_name(name_or_path) : "builtin", st, err);
     pthread_mutex_lock(&c->lock);
     cache_slot *s = find_loaded_locked(c, key);
     if (!s)
@@ -298,7 +378,8 @@ iir_status iird_scene_cache_acquire(iird_scene_cache *c, const char *name_or_pat
     else
         s->refs++;
     pthread_mutex_unlock(&c->lock);
-    if (st == IIR_OK) *out = &s->entry;
+    if (st != IIR_OK) return failed(name, st, err);
+    *out = &s->entry;
     return st;
 }
 

@@ -27,9 +27,10 @@ typedef struct iird_scene_entry {
 
 typedef struct iird_scene_cache iird_scene_cache;
 
-/* An empty cache over scenes_dir (copied); lists the names in scenes_dir once, now. NULL on
- * out-of-memory. */
-iird_scene_cache *iird_scene_cache_create(const char *scenes_dir);
+/* An empty cache over scenes_dir (copied); lists the names in scenes_dir once, now. Unless
+ * follow_links, a name that resolves (symbolic links followed) outside scenes_dir, or whose
+ * folder holds a file that does, is neither listed nor loaded. NULL on out-of-memory. */
+iird_scene_cache *iird_scene_cache_create(const char *scenes_dir, bool follow_links);
 /* Frees every scene still loaded; all references must have been released (asserted). */
 void iird_scene_cache_destroy(iird_scene_cache *c);
 
@@ -50,7 +51,9 @@ bool iird_scene_cache_in_dir(const iird_scene_cache *c, const iird_scene_entry *
 
 /* A new reference to scene `name_or_path`, loading it if no session holds it (this can take
  * seconds for a large scene). "builtin" (or NULL) is the built-in Cornell box; any other text is
- * resolved as iir_scene_open does. On error returns its status with err filled and *out NULL. */
+ * resolved as iir_scene_open does. On error returns its status with err filled and *out NULL:
+ * the reason is logged on stderr whole, and err's message has every path in it replaced by the
+ * scene's name (clients see it). */
 iir_status iird_scene_cache_acquire(iird_scene_cache *c, const char *name_or_path,
                                     const iird_scene_entry **out, iir_error *err);
 /* Another reference to a scene the caller holds (or that is pinned). */

@@ -7,7 +7,7 @@
  * and wakes the main thread with lws_cancel_service; the protocol callback then, on
  * LWS_CALLBACK_EVENT_WAIT_CANCELLED, only asks for writable callbacks for the sessions that have
  * output, and on LWS_CALLBACK_SERVER_WRITEABLE writes one message and asks again if more is
- * waiting. SIGINT, SIGTERM, SIGHUP and SIGQUIT (and the ignored SIGUSR1/SIGUSR2) are blocked in
+ * waiting. SIGINT, SIGTERM, SIGHUP and SIGQUIT (and the ignored ones: signal_set) are blocked in
  * every thread and taken by a small signal thread (sigwait), which sets the stop flag and wakes
  * the service loop the same way.
  * A session whose client left is told to stop and parked on the `closing` list; it is freed when
@@ -40,6 +40,7 @@
 #include "iir/timer.h"
 #include "prometheus.h"
 #include "scene_cache.h"
+#include "scene_save.h"
 #include "scheduler.h"
 #include "session.h"
 
@@ -54,6 +55,7 @@ typedef struct conn {
     iird_session *session; /* NULL for a refused (busy) connection and after close */
     busy_reason busy;
     bool linked;
+    bool failing;          /* lws (or we) started closing it: nothing more is written */
     char addr[ADDR_BYTES]; /* the peer's IP address, for --max-sessions-per-address */
     struct conn *next;
 } conn;
@@ -80,15 +82,18 @@ typedef struct server {
     const iird_scene_entry *startup;
     iird_session_env env;
     iird_sched *sched;
-    conn *conns; /* every open WebSocket connection */
+    iird_saves *saves; /* named saves' limits; service thread */
+    conn *conns;       /* every open WebSocket connection */
     closing *closing;
     int active; /* sessions whose worker has not returned: open ones and closing ones */
     uint32_t next_id;
     atomic_int stop;
-    atomic_int draining;         /* set by the signal thread at the first SIGTERM */
-    double drain_until;          /* ms: the drain's end (0 until the service loop sees it) */
-    int port;                    /* the listening port (cfg->port may be 0) */
-    lws_sorted_usec_list_t tick; /* bounds each lws_service wait during shutdown */
+    atomic_int draining;          /* set by the signal thread at the first SIGTERM */
+    double drain_until;           /* ms: the drain's end (0 until the service loop sees it) */
+    int port;                     /* the listening port (cfg->port may be 0) */
+    lws_sorted_usec_list_t tick;  /* bounds each lws_service wait during shutdown */
+    lws_sorted_usec_list_t sweep; /* looks for connections lws is failing (sweep_cb) */
+    bool sweeping;
     char web_dir[PATH_MAX];
 } server;
 
@@ -230,9 +235,12 @@ static void client_address(const server *srv, struct lws *wsi, char addr[ADDR_BY
     if (n > 0 && n < ADDR_BYTES) memcpy(addr, last, n), addr[n] = '\0';
 }
 
+static void start_sweep(server *srv);
+
 static void on_established(server *srv, conn *c, struct lws *wsi)
 {
     link_conn(srv, c, wsi);
+    start_sweep(srv);
     client_address(srv, wsi, c->addr);
     if (atomic_load(&srv->draining)) return refuse_busy(c, BUSY_DRAINING);
     if (srv->active >= srv->cfg->max_sessions) return refuse_busy(c, BUSY_SERVER);
@@ -244,6 +252,7 @@ static void on_established(server *srv, conn *c, struct lws *wsi)
         fprintf(stderr, "iird serve: %s\n", err.msg);
         return refuse_busy(c, BUSY_SERVER);
     }
+    iird_session_set_address(c->session, c->addr);
     srv->active++;
     /* A client that never says hello must not hold a session slot: lws closes it after this. */
     lws_set_timeout(wsi, PENDING_TIMEOUT_USER_OK, IIRD_HELLO_TIMEOUT_S);
@@ -312,12 +321,53 @@ static void on_idle(server *srv, conn *c)
     lws_callback_on_writable(c->wsi);
 }
 
+/* A client that does not read its replies: its close reason now, sent (after what the socket
+ * already holds) at the next writable callback; a client that reads nothing for
+ * IIRD_NOT_READING_GRACE_S more is dropped without it. */
+static void check_overflow(conn *c)
+{
+    if (c->failing || !c->session || !iird_session_overflowed(c->session)) return;
+    c->failing = true;
+    iird_session_close_not_reading(c->wsi);
+    lws_set_timeout(c->wsi, PENDING_TIMEOUT_USER_OK, IIRD_NOT_READING_GRACE_S);
+    lws_callback_on_writable(c->wsi);
+}
+
 /* A worker (or the signal thread) woke the loop: ask for writable callbacks where output waits. */
 static void on_wake(server *srv)
 {
-    for (conn *c = srv->conns; c; c = c->next)
+    for (conn *c = srv->conns; c; c = c->next) {
         if (c->session && iird_session_take_wake(c->session)) lws_callback_on_writable(c->wsi);
+        check_overflow(c);
+    }
     reap_closing(srv, false);
+}
+
+/* RFC 6455 fails a connection on a frame with RSV bits or a reserved opcode. libwebsockets 4.1
+ * sends its close frame (1002) and stops reading, but then waits up to 5 s for the client's
+ * answer while still handing us writable callbacks. Such a connection has a close payload we did
+ * not set: it gets no further message and is closed at its next writable callback, which this
+ * asks for every 200 ms (a session with output asks sooner). */
+static bool lws_failing(conn *c, struct lws *wsi)
+{
+    if (!c->failing && lws_get_close_length(wsi) > 0) c->failing = true;
+    return c->failing;
+}
+
+static void sweep_cb(lws_sorted_usec_list_t *sul)
+{
+    server *srv = lws_container_of(sul, server, sweep);
+    srv->sweeping = false;
+    for (conn *c = srv->conns; c; c = c->next)
+        if (lws_failing(c, c->wsi)) lws_callback_on_writable(c->wsi);
+    start_sweep(srv);
+}
+
+static void start_sweep(server *srv)
+{
+    if (srv->sweeping || !srv->conns) return;
+    srv->sweeping = true;
+    lws_sul_schedule(srv->ctx, 0, &srv->sweep, sweep_cb, 200 * LWS_US_PER_MS);
 }
 
 /* A refused connection gets one busy error, then close 1013 (try again later). */
@@ -353,6 +403,7 @@ static int write_busy(server *srv, conn *c, struct lws *wsi)
 
 static int on_writable(server *srv, conn *c, struct lws *wsi)
 {
+    if (lws_failing(c, wsi)) return -1; /* its close reason is set: nothing more, close now */
     if (c->busy) return write_busy(srv, c, wsi);
     if (!c->session) return 0;
     switch (iird_session_write(c->session, wsi)) {
@@ -379,9 +430,11 @@ static int ws_callback(struct lws *wsi, enum lws_callback_reasons reason, void *
         on_established(srv, c, wsi);
         break;
     case LWS_CALLBACK_RECEIVE:
-        if (!c->session) break;
+        if (!c->session || lws_failing(c, wsi)) break; /* closing: nothing more is taken */
         iird_session_receive(c->session, in, len, lws_is_final_fragment(wsi),
                              lws_frame_is_binary(wsi));
+        check_overflow(c);
+        if (c->failing) break;
         if (iird_session_greeted(c->session)) lws_set_timeout(wsi, NO_PENDING_TIMEOUT, 0);
         arm_idle(srv, wsi);
         lws_callback_on_writable(wsi);
@@ -555,17 +608,26 @@ typedef struct signal_thread {
     atomic_int quit;
 } signal_thread;
 
-/* The signals the signal thread takes: the first four stop the server cleanly, SIGUSR1 and
- * SIGUSR2 are ignored (their default would kill the process). */
+/* The signals the signal thread takes: SIGINT, SIGTERM, SIGHUP and SIGQUIT stop the server
+ * cleanly; the others are ignored, since their default would end the daemon and nothing here
+ * uses them: SIGUSR1/2, the timer signals (SIGALRM, SIGVTALRM, SIGPROF), SIGIO, SIGPWR,
+ * SIGSTKFLT and the real-time signals. (SIGPIPE and SIGXFSZ are ignored in every thread: a failed
+ * write returns its error. Faults, SIGXCPU, SIGKILL and SIGSTOP keep their defaults.) */
 static void signal_set(sigset_t *set)
 {
+    static const int taken[] = {SIGINT,  SIGTERM,   SIGHUP,  SIGQUIT, SIGUSR1, SIGUSR2,
+                                SIGALRM, SIGVTALRM, SIGPROF, SIGIO,   SIGPWR};
     sigemptyset(set);
-    sigaddset(set, SIGINT);
-    sigaddset(set, SIGTERM);
-    sigaddset(set, SIGHUP);
-    sigaddset(set, SIGQUIT);
-    sigaddset(set, SIGUSR1);
-    sigaddset(set, SIGUSR2);
+    for (size_t i = 0; i < sizeof taken / sizeof *taken; i++) sigaddset(set, taken[i]);
+#ifdef SIGSTKFLT
+    sigaddset(set, SIGSTKFLT);
+#endif
+    for (int sig = SIGRTMIN; sig <= SIGRTMAX; sig++) sigaddset(set, sig);
+}
+
+static bool stop_signal(int sig)
+{
+    return sig == SIGINT || sig == SIGTERM || sig == SIGHUP || sig == SIGQUIT;
 }
 
 static void *signal_main(void *arg)
@@ -577,7 +639,7 @@ static void *signal_main(void *arg)
         int sig = 0;
         sigwait(&set, &sig);
         if (atomic_load(&st->quit)) return NULL;
-        if (sig == SIGUSR1 || sig == SIGUSR2) continue;
+        if (!stop_signal(sig)) continue;
         bool drain = sig == SIGTERM && st->srv->cfg->drain_seconds > 0;
         if (!drain || atomic_exchange(&st->srv->draining, 1)) atomic_store(&st->srv->stop, 1);
         pthread_mutex_lock(&st->srv->ctx_lock);
@@ -590,7 +652,7 @@ static void *signal_main(void *arg)
 
 static int start(server *srv, iir_error *err)
 {
-    srv->scenes = iird_scene_cache_create(srv->cfg->scenes_dir);
+    srv->scenes = iird_scene_cache_create(srv->cfg->scenes_dir, srv->cfg->scenes_follow_links);
     if (!srv->scenes) return iir_fail(err, IIR_ERR_NOMEM, "out of memory"), 1;
     iir_status st = iird_scene_cache_acquire(srv->scenes, srv->cfg->scene, &srv->startup, err);
     if (st != IIR_OK) return iir_status_exit_code(st);
@@ -600,6 +662,9 @@ static int start(server *srv, iir_error *err)
     int slots = srv->cfg->render_slots ? srv->cfg->render_slots : threads > 1 ? 2 : 1;
     srv->sched = iird_sched_create(slots, threads, IIRD_SCHED_SLICE_MS);
     if (!srv->sched) return iir_fail(err, IIR_ERR_NOMEM, "out of memory"), 1;
+    srv->saves = iird_saves_create(iird_scene_cache_dir(srv->scenes), srv->cfg->max_saved_scenes,
+                                   srv->cfg->save_rate);
+    if (!srv->saves) return iir_fail(err, IIR_ERR_NOMEM, "out of memory"), 1;
     srv->env = (iird_session_env){.scenes = srv->scenes,
                                   .metrics = &srv->metrics,
                                   .limits = srv->cfg->limits,
@@ -607,7 +672,8 @@ static int start(server *srv, iir_error *err)
                                   .startup = srv->startup,
                                   .token = srv->cfg->token,
                                   .budget = srv->cfg->budget,
-                                  .sched = srv->sched};
+                                  .sched = srv->sched,
+                                  .saves = srv->saves};
     return 0;
 }
 
@@ -727,6 +793,7 @@ static int serve(server *srv)
     while (!atomic_load(&srv->stop) && !drained(srv))
         if (lws_service(srv->ctx, 0) < 0) break;
     shut_down(srv);
+    lws_sul_cancel(&srv->sweep);
     pthread_mutex_lock(&srv->ctx_lock);
     srv->ctx = NULL;
     pthread_mutex_unlock(&srv->ctx_lock);
@@ -741,6 +808,7 @@ static void finish(server *srv)
         iird_scene_cache_destroy(srv->scenes);
     }
     iird_sched_destroy(srv->sched);
+    iird_saves_destroy(srv->saves);
 }
 
 int iird_server_run(const iird_server_config *cfg)
@@ -750,6 +818,7 @@ int iird_server_run(const iird_server_config *cfg)
     signal_set(&set);
     pthread_sigmask(SIG_BLOCK, &set, NULL);
     signal(SIGPIPE, SIG_IGN);
+    signal(SIGXFSZ, SIG_IGN);
 
     server *srv = calloc(1, sizeof *srv);
     if (!srv) return fprintf(stderr, "iird serve: out of memory\n"), 1;

@@ -12,16 +12,18 @@
 
 enum {
     IIRD_MAX_ORIGINS = 16,
-    IIRD_HELLO_TIMEOUT_S = 10, /* a WebSocket without an accepted hello by then is closed */
-    IIRD_CLOSE_IDLE = 4000,    /* WebSocket close status after --idle-timeout */
+    IIRD_HELLO_TIMEOUT_S = 10,    /* a WebSocket without an accepted hello by then is closed */
+    IIRD_CLOSE_IDLE = 4000,       /* WebSocket close status after --idle-timeout */
+    IIRD_NOT_READING_GRACE_S = 5, /* a client closed for not reading is dropped this long after */
 };
 
 typedef struct iird_server_config {
-    const char *host;       /* IP address to bind, "127.0.0.1" unless told otherwise */
-    int port;               /* 0: any free port (printed) */
-    const char *scene;      /* startup scene: NULL/"builtin", a name, a folder or a file */
-    const char *scenes_dir; /* where client scene names are looked up */
-    const char *web_dir;    /* the web client's folder (must exist) */
+    const char *host;         /* IP address to bind, "127.0.0.1" unless told otherwise */
+    int port;                 /* 0: any free port (printed) */
+    const char *scene;        /* startup scene: NULL/"builtin", a name, a folder or a file */
+    const char *scenes_dir;   /* where client scene names are looked up */
+    bool scenes_follow_links; /* names may lead outside scenes_dir through symbolic links */
+    const char *web_dir;      /* the web client's folder (must exist) */
     int max_sessions;
     int max_sessions_per_address; /* sessions one peer address may hold at once */
     int render_slots;   /* sessions rendering at once (scheduler.h); 0: 2, or 1 on one core */
@@ -39,6 +41,8 @@ typedef struct iird_server_config {
                                 they leave) while /healthz says draining; 0: stop at once */
     const char *trust_proxy; /* NULL, or a balancer's address: connections from it are counted
                                 (per-address limits, logs) by the last X-Forwarded-For entry */
+    int max_saved_scenes;    /* saved scenes the scenes directory may hold (scene_save.h) */
+    int save_rate;           /* named saves per client address per minute (and burst) */
 } iird_server_config;
 
 /* Loads the startup scene, starts listening, prints "iird: serving URL (scene)" on stdout, and

@@ -1,6 +1,7 @@
 /* session.c -- a session's life (create, stop, destroy), its output queue and frame slot, and
  * writing them to the client one message per writable callback. Client messages are
  * session_msg.c's, the render worker session_worker.c's. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -160,28 +161,78 @@ uint64_t iird_session_memory(iird_session *s)
 
 /* ======================== the output queue ======================== */
 
+/* Replies are never dropped: a client that lets more of them wait than the caps allow is closed
+ * (IIRD_CLOSE_NOT_READING). Stats and domain messages are (the oldest first), as frames are. */
+
+static out_msg *q_at(iird_session *s, int i)
+{
+    return &s->queue[(s->q_head + i) % IIRD_QUEUE_CAP];
+}
+
+/* Counts m in (sign 1) or out of (-1) the queue's figures. A snapshot's file is not counted in the
+ * bytes (it is one per session, held in the memory budget). */
+static void q_account(iird_session *s, const out_msg *m, int sign)
+{
+    if (m->droppable)
+        s->q_droppable += sign;
+    else if (!(m->binary && m->snapshot))
+        s->q_reply_bytes = sign > 0 ? s->q_reply_bytes + m->len : s->q_reply_bytes - m->len;
+}
+
+/* Drops the oldest stats or domain message; false when none is queued (the lock is held). */
+static bool drop_oldest_droppable(iird_session *s)
+{
+    for (int i = 0; i < s->q_count; i++) {
+        out_msg *m = q_at(s, i);
+        if (!m->droppable) continue;
+        q_account(s, m, -1);
+        free(m->buf);
+        for (int k = i; k + 1 < s->q_count; k++) *q_at(s, k) = *q_at(s, k + 1);
+        s->q_count--;
+        return true;
+    }
+    return false;
+}
+
+/* The client does not read its replies: nothing more is queued and the service thread closes the
+ * session with IIRD_CLOSE_NOT_READING (the lock is held). */
+static void overflow_locked(iird_session *s)
+{
+    fprintf(stderr,
+            "iird serve: session %u: closed (%d): the client does not read its replies (%d "
+            "messages, %zu bytes waiting)\n",
+            s->id, IIRD_CLOSE_NOT_READING, s->q_count, s->q_reply_bytes);
+    s->overflow = true;
+    s->close_status = IIRD_CLOSE_NOT_READING;
+    s->wake_service = true;
+    if (s->env->lws) lws_cancel_service(s->env->lws);
+}
+
+/* Whether one more message m fits; makes room by dropping stats or domain messages (the lock is
+ * held). A reply that does not fit overflows the session. */
+static bool make_room_locked(iird_session *s, const out_msg *m)
+{
+    if (m->droppable && s->q_droppable >= IIRD_QUEUE_DROPPABLE) drop_oldest_droppable(s);
+    if (s->q_count == IIRD_QUEUE_CAP && !drop_oldest_droppable(s)) {
+        if (!m->droppable) overflow_locked(s);
+        return false;
+    }
+    if (!m->droppable && s->q_reply_bytes >= IIRD_QUEUE_MAX_BYTES) {
+        overflow_locked(s);
+        return false;
+    }
+    return true;
+}
+
 void iird_queue_locked(iird_session *s, out_msg msg)
 {
-    if (s->q_count == IIRD_QUEUE_CAP) {
-        int victim = -1, oldest = -1; /* the oldest droppable entry, else the oldest other one */
-        for (int i = 0; i < s->q_count; i++) {
-            const out_msg *q = &s->queue[(s->q_head + i) % IIRD_QUEUE_CAP];
-            if (q->snapshot) continue; /* a snapshot's two parts go together */
-            if (oldest < 0) oldest = i;
-            if (q->droppable) {
-                victim = i;
-                break;
-            }
-        }
-        if (victim < 0) victim = oldest < 0 ? 0 : oldest;
-        free(s->queue[(s->q_head + victim) % IIRD_QUEUE_CAP].buf);
-        for (int i = victim; i + 1 < s->q_count; i++)
-            s->queue[(s->q_head + i) % IIRD_QUEUE_CAP] =
-                s->queue[(s->q_head + i + 1) % IIRD_QUEUE_CAP];
-        s->q_count--;
+    if (s->overflow || !make_room_locked(s, &msg)) {
+        free(msg.buf);
+        return;
     }
-    s->queue[(s->q_head + s->q_count) % IIRD_QUEUE_CAP] = msg;
+    *q_at(s, s->q_count) = msg;
     s->q_count++;
+    q_account(s, &msg, 1);
 }
 
 void iird_queue_text_locked(iird_session *s, const char *text, bool droppable)
@@ -192,6 +243,15 @@ void iird_queue_text_locked(iird_session *s, const char *text, bool droppable)
     if (!m.buf) return;
     memcpy(m.buf + LWS_PRE, text, len);
     iird_queue_locked(s, m);
+}
+
+void iird_queue_snapshot_locked(iird_session *s, const char *json, unsigned char *buf, size_t len)
+{
+    const unsigned char *tail = s->q_count > 0 ? q_at(s, s->q_count - 1)->buf : NULL;
+    iird_queue_text_locked(s, json, false);
+    out_msg *text = s->q_count > 0 ? q_at(s, s->q_count - 1) : NULL;
+    if (text && text->buf != tail) text->snapshot = true; /* queued: the reply's text */
+    iird_queue_locked(s, (out_msg){buf, len, true, false, true});
 }
 
 void iird_queue_error(iird_session *s, const iird_proto_error *e)
@@ -332,8 +392,27 @@ static bool more_locked(const iird_session *s)
     return s->q_count > 0 || s->slot.full || s->close_status;
 }
 
+bool iird_session_overflowed(iird_session *s)
+{
+    pthread_mutex_lock(&s->lock);
+    bool overflow = s->overflow;
+    pthread_mutex_unlock(&s->lock);
+    return overflow;
+}
+
+void iird_session_close_not_reading(struct lws *wsi)
+{
+    static const char why[] = "the client does not read: too many replies waiting";
+    lws_close_reason(wsi, (enum lws_close_status)IIRD_CLOSE_NOT_READING, (unsigned char *)why,
+                     sizeof why - 1);
+}
+
 iird_write_result iird_session_write(iird_session *s, struct lws *wsi)
 {
+    if (iird_session_overflowed(s)) { /* nothing queued goes: close now, even while choked */
+        iird_session_close_not_reading(wsi);
+        return IIRD_WRITE_CLOSE;
+    }
     if (lws_send_pipe_choked(wsi)) return IIRD_WRITE_MORE;
     bool ok = true;
     pthread_mutex_lock(&s->lock);
@@ -341,6 +420,7 @@ iird_write_result iird_session_write(iird_session *s, struct lws *wsi)
         out_msg m = s->queue[s->q_head];
         s->q_head = (s->q_head + 1) % IIRD_QUEUE_CAP;
         s->q_count--;
+        q_account(s, &m, -1);
         pthread_mutex_unlock(&s->lock);
         ok = write_bytes(s, wsi, m.buf + LWS_PRE, m.len, m.binary);
         free(m.buf);

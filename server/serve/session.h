@@ -40,6 +40,7 @@ typedef struct iird_session_env {
     const char *token;               /* NULL: hello needs no token */
     struct iird_budget *budget;      /* memory reservations (budget.h); NULL: no limits */
     struct iird_sched *sched;        /* who renders when (scheduler.h) */
+    struct iird_saves *saves;        /* named saves' limits (scene_save.h); NULL: none */
 } iird_session_env;
 
 typedef struct iird_session iird_session;
@@ -53,6 +54,9 @@ uint64_t iird_session_estimate(const iird_settings *st);
  * hello). NULL with err filled when out of memory, when the default settings do not fit the
  * daemon's memory budget beside the other sessions, or when the thread cannot start. */
 iird_session *iird_session_create(const iird_session_env *env, uint32_t id, iir_error *err);
+
+/* The client's address as server.c counts it (per-address limits); service thread. */
+void iird_session_set_address(iird_session *s, const char *addr);
 
 /* Asks the worker to stop after its current step; does not block. */
 void iird_session_request_stop(iird_session *s);
@@ -92,7 +96,14 @@ typedef enum iird_write_result {
 
 /* Writes at most one message to wsi: queued replies first, then a pending close (returns
  * IIRD_WRITE_CLOSE with the reason set), then the newest frame (its stats and domain are queued
- * behind it). Nothing while lws_send_pipe_choked. On a write error returns IIRD_WRITE_CLOSE. */
+ * behind it). Nothing while lws_send_pipe_choked. On a write error returns IIRD_WRITE_CLOSE; a
+ * session that overflowed (below) returns it at once, choked or not. */
 iird_write_result iird_session_write(iird_session *s, struct lws *wsi);
+
+/* True once the client let more replies wait than the output queue's caps allow (it does not
+ * read): replies are never dropped, so the session must be closed (any thread). */
+bool iird_session_overflowed(iird_session *s);
+/* Sets wsi's close reason for such a client: 1008 (policy violation) with a text. */
+void iird_session_close_not_reading(struct lws *wsi);
 
 #endif

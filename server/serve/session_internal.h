@@ -14,16 +14,20 @@
 #include "session_lights.h"
 
 enum {
-    IIRD_QUEUE_CAP = 64,       /* pending text/binary replies; oldest stats/domain dropped first */
-    IIRD_REFINE_IDLE_MS = 250, /* no input for this long before refinement starts */
-    IIRD_RATE_PER_S = 250,     /* token bucket refill */
-    IIRD_RATE_BURST = 500,     /* token bucket size */
-    IIRD_FPS_WINDOW = 128,     /* send times kept for the fps figure */
-    IIRD_DOMAIN_MIN_MS = 100,  /* domain messages at most this often while frames stream */
-    IIRD_FRAME_PATIENCE_MS = 250, /* newer input stops a frame only after it ran this long, or 3x
-                                     the last frame's time (at most IIRD_FRAME_PATIENCE_MAX_MS), so
-                                     a drag still shows frames on a loaded machine; refinement
-                                     stops at once */
+    IIRD_QUEUE_CAP = 1024,          /* queued messages at most: more replies waiting than this (a
+                                       client that does not read) closes the session */
+    IIRD_QUEUE_DROPPABLE = 32,      /* stats and domain messages waiting at most: the oldest go */
+    IIRD_QUEUE_MAX_BYTES = 4 << 20, /* reply bytes waiting at most (a snapshot's file aside) */
+    IIRD_CLOSE_NOT_READING = 1008,  /* policy violation: the client does not read its replies */
+    IIRD_REFINE_IDLE_MS = 250,      /* no input for this long before refinement starts */
+    IIRD_RATE_PER_S = 250,          /* token bucket refill */
+    IIRD_RATE_BURST = 500,          /* token bucket size */
+    IIRD_FPS_WINDOW = 128,          /* send times kept for the fps figure */
+    IIRD_DOMAIN_MIN_MS = 100,       /* domain messages at most this often while frames stream */
+    IIRD_FRAME_PATIENCE_MS = 250,   /* newer input stops a frame only after it ran this long, or 3x
+                                       the last frame's time (at most IIRD_FRAME_PATIENCE_MAX_MS), so
+                                       a drag still shows frames on a loaded machine; refinement
+                                       stops at once */
     IIRD_FRAME_PATIENCE_MAX_MS = 1000,
     IIRD_WORKER_NICE =
         5, /* render workers (and their OpenMP threads) yield to the service thread */
@@ -34,8 +38,8 @@ typedef struct out_msg {
     unsigned char *buf;
     size_t len;
     bool binary;
-    bool droppable; /* stats and domain: dropped first when the queue is full */
-    bool snapshot;  /* a snapshot's reply or its binary part: never dropped (they go together) */
+    bool droppable; /* stats and domain: the only messages ever dropped (latest-wins) */
+    bool snapshot;  /* a snapshot's reply or its binary part: not counted in the byte cap */
 } out_msg;
 
 /* A growable byte buffer with LWS_PRE headroom in front of the data. */
@@ -77,7 +81,12 @@ typedef struct worker_state {
     iir_method *method;
     char method_name[16];
     const iird_scene_entry *method_scene;
-    bool refining; /* the method call under way is a refinement pass (the stop hook) */
+    bool refining;       /* the method call under way is a refinement pass (the stop hook) */
+    uint64_t extra_held; /* bytes reserved in env->budget beyond the session's `reserved`: what
+                            the method's real counts on its scene add to the estimate from its
+                            parameters (reserve_real_size; the worker's own) */
+    iird_settings method_settings;    /* the settings `method` was made with (a refused switch
+                                         goes back to them) */
     const iird_scene_entry *creating; /* the method is being created (or re-created by new
                                          parameters) for this scene, for job `last` (the stop
                                          hook's creation rule); NULL otherwise */
@@ -107,6 +116,7 @@ typedef struct worker_state {
 struct iird_session {
     const iird_session_env *env;
     uint32_t id;
+    char addr[64]; /* the client's address (server.c), for the per-address save rate */
     pthread_t thread;
     bool thread_started;
     pthread_mutex_t lock;
@@ -132,8 +142,12 @@ struct iird_session {
     bool snapshot_busy;     /* one requested and not yet written out (at most one per session) */
     uint64_t snapshot_held; /* its bytes, reserved in env->budget while queued */
     int64_t snapshot_seq;
-    out_msg queue[IIRD_QUEUE_CAP];
+    out_msg queue[IIRD_QUEUE_CAP]; /* a ring: replies are never dropped; stats and domain are */
     int q_head, q_count;
+    int q_droppable;      /* stats and domain messages in the queue */
+    size_t q_reply_bytes; /* bytes of the queued replies (snapshot files aside) */
+    bool overflow;        /* more replies waiting than the caps allow: the session is closed with
+                             IIRD_CLOSE_NOT_READING and nothing more is queued */
     frame_slot slot;
     uint32_t sent_id;  /* id of the last frame handed to lws */
     bool wake_service; /* the worker queued output since the service thread last looked */
@@ -166,8 +180,12 @@ bool iird_buf_reserve(byte_buf *b, size_t n);
 void iird_buf_free(byte_buf *b);
 /* Queues a copy of text (with the lock held). */
 void iird_queue_text_locked(iird_session *s, const char *text, bool droppable);
-/* Queues msg, taking ownership of buf (with the lock held). */
+/* Queues msg, taking ownership of buf (with the lock held). Replies are never dropped: one that
+ * does not fit overflows the session (it is closed); stats and domain messages may be. */
 void iird_queue_locked(iird_session *s, out_msg msg);
+/* Queues a snapshot's reply (a copy of json) and its binary message (buf, LWS_PRE headroom, len
+ * bytes; taken), marked as the snapshot's two parts (with the lock held). */
+void iird_queue_snapshot_locked(iird_session *s, const char *json, unsigned char *buf, size_t len);
 /* Queues an error reply (locks); counts it in the metrics. */
 void iird_queue_error(iird_session *s, const iird_proto_error *e);
 /* The session's state as the protocol's JSON builders read it (lock held). */

@@ -91,6 +91,14 @@ static bool token_matches(const char *want, const char *got)
     return diff == 0;
 }
 
+/* The welcome's and save replies' scene names: all but the older saved scenes (scene_save.h);
+ * free the array (not its names). NULL when out of memory. */
+static const char **listed_scenes(const iird_session *s, size_t *more)
+{
+    return iird_saves_listed(s->env->saves, iird_scene_cache_names(s->env->scenes),
+                             IIRD_SAVED_LISTED, more);
+}
+
 static bool on_hello(iird_session *s, const iird_msg *m, iird_proto_error *err)
 {
     if (m->u.hello.protocol != IIRD_PROTOCOL_VERSION)
@@ -105,11 +113,14 @@ static bool on_hello(iird_session *s, const iird_msg *m, iird_proto_error *err)
         iird_session_close(s, 1008); /* policy violation */
         return true;
     }
+    size_t more = 0;
+    const char **names = listed_scenes(s, &more);
+    if (!names) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
     s->hello_ok = true;
     pthread_mutex_lock(&s->lock);
     iird_state_view v = iird_state_view_locked(s);
-    char *json = iird_json_welcome(&v, s->id, iird_scene_cache_names(s->env->scenes),
-                                   &s->env->limits, m->seq);
+    char *json = iird_json_welcome(&v, s->id, names, more, &s->env->limits, m->seq);
+    free(names);
     iird_queue_text_locked(s, json, false);
     s->ready = true;
     pthread_cond_broadcast(&s->wake);
@@ -257,11 +268,20 @@ static bool on_scene(iird_session *s, const iird_msg *m, iird_proto_error *err)
         return iird_proto_fail(err, IIRD_E_BAD_FIELD, "scene.name",
                                "no scene named '%s' (welcome.scenes lists them)", name);
     pthread_mutex_lock(&s->lock);
+    /* Latest-wins: a switch still waiting for the worker is replaced, and answered now (every
+       request with a seq gets its reply) by the state as it is, marked superseded. */
+    char *json = NULL;
+    if (s->scene_pending && s->scene_seq != IIRD_NO_SEQ) {
+        iird_state_view v = iird_state_view_locked(s);
+        json = iird_json_state_superseded(&v, s->scene_seq);
+        iird_queue_text_locked(s, json, false);
+    }
     s->scene_pending = true;
     snprintf(s->scene_name, sizeof s->scene_name, "%s", name);
     s->scene_seq = m->seq;
     pthread_cond_broadcast(&s->wake);
     pthread_mutex_unlock(&s->lock);
+    free(json);
     return true;
 }
 
@@ -356,10 +376,16 @@ static bool on_record(iird_session *s, const iird_msg *m, iird_proto_error *err)
 
 /* ---- save ---- */
 
+void iird_session_set_address(iird_session *s, const char *addr)
+{
+    snprintf(s->addr, sizeof s->addr, "%s", addr);
+}
+
 /* What a save needs of the session, copied under its lock (the worker may swap the scene). */
 typedef struct save_state {
     char scene[130];
-    bool in_dir; /* the scene can be a sidecar's base */
+    char base[130]; /* what the sidecar names: the scene, flattened (iird_save_base) */
+    bool in_dir;    /* the scene can be a sidecar's base */
     iir_camera camera;
     float aspect;
     iir_light *lights; /* the session's lights as rendered (one switched off black), in order */
@@ -378,12 +404,13 @@ static bool copy_save_state(iird_session *s, save_state *st)
         memcpy(st->lights, iird_lights_shown(&s->lights), s->lights.n * sizeof *st->lights);
     if (st->lights) st->num_lights = s->lights.n;
     pthread_mutex_unlock(&s->lock);
+    snprintf(st->base, sizeof st->base, "%s", st->scene);
     return st->lights != NULL;
 }
 
-/* Writes the sidecar as the new scene `name` and lists it; false with err filled otherwise. */
-static bool save_named(iird_session *s, const save_state *st, const iird_sidecar_view *v,
-                       const char *name, iird_proto_error *err)
+/* Whether the session may write scene `name` now: --allow-save, a new name, a scene of the
+ * scenes directory, the address's rate and the total (scene_save.h); false with err filled. */
+static bool may_save(iird_session *s, const save_state *st, const char *name, iird_proto_error *err)
 {
     if (!s->env->limits.allow_save)
         return iird_proto_fail(err, IIRD_E_UNSUPPORTED, "save.name",
@@ -398,26 +425,51 @@ static bool save_named(iird_session *s, const save_state *st, const iird_sidecar
                                "scene cannot name it as its base; send save without a name to "
                                "get the sidecar",
                                st->scene);
+    return !s->env->saves || iird_saves_admit(s->env->saves, s->addr, iir_now_ms(), err);
+}
+
+/* Writes the sidecar as the new scene `name` (may_save said yes) and lists it; false with err
+ * filled otherwise. */
+static bool save_named(iird_session *s, const iird_sidecar_view *v, const char *name,
+                       iird_proto_error *err)
+{
     char *text = iird_sidecar_text(v);
     bool ok = text ? iird_scene_save(iird_scene_cache_dir(s->env->scenes), name, text, err)
                    : iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
     free(text);
     if (ok) iird_scene_cache_add_name(s->env->scenes, name);
+    if (ok && s->env->saves) iird_saves_added(s->env->saves, name);
     return ok;
 }
 
-/* `save`: the session's lights and camera as a sidecar based on its scene, sent back; with a
- * name also written into the scenes directory as a new scene (only with --allow-save). */
+/* The save reply: the sidecar, and after a named save the names a client may now ask for. */
+static char *save_reply(iird_session *s, const iird_sidecar_view *v, int64_t seq, const char *name)
+{
+    size_t more = 0;
+    const char **names = name ? listed_scenes(s, &more) : NULL;
+    if (name && !names) return NULL;
+    char *json = iird_json_save(v, seq, name, names, more);
+    free(names);
+    return json;
+}
+
+/* `save`: the session's lights and camera as a sidecar based on its scene (flattened: a scene
+ * iird saved gives way to its own base), sent back; with a name also written into the scenes
+ * directory as a new scene (only with --allow-save). A name refuses a sidecar the loader could
+ * not load; without one the sidecar keeps the scene as its base then. */
 static bool on_save(iird_session *s, const iird_msg *m, iird_proto_error *err)
 {
     const char *name = m->u.save.has_name ? m->u.save.name : NULL;
     save_state st = {0};
     if (!copy_save_state(s, &st))
         return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
-    iird_sidecar_view v = {st.scene, &st.camera, st.aspect, st.lights, st.num_lights};
-    bool ok = !name || save_named(s, &st, &v, name, err);
-    char *json =
-        ok ? iird_json_save(&v, m->seq, name, iird_scene_cache_names(s->env->scenes)) : NULL;
+    iird_proto_error flat = *err;
+    bool ok = !name || may_save(s, &st, name, err);
+    bool based = ok && (!st.in_dir || iird_save_base(iird_scene_cache_dir(s->env->scenes), st.scene,
+                                                     st.base, sizeof st.base, name ? err : &flat));
+    iird_sidecar_view v = {st.base, &st.camera, st.aspect, st.lights, st.num_lights};
+    ok = ok && (based || !name) && (!name || save_named(s, &v, name, err));
+    char *json = ok ? save_reply(s, &v, m->seq, name) : NULL;
     free(st.lights);
     if (ok && !json) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
     if (ok) {
@@ -427,6 +479,18 @@ static bool on_save(iird_session *s, const iird_msg *m, iird_proto_error *err)
     }
     free(json);
     return ok;
+}
+
+/* `scenes`: every name a client may ask for, saved scenes welcome left out included. */
+static bool on_scenes(iird_session *s, const iird_msg *m, iird_proto_error *err)
+{
+    char *json = iird_json_scenes(iird_scene_cache_names(s->env->scenes), m->seq);
+    if (!json) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory");
+    pthread_mutex_lock(&s->lock);
+    iird_queue_text_locked(s, json, false);
+    pthread_mutex_unlock(&s->lock);
+    free(json);
+    return true;
 }
 
 static bool dispatch(iird_session *s, const iird_msg *m, iird_proto_error *err)
@@ -450,6 +514,8 @@ static bool dispatch(iird_session *s, const iird_msg *m, iird_proto_error *err)
         return on_record(s, m, err);
     case IIRD_MSG_SAVE:
         return on_save(s, m, err);
+    case IIRD_MSG_SCENES:
+        return on_scenes(s, m, err);
     }
     return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "unhandled message type %d", (int)m->type);
 }

@@ -125,8 +125,68 @@ static bool should_stop(void *ctx)
            iird_sched_used_ms(s->env->sched, &s->sched) - s->w.started_ms > s->w.patience_ms;
 }
 
+/* A method the budget refused: the session goes back to the settings its method has (those of a new
+ * session when it has none), answered with a `state` reply, and the job's request gets the refusal
+ * (lock held). Newer settings than the job's are left alone: their own turn checks them. */
+static void refuse_settings_locked(iird_session *s, const render_job *j, iird_proto_error *pe)
+{
+    worker_state *w = &s->w;
+    const iird_settings *now = &s->settings;
+    if (!strcmp(now->method, j->settings.method) &&
+        iir_params_equal(&now->params, &j->settings.params) && now->width == j->settings.width &&
+        now->height == j->settings.height) {
+        s->settings = w->method ? w->method_settings : s->env->defaults;
+        iird_proto_error ignore;
+        (void)iird_budget_reserve(s->env->budget, &s->reserved, iird_session_estimate(&s->settings),
+                                  &ignore); /* less than before: fits */
+        s->version++;
+        s->generation++;
+        iird_state_view v = iird_state_view_locked(s);
+        char *json = iird_json_state(&v, j->seq);
+        iird_queue_text_locked(s, json, false);
+        free(json);
+    }
+    char *json = iird_json_error(pe);
+    iird_metrics_error(s->env->metrics, pe->code);
+    iird_queue_text_locked(s, json, false);
+    free(json);
+    notify_locked(s);
+}
+
+/* Reserves what the job's method will hold by its real counts on scene sc (radiosity: the scene's
+ * patches and sampled form-factor rows; iir_method_memory_on) beyond what the session reserved
+ * from its parameters, before anything is built. False when that passes the session's or the
+ * daemon's budget: the request is refused as a `params` message would be (the session's settings
+ * go back to its method's), nothing is built and the old method stays. */
+static bool reserve_real_size(iird_session *s, const render_job *j, const iird_scene_entry *sc)
+{
+    worker_state *w = &s->w;
+    const iird_settings *st = &j->settings;
+    uint64_t real =
+        iir_method_memory_on(st->method, sc->scene, sc->rt, &st->params, st->width, st->height);
+    uint64_t param = iir_method_memory(st->method, &st->params, st->width, st->height);
+    uint64_t extra = real > param ? real - param : 0;
+    iird_budget *b = s->env->budget;
+    iird_proto_error pe = {.seq = j->seq};
+    pthread_mutex_lock(&s->lock);
+    bool ok = !b || s->reserved + extra <= b->session_max;
+    if (!ok)
+        iird_proto_fail(&pe, IIRD_E_OUT_OF_RANGE, "params",
+                        "params: %s on scene %s would hold about %.0f MiB (counted on the scene), "
+                        "over the session's memory budget of %.0f MiB (--max-session-memory); "
+                        "a larger patch_area or a smaller hemicube_res fits",
+                        st->method, sc->name, (double)(s->reserved + extra) / 1048576.0,
+                        (double)b->session_max / 1048576.0);
+    else
+        ok = iird_budget_reserve(b, &w->extra_held, extra, &pe);
+    if (!ok) refuse_settings_locked(s, j, &pe);
+    pthread_mutex_unlock(&s->lock);
+    return ok;
+}
+
 /* The session's method for the job: kept when only parameters changed (its VPLs too, when every
- * change is IIR_PARAM_LIVE), created anew for another method or scene. */
+ * change is IIR_PARAM_LIVE), created anew for another method or scene; its size on the scene is
+ * reserved first (reserve_real_size). */
 static iir_status ensure_method(iird_session *s, const render_job *j, const iird_scene_entry *sc,
                                 iir_error *err)
 {
@@ -134,11 +194,14 @@ static iir_status ensure_method(iird_session *s, const render_job *j, const iird
     const iird_settings *st = &j->settings;
     bool same = w->method && w->method_scene == sc && !strcmp(w->method_name, st->method);
     if (same && iir_params_equal(iir_method_params(w->method), &st->params)) return IIR_OK;
+    if (!reserve_real_size(s, j, sc))
+        return iir_fail(err, IIR_ERR_INTERRUPTED, "refused: over the memory budget"); /* said */
     w->have_frame = false;
     w->creating = sc; /* the stop hook's creation rule, until this returns */
     if (same) {
         iir_status rc = iir_method_set_params(w->method, &st->params, NULL, err);
         w->creating = NULL;
+        if (rc == IIR_OK) w->method_settings = *st;
         return rc;
     }
     iir_method_destroy(w->method);
@@ -147,6 +210,7 @@ static iir_status ensure_method(iird_session *s, const render_job *j, const iird
                                                 should_stop, s, &w->method, err);
     w->creating = NULL;
     if (rc != IIR_OK) return rc;
+    w->method_settings = *st;
     snprintf(w->method_name, sizeof w->method_name, "%s", st->method);
     w->method_scene = sc;
     return IIR_OK;
@@ -601,9 +665,7 @@ static void snapshot_locked(iird_session *s)
     char *json = iird_json_snapshot(seq, exr ? "exr" : "png", w->last_id, w->pass, size,
                                     w->img->width, w->img->height);
     pthread_mutex_lock(&s->lock);
-    iird_queue_text_locked(s, json, false);
-    s->queue[(s->q_head + s->q_count - 1) % IIRD_QUEUE_CAP].snapshot = true; /* the reply's text */
-    iird_queue_locked(s, (out_msg){buf, IIRD_FRAME_HEADER_BYTES + size, true, false, true});
+    iird_queue_snapshot_locked(s, json, buf, IIRD_FRAME_HEADER_BYTES + size);
     notify_locked(s);
     free(json);
 }
@@ -745,6 +807,7 @@ void *iird_session_worker(void *arg)
         else
             pthread_cond_wait(&s->wake, &s->lock);
     }
+    iird_budget_release(s->env->budget, &s->w.extra_held);
     s->worker_done = true;
     notify_locked(s); /* the service thread reaps finished sessions */
     pthread_mutex_unlock(&s->lock);

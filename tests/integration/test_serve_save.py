@@ -9,6 +9,7 @@ carries the sidecar alone. Usage: test_serve_save.py IIRD SOURCE_DIR"""
 import asyncio
 import json
 import os
+import shutil
 import subprocess
 import tempfile
 import unittest
@@ -79,7 +80,8 @@ class SaveTest(unittest.IsolatedAsyncioTestCase):
         cls.tmp = tempfile.TemporaryDirectory(prefix="iird-save-", dir=os.environ.get("IIR_TEST_TMP"))
         cls.scenes = os.path.join(cls.tmp.name, "scenes")
         os.makedirs(cls.scenes)
-        os.symlink(os.path.join(iirserve.SRC, "scenes", "cornell_box"), os.path.join(cls.scenes, "cornell_box"))
+        # a copy, not a link: a link leading outside the scenes directory is refused (--scenes-follow-links)
+        shutil.copytree(os.path.join(iirserve.SRC, "scenes", "cornell_box"), os.path.join(cls.scenes, "cornell_box"))
         cls.daemon = Daemon(*iirserve.FAST_ARGS, "--scenes", cls.scenes, "--allow-save", scenes=False)
         cls.plain = Daemon(*iirserve.FAST_ARGS, "--scenes", cls.scenes, scenes=False)
 

@@ -612,7 +612,7 @@ static void test_params_parse(void **state)
     expect("{\"type\":\"params\",\"method\":3}", IIRD_E_BAD_TYPE, "params.method");
     /* values land under their names */
     m = parse_ok("{\"type\":\"params\",\"method\":\"pt\",\"vpls\":100,\"weights\":\"uniform\","
-                 "\"clamp\":0.5,\"width\":640,\"refine\":false,\"seed\":9007199254740992}");
+                 "\"clamp\":0.5,\"width\":640,\"refine\":false,\"seed\":9007199254740991}");
     const iir_params *v = &m.u.params.values;
     double x = 0;
     assert_true(iir_params_get(v, "vpls", &x) && x == 100);
@@ -620,12 +620,17 @@ static void test_params_parse(void **state)
     assert_true(iir_params_get(v, "clamp", &x) && x == 0.5);
     assert_true(iir_params_get(v, "width", &x) && x == 640);
     assert_true(iir_params_get(v, "refine", &x) && x == 0);
-    assert_true(iir_params_get(v, "seed", &x) && x == 9007199254740992.0);
+    assert_true(iir_params_get(v, "seed", &x) && x == 9007199254740991.0);
     assert_int_equal(v->count, 6);
     /* live maxima bound what a client may ask for: more VPLs than a frame stays interactive */
     e = expect("{\"type\":\"params\",\"vpls\":4097}", IIRD_E_OUT_OF_RANGE, "params.vpls");
     assert_non_null(strstr(e.message, "4096"));
     expect("{\"type\":\"params\",\"spp\":65}", IIRD_E_OUT_OF_RANGE, "params.spp");
+    /* integers above 2^53 - 1 cannot be told apart as doubles: refused, with exact digits */
+    e = expect("{\"type\":\"params\",\"seed\":9007199254740992}", IIRD_E_OUT_OF_RANGE,
+               "params.seed");
+    assert_non_null(strstr(e.message, "9007199254740991], got 9007199254740992"));
+    expect("{\"type\":\"params\",\"seed\":9007199254740993}", IIRD_E_OUT_OF_RANGE, "params.seed");
 }
 
 static double val(const iird_settings *s, const char *name)
@@ -940,7 +945,7 @@ static void test_json_replies(void **state)
     iird_settings s = iird_settings_default();
     iir_error ie;
     assert_int_equal(
-        iir_params_set(&s.params, iir_method_any_param("seed"), 9007199254740992.0, &ie), IIR_OK);
+        iir_params_set(&s.params, iir_method_any_param("seed"), 9007199254740991.0, &ie), IIR_OK);
     iird_state_view v = {"builtin", &L, &C, &s, 4, false, NULL, NULL, NULL, 0};
     char *text = iird_json_state(&v, 3);
     assert_non_null(strstr(text, "\"fov\":39.3}"));
@@ -948,7 +953,7 @@ static void test_json_replies(void **state)
     assert_non_null(strstr(text, "\"generation\":4,"));
     assert_non_null(strstr(text, "\"default_light\":false,"));
     assert_non_null(strstr(text, "\"position\":[0,1.9,0]"));
-    assert_non_null(strstr(text, "\"seed\":9007199254740992"));
+    assert_non_null(strstr(text, "\"seed\":9007199254740991"));
     o = reply_ok(text, "state");
     assert_int_equal(num(o, "seq"), 3);
     assert_string_equal(cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(o, "scene")),
@@ -999,7 +1004,7 @@ static void test_json_replies(void **state)
 
     /* welcome */
     const char *scenes[] = {"builtin", "cornell_box", NULL};
-    o = reply_ok(iird_json_welcome(&v, 7, scenes, &LIM, 0), "welcome");
+    o = reply_ok(iird_json_welcome(&v, 7, scenes, 0, &LIM, 0), "welcome");
     assert_int_equal(num(o, "protocol"), 1);
     assert_int_equal(num(o, "session"), 7);
     assert_int_equal(num(o, "seq"), 0);

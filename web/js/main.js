@@ -261,9 +261,16 @@ const switcher = new Switcher({
 const saving = new SaveControls($('#panel'), {
     send,
     download: (blob, name) => download(blob, name),
-    scenes: (list) => panel.setScenes(list),
+    scenes: (list, more) => listScenes(list, more),
     scene: () => app.state.scene,
 });
+
+// The scene picker's names; `more` saved scenes left out (welcome and save list the newest
+// saved ones only): the `scenes` request brings them all.
+function listScenes(list, more) {
+    panel.setScenes(list);
+    if (more) send({ type: 'scenes' });
+}
 
 // Light and camera input needs a session, and no scene on its way (the switch resets both).
 function updateEnabled() {
@@ -323,6 +330,7 @@ function onWelcome(w, newSession) {
     app.welcomed = true;
     app.resync = false;
     panel.setWelcome({ ...w, state: app.state }, app.selected);
+    if (w.scenes_more) send({ type: 'scenes' });
     saving.setLimits(w.limits);
     if (!first) resend(app.state, w.state);
     else if (!app.framesDrawn) curtain.loading(`waiting for the first frame…`, `${app.state.scene} with ${app.state.params.method}`);
@@ -389,6 +397,9 @@ function onMessage(msg) {
         return onRecord(msg);
     case 'save':
         return saving.saved(msg, settled(msg));
+    case 'scenes':
+        settled(msg);
+        return panel.setScenes(msg.scenes);
     case 'error':
         return onError(msg);
     default:
@@ -417,6 +428,9 @@ function showNotes(notes) {
 }
 
 function onState(msg) {
+    // A scene switch replaced by a newer one before it began: answered, nothing changed (the
+    // newer switch's own reply brings the state).
+    if (msg.superseded) return switcher.stated(msg, settled(msg));
     const req = settled(msg);
     showNotes(msg.notes);
     const s = app.state;

@@ -9,7 +9,7 @@ const NAME_RE = /^[A-Za-z0-9_.-]{1,100}$/;
 const NO_SAVE = 'this server does not write scenes (it was started without --allow-save); Download gives the sidecar';
 
 export class SaveControls {
-    // handlers: {send(msg, details) -> seq, download(blob, name), scenes(list), scene() -> current}
+    // handlers: {send(msg, details) -> seq, download(blob, name), scenes(list, more), scene() -> current}
     constructor(root, handlers) {
         this.h = handlers;
         this.name = root.querySelector('#save-name');
@@ -74,7 +74,7 @@ export class SaveControls {
     // The `save` reply; req: the request it answers ({file, onServer}).
     saved(msg, req) {
         if (msg.name) {
-            if (msg.scenes) this.h.scenes(msg.scenes);
+            if (msg.scenes) this.h.scenes(msg.scenes, msg.scenes_more);
             this.say(`saved as scene ${msg.name} on the server (in the picker; iird render ${msg.name} renders it)`);
         } else {
             const file = (req && req.file) || `${this.h.scene()}_view`;

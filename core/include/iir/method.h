@@ -121,6 +121,16 @@ int iir_method_reference_bounces(const char *name, const iir_params *p);
  * can refuse a request before anything is allocated. 0 for an unknown name. */
 uint64_t iir_method_memory(const char *name, const iir_params *p, int width, int height);
 
+/* The same for this scene, from its real counts where the method's size depends on the scene
+ * (radiosity and hybrid: the exact patch count and the form factors' non-zeros from a few sampled
+ * hemicube rows; milliseconds of work, never the build itself): what a caller checks against a
+ * budget before iir_method_create. Equal to iir_method_memory for the other methods. */
+uint64_t iir_method_memory_on(const char *name, const struct iir_scene *scene, const iir_rt *rt,
+                              const iir_params *p, int width, int height);
+/* What a created method holds by its real counts, in the terms of iir_method_memory_on (for
+ * methods whose size does not depend on the scene: their estimate). */
+uint64_t iir_method_memory_held(const iir_method *m, int width, int height);
+
 /* Whether method `name` can render these lights (iir: its domain is a spot's disk, so it needs a
  * spot light): IIR_OK, or IIR_ERR_UNSUPPORTED saying what is missing, so that a caller can refuse a
  * request before accepting it rather than fail every frame after. IIR_ERR_INVALID for an unknown

@@ -10,6 +10,7 @@
  * shadows) and H the light of one bounce or more; direct = patches: no shadow rays, H holds all of
  * x's light at patch resolution. Progressive refinement shoots another batch per refine call and
  * traces the frame again. */
+#include <omp.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -168,6 +169,21 @@ static uint64_t hybrid_memory(const void *opts, int width, int height)
     return rad_solution_memory(&((const hybrid_options *)opts)->r) + sizeof(hybrid_state);
 }
 
+static uint64_t hybrid_memory_on(const void *opts, const iir_scene *scene, const iir_rt *rt,
+                                 int width, int height)
+{
+    (void)width, (void)height;
+    const hybrid_options *o = opts;
+    return rad_solution_estimate(&o->r, scene, rt, omp_get_max_threads()) + sizeof(hybrid_state);
+}
+
+static uint64_t hybrid_held(const void *state, int width, int height)
+{
+    (void)width, (void)height;
+    const hybrid_state *s = state;
+    return rad_solution_bytes(&s->sol, omp_get_max_threads()) + sizeof(hybrid_state);
+}
+
 static uint64_t hybrid_converged_at(const void *opts)
 {
     const hybrid_options *o = opts;
@@ -188,6 +204,8 @@ const iir_method_ops iir_method_hybrid = {
     .set_stop = hybrid_set_stop,
     .update = hybrid_update,
     .memory = hybrid_memory,
+    .memory_on = hybrid_memory_on,
+    .held = hybrid_held,
     .converged_at = hybrid_converged_at,
     /* measured against a multi-bounce pt: 8 bounces (the Cornell box's walls keep ~5% past) */
     .reference_bounces = 8,

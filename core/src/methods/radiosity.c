@@ -25,6 +25,7 @@
  * the unshot power is below tolerance times the emitted; the ambient term is displayed with the
  * partial solution). */
 #include <math.h>
+#include <omp.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -259,13 +260,32 @@ static void rad_set_stop(void *state, iir_stop_fn fn, void *ctx)
     rad_solution_set_stop(&s->sol, fn, ctx);
 }
 
+/* The frame's part of rad_memory: G-buffer and scratch as the VPL renderer's, the direct copy. */
+static uint64_t frame_bytes(int width, int height)
+{
+    return (uint64_t)width * (uint64_t)height * (56 + 12 + 16 + 12);
+}
+
 /* The solution, and the frame: G-buffer and scratch as the VPL renderer's, plus the direct-light
  * copy. */
 static uint64_t rad_memory(const void *opts, int width, int height)
 {
     const rad_options *o = opts;
-    uint64_t px = (uint64_t)width * (uint64_t)height;
-    return rad_solution_memory(&o->r) + px * (56 + 12 + 16 + 12);
+    return rad_solution_memory(&o->r) + frame_bytes(width, height);
+}
+
+static uint64_t rad_memory_on(const void *opts, const iir_scene *scene, const iir_rt *rt, int width,
+                              int height)
+{
+    const rad_options *o = opts;
+    return rad_solution_estimate(&o->r, scene, rt, omp_get_max_threads()) +
+           frame_bytes(width, height);
+}
+
+static uint64_t rad_held(const void *state, int width, int height)
+{
+    const rad_state *s = state;
+    return rad_solution_bytes(&s->sol, omp_get_max_threads()) + frame_bytes(width, height);
 }
 
 /* Radiosity renders every light and the emitters' light; mirrors and glass have no diffuse part,
@@ -307,6 +327,8 @@ const iir_method_ops iir_method_radiosity = {
     .set_stop = rad_set_stop,
     .update = rad_update,
     .memory = rad_memory,
+    .memory_on = rad_memory_on,
+    .held = rad_held,
     .converged_at = rad_converged_at,
     .dropped = rad_dropped,
     /* measured against a multi-bounce pt: 8 bounces (the Cornell box's walls keep ~5% past) */

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "iir/rng.h"
 #include "radiosity.h"
 
 /* ---- the hemicube's cells ----
@@ -115,6 +116,32 @@ static bool take_row(row_scratch *sc, uint32_t **col, float **val, uint32_t *len
     }
     sc->count = 0;
     return ok;
+}
+
+/* ---- a sampled row, for estimates ---- */
+
+uint32_t rad_ff_sample_row(const rad_mesh *m, const iir_scene *scene, const iir_rt *rt,
+                           const iir_vec3 *dir, uint32_t cells, uint32_t max_cells, iir_vec3 centre,
+                           iir_vec3 normal, uint64_t seed, uint32_t *hits, uint32_t *touched)
+{
+    const iir_frame fr = iir_frame_from_normal(normal);
+    const iir_vec3 o = iir_madd(centre, normal, iir_rt_epsilon(rt));
+    const uint32_t traced = cells < max_cells ? cells : max_cells;
+    uint32_t count = 0;
+    iir_raystats st = {0};
+    for (uint32_t k = 0; k < traced; k++) {
+        /* every cell, or a uniform choice of them (with repetition: Chao's estimator's model) */
+        uint32_t c = traced == cells ? k : (uint32_t)(iir_hash3(seed, k, 1) % cells);
+        iir_vec3 d = iir_frame_to_world(&fr, dir[c]);
+        iir_ray r = iir_make_ray(o, d, 0.f, INFINITY);
+        iir_hit hit;
+        if (!iir_rt_intersect(rt, &r, &hit, &st, IIR_RAYS_BENCH) || hit.prim == IIR_NO_HIT)
+            continue;
+        if (iir_dot(d, scene->normals[hit.prim]) >= 0.f) continue; /* its back */
+        uint32_t j = rad_patch_of(m, hit.prim, hit.u, hit.v);
+        if (hits[j]++ == 0) touched[count++] = j;
+    }
+    return count;
 }
 
 /* ---- all rows ---- */

@@ -155,6 +155,12 @@ static iir_status mesh_fail(rad_mesh *m, iir_status st)
     return st;
 }
 
+uint32_t rad_patches_along(float area, float target_area)
+{
+    double r = sqrt((double)area / (double)target_area);
+    return r < 1.0 ? 1u : r > 4096.0 ? 4096u : (uint32_t)ceil(r);
+}
+
 iir_status rad_mesh_build(rad_mesh *m, const iir_scene *s, float target_area, uint32_t max_patches,
                           iir_error *err)
 {
@@ -165,8 +171,7 @@ iir_status rad_mesh_build(rad_mesh *m, const iir_scene *s, float target_area, ui
         return mesh_fail(m, iir_fail(err, IIR_ERR_NOMEM, "radiosity: out of memory"));
     uint64_t patches = 0, raw = 0;
     for (uint32_t t = 0; t < s->num_triangles; t++) {
-        double r = sqrt((double)s->areas[t] / (double)target_area);
-        uint32_t n = r < 1.0 ? 1u : r > 4096.0 ? 4096u : (uint32_t)ceil(r);
+        uint32_t n = rad_patches_along(s->areas[t], target_area);
         m->tri_n[t] = n;
         m->tri_first[t] = (uint32_t)(patches < UINT32_MAX ? patches : UINT32_MAX);
         patches += (uint64_t)n * n;

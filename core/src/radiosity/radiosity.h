@@ -11,6 +11,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "iir/rt.h"
 #include "iir/scene.h"
@@ -35,6 +36,8 @@ typedef struct rad_mesh {
     uint32_t *tri_n;     /* per source triangle: n_t */
 } rad_mesh;
 
+/* The patches along each edge of a triangle of this area: n, for n^2 patches (at least 1). */
+uint32_t rad_patches_along(float area, float target_area);
 /* Meshes scene to patches of at most target_area (world units^2). IIR_ERR_NOMEM, or
  * IIR_ERR_UNSUPPORTED when it would exceed max_patches (the message names the count, or says that
  * the scene has more triangles than that); a failed build leaves m empty. */
@@ -68,6 +71,13 @@ iir_status rad_ff_compute(rad_ff *ff, const rad_mesh *m, const iir_scene *scene,
                           int res, const iir_stop *stop, rad_progress_fn progress, void *ctx,
                           iir_error *err);
 void rad_ff_free(rad_ff *ff);
+/* Traces the cells of one hemicube row from centre (facing normal) for an estimate: all `cells`
+ * directions dir (rad_hemicube_cells' order) when there are at most max_cells, else max_cells of
+ * them drawn uniformly (with repetition, from seed). hits[j] counts the cells that reached patch
+ * j (the caller zeroes it after); touched gets the distinct patches. Returns how many. */
+uint32_t rad_ff_sample_row(const rad_mesh *m, const iir_scene *scene, const iir_rt *rt,
+                           const iir_vec3 *dir, uint32_t cells, uint32_t max_cells, iir_vec3 centre,
+                           iir_vec3 normal, uint64_t seed, uint32_t *hits, uint32_t *touched);
 /* The delta form factor of every cell, in ray order (top face rows, then the four sides); writes
  * the cells' hemicube directions (frame-local, z along the normal) to dir when not NULL. Returns
  * the number of cells, 3 res^2 (res even). */
@@ -76,8 +86,15 @@ uint32_t rad_hemicube_cells(int res, float *dF, iir_vec3 *dir);
 /* ---- the cache (ffcache.c) ----
  * One file per key, `<dir>/<key as 16 hex digits>.ff`: a 64-byte header (magic "IIRRADFF",
  * format version, key, n, nnz, FNV-1a 64 of the payload), then row[n + 1] (u64), col[nnz] (u32),
- * val[nnz] (f32), little-endian as the machine writes them. Written to a temporary file and
- * renamed, so a reader sees a whole file or none. */
+ * val[nnz] (f32), little-endian as the machine writes them. Written to a temporary file of the
+ * directory made by mkstemp (`.<key>.ff.XXXXXX`: created exclusively, so nothing placed there,
+ * a symlink included, is ever written through) and renamed, so a reader sees a whole file or
+ * none. Files are opened without following links or blocking and only regular files are read.
+ *
+ * The folder is bounded: after each save the least recently used *.ff files (oldest
+ * modification time; a load touches it) are deleted until the folder's *.ff files take at most
+ * max_bytes, never the file just written. The configuration comes from the caller (rad_cache);
+ * rad_cache_config() reads the process's: $IIR_CACHE_DIR and $IIR_CACHE_MAX. */
 
 /* The key: FNV-1a 64 over the triangles' positions (in index order), the meshing's target area,
  * the hemicube resolution and the format version. */
@@ -86,11 +103,47 @@ uint64_t rad_ff_key(const iir_scene *scene, float target_area, int res);
  * $HOME/.cache/iir/radiosity; "" (caching off) when IIR_CACHE_DIR is set empty or no home is
  * known. Writes at most size bytes. */
 void rad_cache_dir(char *out, size_t size);
-/* Loads the file of `key` from dir into ff (which must be empty): true on success; false when
- * there is none or it is corrupt (bad header, size, offsets, column or checksum -- *why says which,
- * may be NULL), leaving ff empty. */
+
+#define RAD_CACHE_MAX_DEFAULT (512ull << 20) /* bytes of *.ff files a folder keeps */
+
+/* Where the cache lives and how large it may grow (its *.ff files' bytes). */
+typedef struct rad_cache {
+    char dir[1024]; /* "" = caching off */
+    uint64_t max_bytes;
+} rad_cache;
+/* The process's cache: rad_cache_dir(), and $IIR_CACHE_MAX (bytes, or with K, M, G, T; what
+ * `iird ... --cache-max` sets) else RAD_CACHE_MAX_DEFAULT (also for an unreadable value). */
+void rad_cache_config(rad_cache *c);
+/* Parses a size as $IIR_CACHE_MAX holds it: false (out unchanged) unless a positive number of
+ * bytes with an optional K, M, G or T. */
+bool rad_cache_parse_size(const char *text, uint64_t *out);
+
+/* What a folder holds: its regular <16 hex>.ff files, and what a trim removed. */
+typedef struct rad_cache_usage {
+    uint64_t bytes, files;
+    uint64_t evicted, evicted_bytes; /* by the trim that filled this in */
+} rad_cache_usage;
+/* Counts dir's cache files into u (zeroed first); false when dir cannot be read (u zero). */
+bool rad_cache_scan(const char *dir, rad_cache_usage *u);
+/* Deletes the least recently used cache files of c->dir until the rest take at most
+ * c->max_bytes, never the file of `keep`; u (may be NULL) gets what is left and what went.
+ * Also removes temporaries of writers that died (older than an hour). False when the folder
+ * cannot be read. */
+bool rad_cache_trim(const rad_cache *c, uint64_t keep, rad_cache_usage *u);
+
+/* Loads the file of `key` from dir into ff (which must be empty): true on success, and the file's
+ * modification time becomes now (its recency); false when there is none or it is unusable (not a
+ * regular file; bad header, size, offsets, column or checksum -- *why says which, may be NULL),
+ * leaving ff empty. Never blocks on a FIFO or follows a symlink. */
 bool rad_ff_load(rad_ff *ff, const char *dir, uint64_t key, uint32_t n, const char **why);
-/* Saves ff under key into dir (creating it): false with a message in err when it cannot. */
+/* The reader behind rad_ff_load: f holds size bytes of a cache file. NULL on success, else why
+ * (ff then empty). Allocates no more than size allows. */
+const char *rad_ff_read(rad_ff *ff, FILE *f, uint64_t size, uint64_t key, uint32_t n);
+/* Saves ff under key into c->dir (creating it), then trims the folder to c->max_bytes (u, may be
+ * NULL, as rad_cache_trim's): false with a message in err when it cannot write. */
+bool rad_ff_store(const rad_ff *ff, const rad_cache *c, uint64_t key, rad_cache_usage *u,
+                  iir_error *err);
+/* rad_ff_store into dir with the process's cap (rad_cache_config's max_bytes). */
 bool rad_ff_save(const rad_ff *ff, const char *dir, uint64_t key, iir_error *err);
 
 /* ---- solvers (solve.c) ---- */
@@ -207,7 +260,20 @@ iir_status rad_solution_refine(rad_solution *s, bool *shot, iir_error *err);
 iir_status rad_solution_gather(rad_solution *s, bool with_direct, iir_error *err);
 /* H at Embree barycentrics (u, v) of scene triangle t, Gouraud over its patch's corners. */
 iir_vec3 rad_solution_H(const rad_solution *s, uint32_t t, float u, float v);
-/* Bytes a solution holds with o: form factors, patches, the solver's scratch. */
+/* Bytes a solution holds with o: form factors, patches, the solver's scratch -- from the
+ * parameters alone (no scene): a quick first check. */
 uint64_t rad_solution_memory(const rad_params *o);
+
+/* ---- the size (estimate.c) ---- */
+/* The target patch area: patch_area times the scene's bounding box's surface. */
+float rad_target_area(const iir_scene *scene, float patch_area);
+/* Bytes a solution with o will hold on this scene at its largest (threads: the OpenMP threads that
+ * compute F), before anything large is built: the patch counts exactly, F's non-zeros from a few
+ * hemicube rows traced (a few thousand rays each, subsampled and extrapolated on large hemicubes).
+ * UINT64_MAX when out of memory. */
+uint64_t rad_solution_estimate(const rad_params *o, const iir_scene *scene, const iir_rt *rt,
+                               int threads);
+/* What a built solution holds by the same formula, from its real counts. */
+uint64_t rad_solution_bytes(const rad_solution *s, int threads);
 
 #endif

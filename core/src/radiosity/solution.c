@@ -311,8 +311,7 @@ static bool alloc_arrays(rad_solution *s)
     return s->Ed && s->E && s->B && s->Bd && s->H && s->vH && s->vw && s->lights;
 }
 
-/* The target patch area: patch_area times the bounding box's surface. */
-static float target_area(const iir_scene *sc, float frac)
+float rad_target_area(const iir_scene *sc, float frac)
 {
     iir_vec3 e = iir_sub(sc->bounds_max, sc->bounds_min);
     return frac * 2.f * (e.x * e.y + e.y * e.z + e.z * e.x);
@@ -325,8 +324,8 @@ iir_status rad_solution_init(rad_solution *s, const iir_scene *scene, const iir_
     memset(s, 0, sizeof *s);
     s->scene = scene, s->rt = rt, s->o = *o, s->seed = seed;
     if (stop) s->stop = *stop;
-    iir_status st =
-        rad_mesh_build(&s->mesh, scene, target_area(scene, o->patch_area), RAD_MAX_PATCHES, err);
+    iir_status st = rad_mesh_build(&s->mesh, scene, rad_target_area(scene, o->patch_area),
+                                   RAD_MAX_PATCHES, err);
     if (st == IIR_OK && o->solver == RAD_GAUSS && s->mesh.num_patches > RAD_GAUSS_MAX)
         st = iir_fail(err, IIR_ERR_UNSUPPORTED,
                       "radiosity: solver gauss takes at most %d patches, patch_area gives %u; "
