@@ -104,16 +104,32 @@ static void stop_waiting(iird_sched *s, iird_sched_entity *e)
     atomic_fetch_sub(&s->waiting, 1);
 }
 
-/* Fills free slots with the waiting sessions of least virtual time (earliest arrival first). */
+/* Whether a foreground session other than e renders or waits. */
+static bool foreground_busy(const iird_sched *s, const iird_sched_entity *e)
+{
+    for (const iird_sched_entity *o = s->head.next; o != &s->head; o = o->next)
+        if (o != e && !o->background && active(o)) return true;
+    return false;
+}
+
+/* Whether waiting o goes before best: foreground before background, then the least virtual time,
+ * then the earliest arrival. */
+static bool before(const iird_sched_entity *o, const iird_sched_entity *best)
+{
+    if (!best || o->background != best->background) return !best || !o->background;
+    return o->vtime_ms < best->vtime_ms ||
+           (o->vtime_ms == best->vtime_ms && o->ticket < best->ticket);
+}
+
+/* Fills free slots with the waiting sessions that go first (before()); background ones only while
+ * no foreground session renders or waits. */
 static void grant(iird_sched *s, double now)
 {
     while (s->running < s->slots) {
         iird_sched_entity *best = NULL;
         for (iird_sched_entity *o = s->head.next; o != &s->head; o = o->next)
-            if (o->waiting && (!best || o->vtime_ms < best->vtime_ms ||
-                               (o->vtime_ms == best->vtime_ms && o->ticket < best->ticket)))
-                best = o;
-        if (!best) return;
+            if (o->waiting && before(o, best)) best = o;
+        if (!best || (best->background && foreground_busy(s, best))) return;
         stop_waiting(s, best);
         s->wait_ms += now - atomic_load(&best->slice_start_ms);
         atomic_store(&best->slice_start_ms, now);
@@ -133,6 +149,10 @@ static void preempt_for(iird_sched *s, const iird_sched_entity *e, double now)
     double most = 0;
     for (iird_sched_entity *o = s->head.next; o != &s->head; o = o->next) {
         if (!atomic_load(&o->running)) continue;
+        if (!e->background && o->background) { /* foreground first: every background yields */
+            atomic_store(&o->preempt, true);
+            continue;
+        }
         double v = o->vtime_ms + (now - atomic_load(&o->slice_start_ms));
         if (!victim || v > most) victim = o, most = v;
     }
@@ -149,18 +169,22 @@ static void wait_turn(iird_sched *s, iird_sched_entity *e)
 
 /* ---- the interface ---- */
 
-/* e's team: every thread when it is the only busy session, else its part of them. */
+/* e's team: every thread when it is the only busy session, else its part of them. Background
+ * sessions do not count for a foreground one: the waiting ones get no slot beside it and the
+ * running ones hand theirs over at their next tile. */
 static int team(const iird_sched *s, const iird_sched_entity *e)
 {
     for (const iird_sched_entity *o = s->head.next; o != &s->head; o = o->next)
-        if (o != e && active(o)) return s->threads / s->slots > 1 ? s->threads / s->slots : 1;
+        if (o != e && active(o) && (e->background || !o->background))
+            return s->threads / s->slots > 1 ? s->threads / s->slots : 1;
     return s->threads;
 }
 
-int iird_sched_enter(iird_sched *s, iird_sched_entity *e)
+static int enter(iird_sched *s, iird_sched_entity *e, bool background)
 {
     pthread_mutex_lock(&s->lock);
     if (!e->cancelled && !active(e)) {
+        e->background = background;
         double now = iir_now_ms();
         /* new, or back from sleep: at most one slice behind the least-served */
         if (e->vtime_ms < s->floor_ms - s->slice_ms) e->vtime_ms = s->floor_ms - s->slice_ms;
@@ -172,6 +196,30 @@ int iird_sched_enter(iird_sched *s, iird_sched_entity *e)
     int n = team(s, e);
     pthread_mutex_unlock(&s->lock);
     return n;
+}
+
+int iird_sched_enter(iird_sched *s, iird_sched_entity *e)
+{
+    return enter(s, e, false);
+}
+
+int iird_sched_enter_background(iird_sched *s, iird_sched_entity *e)
+{
+    return enter(s, e, true);
+}
+
+void iird_sched_promote(iird_sched *s, iird_sched_entity *e)
+{
+    pthread_mutex_lock(&s->lock);
+    if (e->background) {
+        double now = iir_now_ms();
+        e->background = false;
+        if (e->waiting) {
+            grant(s, now);
+            if (e->waiting) preempt_for(s, e, now);
+        }
+    }
+    pthread_mutex_unlock(&s->lock);
 }
 
 void iird_sched_leave(iird_sched *s, iird_sched_entity *e)

@@ -41,6 +41,9 @@ typedef struct iird_sched_entity {
     atomic_bool running;                   /* it holds a slot */
     atomic_bool preempt;                   /* a session behind it woke up: hand over now */
     bool waiting;                          /* it waits for a slot */
+    bool background;                       /* its work under way is background (refinement):
+                                              it gets a slot only when no foreground session
+                                              renders or waits, and yields to one at once */
     bool cancelled;                        /* its session is stopping: never wait again */
     uint64_t ticket;                       /* arrival order among equal virtual times */
 } iird_sched_entity;
@@ -65,6 +68,14 @@ void iird_sched_remove(iird_sched *s, iird_sched_entity *e);
 /* Blocks until e holds a slot (or is cancelled); returns the OpenMP team e's render should use:
  * every thread when no other session is busy, else threads / slots (at least 1). */
 int iird_sched_enter(iird_sched *s, iird_sched_entity *e);
+/* The same for background work (progressive refinement of a frame already shown): e waits while
+ * any foreground session (a frame answering input, a method's creation) renders or waits, and a
+ * foreground session that arrives takes e's slot at e's next tile. Among themselves background
+ * sessions share as foreground ones do. */
+int iird_sched_enter_background(iird_sched *s, iird_sched_entity *e);
+/* e's session has new input: its background work under way (or waiting) becomes foreground, so
+ * that it reaches its stop hook and the frame answering the input soon. Any thread. */
+void iird_sched_promote(iird_sched *s, iird_sched_entity *e);
 /* Gives e's slot back; harmless when e holds none. */
 void iird_sched_leave(iird_sched *s, iird_sched_entity *e);
 /* From any of e's render threads, per tile: when e's slice is over and another session waits,

@@ -80,6 +80,7 @@ static void input_changed_locked(iird_session *s, int64_t seq)
     s->version++;
     if (seq != IIRD_NO_SEQ) s->seq = seq;
     s->input_ms = iir_now_ms();
+    if (s->sched_added) iird_sched_promote(s->env->sched, &s->sched); /* refinement yields */
     pthread_cond_broadcast(&s->wake);
 }
 

@@ -117,8 +117,8 @@ static bool creation_obsolete(iird_session *s)
 static bool should_stop(void *ctx)
 {
     iird_session *s = ctx;
-    iird_sched_yield(s->env->sched, &s->sched); /* the cores may go to another session first */
     if (atomic_load_explicit(&s->stop, memory_order_relaxed)) return true;
+    iird_sched_yield(s->env->sched, &s->sched); /* the cores may go to another session first */
     if (atomic_load_explicit(&s->version, memory_order_relaxed) == s->w.last.version) return false;
     if (s->w.creating) return creation_obsolete(s);
     return s->w.refining ||
@@ -565,7 +565,8 @@ static void refine_locked(iird_session *s)
     frame_info f = {0};
     iir_error err = {0};
     w->refining = true;
-    omp_set_num_threads(iird_sched_enter(s->env->sched, &s->sched)); /* the pass, its JPEG */
+    /* the pass, its JPEG: background work, which any session's frame goes before */
+    omp_set_num_threads(iird_sched_enter_background(s->env->sched, &s->sched));
     iir_status st = iir_method_refine(w->method, w->img, &f.stats, &err);
     if (st == IIR_OK) {
         f.stats.vpl = refined_vpl(&w->frame_vpl);

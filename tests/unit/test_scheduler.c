@@ -1,6 +1,7 @@
 /* test_scheduler.c -- the daemon's render scheduler (server/serve/scheduler.c): one slot is held by
  * one session at a time, busy sessions get equal render time, a session waking from sleep preempts
- * a running one at its next yield, a cancelled wait returns, and the OpenMP team a session gets. */
+ * a running one at its next yield, a cancelled wait returns, the OpenMP team a session gets, and
+ * background work (refinement) goes after every frame. */
 #include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -188,6 +189,75 @@ static void test_teams_split_the_threads_between_slots(void **state)
     iird_sched_destroy(s);
 }
 
+/* Enters as background work and keeps the slot (the test leaves for it). */
+static void *background_main(void *arg)
+{
+    waiter *w = arg;
+    iird_sched_enter_background(w->s, w->e);
+    atomic_store(&w->entered, true);
+    return NULL;
+}
+
+/* A frame that arrives takes a background pass's only slot at its next yield, and the pass waits
+ * until no frame renders. */
+static void test_a_frame_preempts_background_work(void **state)
+{
+    (void)state;
+    iird_sched *s = iird_sched_create(1, 4, 1000.0); /* a slice far longer than the test */
+    iird_sched_entity a, b;
+    iird_sched_add(s, &a);
+    iird_sched_add(s, &b);
+    assert_int_equal(iird_sched_enter_background(s, &a), 4);
+    waiter w = {.s = s, .e = &b};
+    pthread_t t;
+    pthread_create(&t, NULL, enter_main, &w); /* b has rendered no less than a: preempts anyway */
+    wait_until_waiting(s, 1);
+    assert_true(atomic_load(&a.preempt));
+    iird_sched_yield(s, &a); /* hands over, and blocks until b leaves */
+    pthread_join(t, NULL);
+    assert_true(atomic_load(&w.entered) && atomic_load(&a.running));
+    iird_sched_leave(s, &a);
+    iird_sched_remove(s, &a);
+    iird_sched_remove(s, &b);
+    iird_sched_destroy(s);
+}
+
+/* Background work gets no free slot while a frame renders, and a frame beside background work gets
+ * every thread; new input promotes a waiting pass to a frame. */
+static void test_background_waits_for_frames(void **state)
+{
+    (void)state;
+    iird_sched *s = iird_sched_create(2, 4, 1000.0);
+    iird_sched_entity a, b;
+    iird_sched_add(s, &a);
+    iird_sched_add(s, &b);
+    assert_int_equal(iird_sched_enter(s, &b), 4);
+    waiter w = {.s = s, .e = &a};
+    pthread_t t;
+    pthread_create(&t, NULL, background_main, &w);
+    wait_until_waiting(s, 1);
+    sleep_ms(20); /* a free slot, but b renders: a waits */
+    assert_false(atomic_load(&w.entered));
+    iird_sched_leave(s, &b);
+    pthread_join(t, NULL); /* no frame left: a's turn */
+    assert_true(atomic_load(&w.entered) && atomic_load(&a.running));
+    assert_int_equal(iird_sched_enter(s, &b), 4); /* beside background work: every thread */
+    iird_sched_leave(s, &b);
+    iird_sched_leave(s, &a);
+    assert_int_equal(iird_sched_enter(s, &b), 4);
+    atomic_store(&w.entered, false);
+    pthread_create(&t, NULL, background_main, &w);
+    wait_until_waiting(s, 1);
+    iird_sched_promote(s, &a); /* new input: a is a frame now, and takes the free slot */
+    pthread_join(t, NULL);
+    assert_true(atomic_load(&w.entered) && atomic_load(&a.running));
+    iird_sched_leave(s, &a);
+    iird_sched_leave(s, &b);
+    iird_sched_remove(s, &a);
+    iird_sched_remove(s, &b);
+    iird_sched_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -196,6 +266,8 @@ int main(void)
         cmocka_unit_test(test_a_cancelled_wait_returns_without_a_slot),
         cmocka_unit_test(test_a_waking_session_preempts_at_the_next_yield),
         cmocka_unit_test(test_teams_split_the_threads_between_slots),
+        cmocka_unit_test(test_a_frame_preempts_background_work),
+        cmocka_unit_test(test_background_waits_for_frames),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
