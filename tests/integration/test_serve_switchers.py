@@ -49,7 +49,7 @@ async def switcher(d, i, t_end):
             if k % 2 == 0:
                 await c.send({"type": "scene", "name": SCENES[k % len(SCENES)], "seq": c.next_seq()})
             else:
-                await c.send({"type": "params", **METHODS[k % len(METHODS)], "seq": c.next_seq()})
+                await c.send({"type": "params", **METHODS[(k // 2) % len(METHODS)], "seq": c.next_seq()})
             k += 1
             await asyncio.sleep(0.4)
     finally:
