@@ -351,6 +351,38 @@ void iird_print_params_markdown(FILE *f)
 
 /* ---- parsing ---- */
 
+/* A parameter option that failed its check against the first method declaring it (rows of one
+ * name may differ in unit: ir's vpls are "paths", iir's "VPLs"), kept until the methods are
+ * known. */
+typedef struct param_error {
+    const iir_param *row; /* NULL: none */
+    const char *text;
+    iir_error err;
+} param_error;
+
+/* pe's error again, against the row of the first method of the list that declares the parameter
+ * and refuses the value (its own unit and range), spelt as an option; pe's own error when none
+ * does (another method of the list refused it). */
+static iir_status param_error_for(const char *methods, param_error *pe, iir_error *err)
+{
+    char m[32];
+    *err = pe->err;
+    for (const char *rest = methods; (rest = next_method(rest, m, sizeof m));) {
+        const iir_param *row = iir_method_find_param(m, pe->row->name);
+        double v = 0.0;
+        iir_error e = {0};
+        if (!row || (iir_param_parse(row, pe->text, &v, &e) == IIR_OK &&
+                     iir_param_check(row, v, false, &e) == IIR_OK))
+            continue;
+        char opt[48] = "--";
+        iir_param_option_name(row, opt + 2, sizeof opt - 2);
+        iir_param_reword(&e, row, opt);
+        *err = e;
+        break;
+    }
+    return err->status;
+}
+
 int iird_parse_command(const iird_command *cmd, int argc, char **argv, void *ctx,
                        iir_params *params, const char **scene)
 {
@@ -359,21 +391,30 @@ int iird_parse_command(const iird_command *cmd, int argc, char **argv, void *ctx
     int c;
     bool help = false;
     iir_error err = {0};
+    param_error pe = {0};
     optind = 1;
     while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
         iir_status st = IIR_OK;
         if (c == 'h') help = true;
         if (c == '?') return cmd->usage(stderr), IIRD_EXIT_USAGE;
-        if (c >= OPT_PARAM_BASE)
-            st = iird_parse_param(rows[c - OPT_PARAM_BASE]->name, optarg ? optarg : "true", params,
-                                  &err);
-        else if (c == OPT_THREADS)
+        if (c >= OPT_PARAM_BASE) {
+            const char *text = optarg ? optarg : "true";
+            st = iird_parse_param(rows[c - OPT_PARAM_BASE]->name, text, params, &err);
+            if (st != IIR_OK && !pe.row) /* worded once --method is known (it may come later) */
+                pe = (param_error){rows[c - OPT_PARAM_BASE], text, err};
+            continue;
+        }
+        if (c == OPT_THREADS)
             st = parse_threads(optarg, &err);
         else if (c != 'h')
             st = cmd->option(ctx, c, optarg, &err);
-        if (st != IIR_OK) return iird_report(cmd->name, &err);
+        if (st != IIR_OK) return iird_report(cmd->name, pe.row ? &pe.err : &err);
     }
     const char *methods = cmd->methods ? cmd->methods(ctx) : NULL;
+    if (pe.row && !help) {
+        param_error_for(methods, &pe, &err);
+        return iird_report(cmd->name, &err);
+    }
     if (help) return cmd->usage(stdout), iird_print_params(stdout, methods), 0;
     if (optind < argc) *scene = argv[optind++];
     if (optind < argc) {

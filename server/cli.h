@@ -136,9 +136,15 @@ void iird_warn_anim_scene(const char *cmd, const iir_anim *anim, const char *sce
 void iird_note_camera(const char *cmd, const iir_scene *scene);
 
 /* "iird CMD: warning: light 'sun': ..." for every light and material that a method of `methods`
- * (comma-separated) does not render (iir_method_dropped); what no method renders once. */
+ * (comma-separated) does not render (iir_method_dropped); what no method renders once. The
+ * scene's notes (iir_dropped.note: an emitter became an area light) say "note:" instead. */
 void iird_warn_dropped(const char *cmd, const char *methods, const iir_scene *scene,
                        const iir_light *lights, uint32_t num_lights);
+
+/* The scene's own notes and warnings (iir_scene.dropped: what no method renders, and what was made
+ * of its emissive materials), "iird WHO: warning: ..." or "iird WHO: note: ...", grouped as
+ * iird_warn_dropped does; `serve` logs them when it loads a scene (WHO "serve: scene NAME"). */
+void iird_log_scene_notes(const char *who, const iir_scene *scene);
 
 /* Whether every pixel of img is black (no channel above 0). */
 bool iird_image_black(const iir_image *img);

@@ -31,11 +31,13 @@ static bool seen(const iir_dropped *out, uint32_t i, const iir_dropped *d)
 
 static bool same_note(const iir_dropped *a, const iir_dropped *b)
 {
-    return !strcmp(a->method, b->method) && !strcmp(a->kind, b->kind) && !strcmp(a->what, b->what);
+    return !strcmp(a->method, b->method) && !strcmp(a->kind, b->kind) &&
+           !strcmp(a->what, b->what) && a->note == b->note;
 }
 
 /* One line for all[i] and every later entry with the same method, kind and text (a scene with
- * fifty textured materials gets one line naming them), which are marked done. */
+ * fifty textured materials gets one line naming them), which are marked done: "warning:" for
+ * what is left out, "note:" for what was made of the scene (iir_dropped.note). */
 static void print_group(const char *cmd, iir_dropped *all, uint32_t n, uint32_t i, bool *done)
 {
     enum { NAMES = 8 };
@@ -51,9 +53,9 @@ static void print_group(const char *cmd, iir_dropped *all, uint32_t n, uint32_t 
     }
     char more[48] = "";
     if (count > NAMES) snprintf(more, sizeof more, " and %u more", count - NAMES);
-    fprintf(stderr, "iird %s: warning: %s%s%s%s %s%s: %s\n", cmd, all[i].method,
-            all[i].method[0] ? ": " : "", all[i].kind, count > 1 ? "s" : "", names, more,
-            all[i].what);
+    fprintf(stderr, "iird %s: %s: %s%s%s%s %s%s: %s\n", cmd, all[i].note ? "note" : "warning",
+            all[i].method, all[i].method[0] ? ": " : "", all[i].kind, count > 1 ? "s" : "", names,
+            more, all[i].what);
 }
 
 void iird_warn_dropped(const char *cmd, const char *methods, const iir_scene *scene,
@@ -81,6 +83,20 @@ void iird_warn_dropped(const char *cmd, const char *methods, const iir_scene *sc
     if (lost) fprintf(stderr, "iird %s: warning: and %u more not rendered\n", cmd, lost);
     free(all);
     free(got);
+    free(done);
+}
+
+void iird_log_scene_notes(const char *who, const iir_scene *scene)
+{
+    uint32_t n = scene->num_dropped;
+    iir_dropped *all = n ? calloc(n, sizeof *all) : NULL;
+    bool *done = n ? calloc(n, sizeof *done) : NULL;
+    if (all && done) {
+        memcpy(all, scene->dropped, n * sizeof *all);
+        for (uint32_t i = 0; i < n; i++)
+            if (!done[i]) print_group(who, all, n, i, done);
+    }
+    free(all);
     free(done);
 }
 

@@ -72,6 +72,7 @@ iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl
         .clamp = v->clamp,
         .clamp_comp = v->clamp_comp != IIR_CLAMP_COMP_OFF,
         .bounces = bounces,
+        .area_samples = v->area_samples,
         .seed = iir_hash3(c->seed, 0x4ef1, 0),
     };
     return r;

@@ -39,6 +39,7 @@ typedef struct iir_vpl_options {
     iir_clamp_comp clamp_comp; /* table iir_clamp_comp_table */
     iir_shading shading;       /* table iir_shading_table */
     iir_multires_options mr;   /* table iir_multires_table */
+    int area_samples;          /* direct light: stratified samples per pixel per area light */
 } iir_vpl_options;
 extern const iir_param_table iir_vpl_table; /* sm_bias, interleave */
 /* visibility and sm_res, of the same struct (ism always uses ISMs: it does not list them) */

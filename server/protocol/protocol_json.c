@@ -226,7 +226,9 @@ static cJSON *params_json(const iird_settings *s)
     return keep_if(o, ok);
 }
 
-/* What the method does not render of the scene (iir_method_dropped), for the client's notes. */
+/* What the method does not render of the scene (iir_method_dropped), for the client's notes, each
+ * with its severity: "warning" for what is left out, "note" for what was made of the scene (an
+ * emissive material that became the movable area light), which is rendered. */
 static cJSON *notes_json(const iird_state_view *s)
 {
     cJSON *a = cJSON_CreateArray();
@@ -242,7 +244,8 @@ static cJSON *notes_json(const iird_state_view *s)
         cJSON *e = cJSON_CreateObject();
         ok = add_item(a, NULL, e) && add_str(e, "method", d[i].method) &&
              add_str(e, "kind", d[i].kind) && add_str(e, "name", d[i].name) &&
-             add_str(e, "what", d[i].what);
+             add_str(e, "what", d[i].what) &&
+             add_str(e, "severity", d[i].note ? "note" : "warning");
     }
     return keep_if(a, ok);
 }

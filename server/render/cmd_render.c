@@ -245,7 +245,8 @@ static iir_status render_still(iir_method *m, uint64_t total, const iir_scene *s
 }
 
 /* What the frame holds: samples per pixel (pt), the ray trees' cut branches (whitted, hybrid),
- * radiosity's refinement passes, or refinement passes and the VPLs. */
+ * radiosity's refinement passes, the VPLs of a method that does not refine (rsm, hier), or
+ * refinement passes and the VPLs. */
 static void work_text(const render_opts *o, const iir_frame_stats *fs, char *buf, size_t n)
 {
     unsigned long long done = (unsigned long long)fs->samples_per_pixel;
@@ -258,6 +259,8 @@ static void work_text(const render_opts *o, const iir_frame_stats *fs, char *buf
     else if (iir_method_find_param(o->method, "patch_area")) /* radiosity */
         snprintf(buf, n, "a radiosity solution, %llu refinement pass%s", done,
                  done == 1 ? "" : "es");
+    else if (!iir_method_converged_at(o->method, &o->params)) /* rsm, hier: no refinement */
+        snprintf(buf, n, "one frame (%s does not refine) over %u VPLs", o->method, fs->vpl.count);
     else if (fs->vpl.descendants > 0) /* iir with bounces > 2 */
         snprintf(buf, n, "%llu refinement pass%s over %u VPLs (+%u of later bounces)", done,
                  done == 1 ? "" : "es", fs->vpl.count, fs->vpl.descendants);

@@ -376,8 +376,10 @@ int iird_cmd_serve(int argc, char **argv)
                 o.cfg.tls_cert ? "--tls-key" : "--tls-cert");
         return IIRD_EXIT_USAGE;
     }
-    if (o.cfg.max_sessions_per_address == 0) /* not given */
+    if (o.cfg.max_sessions_per_address == 0) { /* not given: for strangers, not this machine */
         o.cfg.max_sessions_per_address = o.cfg.max_sessions / 4 > 1 ? o.cfg.max_sessions / 4 : 1;
+        o.cfg.loopback_unlimited = true;
+    }
     o.cfg.scene = o.scene_arg ? o.scene_arg : positional;
     o.cfg.scenes_dir = iird_scenes_dir(o.cfg.scenes_dir);
     o.cfg.web_dir = web_dir(o.web_opt);

@@ -12,6 +12,7 @@
 #include <strings.h>
 #include <sys/stat.h>
 
+#include "cli.h"
 #include "iir/timer.h"
 
 typedef struct cache_slot {
@@ -282,7 +283,12 @@ static iir_status load_slot(iird_scene_cache *c, cache_slot *s, iir_error *err)
     iir_rt *rt = NULL;
     pthread_mutex_unlock(&c->lock);
     iir_status st = iir_scene_open(s->key, NULL, &scene, &rt, err);
-    if (st == IIR_OK) log_camera(s->entry.name, scene);
+    if (st == IIR_OK) {
+        log_camera(s->entry.name, scene);
+        char who[160];
+        snprintf(who, sizeof who, "serve: scene %s", s->entry.name);
+        iird_log_scene_notes(who, scene); /* what no method renders: docs/cli.md */
+    }
     pthread_mutex_lock(&c->lock);
     s->loading = false;
     s->scene = scene;

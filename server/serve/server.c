@@ -57,6 +57,7 @@ typedef struct conn {
     bool linked;
     bool failing;          /* lws (or we) started closing it: nothing more is written */
     char addr[ADDR_BYTES]; /* the peer's IP address, for --max-sessions-per-address */
+    bool local;            /* a direct peer on the loopback address (not via --trust-proxy) */
     struct conn *next;
 } conn;
 
@@ -218,16 +219,26 @@ static void refuse_busy(conn *c, busy_reason why)
     lws_callback_on_writable(c->wsi);
 }
 
+/* Whether addr (as lws_get_peer_simple writes it) is on the loopback network: 127.0.0.0/8, ::1,
+ * or IPv4-mapped 127.x. */
+static bool is_loopback(const char *addr)
+{
+    if (!strncasecmp(addr, "::ffff:", 7)) addr += 7;
+    return !strncmp(addr, "127.", 4) || !strcmp(addr, "::1") || !strcmp(addr, "0:0:0:0:0:0:0:1");
+}
+
 /* The client's address: the peer's, or behind the trusted balancer (--trust-proxy) the last entry
- * of X-Forwarded-For (the one the balancer appended; earlier ones are the client's own word). */
-static void client_address(const server *srv, struct lws *wsi, char addr[ADDR_BYTES])
+ * of X-Forwarded-For (the one the balancer appended; earlier ones are the client's own word).
+ * *local: a direct loopback peer, never one that came through the balancer (whatever its
+ * header says), so that --max-sessions-per-address's default spares this machine's own tabs. */
+static void client_address(const server *srv, struct lws *wsi, char addr[ADDR_BYTES], bool *local)
 {
     lws_get_peer_simple(wsi, addr, ADDR_BYTES);
     const char *proxy = srv->cfg->trust_proxy;
+    bool proxied = proxy && !strcmp(addr, proxy);
+    *local = !proxied && is_loopback(addr);
     char xff[512];
-    if (!proxy || strcmp(addr, proxy) != 0 ||
-        lws_hdr_copy(wsi, xff, sizeof xff, WSI_TOKEN_X_FORWARDED_FOR) <= 0)
-        return;
+    if (!proxied || lws_hdr_copy(wsi, xff, sizeof xff, WSI_TOKEN_X_FORWARDED_FOR) <= 0) return;
     const char *last = strrchr(xff, ',');
     last = last ? last + 1 : xff;
     while (*last == ' ') last++;
@@ -241,10 +252,11 @@ static void on_established(server *srv, conn *c, struct lws *wsi)
 {
     link_conn(srv, c, wsi);
     start_sweep(srv);
-    client_address(srv, wsi, c->addr);
+    client_address(srv, wsi, c->addr, &c->local);
     if (atomic_load(&srv->draining)) return refuse_busy(c, BUSY_DRAINING);
     if (srv->active >= srv->cfg->max_sessions) return refuse_busy(c, BUSY_SERVER);
-    if (sessions_from(srv, c->addr) >= srv->cfg->max_sessions_per_address)
+    bool limited = !(c->local && srv->cfg->loopback_unlimited);
+    if (limited && sessions_from(srv, c->addr) >= srv->cfg->max_sessions_per_address)
         return refuse_busy(c, BUSY_ADDRESS);
     iir_error err = {0};
     c->session = iird_session_create(&srv->env, ++srv->next_id, &err);
@@ -655,7 +667,10 @@ static int start(server *srv, iir_error *err)
     srv->scenes = iird_scene_cache_create(srv->cfg->scenes_dir, srv->cfg->scenes_follow_links);
     if (!srv->scenes) return iir_fail(err, IIR_ERR_NOMEM, "out of memory"), 1;
     iir_status st = iird_scene_cache_acquire(srv->scenes, srv->cfg->scene, &srv->startup, err);
-    if (st != IIR_OK) return iir_status_exit_code(st);
+    if (st != IIR_OK) { /* its whole reason, paths and all, is logged already */
+        snprintf(err->msg, sizeof err->msg, "the startup scene cannot be loaded (above)");
+        return iir_status_exit_code(st);
+    }
     iird_scene_cache_set_startup(srv->scenes, srv->startup);
     iird_metrics_init(&srv->metrics);
     int threads = omp_get_max_threads();

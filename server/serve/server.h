@@ -26,6 +26,9 @@ typedef struct iird_server_config {
     const char *web_dir;      /* the web client's folder (must exist) */
     int max_sessions;
     int max_sessions_per_address; /* sessions one peer address may hold at once */
+    bool loopback_unlimited;      /* the default limit: a client on the loopback address (this
+                                     machine's own tabs, not one behind --trust-proxy) is held
+                                     only by max_sessions; false when the option was given */
     int render_slots;   /* sessions rendering at once (scheduler.h); 0: 2, or 1 on one core */
     int idle_timeout_s; /* close a session after this long without a client message;
                            0: never */

@@ -331,6 +331,15 @@ export async function waitFor(page, fn, arg = null, timeout = WAIT_MS) {
 
 // ---- pixels ----
 
+// Where a test writes screenshot `name`: the build's test-tmp dir (IIR_TEST_TMP, as ctest sets it),
+// else the system's temporary dir (never the working dir: run from the source tree they were
+// committed by mistake).
+export function shotPath(name) {
+    const dir = process.env.IIR_TEST_TMP || path.join(os.tmpdir(), 'iir-browser');
+    fs.mkdirSync(dir, { recursive: true });
+    return path.join(dir, name);
+}
+
 // Mean absolute difference (0-255) of two RGB arrays.
 export function mad(a, b) {
     let s = 0;

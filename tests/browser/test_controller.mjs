@@ -6,7 +6,7 @@
 // spare, while the stats' VPL set holds that N; target_fps 0 turns it off again. What is tested is
 // the path through the panel, the protocol, the daemon and the method, not the machine's speed (the
 // controller's convergence is test_controller's, its timing docs/experiments.md's).
-// Screenshot: browser_controller.png in the working directory.
+// Screenshot: browser_controller.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_controller.mjs IIRD SOURCE_DIR
 
@@ -39,7 +39,7 @@ async function main() {
     // the set follows the controller's N (not vpls' 256); a frame of the drag may end a few VPLs
     // short of it, the ones the moving spot killed that frame beyond what it refilled
     check(count <= 64 && count >= 0.9 * 64, `the VPL set holds the controller's N, 64: ${count}`);
-    await page.screenshot({ path: path.resolve('browser_controller.png') });
+    await page.screenshot({ path: H.shotPath('browser_controller.png') });
 
     await H.setParam(page, 'target_fps', 0);
     await drag(page, 5);

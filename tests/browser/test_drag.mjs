@@ -6,7 +6,7 @@
 // covers a frame's deaths on a loaded sanitizer build too (200 ms did not, with a compile running
 // beside it): what is tested is that the set is refilled in the frame the VPLs die, through the
 // panel, the protocol and the daemon, not how fast the machine is (the budget's timing is measured
-// by tools/live_bench.py, not here). Screenshot: browser_drag.png in the working directory.
+// by tools/live_bench.py, not here). Screenshot: browser_drag.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_drag.mjs IIRD SOURCE_DIR
 
@@ -36,7 +36,7 @@ async function main() {
     check(rows.length >= 3, `the drag rendered frames with VPL steps (${rows.length})`);
     check(died >= 0.1 * N, `the drag killed VPLs: ${died} (at least a tenth of N = ${N})`);
     check(counts.every((c) => c >= 0.9 * N), `every frame keeps at least 0.9 N = ${0.9 * N}: min ${Math.min(...counts)}`);
-    await page.screenshot({ path: path.resolve('browser_drag.png') });
+    await page.screenshot({ path: H.shotPath('browser_drag.png') });
     check(page.problems.length === 0, `no console errors${page.problems.length ? `:\n  ${page.problems.join('\n  ')}` : ''}`);
     await daemon.stop();
 }

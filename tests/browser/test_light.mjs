@@ -11,7 +11,7 @@
 //     in the made-up light's colour where it projects;
 //  5. a light out of view (the camera dollied in under it) gets an arrow at the frame's edge pointing
 //     at it.
-// Screenshots: browser_light_wall.png, browser_light_default.png in the working directory.
+// Screenshots: browser_light_wall.png, browser_light_default.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_light.mjs IIRD SOURCE_DIR
 
@@ -88,7 +88,7 @@ async function main() {
     check(last && Math.hypot(...p.map((x, i) => x - last.position[i])) < 1e-3, 'the page took the position the daemon used');
     const posText = await page.textContent('#light-pos');
     check(Math.abs(Number(posText.split(',')[0]) - p[0]) < 0.006, `the panel shows it: ${posText}`);
-    let t = H.tone(await H.screenRGB(page, '#frame', 128, 96, path.resolve('browser_light_wall.png')));
+    let t = H.tone(await H.screenRGB(page, '#frame', 128, 96, H.shotPath('browser_light_wall.png')));
     check(t.lum > NOT_BLACK, `the image is not black: brightness ${t.lum.toFixed(1)} > ${NOT_BLACK}`);
     await gizmoAt(page, SCENE_LIGHT, 'after the drag');
 
@@ -146,7 +146,7 @@ async function main() {
     check(await note.isVisible() && /no light of its own/.test(await note.textContent()), 'the light panel says the scene has no light of its own and iird placed the spot');
     await gizmoAt(page, MADE_UP, "iird's spot");
     await note.scrollIntoViewIfNeeded();
-    await page.screenshot({ path: path.resolve('browser_light_default.png') });
+    await page.screenshot({ path: H.shotPath('browser_light_default.png') });
     await page.selectOption('#scene', 'builtin');
     await H.waitFor(page, () => window.iir.state.scene === 'builtin' && !window.iir.switching);
     check(!(await note.isVisible()), 'the note goes on a scene with its own light');
@@ -172,7 +172,7 @@ async function main() {
     const marks = await H.overlayPixelsNear(page, out.x, out.y, 10, SCENE_LIGHT);
     check(out.offscreen && !out.visible && out.y < 0.1 * f5.height && marks >= GIZMO_MIN_PIXELS,
         `an arrow at the frame's top edge points at it: (${out.x.toFixed(0)}, ${out.y.toFixed(0)}), ${marks} pixels of its colour`);
-    await page.screenshot({ path: path.resolve('browser_light_offscreen.png') });
+    await page.screenshot({ path: H.shotPath('browser_light_offscreen.png') });
 
     check(page.problems.length === 0, `no console errors${page.problems.length ? `:\n  ${page.problems.join('\n  ')}` : ''}`);
     await daemon.stop();

@@ -11,7 +11,7 @@
 //  5. on disc_lamp (an area light shaped as a 32-gon, harness.mjs DISC_LAMP), state sends its shape
 //     and the gizmo draws the disc's outline: gizmo pixels at its rim, none at the corners of its
 //     bounding square (a rectangle's outline would be there).
-// Screenshot: browser_lights.png in the working directory.
+// Screenshot: browser_lights.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_lights.mjs IIRD SOURCE_DIR
 
@@ -105,7 +105,7 @@ async function main() {
     const dark = await brightness(page);
     const g = (await page.evaluate(() => window.iir.gizmos))[1];
     const grey = g.visible ? await H.overlayPixelsNear(page, g.x, g.y, 6, OFF_GREY, 12) : 0;
-    await page.screenshot({ path: path.resolve('browser_lights.png') });
+    await page.screenshot({ path: H.shotPath('browser_lights.png') });
     log(`brightness: both on ${lit.toFixed(2)}, bulb off ${dark.toFixed(2)}; ${grey} grey gizmo pixels at the bulb`);
     check(dark < DARKER * lit, `switched off, the image darkens: ${dark.toFixed(2)} < ${DARKER} x ${lit.toFixed(2)}`);
     check(grey >= 20, 'and the bulb\'s gizmo is drawn grey');
@@ -148,7 +148,7 @@ async function main() {
         const p = at(x, y);
         corners.push(await H.overlayPixelsNear(page, p.x, p.y, 3, colour, 40));
     }
-    await page.screenshot({ path: path.resolve('browser_disc_lamp.png') });
+    await page.screenshot({ path: H.shotPath('browser_disc_lamp.png') });
     log(`disc outline: gizmo pixels at 8 rim points ${JSON.stringify(rim)}, at the square's corners ${JSON.stringify(corners)}`);
     check(rim.every((n) => n >= 2), 'the gizmo draws the disc\'s rim');
     check(corners.every((n) => n === 0), 'and not the corners of its bounding square');

@@ -37,7 +37,7 @@ async function main() {
     const n = await notice(page);
     log(`notice: ${n && n.text}`);
     check(n && n.note && /material 'light'/.test(n.text) && /indirect/.test(n.text), 'glow_box under iir: a notice names the emitting material whose indirect light iir leaves out');
-    await page.screenshot({ path: path.resolve('browser_notes.png') });
+    await page.screenshot({ path: H.shotPath('browser_notes.png') });
 
     await page.selectOption('#param-method', 'pt');
     await H.waitFor(page, () => window.iir.state.params.method === 'pt' && !document.querySelector('#errors [data-kind="notes"]'));

@@ -7,7 +7,7 @@
 //     my_view again is refused: a save banner, the name marked;
 //  2. without --allow-save: Save on server is refused once, then disabled and says why (--allow-save),
 //     and Download still works.
-// Screenshot: browser_save.png in the working directory.
+// Screenshot: browser_save.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_save.mjs IIRD SOURCE_DIR
 
@@ -85,7 +85,7 @@ async function main() {
     const banner = (await page.evaluate(() => window.iir.errors)).save;
     check(/my_view/.test(banner) && (await page.getAttribute('#save-name', 'class')).includes('invalid'), `saving over my_view is refused: "${banner}", the name marked`);
     await page.locator('#save-info').scrollIntoViewIfNeeded();
-    await page.screenshot({ path: path.resolve('browser_save.png') });
+    await page.screenshot({ path: H.shotPath('browser_save.png') });
 
     // 2. a daemon that does not write scenes
     const plain = await H.startDaemon(IIRD, ['--scenes', scenes, ...web]);

@@ -8,7 +8,7 @@
 //     sites of one frame (its red pixels counted against that), and none once the frame is refined;
 //  4. pt: the domain says "pt has no VPL domain" at once and never "no domain from pt yet"; the stats
 //     say pt has no VPLs; ir: "ir has no disk domain", its VPL count is the set's size, a new set.
-// Screenshot: browser_stats.png in the working directory.
+// Screenshot: browser_stats.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_stats.mjs IIRD SOURCE_DIR
 
@@ -130,7 +130,7 @@ async function main() {
     const kept = rows.filter((x) => x[2] !== null).map((x) => x[2]);
     check(kept.length > 0 && chartProblems(rows).length === 0, `aiming gives incremental steps with VPLs kept (${kept.slice(-5).join(', ')}), still no zero points (bad: ${chartProblems(rows).join(' ') || 'none'})`);
     await page.locator('#domain').scrollIntoViewIfNeeded();
-    await page.screenshot({ path: path.resolve('browser_stats.png') });
+    await page.screenshot({ path: H.shotPath('browser_stats.png') });
 
     // 4. pt: no VPL domain, said at once and once
     const captions = new Set();

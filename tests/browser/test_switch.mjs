@@ -13,7 +13,7 @@
 //     is accepted; a banner is dismissed with its × button;
 //  6. after the daemon restarts, the page brings back its scene, method, parameters and light (and
 //     the checks of 1 hold over the whole test, the reconnect included).
-// Screenshot: browser_switch_loading.png in the working directory.
+// Screenshot: browser_switch_loading.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_switch.mjs IIRD SOURCE_DIR
 
@@ -93,7 +93,7 @@ async function main() {
     check(now.greyed && now.switching && now.tone.sat < GREY_SAT_MAX && now.tone.lum < boxTone.lum,
         `the image is greyed the moment conference is picked: saturation ${now.tone.sat.toFixed(2)} < ${GREY_SAT_MAX}, brightness ${now.tone.lum.toFixed(1)}`);
     check(now.curtain.mode === 'loading' && /loading conference/.test(now.curtain.title), `the image area says "${now.curtain.title}"`);
-    const grey = H.tone(await viewRGB(page, path.resolve('browser_switch_loading.png')));
+    const grey = H.tone(await viewRGB(page, H.shotPath('browser_switch_loading.png')));
     const still = await page.evaluate(() => ({ switching: window.iir.switching, curtain: window.iir.curtain, scene: document.querySelector('#scene').value }));
     log(`while loading: saturation ${grey.sat.toFixed(2)}, brightness ${grey.lum.toFixed(1)}; still switching: ${still.switching}`);
     if (still.switching) {

@@ -1,7 +1,7 @@
 // test_ui.mjs -- the browser client against a real `iird serve`, in Debian's headless Chromium driven
 // by playwright-core: the page loads and shows frames; a drag on the image aims the light (the image
 // and the domain drawing change by more than idle refinement changes them); a screenshot goes to
-// browser_ui.png in the working directory; the connection indicator says connected; after the daemon
+// browser_ui.png in $IIR_TEST_TMP (harness shotPath); the connection indicator says connected; after the daemon
 // stops the page says disconnected, and when a daemon starts again on the same port the page
 // reconnects by itself and re-sends its light (the image comes back to the aimed one). Console
 // errors of the page fail the test (except the refused WebSocket connects while the daemon is down),
@@ -100,7 +100,7 @@ async function main() {
     check(domChange > DOMAIN_DRAG_MIN && domChange > 4 * domIdle,
         `domain drawing changed: ${domChange.toFixed(2)} > ${DOMAIN_DRAG_MIN} and > 4 x idle ${domIdle.toFixed(2)}`);
 
-    const shot = path.resolve('browser_ui.png');
+    const shot = H.shotPath('browser_ui.png');
     await page.screenshot({ path: shot });
     log(`screenshot: ${shot}`);
 

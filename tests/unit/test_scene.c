@@ -1301,10 +1301,11 @@ static void test_resolve(void **state)
     /* relative names are judged from the scratch folder, where ../etc does not exist */
     assert_non_null(getcwd(cwd, sizeof cwd));
     assert_int_equal(chdir(tmp), 0);
-    assert_int_equal(iir_scene_resolve("../etc", scenes, out, sizeof out, &err), IIR_ERR_INVALID);
+    /* a missing path is a file that cannot be read (exit 3, as a missing name), not bad input */
+    assert_int_equal(iir_scene_resolve("../etc", scenes, out, sizeof out, &err), IIR_ERR_IO);
     assert_contains(err.msg, "'../etc'");
     assert_contains(err.msg, "'..'");
-    assert_int_equal(iir_scene_resolve("a/b", scenes, out, sizeof out, &err), IIR_ERR_INVALID);
+    assert_int_equal(iir_scene_resolve("a/b", scenes, out, sizeof out, &err), IIR_ERR_IO);
     assert_contains(err.msg, "'a/b'");
     assert_int_equal(iir_scene_resolve("up..name", scenes, out, sizeof out, &err), IIR_ERR_INVALID);
     assert_int_equal(iir_scene_resolve("my scene", scenes, out, sizeof out, &err), IIR_ERR_INVALID);
@@ -1368,7 +1369,8 @@ static void test_open(void **state)
 
     /* every step can fail: the name, the lookup, the file */
     assert_open_fails("no_such_scene", IIR_SOURCE_DIR "/scenes", IIR_ERR_IO, "no_such_scene");
-    assert_open_fails("a/b", IIR_SOURCE_DIR "/scenes", IIR_ERR_INVALID, "'a/b'");
+    assert_open_fails("a/b", IIR_SOURCE_DIR "/scenes", IIR_ERR_IO,
+                      "'a/b'"); /* a missing path: exit 3 */
     assert_open_fails("cornell_box", NULL, IIR_ERR_IO, "no scenes folder");
     char path[1024];
     write_file("open_broken.obj", "v 0 0 0\nv 1 0 0\n", path, sizeof path);

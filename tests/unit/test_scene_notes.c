@@ -282,6 +282,8 @@ static void test_gltf_aspect_and_dropped(void **state)
     assert_true(find(d, n, "", "sunnode", "") < 0); /* a sun now */
     assert_true(find(d, n, "", "paint", "texture") >= 0);
     assert_true(find(d, n, "", "steel", "metallic 1") >= 0);
+    /* what is left out is a warning (issue 26 item 8): none of these is a note */
+    for (uint32_t i = 0; i < n; i++) assert_false(d[i].note);
     assert_true(find(d, n, "", "floor", "") < 0);
     assert_true(find(d, n, NULL, "fillnode", "") < 0); /* pt renders the point light */
 
@@ -385,8 +387,14 @@ static void test_emitter_becomes_area_light(void **state)
     assert_int_equal(l->shape.num_triangles, 0); /* a rectangle */
     double area;
     assert_int_equal(material_triangles(s, "lamp", &area), 0);
-    assert_true(find(s->dropped, s->num_dropped, "", "lamp",
-                     "emits light: became the movable area light 'lamp'") >= 0);
+    int at = find(s->dropped, s->num_dropped, "", "lamp",
+                  "emits light: became the movable area light 'lamp'");
+    assert_true(at >= 0);
+    assert_true(s->dropped[at].note); /* rendered: a note, not a warning (issue 26 item 8) */
+    /* the method's own entry on the lamp (ir: its indirect light) stays a warning */
+    iir_dropped d[16];
+    uint32_t n = iir_method_dropped("ir", s, s->lights, s->num_lights, d, 16);
+    for (uint32_t i = 0; i < n && i < 16; i++) assert_true(d[i].note == !d[i].method[0]);
     double mean_iir = render_mean(&o, "iir"), mean_pt = render_mean(&o, "pt");
     print_message("lamp room: iir mean %.4f, pt mean %.4f\n", mean_iir, mean_pt);
     assert_true(mean_iir > 0.05 && mean_pt > 0.05);
@@ -404,9 +412,11 @@ static void test_emitter_becomes_area_light(void **state)
     o = open_obj("cuberoom");
     assert_int_equal(o.scene->num_lights, 0);
     assert_int_equal(material_triangles(o.scene, "lamp", &area), 12);
-    assert_true(find(o.scene->dropped, o.scene->num_dropped, "", "lamp",
-                     "emits light: stays static emissive triangles, not a movable area light: it "
-                     "has triangles facing different ways") >= 0);
+    at = find(o.scene->dropped, o.scene->num_dropped, "", "lamp",
+              "emits light: stays static emissive triangles, not a movable area light: it "
+              "has triangles facing different ways");
+    assert_true(at >= 0);
+    assert_true(o.scene->dropped[at].note);
     close_scene(&o);
 }
 

@@ -158,7 +158,7 @@ static void test_render_stops(void **state)
     const setting rsm[] = {{"rsm_res", 256}, {"rsm_samples", 1024}, {"rsm_lowres", 1}, {NULL, 0}};
     const setting ir[] = {{"vpls", 4096}, {"bounces", 8}, {"clamp_compensation", 1}, {NULL, 0}};
     const setting ism[] = {{"vpls", 4096}, {"ism_points", 262144}, {NULL, 0}};
-    const setting iir[] = {{"vpls", 4096}, {"sm_res", 512}, {NULL, 0}};
+    const setting iir[] = {{"vpls", 4096}, {"sm_res", 512}, {"area_samples", 1024}, {NULL, 0}};
     const setting pt[] = {{"spp", 64}, {"bounces", 8}, {NULL, 0}};
     const setting whitted[] = {{"area_samples", 1024}, {NULL, 0}};
     const setting hier[] = {{"area_samples", 1024}, {"rsm_samples", 1024}, {NULL, 0}};

@@ -12,9 +12,9 @@
 //
 // A sun has no position: any left drag turns it (its arrow follows the cursor's motion) and the
 // moves that would carry it (shift-drag, wheel, WASD, QE) do nothing.
-// The arrows tilt the spot's aim across the screen (left/right/up/down as the user sees it), so they
-// change something for every spot, also one pointing straight down, where a yaw about the up axis
-// would change nothing; on a point light (no axis) they move the light in the view plane instead.
+// The arrows move the spot's light pool across the screen (left/right/up/down as the user sees it)
+// by equal angles, also from straight down, where a yaw about the up axis would change nothing (see
+// aimBy); on a point light (no axis) they move the light in the view plane instead.
 // The daemon keeps a moved light inside the scene: main.js puts its position back into the model.
 
 import * as v from './vec.js';
@@ -46,6 +46,7 @@ export class Controls {
         this.pendingCamera = null;
         this.pendingPick = null; // {x, y} in frame pixels
         this.pickInFlight = null; // {seq, t}
+        this.lastAim = null; // {name, position, distance}: the selected spot's last aim by the mouse
         this.raf = 0;
         this.bind();
     }
@@ -87,7 +88,7 @@ export class Controls {
         d.y = e.clientY;
         if (d.mode === 'aim') this.aimAt(e);
         else if (d.mode === 'move') this.moveLightInView(dx, dy);
-        else if (d.mode === 'turn') this.aimBy(dx * TURN_DEG_PER_PX, -dy * TURN_DEG_PER_PX);
+        else if (d.mode === 'turn') this.turnBy(dx * TURN_DEG_PER_PX, -dy * TURN_DEG_PER_PX);
         else this.orbit(-dx * ORBIT_DEG_PER_PX, dy * ORBIT_DEG_PER_PX); // grab the scene
     }
 
@@ -126,6 +127,7 @@ export class Controls {
         const L = this.model.light;
         if (isSun(L)) return; // the drag turned into a turn (selection changed meanwhile)
         L.direction = v.normalize(v.sub(msg.position, L.position), L.direction);
+        this.lastAim = { name: L.name, position: L.position.slice(), distance: v.length(v.sub(msg.position, L.position)) };
         this.queueLight({ target: msg.position });
     }
 
@@ -166,18 +168,82 @@ export class Controls {
         this.queueLight({ position: L.position });
     }
 
-    // Tilts the spot's axis so its aim moves right (rightDeg > 0) and up (upDeg > 0) on the screen:
-    // rotations about d x r and d x u, the axes that move d towards the camera's right r and up u.
-    // When the axis points along r (or u) itself, that rotation falls back to one about the camera's
-    // up (or right), which turns it into or out of the screen. A point light moves instead.
+    // Tilts the spot's axis so its light pool moves right (rightDeg > 0) and up (upDeg > 0) on the
+    // screen, by that angle whatever the aim (straight down too): the pool is taken as the point at
+    // aimDistance() along the axis on a floor (a ceiling, or a wall facing the light, by where the
+    // axis points), and the axis turns toward the
+    // direction w (perpendicular to it) that moves that point's image the way asked (the 2x2 system
+    // of the projection's derivative on the plane across the axis). Where that is undefined (the
+    // point behind the camera, or its plane seen edge-on) the axis turns toward the screen direction
+    // itself. A sun turns (turnBy); a point light moves instead.
     aimBy(rightDeg, upDeg) {
         const L = this.model.light;
-        const { r, u } = v.cameraBasis(this.model.camera);
+        if (isSun(L)) return this.turnBy(rightDeg, upDeg);
+        const c = this.model.camera;
+        const { f, r, u } = v.cameraBasis(c);
         if (isPoint(L)) {
             const step = (MOVE_STEP * this.sceneScale()) / AIM_STEP_DEG;
             this.moveLight(v.add(v.scale(r, rightDeg * step), v.scale(u, upDeg * step)));
             return;
         }
+        const angle = Math.hypot(rightDeg, upDeg) * v.DEG;
+        if (!(angle > 0)) return;
+        const d = v.normalize(L.direction);
+        const sx = rightDeg / Math.hypot(rightDeg, upDeg);
+        const sy = upDeg / Math.hypot(rightDeg, upDeg);
+        // an orthonormal pair across the axis
+        const e1 = v.sideOf(d, Math.abs(d[1]) < 0.9 ? [0, 1, 0] : [0, 0, 1]);
+        const e2 = v.cross(d, e1);
+        // the lit surface: a floor under a spot pointing down, a ceiling over one pointing up, else
+        // a wall facing it; the pool slides on it by t(e) as the axis turns toward e
+        const up = v.normalize(c.up || [0, 1, 0]);
+        const du = v.dot(d, up);
+        const n = du < -0.5 ? up : du > 0.5 ? v.scale(up, -1) : v.scale(d, -1);
+        const slide = (e) => v.sub(e, v.scale(d, v.dot(e, n) / v.dot(d, n)));
+        const q = v.sub(v.add(L.position, v.scale(d, this.aimDistance(L, Math.abs(du) > 0.5 ? Math.abs(du) : 1))), c.position);
+        const z = v.dot(q, f);
+        let w = null;
+        if (z > 1e-6) {
+            const x = v.dot(q, r) / z;
+            const y = v.dot(q, u) / z;
+            // screen motion (right, up) of the pool as the axis turns toward e: d(q.r / q.f), d(q.u / q.f)
+            const J = (e0) => {
+                const e = slide(e0);
+                return [(v.dot(e, r) - x * v.dot(e, f)) / z, (v.dot(e, u) - y * v.dot(e, f)) / z];
+            };
+            const [a11, a21] = J(e1);
+            const [a12, a22] = J(e2);
+            const det = a11 * a22 - a12 * a21;
+            const norm = Math.hypot(a11, a21) * Math.hypot(a12, a22);
+            if (Math.abs(det) > 1e-3 * norm) {
+                const a = (sx * a22 - sy * a12) / det;
+                const b = (a11 * sy - a21 * sx) / det;
+                const ab = v.add(v.scale(e1, a), v.scale(e2, b));
+                if (v.length(ab) > 1e-9) w = v.normalize(ab);
+            }
+        }
+        if (!w) {
+            const s = v.add(v.scale(r, sx), v.scale(u, sy));
+            w = v.normalize(v.sub(s, v.scale(d, v.dot(s, d))), e1);
+        }
+        L.direction = v.normalize(v.add(v.scale(d, Math.cos(angle)), v.scale(w, Math.sin(angle))), L.direction);
+        this.queueLight({ direction: L.direction });
+    }
+
+    // How far along the axis the selected spot's pool is: the hit of its last aim by the mouse while
+    // the light has not moved since, else the surface half the camera's distance to its target (the
+    // scene's scale) away (cos: of the axis against the surface's normal).
+    aimDistance(L, cos = 1) {
+        const a = this.lastAim;
+        if (a && a.name === L.name && v.length(v.sub(a.position, L.position)) < 1e-6 && a.distance > 1e-6) return a.distance;
+        return (0.5 * this.sceneScale()) / cos;
+    }
+
+    // A sun turned by a drag: rotations about d x r and d x u, the axes that move d towards the
+    // camera's right r and up u (its arrow follows the cursor's motion).
+    turnBy(rightDeg, upDeg) {
+        const L = this.model.light;
+        const { r, u } = v.cameraBasis(this.model.camera);
         const about = (k, fallback) => (v.length(k) > 1e-3 ? v.normalize(k) : fallback);
         let d = v.normalize(L.direction);
         d = v.rotate(d, about(v.cross(d, r), u), rightDeg * v.DEG);

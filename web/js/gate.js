@@ -10,6 +10,7 @@ export class FrameGate {
         this.generation = 0; // of the newest state (or welcome) received
         this.pending = new Map(); // seq -> request: switches sent, not yet answered
         this.firstId = Infinity; // id of the first frame seen of `generation` or later
+        this.lastScene = 0; // seq of the newest scene switch asked for
     }
 
     // A welcome: a session whose state has this generation (a new session after a reconnect starts
@@ -18,11 +19,24 @@ export class FrameGate {
         this.generation = generation;
         this.pending.clear();
         this.firstId = Infinity;
+        this.lastScene = 0;
     }
 
-    // A switch sent: nothing is shown until its state (or error) reply.
+    // A switch sent: nothing is shown until its state (or error) reply. Scene switches are
+    // latest-wins (docs/protocol.md): a newer one replaces those still waiting, so the page waits
+    // only for the reply of the last scene asked for (a lost reply of a replaced one cannot hold the
+    // image; their states, of lower generations, show nothing anyway).
     asked(request) {
+        if (request.kind === 'scene') {
+            for (const [seq, r] of this.pending) if (r.kind === 'scene') this.pending.delete(seq);
+            this.lastScene = request.seq;
+        }
         this.pending.set(request.seq, request);
+    }
+
+    // Whether scene switch `seq` was replaced by a newer one.
+    replaced(seq) {
+        return this.lastScene > seq;
     }
 
     // The state reply (seq may be undefined for a state the client did not ask for). sameRender:

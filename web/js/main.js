@@ -255,6 +255,7 @@ const switcher = new Switcher({
     panel,
     send,
     state: () => app.state,
+    methods: () => app.methods || [],
     busy: () => updateEnabled(),
 });
 
@@ -410,7 +411,7 @@ function onMessage(msg) {
 // A reply that settles its request: an error of that kind from before it goes.
 function settled(msg) {
     const req = requests.take(msg.seq);
-    if (req) errors.succeeded(req.kind, req.seq);
+    if (req && !req.restore) errors.succeeded(req.kind, req.seq); // a restore says nothing of the error
     return req;
 }
 
@@ -418,9 +419,13 @@ function settled(msg) {
 // light and camera stay when we sent newer ones since (a kept-inside light moves by the difference
 // between the position sent and the position used).
 // What the method leaves out of the scene (state.notes: a sun iir ignores, a second light's indirect
-// light...): one notice, shown again only when the list changes (a dismissed one stays away).
+// light...): one notice, shown again only when the list changes (a dismissed one stays away). Only
+// warnings (what is not rendered) go in it; notes (what was made of the scene: a lamp material that
+// became the movable area light) are rendered, and are not news.
 function showNotes(notes) {
-    const text = (notes || []).map((n) => `${n.kind} '${n.name}': ${n.what}`).join(' · ');
+    const text = (notes || [])
+        .filter((n) => n.severity !== 'note')
+        .map((n) => `${n.kind} '${n.name}': ${n.what}`).join(' · ');
     if (text === app.notesText) return;
     app.notesText = text;
     if (text) errors.show('notes', text, 0, true);
@@ -451,6 +456,8 @@ function onState(msg) {
     if (fresh || msg.seq >= app.lastCameraSeq) s.camera = msg.camera;
     switcher.stated(msg, req, sameRender);
     panel.setState(s, app.selected);
+    panel.showScene(switcher.pendingScene()); // the picker says the scene on its way, not one passed
+    if (req && req.kind === 'params' && req.fields && !req.restore) panel.clearFieldErrors(req.fields);
     saving.sceneChanged();
     if (req && req.kind === 'scene' && app.afterScene) {
         const then = app.afterScene;
@@ -529,11 +536,17 @@ function onRecord(msg) {
 function onError(msg) {
     const text = P.describeError(msg);
     console.warn(`iir: server error: ${text}`);
-    const req = requests.take(msg.seq);
+    let req = requests.take(msg.seq);
+    // an error after the state of a switch: the session took it but cannot render it
+    const late = !req && switcher.answeredSwitch(msg.seq);
+    if (late) req = late;
     const kind = errorKind(msg, req);
     errors.show(kind, text, msg.seq || 0);
     panel.flagField(msg.field, text);
-    if (req && (req.kind === 'scene' || req.kind === 'params')) {
+    if (late) {
+        switcher.lateRefusal(msg, req);
+        showDomain();
+    } else if (req && (req.kind === 'scene' || req.kind === 'params')) {
         if (req.kind === 'scene') app.afterScene = null; // the light and camera of a scene not shown
         switcher.refused(msg, req);
         showDomain(); // the VPLs over the image shown again
@@ -605,6 +618,6 @@ $('#help').addEventListener('click', () => actions.help(false));
 $('#show-vpls').addEventListener('change', (e) => actions.toggleVpls(e.target.checked));
 $('#retry-now').addEventListener('click', () => conn.retryNow());
 
-window.iir = inspector({ app, gate, errors, curtain, view, charts, domainView });
+window.iir = inspector({ app, gate, errors, curtain, view, charts, domainView, panel });
 
 conn.start();

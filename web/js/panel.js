@@ -49,6 +49,7 @@ export class Panel {
         this.recording = null; // {since} while recording
         this.selected = 0; // index of the selected light
         this.listKey = ''; // the light list's names and kinds as built
+        this.fieldErrors = new Map(); // params field -> why the value typed there was refused
         this.bindStatic();
     }
 
@@ -116,10 +117,18 @@ export class Panel {
             input.id = `param-${row.name}`;
             input.name = row.name;
             input.title = row.help + (row.unit ? ` (${row.unit})` : '');
+            const live = this.maxOf(row);
+            if (row.type === 'int' || row.type === 'u64' || row.type === 'float') {
+                input.title += ` · [${row.min}, ${live}]${row.max > live ? ` live (iird render: up to ${row.max})` : ''}`;
+            }
+            input.dataset.title = input.title;
             input.addEventListener('change', () => this.edited(row, input));
             this.inputs.set(row.name, input);
             const label = el('label', { for: input.id, text: row.name.replaceAll('_', ' '), title: input.title });
-            group.append(el('div', { class: 'row' }, label, input));
+            const error = el('div', { class: 'field-error', role: 'alert', 'data-field': row.name });
+            error.hidden = true;
+            group.append(el('div', { class: 'row' }, label, input), error);
+            if (this.fieldErrors.has(row.name)) this.showFieldError(row.name, this.fieldErrors.get(row.name));
         }
     }
 
@@ -144,7 +153,8 @@ export class Panel {
         return el('input', { type: 'number', min: row.min, max: this.maxOf(row), step });
     }
 
-    // A form edit: the value if it is valid, else the field marked and nothing sent.
+    // A form edit: the value if it is valid, else the field shows the value in force again and,
+    // next to it, why the one typed was refused (until a value of that field is accepted).
     edited(row, input) {
         let value;
         if (row.type === 'bool') value = input.checked;
@@ -157,12 +167,66 @@ export class Panel {
             const bad = input.value === '' || !Number.isFinite(value) || value < min || value > max ||
                 (int && !Number.isInteger(value));
             if (bad) {
-                this.flagInvalid(input, `${row.name} must be ${int ? 'an integer ' : ''}in [${min}, ${max}]`);
+                const typed = input.value === '' ? 'an empty value' : input.value;
+                const beyond = row.max > max && value > max && value <= row.max
+                    ? ` (${max} is a live session's most; \`iird render\` takes up to ${row.max})` : '';
+                const inForce = this.state && this.state.params[row.name] !== undefined ? `; ${this.state.params[row.name]} is in force` : '';
+                this.showFieldError(row.name, `${typed} refused: ${row.name} must be ${int ? 'an integer ' : ''}in [${min}, ${max}]${beyond}${inForce}`);
+                this.showValue(row.name);
                 return;
             }
         }
-        input.classList.remove('invalid');
         this.h.params({ [row.name]: value });
+    }
+
+    // The value in force (the state's) back in field `name`.
+    showValue(name) {
+        const input = this.inputs.get(name);
+        const val = this.state && this.state.params[name];
+        if (!input || val === undefined) return;
+        if (input.type === 'checkbox') input.checked = !!val;
+        else input.value = String(val);
+    }
+
+    // Why the value typed into params field `name` was refused, next to the field, until cleared.
+    showFieldError(name, text) {
+        this.fieldErrors.set(name, text);
+        const input = this.inputs.get(name);
+        if (!input) return;
+        input.classList.add('invalid');
+        input.title = `${text}\n${input.dataset.title || ''}`;
+        const box = this.root.querySelector(`.field-error[data-field="${name}"]`);
+        if (box) {
+            box.textContent = text;
+            box.hidden = false;
+        }
+    }
+
+    // A value of these params fields was accepted: their errors go.
+    clearFieldErrors(names) {
+        for (const name of names) {
+            if (!this.fieldErrors.delete(name)) continue;
+            const input = this.inputs.get(name);
+            if (input) {
+                input.classList.remove('invalid');
+                input.title = input.dataset.title || '';
+            }
+            const box = this.root.querySelector(`.field-error[data-field="${name}"]`);
+            if (box) {
+                box.hidden = true;
+                box.textContent = '';
+            }
+        }
+    }
+
+    // The field errors shown (name -> text), for tests and the console.
+    listFieldErrors() {
+        return Object.fromEntries(this.fieldErrors);
+    }
+
+    // The scene picker says `name` (a switch to it is under way) instead of the scene shown.
+    showScene(name) {
+        if (name) $('#scene', this.root).value = name;
     }
 
     setState(state, selected = this.selected) {
@@ -174,7 +238,7 @@ export class Panel {
             if (val === undefined) continue;
             if (input.type === 'checkbox') input.checked = !!val;
             else input.value = String(val);
-            input.classList.remove('invalid');
+            if (!this.fieldErrors.has(name)) input.classList.remove('invalid');
         }
         const m = this.methods.find((x) => x.name === state.params.method);
         $('#method-summary', this.root).textContent = m && m.summary ? m.summary : '';
@@ -285,13 +349,14 @@ export class Panel {
 
     // ---- errors ----
 
-    // A refused params field (`params.kmax`): its input is marked and shows the state's value again.
+    // A refused params field (`params.kmax`): its input shows the state's value again and the
+    // server's reason next to it (until a value of that field is accepted).
     flagField(field, text) {
         const name = field && field.startsWith('params.') ? field.slice(7).replace(/\[.*$/, '') : null;
         const input = name && this.inputs.get(name);
         if (!input) return;
-        if (this.state) this.setState(this.state);
-        this.flagInvalid(input, text);
+        this.showFieldError(name, this.state && this.state.params[name] !== undefined ? `${text}; ${this.state.params[name]} is in force` : text);
+        this.showValue(name);
     }
 
     flagInvalid(input, text) {

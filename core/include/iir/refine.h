@@ -43,13 +43,14 @@ extern "C" {
 #define IIR_REFINE_MAX_PASSES 4096
 
 typedef struct iir_refine_params {
-    int interleave;  /* n: a sweep is n^2 passes, [1, 8] */
-    int max_passes;  /* converged after this many passes, [1, IIR_REFINE_MAX_PASSES] */
-    bool jitter;     /* jittered camera rays (antialiasing) or pixel centres */
-    float clamp;     /* geometry-term bound, as iir_indirect_params.clamp */
-    bool clamp_comp; /* compensate the clamp in every pass (render.h's iir_pass_params) */
-    int bounces;     /* as iir_indirect_params.bounces */
-    uint64_t seed;   /* area-light samples of the passes */
+    int interleave;   /* n: a sweep is n^2 passes, [1, 8] */
+    int max_passes;   /* converged after this many passes, [1, IIR_REFINE_MAX_PASSES] */
+    bool jitter;      /* jittered camera rays (antialiasing) or pixel centres */
+    float clamp;      /* geometry-term bound, as iir_indirect_params.clamp */
+    bool clamp_comp;  /* compensate the clamp in every pass (render.h's iir_pass_params) */
+    int bounces;      /* as iir_indirect_params.bounces */
+    int area_samples; /* as iir_indirect_params.area_samples; 0 = its default */
+    uint64_t seed;    /* area-light samples of the passes */
 } iir_refine_params;
 
 /* Supplies the VPL set of `sweep` (0: the rendered frame's set; >= 1: a fresh independent set of

@@ -7,8 +7,8 @@
  *  1. G-buffer: one camera ray per pixel centre (no jitter), 8-wide packets over 4x2 pixel blocks,
  *     OpenMP over 16x16 tiles. Kept while the camera and the frame size do not change.
  *  2. Direct: emission seen directly, plus for every punctual light one shadow ray per pixel
- *     (spot cone and cosine lobe by iir_light_intensity), plus, when the scene has emissive
- *     triangles, one light-set sample per pixel drawn from the stream hash(x, y, 0) of the seed.
+ *     (spot cone and cosine lobe by iir_light_intensity), plus, for every area light and
+ *     the emissive triangles, area_samples stratified samples per pixel (render_direct.c).
  *  3. Indirect: vpl.h's formula, with the geometry term clamped,
  *         L(x) = (rho_x / pi) sum_i (Phi_i / pi) min(G_i, clamp / D^2) V_i(x),
  *         G_i = max(0, n_i . w) max(0, -n_x . w) / d^2,
@@ -120,6 +120,8 @@ typedef struct iir_indirect_params {
                             compensation adds no light of more bounces. Default 2 */
     float filter_normal; /* filter: minimum cosine between the normals. [-1, 1], default 0.9 */
     float filter_depth;  /* filter: maximum relative depth difference. (0, inf), default 0.05 */
+    int area_samples;    /* direct light: stratified samples per pixel of every area light and of
+                            the emissive triangles (render_direct.c). [1, 4096] */
 } iir_indirect_params;
 
 /* shadowmap, interleave 4 with the filter, clamp 100 (G stops growing below a tenth of the scene
@@ -202,12 +204,13 @@ iir_status iir_renderer_frame(iir_renderer *r, const iir_render_input *in,
  *    iir_renderer_frame with interleave 1 and exact rays), whatever the subsets' sizes.
  * Direct light is a frame's: with emissive triangles pass a new seed per pass for new samples. */
 typedef struct iir_pass_params {
-    int interleave;  /* n, [1, 8] */
-    uint32_t shift;  /* [0, n^2) */
-    iir_vec2 jitter; /* in [0, 1]^2; (0.5, 0.5) = the pixel centre */
-    float clamp;     /* as iir_indirect_params.clamp */
-    bool clamp_comp; /* compensation at every pixel (any rate of a frame: passes average it) */
-    int bounces;     /* as iir_indirect_params.bounces */
+    int interleave;   /* n, [1, 8] */
+    uint32_t shift;   /* [0, n^2) */
+    iir_vec2 jitter;  /* in [0, 1]^2; (0.5, 0.5) = the pixel centre */
+    float clamp;      /* as iir_indirect_params.clamp */
+    bool clamp_comp;  /* compensation at every pixel (any rate of a frame: passes average it) */
+    int bounces;      /* as iir_indirect_params.bounces */
+    int area_samples; /* as iir_indirect_params.area_samples; 0 = its default */
 } iir_pass_params;
 
 /* The hook (status.h) that lets a frame or a pass end early: polled between phases and before each

@@ -44,14 +44,17 @@ typedef struct iir_material {
 const char *iir_material_kind_name(iir_material_kind kind);
 
 /* Something of a scene that is not rendered, for warnings (the CLI prints them; the daemon can send
- * them): a light or material by its name in the scene that no method renders (the loader's list,
- * iir_scene.dropped, method "") or that one method leaves out (iir_method_dropped), and what
- * happens to it. */
+ * them), or a note on what was made of it (`note`): a light or material by its name in the scene
+ * that no method renders (the loader's list, iir_scene.dropped, method "") or that one method
+ * leaves out (iir_method_dropped), and what happens to it. */
 typedef struct iir_dropped {
     char method[16]; /* "" = no method renders it; else the method that leaves it out */
     char kind[16];   /* "light" or "material" */
     char name[64];   /* its name in the scene */
     char what[192];  /* e.g. "a directional light (sun): ignored; ..." */
+    bool note;       /* informational: what was done to the scene (an emissive material became a
+                        movable area light, or stays static emissive triangles), which is rendered;
+                        false: a warning, something left out */
 } iir_dropped;
 
 /* Where a scene's camera comes from. Without one in the file or sidecar, iir_scene_open frames the

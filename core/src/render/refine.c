@@ -192,7 +192,8 @@ iir_status iir_refine_pass(iir_refine *rf, iir_renderer *r, iir_refine_vpls_fn v
                               .jitter = p->jitter ? iir_refine_jitter(i) : iir_v2(0.5f, 0.5f),
                               .clamp = p->clamp,
                               .clamp_comp = p->clamp_comp,
-                              .bounces = p->bounces};
+                              .bounces = p->bounces,
+                              .area_samples = p->area_samples};
         iir_render_input in = {.camera = &rf->camera,
                                .lights = rf->lights,
                                .num_lights = rf->num_lights,

@@ -35,6 +35,7 @@ iir_indirect_params iir_indirect_params_default(void)
         .mr_window = o.mr.mr_window,
         .filter_normal = 0.9f,
         .filter_depth = 0.05f,
+        .area_samples = o.area_samples,
     };
     return p;
 }
@@ -80,6 +81,9 @@ iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error 
         return iir_fail(err, IIR_ERR_INVALID,
                         "clamp compensation needs shading full (multires has no per-pixel "
                         "indirect light to add it to)");
+    if (p->area_samples < 1 || p->area_samples > IIR_MAX_AREA_SAMPLES)
+        return iir_fail(err, IIR_ERR_INVALID, "indirect area_samples %d is outside [1, %d]",
+                        p->area_samples, IIR_MAX_AREA_SAMPLES);
     if (p->shading != IIR_SHADING_FULL && p->shading != IIR_SHADING_MULTIRES)
         return iir_fail(err, IIR_ERR_INVALID, "indirect shading %d is neither full nor multires",
                         (int)p->shading);
@@ -207,7 +211,7 @@ static bool shade(iir_renderer *r, const iir_shade_job *job, iir_render_timing *
                   iir_raystats *rays)
 {
     double t0 = iir_now_ms();
-    bool stopped = iir_render_direct(r, job->lights, job->num_lights, job->seed, job->out, rays);
+    bool stopped = iir_render_direct(r, job, rays);
     double t1 = iir_now_ms();
     if (!stopped && r->level)
         stopped = iir_render_indirect_coarse(r, job->p, true, rays, &tm->vpl_evals);
@@ -340,6 +344,7 @@ iir_status iir_renderer_pass(iir_renderer *r, const iir_render_input *in, const 
     ind.clamp = p->clamp;
     ind.clamp_comp = p->clamp_comp ? IIR_CLAMP_COMP_FULL : IIR_CLAMP_COMP_OFF;
     ind.bounces = p->bounces;
+    if (p->area_samples > 0) ind.area_samples = p->area_samples;
     iir_status s = check_pass(p, err);
     if (s == IIR_OK) s = check_inputs(in->camera, in->lights, in->num_lights, &ind, out, err);
     if (s == IIR_OK) s = iir_render_subsets(r, in->vpls, in->num_vpls, &ind, true, err);

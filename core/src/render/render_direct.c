@@ -1,6 +1,9 @@
 /* render_direct.c -- emission and direct light at the G-buffer's pixels: every delta light (point,
- * spots, sun) by one shadow ray per pixel (a sun's goes to infinity), every rectangular area light
- * and the emissive triangles by one seeded sample per pixel each; and the area lights that the
+ * spots, sun) by one shadow ray per pixel (a sun's goes to infinity), every area light and the
+ * emissive triangles by area_samples stratified samples per pixel each (a 2D Sobol net, shuffled
+ * and Owen-scrambled per pixel and light: any prefix is well spread, a power of two of them is
+ * stratified over the emitter; Burley 2020, "Practical hash-based Owen scrambling"); and the area
+ * lights that the
  * pixels' camera rays meet from the front before their surface (they are not in the BVH, so not in
  * the G-buffer: their radiance is added here, each frame, as they move). Not indirect light.
  *
@@ -21,8 +24,75 @@ typedef struct direct_ctx {
     const iir_light *lights;
     uint32_t num_lights;
     uint64_t seed;
+    int samples; /* per pixel per area light (and for the emissive triangles) */
+    float inv_samples;
     iir_camera_frame cam; /* the G-buffer's camera: its rays through r->gb_shift */
 } direct_ctx;
+
+/* ---- stratified samples: a shuffled, Owen-scrambled 2D Sobol sequence per pixel and light ---- */
+
+static uint32_t reverse_bits(uint32_t x)
+{
+    x = (x << 16) | (x >> 16);
+    x = ((x & 0x00ff00ffu) << 8) | ((x & 0xff00ff00u) >> 8);
+    x = ((x & 0x0f0f0f0fu) << 4) | ((x & 0xf0f0f0f0u) >> 4);
+    x = ((x & 0x33333333u) << 2) | ((x & 0xccccccccu) >> 2);
+    return ((x & 0x55555555u) << 1) | ((x & 0xaaaaaaaau) >> 1);
+}
+
+/* Nested uniform (Owen) scramble of x's bits from the top, by a hash (Laine-Karras in reverse):
+ * each bit is flipped by a function of the bits above it, so nets stay nets. */
+static uint32_t owen_scramble(uint32_t x, uint32_t seed)
+{
+    x = reverse_bits(x) + seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return reverse_bits(x);
+}
+
+/* The second dimension of the Sobol sequence (the first is reverse_bits): together a (0,2)-net
+ * in every aligned block of 2^m indices. */
+static uint32_t sobol_dim1(uint32_t i)
+{
+    uint32_t x = 0;
+    for (uint32_t v = 1u << 31; i; i >>= 1, v ^= v >> 1)
+        if (i & 1u) x ^= v;
+    return x;
+}
+
+static float unit_float(uint32_t x)
+{
+    return (float)(x >> 8) * 0x1p-24f;
+}
+
+/* One pixel's and one light's sample stream: hashes of (seed, x, y, stream). */
+typedef struct strat {
+    uint32_t shuffle, sx, sy, shuffle_pick, spick;
+} strat;
+
+static strat strat_make(uint64_t seed, int x, int y, uint64_t stream)
+{
+    uint64_t a = iir_hash3(seed, iir_hash3((uint64_t)x, (uint64_t)y, stream), 0x57a7);
+    uint64_t b = iir_mix64(a ^ 0x9e3779b97f4a7c15ull), c = iir_mix64(b + 1);
+    strat s = {(uint32_t)a, (uint32_t)(a >> 32), (uint32_t)b, (uint32_t)(b >> 32), (uint32_t)c};
+    return s;
+}
+
+/* Sample i (of the first n) of the stream: a point in [0, 1)^2. */
+static iir_vec2 strat_point(const strat *s, uint32_t i)
+{
+    uint32_t j = owen_scramble(i, s->shuffle);
+    return iir_v2(unit_float(owen_scramble(reverse_bits(j), s->sx)),
+                  unit_float(owen_scramble(sobol_dim1(j), s->sy)));
+}
+
+/* A third, independently shuffled dimension (stratified in 1D): the emissive triangles' pick. */
+static float strat_pick(const strat *s, uint32_t i)
+{
+    return unit_float(owen_scramble(reverse_bits(owen_scramble(i, s->shuffle_pick)), s->spick));
+}
 
 /* The pixels of one 4x2 block and their shadow rays. */
 typedef struct block {
@@ -111,21 +181,44 @@ static void aim_lane(const iir_renderer *r, block *b, int k, iir_vec3 p, iir_vec
     set_lane(&b->rays, k, o, iir_scale(d, 1.f / len), len - 2.f * r->eps);
 }
 
-/* Lane k's unshadowed f Li cos / pdf for one sample (point uniform on it) of area light l, the
- * light's index li in the frame's list (its random numbers), and the shadow ray to the point. */
-static void area_light_lane(const direct_ctx *c, const iir_light *l, uint32_t li, block *b, int k)
+/* Lane k's unshadowed f Li cos / (pdf N) for sample ls of N (c->samples), and its shadow ray. */
+static void sample_lane(const direct_ctx *c, block *b, int k, const iir_light_sample *ls)
 {
-    const iir_renderer *r = c->r;
-    const iir_gbuffer *gb = &r->gb;
-    int x = b->x0 + k % BLOCK_W, y = b->y0 + k / BLOCK_W;
+    const iir_gbuffer *gb = &c->r->gb;
     iir_vec3 p = gb->position[b->index[k]], n = gb->normal[b->index[k]];
-    iir_rng rng = iir_rng_make(c->seed, iir_hash3((uint64_t)x, (uint64_t)y, 1u + (uint64_t)li));
-    iir_light_sample ls = iir_area_light_sample(l, p, iir_rng_uniform2(&rng));
-    if (ls.pdf <= 0.f || iir_is_black(ls.Li)) return;
-    float cos_theta = iir_dot(n, ls.wi);
+    if (ls->pdf <= 0.f || iir_is_black(ls->Li)) return;
+    float cos_theta = iir_dot(n, ls->wi);
     if (cos_theta <= 0.f) return;
-    b->pending[k] = iir_scale(iir_mul(b->f[k], ls.Li), cos_theta / ls.pdf);
-    aim_lane(r, b, k, p, n, &ls);
+    b->pending[k] = iir_scale(iir_mul(b->f[k], ls->Li), cos_theta * c->inv_samples / ls->pdf);
+    aim_lane(c->r, b, k, p, n, ls);
+}
+
+/* The block's sample streams of stream number `stream` (area light li: 1 + li; emissive
+ * triangles: 0). */
+static void block_strats(const direct_ctx *c, const block *b, uint64_t stream, strat s[8])
+{
+    for (int k = 0; k < 8; k++)
+        s[k] = strat_make(c->seed, b->x0 + k % BLOCK_W, b->y0 + k / BLOCK_W, stream);
+}
+
+/* Area light l's direct light at the block: sample i of each shaded pixel's stratified stream
+ * (a point uniform by area on the emitter), one packet of shadow rays per sample. */
+static void area_light_samples(const direct_ctx *c, const iir_light *l, uint32_t li, block *b,
+                               iir_raystats *st)
+{
+    strat s[8];
+    block_strats(c, b, 1u + (uint64_t)li, s);
+    const iir_gbuffer *gb = &c->r->gb;
+    for (int i = 0; i < c->samples; i++) {
+        clear_rays(b);
+        for (int k = 0; k < 8; k++) {
+            if (!b->shaded[k]) continue;
+            iir_vec3 p = gb->position[b->index[k]];
+            iir_light_sample ls = iir_area_light_sample(l, p, strat_point(&s[k], (uint32_t)i));
+            sample_lane(c, b, k, &ls);
+        }
+        resolve(c->r, b, st);
+    }
 }
 
 /* Adds area light l's radiance to the pixels whose camera rays meet it from the front before their
@@ -151,34 +244,37 @@ static void area_light_seen(const direct_ctx *c, const iir_light *l, block *b)
 static void shade_light(const direct_ctx *c, uint32_t li, block *b, iir_raystats *st)
 {
     const iir_light *l = &c->lights[li];
+    if (l->type == IIR_LIGHT_AREA) {
+        area_light_samples(c, l, li, b, st);
+        area_light_seen(c, l, b);
+        return;
+    }
     iir_light_eval e = iir_light_prepare(l);
     clear_rays(b);
-    for (int k = 0; k < 8; k++) {
-        if (!b->shaded[k]) continue;
-        if (l->type == IIR_LIGHT_AREA)
-            area_light_lane(c, l, li, b, k);
-        else
-            punctual_lane(c->r, &e, b, k);
-    }
+    for (int k = 0; k < 8; k++)
+        if (b->shaded[k]) punctual_lane(c->r, &e, b, k);
     resolve(c->r, b, st);
-    if (l->type == IIR_LIGHT_AREA) area_light_seen(c, l, b);
 }
 
-/* Lane k's unshadowed f Li cos / pdf for one sample of the emissive triangles, and its ray. */
-static void area_lane(const direct_ctx *c, block *b, int k)
+/* The emissive triangles' direct light at the block: sample i of each shaded pixel's stream (a
+ * triangle picked by a stratified 1D number, a point on it by the 2D net), a packet per sample. */
+static void emissive_samples(const direct_ctx *c, block *b, iir_raystats *st)
 {
-    const iir_renderer *r = c->r;
-    const iir_gbuffer *gb = &r->gb;
-    int x = b->x0 + k % BLOCK_W, y = b->y0 + k / BLOCK_W;
-    iir_vec3 p = gb->position[b->index[k]], n = gb->normal[b->index[k]];
-    iir_rng rng = iir_rng_make(c->seed, iir_hash3((uint64_t)x, (uint64_t)y, 0));
-    float u_pick = iir_rng_uniform(&rng);
-    iir_light_sample ls = iir_lightset_sample(r->area_lights, p, u_pick, iir_rng_uniform2(&rng));
-    if (ls.pdf <= 0.f || iir_is_black(ls.Li)) return;
-    float cos_theta = iir_dot(n, ls.wi);
-    if (cos_theta <= 0.f) return;
-    b->pending[k] = iir_scale(iir_mul(b->f[k], ls.Li), cos_theta / ls.pdf);
-    aim_lane(r, b, k, p, n, &ls);
+    strat s[8];
+    block_strats(c, b, 0, s);
+    const iir_gbuffer *gb = &c->r->gb;
+    for (int i = 0; i < c->samples; i++) {
+        clear_rays(b);
+        for (int k = 0; k < 8; k++) {
+            if (!b->shaded[k]) continue;
+            iir_vec3 p = gb->position[b->index[k]];
+            iir_light_sample ls =
+                iir_lightset_sample(c->r->area_lights, p, strat_pick(&s[k], (uint32_t)i),
+                                    strat_point(&s[k], (uint32_t)i));
+            sample_lane(c, b, k, &ls);
+        }
+        resolve(c->r, b, st);
+    }
 }
 
 /* Reads the block's pixels: emission, and which of them direct light can reach. */
@@ -201,24 +297,25 @@ static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir
     block b;
     load_block(&c->r->gb, x0, y0, &b);
     for (uint32_t l = 0; l < c->num_lights; l++) shade_light(c, l, &b, st);
-    if (c->r->area_lights) {
-        clear_rays(&b);
-        for (int k = 0; k < 8; k++)
-            if (b.shaded[k]) area_lane(c, &b, k);
-        resolve(c->r, &b, st);
-    }
+    if (c->r->area_lights) emissive_samples(c, &b, st);
     for (int k = 0; k < 8; k++) {
         int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
         if (x < out->width && y < out->height) *iir_image_at(out, x, y) = b.L[k];
     }
 }
 
-bool iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t num_lights,
-                       uint64_t seed, iir_image *out, iir_raystats *st)
+bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_raystats *st)
 {
     bool stopped = false;
-    direct_ctx c = {r, lights, num_lights, seed,
+    int n = job->p->area_samples;
+    direct_ctx c = {r,
+                    job->lights,
+                    job->num_lights,
+                    job->seed,
+                    n,
+                    1.f / (float)n,
                     iir_camera_setup(&r->gb_camera, r->gb.width, r->gb.height)};
+    iir_image *out = job->out;
     int w = out->width, h = out->height, tiles = iir_tile_count(w, h, IIR_RENDER_TILE);
     iir_raystats total = {0};
 #pragma omp parallel

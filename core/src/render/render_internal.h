@@ -11,6 +11,7 @@
 /* Tiles of the G-buffer, direct and filter phases; the indirect phase uses larger ones so that a
  * subset has more pixels per tile to share each VPL's map texels. */
 enum { IIR_RENDER_TILE = 16, IIR_INDIRECT_TILE = 64, IIR_MAX_INTERLEAVE = 8, IIR_MAX_SUBSETS = 64 };
+enum { IIR_MAX_AREA_SAMPLES = 4096 }; /* iir_indirect_params.area_samples */
 
 /* The filter's horizontal pass at one pixel: weighted sum of the accepted taps and their weight. */
 typedef struct iir_filter_row {
@@ -112,8 +113,7 @@ bool iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *r
 /* render_direct.c: out = emission + direct light (every pixel written). Each tile first polls
  * r->stop (when set) and is skipped once it said stop; returns true when that happened (out is then
  * incomplete). */
-bool iir_render_direct(const iir_renderer *r, const iir_light *lights, uint32_t num_lights,
-                       uint64_t seed, iir_image *out, iir_raystats *st);
+bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_raystats *st);
 
 /* render_indirect.c: builds the per-subset VPL lists (checking the VPLs), a subset's flux scaled
  * by N / |subset| (frames) or by n^2 (refinement passes: exact_mean), then fills r->raw, pixel

@@ -127,7 +127,12 @@ iir_status iir_scene_resolve(const char *name, const char *scenes_dir, char *out
     if (!name || !*name) return iir_fail(err, IIR_ERR_INVALID, "no scene name given");
     struct stat st;
     if (stat(name, &st) == 0) return copy_out(name, out, n, err);
-    if (strchr(name, '/') || strstr(name, ".."))
+    if (strchr(name, '/')) /* a path to a file that is not there: cannot be read (exit 3) */
+        return iir_fail(err, IIR_ERR_IO,
+                        "scene '%s' does not exist, and only bare names (letters, digits, '_', "
+                        "'-', '.'; no '/' or '..') are looked up in the scenes folder",
+                        name);
+    if (strstr(name, ".."))
         return iir_fail(err, IIR_ERR_INVALID,
                         "scene '%s' does not exist, and only bare names (letters, digits, '_', "
                         "'-', '.'; no '/' or '..') are looked up in the scenes folder",

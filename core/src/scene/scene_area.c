@@ -314,7 +314,7 @@ static void note_converted(iir_scene_builder *b, const char *name, const iir_lig
     char what[64] = "a rectangle";
     if (l->shape.num_triangles)
         snprintf(what, sizeof what, "a shape of %u triangles", l->shape.num_triangles);
-    iir_builder_drop(b, "material", name,
+    iir_builder_note(b, "material", name,
                      "emits light: became the movable area light '%s' (%s, %g x %g); a sidecar "
                      "with a \"lights\" array keeps it static",
                      l->name, what, (double)l->size.x, (double)l->size.y);
@@ -336,7 +336,7 @@ static iir_status convert_emitter(iir_scene_builder *b, uint32_t i, iir_error *e
     iir_status st = iir_builder_fit_area_light(b, name, &l, &fit);
     if (st == IIR_ERR_NOMEM) return iir_fail(err, st, "%s: out of memory", b->source);
     if (st != IIR_OK || !light_ok(b, &l, n, fit.why, sizeof fit.why)) {
-        iir_builder_drop(b, "material", name,
+        iir_builder_note(b, "material", name,
                          "emits light: stays static emissive triangles, not a movable area "
                          "light: it %s",
                          fit.why);

@@ -196,8 +196,8 @@ iir_status iir_builder_add_scene(iir_scene_builder *b, const iir_scene *scene, i
         st = iir_builder_add_light(b, &scene->lights[i], err);
     for (uint32_t i = 0; st == IIR_OK && i < scene->num_dropped; i++)
         if (!scene->dropped[i].method[0])
-            iir_builder_drop(b, scene->dropped[i].kind, scene->dropped[i].name, "%s",
-                             scene->dropped[i].what);
+            (scene->dropped[i].note ? iir_builder_note : iir_builder_drop)(
+                b, scene->dropped[i].kind, scene->dropped[i].name, "%s", scene->dropped[i].what);
     if (st == IIR_OK) {
         iir_builder_set_camera(b, &scene->camera);
         iir_builder_set_camera_origin(b, scene->camera_origin, scene->aspect);
@@ -228,8 +228,9 @@ void iir_builder_set_camera_origin(iir_scene_builder *b, iir_camera_origin origi
     b->aspect = aspect;
 }
 
-void iir_builder_drop(iir_scene_builder *b, const char *kind, const char *name, const char *fmt,
-                      ...)
+/* One more entry of b->dropped: a warning, or a note (iir_dropped.note). */
+static void add_dropped(iir_scene_builder *b, bool note, const char *kind, const char *name,
+                        const char *fmt, va_list ap)
 {
     if (!grow((void **)&b->dropped, &b->cap_dropped, (uint64_t)b->num_dropped + 1,
               sizeof(iir_dropped)))
@@ -238,9 +239,25 @@ void iir_builder_drop(iir_scene_builder *b, const char *kind, const char *name, 
     memset(d, 0, sizeof *d);
     iir_scene_strcpy(d->kind, sizeof d->kind, kind);
     iir_scene_strcpy(d->name, sizeof d->name, name);
+    vsnprintf(d->what, sizeof d->what, fmt, ap);
+    d->note = note;
+}
+
+void iir_builder_drop(iir_scene_builder *b, const char *kind, const char *name, const char *fmt,
+                      ...)
+{
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(d->what, sizeof d->what, fmt, ap);
+    add_dropped(b, false, kind, name, fmt, ap);
+    va_end(ap);
+}
+
+void iir_builder_note(iir_scene_builder *b, const char *kind, const char *name, const char *fmt,
+                      ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    add_dropped(b, true, kind, name, fmt, ap);
     va_end(ap);
 }
 

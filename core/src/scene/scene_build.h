@@ -117,6 +117,10 @@ void iir_builder_set_camera_origin(iir_scene_builder *b, iir_camera_origin origi
  * forgets the light notes (the sidecar's lights replace the file's). */
 void iir_builder_drop(iir_scene_builder *b, const char *kind, const char *name, const char *fmt,
                       ...) __attribute__((format(printf, 4, 5)));
+/* The same as a note (iir_dropped.note): what was made of it, which is rendered (an emissive
+ * material that became an area light), not a warning. */
+void iir_builder_note(iir_scene_builder *b, const char *kind, const char *name, const char *fmt,
+                      ...) __attribute__((format(printf, 4, 5)));
 
 /* Appends a loaded scene's vertices, triangles (same order), materials and lights, and sets its
  * camera: a sidecar's "base" scene becomes the mesh the sidecar applies to. Not its paths. */
