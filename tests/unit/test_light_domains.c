@@ -314,8 +314,8 @@ static double rel_mse(const iir_gbuffer *gb, const iir_image *img, const iir_ima
 }
 
 /* One frame; an area light's direct light from area_samples stratified points per pixel
- * (one_bounce sets 64: within 0.002 relRMSE of a converged still, docs/architecture.md), so no refinement
- * passes are needed to average it. */
+ * (one_bounce sets 64: within 0.002 relRMSE of a converged still, docs/architecture.md), so no
+ * refinement passes are needed to average it. */
 static void render_with(const fixture *f, const char *method, const iir_params *p,
                         const iir_view *v, iir_image *img)
 {
