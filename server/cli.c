@@ -534,15 +534,35 @@ static bool anim_is_file(const char *arg)
     return stat(arg, &sb) == 0 || strchr(arg, '/') || ends_with(arg, ".json") || !is_bare_name(arg);
 }
 
-const char *iird_anim_scene_arg(const char *scene_arg, const char *anim_arg, char *buf, size_t n)
+/* The script's scenes folder when it is one (else a warning when the scene needs it: not the
+ * built-in box), copied into o->scenes_buf. */
+static const char *script_scenes(const char *cmd, const iir_anim *a, iird_anim_origin *o)
 {
-    if (scene_arg || !anim_arg || !anim_is_file(anim_arg)) return scene_arg;
+    const char *dir = iir_anim_scenes_dir(a);
+    if (!dir[0]) return NULL;
+    if (is_dir(dir)) return snprintf(o->scenes_buf, sizeof o->scenes_buf, "%s", dir), o->scenes_buf;
+    if (o->scene && strcmp(o->scene, "builtin"))
+        fprintf(stderr,
+                "iird %s: warning: the script's scenes folder %s is not a folder here; looking "
+                "'%s' up in %s (give --scenes DIR)\n",
+                cmd, dir, o->scene, iird_scenes_dir(NULL));
+    return NULL;
+}
+
+void iird_anim_origin_read(const char *cmd, const char *scene_arg, const char *scenes_arg,
+                           const char *anim_arg, iird_anim_origin *o)
+{
+    *o = (iird_anim_origin){.scene = scene_arg};
     iir_anim *a = NULL;
     iir_error err = {0};
-    if (iir_anim_load(anim_arg, &a, &err) != IIR_OK) return NULL;
-    snprintf(buf, n, "%s", iir_anim_scene(a));
+    if (anim_arg && anim_is_file(anim_arg) && iir_anim_load(anim_arg, &a, &err) == IIR_OK) {
+        snprintf(o->scene_buf, sizeof o->scene_buf, "%s", iir_anim_scene(a));
+        if (!scene_arg && o->scene_buf[0]) o->scene = o->scene_buf;
+        if (!scenes_arg) o->scenes_dir = script_scenes(cmd, a, o);
+        iir_anim_size(a, &o->width, &o->height);
+    }
     iir_anim_destroy(a);
-    return buf[0] ? buf : NULL;
+    if (!o->scenes_dir) o->scenes_dir = iird_scenes_dir(scenes_arg);
 }
 
 /* The scene opened from arg is the one called name: the argument itself, its last path

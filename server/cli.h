@@ -120,10 +120,22 @@ iir_status iird_set_cache_max(const char *arg, iir_error *err);
 iir_status iird_resolve_anim(const iir_scene *scene, const char *scenes_dir, const char *arg,
                              iir_anim **out, char *label, size_t n, iir_error *err);
 
-/* The scene to open for --anim ARG: scene_arg when given; else, when ARG is a script file that
- * names its scene (recordings from the browser do), that name (copied into buf, size n); else NULL
- * (the built-in box). A script that cannot be read is reported later, by iird_resolve_anim. */
-const char *iird_anim_scene_arg(const char *scene_arg, const char *anim_arg, char *buf, size_t n);
+/* What an --anim script file says of where and how it was made (recordings from the browser say
+ * all of it, docs/animation-format.md section 6), under what the command line gives. */
+typedef struct iird_anim_origin {
+    const char *scene;      /* SCENE; else the script's "scene"; else NULL (the built-in box) */
+    const char *scenes_dir; /* --scenes; else the script's "scenes" when that is a folder here;
+                               else iird_scenes_dir(NULL) */
+    int width, height;      /* the script's "size"; 0 when it gives none (--size is the caller's) */
+    char scene_buf[129], scenes_buf[4096]; /* what scene and scenes_dir may point into */
+} iird_anim_origin;
+
+/* Fills *o for `iird CMD [SCENE] [--scenes DIR] --anim ARG` (scene_arg, scenes_arg, anim_arg NULL
+ * when not given; ARG a path of a scene's sidecar names no origin). A script folder that is not a
+ * folder here is passed over with a warning on stderr (not for the built-in box, which needs
+ * none); a script that cannot be read is reported later, by iird_resolve_anim. */
+void iird_anim_origin_read(const char *cmd, const char *scene_arg, const char *scenes_arg,
+                           const char *anim_arg, iird_anim_origin *o);
 
 /* A warning on stderr ("iird CMD: warning: ...") when the script names a scene other than the one
  * opened (from scene_arg, NULL: builtin); nothing when it names none. */
@@ -136,10 +148,11 @@ void iird_warn_anim_scene(const char *cmd, const iir_anim *anim, const char *sce
 void iird_note_camera(const char *cmd, const iir_scene *scene);
 
 /* "iird CMD: warning: light 'sun': ..." for every light and material that a method of `methods`
- * (comma-separated) does not render (iir_method_dropped); what no method renders once. The
+ * (comma-separated) does not render (iir_method_dropped), also at the parameters params
+ * (iir_method_dropped_by_params: pt's glass at too few bounces); what no method renders once. The
  * scene's notes (iir_dropped.note: an emitter became an area light) say "note:" instead. */
-void iird_warn_dropped(const char *cmd, const char *methods, const iir_scene *scene,
-                       const iir_light *lights, uint32_t num_lights);
+void iird_warn_dropped(const char *cmd, const char *methods, const iir_params *params,
+                       const iir_scene *scene, const iir_light *lights, uint32_t num_lights);
 
 /* The scene's own notes and warnings (iir_scene.dropped: what no method renders, and what was made
  * of its emissive materials), "iird WHO: warning: ..." or "iird WHO: note: ...", grouped as

@@ -58,8 +58,22 @@ static void print_group(const char *cmd, iir_dropped *all, uint32_t n, uint32_t 
             more, all[i].what);
 }
 
-void iird_warn_dropped(const char *cmd, const char *methods, const iir_scene *scene,
-                       const iir_light *lights, uint32_t num_lights)
+/* Adds the k entries of got not in all[0..*n) to all (at most MAX_DROPPED; the rest to *lost). */
+static void add_new(iir_dropped *all, uint32_t *n, uint32_t *lost, const iir_dropped *got,
+                    uint32_t k)
+{
+    for (uint32_t i = 0; i < k && i < MAX_DROPPED; i++) {
+        if (seen(all, *n, &got[i])) continue;
+        if (*n < MAX_DROPPED)
+            all[(*n)++] = got[i];
+        else
+            (*lost)++;
+    }
+    if (k > MAX_DROPPED) *lost += k - MAX_DROPPED;
+}
+
+void iird_warn_dropped(const char *cmd, const char *methods, const iir_params *params,
+                       const iir_scene *scene, const iir_light *lights, uint32_t num_lights)
 {
     iir_dropped *all = calloc(MAX_DROPPED, sizeof *all), *got = calloc(MAX_DROPPED, sizeof *got);
     bool *done = calloc(MAX_DROPPED, sizeof *done);
@@ -68,15 +82,10 @@ void iird_warn_dropped(const char *cmd, const char *methods, const iir_scene *sc
     snprintf(list, sizeof list, "%s", methods);
     for (char *m = strtok_r(list, ",", &save); all && got && done && m;
          m = strtok_r(NULL, ",", &save)) {
-        uint32_t k = iir_method_dropped(m, scene, lights, num_lights, got, MAX_DROPPED);
-        for (uint32_t i = 0; i < k && i < MAX_DROPPED; i++) {
-            if (seen(all, n, &got[i])) continue;
-            if (n < MAX_DROPPED)
-                all[n++] = got[i];
-            else
-                lost++;
-        }
-        if (k > MAX_DROPPED) lost += k - MAX_DROPPED;
+        add_new(all, &n, &lost, got,
+                iir_method_dropped(m, scene, lights, num_lights, got, MAX_DROPPED));
+        add_new(all, &n, &lost, got,
+                iir_method_dropped_by_params(m, scene, params, got, MAX_DROPPED));
     }
     for (uint32_t i = 0; i < n; i++)
         if (!done[i]) print_group(cmd, all, n, i, done);

@@ -246,6 +246,12 @@ static void *bind_opts(const iir_method_ops *ops, const iir_params *p, const iir
     return opts;
 }
 
+void *iir_method_bind_opts(const iir_method_ops *ops, const iir_params *p)
+{
+    iir_error err;
+    return bind_opts(ops, p, NULL, NULL, &err);
+}
+
 iir_status iir_method_params_validate(const char *name, const iir_params *p,
                                       const iir_params *given, const iir_param **bad,
                                       iir_error *err)

@@ -61,6 +61,8 @@ extern const iir_param_table iir_rsm_table;
 typedef struct iir_ctl_options {
     float target_fps; /* 0: off (the fixed vpls, interleave and sm_res) */
     int vpls_max;     /* ctl_vpls_max: the controller's N_max */
+    int vpls_min;     /* ctl_vpls_min: its floor N_min (at most N_max) */
+    int sm_res_min;   /* ctl_sm_res_min: the coarsest maps it builds (at most sm_res) */
 } iir_ctl_options;
 extern const iir_param_table iir_ctl_table;
 /* Creates, reconfigures or destroys *ctl as o asks (target_fps 0: none), its main rungs at v's
@@ -149,10 +151,18 @@ typedef struct iir_method_ops {
      * the scene's emissive materials (iir_method_dropped). */
     uint32_t (*dropped)(const struct iir_scene *scene, const iir_light *lights, uint32_t num_lights,
                         iir_dropped *out, uint32_t max);
+    /* NULL when what the method renders does not depend on its options. Otherwise appends, as
+     * dropped does, what opts leave out of the scene (pt: mirrors and glass its bounces do not get
+     * through; iir_method_dropped_by_params). */
+    uint32_t (*dropped_by_params)(const struct iir_scene *scene, const void *opts, iir_dropped *out,
+                                  uint32_t max);
 } iir_method_ops;
 
 /* The operations of method `name`, or NULL (method.c). */
 const iir_method_ops *iir_method_ops_of(const char *name);
+/* A new options struct of ops bound from p (malloc'ed: the caller frees it), or NULL when p holds
+ * a value the method refuses or on out-of-memory (method.c). */
+void *iir_method_bind_opts(const iir_method_ops *ops, const iir_params *p);
 
 /* Appends an entry to out (when *n < max; printf-style `what`) and counts it in *n (dropped.c). */
 void iir_dropped_add(iir_dropped *out, uint32_t max, uint32_t *n, const char *method,

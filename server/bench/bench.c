@@ -135,9 +135,9 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     b->o = o;
     snprintf(b->path_label, sizeof b->path_label, "built-in orbit");
     iir_status st = IIR_OK;
-    const char *scenes = iird_scenes_dir(o->scenes_dir);
-    char named[128];
-    const char *scene = iird_anim_scene_arg(o->scene, o->anim, named, sizeof named);
+    iird_anim_origin origin; /* its size aside: a bench's size is the experiment's (--size) */
+    iird_anim_origin_read("bench", o->scene, o->scenes_dir, o->anim, &origin);
+    const char *scene = origin.scene, *scenes = origin.scenes_dir;
     if (st == IIR_OK) st = iir_scene_open(scene, scenes, &b->scene, &b->rt, err);
     if (st == IIR_OK) iird_note_camera("bench", b->scene);
     if (st == IIR_OK) b->spot = iird_moved_light(b->scene);
@@ -148,7 +148,8 @@ iir_status iird_bench_setup(iird_bench *b, const iird_bench_opts *o, iir_error *
     if (st == IIR_OK) st = set_range(b, err);
     if (st == IIR_OK) st = parse_methods(b, o->methods, err);
     if (st != IIR_OK) return st;
-    iird_warn_dropped("bench", o->methods, b->scene, b->scene->lights, b->scene->num_lights);
+    iird_warn_dropped("bench", o->methods, &o->params, b->scene, b->scene->lights,
+                      b->scene->num_lights);
     b->scene_hash = iird_bench_scene_hash(b->scene);
     b->lights = malloc(sizeof(iir_light) * (b->scene->num_lights + 1)); /* + a made-up spot */
     b->rows = calloc((size_t)b->frames * (size_t)b->num_runs, sizeof(iird_bench_row));

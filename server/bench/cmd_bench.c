@@ -47,7 +47,8 @@ static void bench_usage(FILE *f)
             "  --segment I/N        with --refs-only: the I-th (from 0) of N shares of them\n"
             "  --save-images        also write DIR/ref_NNNNN.pfm and DIR/<method>[_<setting>]_\n"
             "                       NNNNN.pfm at the reference frames\n"
-            "  --scenes DIR         where scene names are looked up\n" IIRD_CACHE_MAX_HELP
+            "  --scenes DIR         where scene names are looked up (default: the --anim\n"
+            "                       script's scenes folder, else ./scenes)\n" IIRD_CACHE_MAX_HELP
             "  -h, --help           this text (with --methods: their parameters only)\n");
 }
 

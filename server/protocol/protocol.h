@@ -240,6 +240,7 @@ typedef struct iird_stats_view {
     const char *method;
     uint32_t pass;
     bool converged;
+    bool reencoded; /* the last image again, only its encoding changed: "reencoded", no render */
     const iir_frame_stats *stats;
     double encode_ms, latency_ms, fps;
     size_t bytes;
@@ -268,8 +269,13 @@ char *iird_json_snapshot(int64_t seq, const char *format, uint32_t frame, uint32
 /* ---- recording: what a session showed over time (its light, camera and exposure), written as an
  * animation script ---- */
 typedef struct iird_recording iird_recording;
-/* scene: the scene it is recorded on, named in the script (NULL: none). */
-iird_recording *iird_recording_create(int fps, const char *scene);
+/* scene: the scene it is recorded on, named in the script (NULL: none); scenes_dir: the folder,
+ * absolute, that finds it by that name, named as the script's "scenes" (NULL or "": none, e.g. the
+ * built-in box). NULL on out-of-memory. */
+iird_recording *iird_recording_create(int fps, const char *scene, const char *scenes_dir);
+/* The frame size the session renders at, named as the script's "size" (the last one set; a size
+ * outside [1, 16384] names none). */
+void iird_recording_set_size(iird_recording *r, int width, int height);
 int iird_recording_fps(const iird_recording *r);
 void iird_recording_destroy(iird_recording *r);
 /* Each adds the state applied at t seconds since start to its track. t is rounded to

@@ -226,9 +226,10 @@ static cJSON *params_json(const iird_settings *s)
     return keep_if(o, ok);
 }
 
-/* What the method does not render of the scene (iir_method_dropped), for the client's notes, each
- * with its severity: "warning" for what is left out, "note" for what was made of the scene (an
- * emissive material that became the movable area light), which is rendered. */
+/* What the method does not render of the scene (iir_method_dropped), and at its parameters
+ * (iir_method_dropped_by_params: pt's glass at too few bounces), for the client's notes, each with
+ * its severity: "warning" for what is left out, "note" for what was made of the scene (an emissive
+ * material that became the movable area light), which is rendered. */
 static cJSON *notes_json(const iird_state_view *s)
 {
     cJSON *a = cJSON_CreateArray();
@@ -237,8 +238,11 @@ static cJSON *notes_json(const iird_state_view *s)
     iir_dropped d[MAX_NOTES];
     const iir_scene *sc = s->scene_data;
     const iir_light *lights = s->lights ? s->lights : s->light;
-    uint32_t n = iir_method_dropped(s->settings->method, sc, lights, s->lights ? s->num_lights : 1,
-                                    d, MAX_NOTES);
+    const char *method = s->settings->method;
+    uint32_t n =
+        iir_method_dropped(method, sc, lights, s->lights ? s->num_lights : 1, d, MAX_NOTES);
+    if (n < MAX_NOTES)
+        n += iir_method_dropped_by_params(method, sc, &s->settings->params, d + n, MAX_NOTES - n);
     bool ok = true;
     for (uint32_t i = 0; ok && i < n && i < MAX_NOTES; i++) {
         cJSON *e = cJSON_CreateObject();
@@ -381,13 +385,16 @@ cJSON *iird_json_ctl(const iir_frame_stats *st)
     cJSON *o = cJSON_CreateObject();
     bool ok = o && iird_json_add_num(o, "target_ms", rounded(c->target_ms, 1e3)) &&
               iird_json_add_num(o, "mean_ms", rounded(c->mean_ms, 1e3)) &&
+              iird_json_add_u64(o, "frames", c->frames) &&
               iird_json_add_num(o, "predicted_ms", rounded(c->predicted_ms, 1e3)) &&
-              add_bool(o, "reachable", c->reachable) &&
+              add_bool(o, "reachable", c->reachable) && add_bool(o, "busy", c->busy) &&
               iird_json_add_num(o, "vpls", c->setting.vpls) &&
               iird_json_add_num(o, "interleave", c->setting.interleave) &&
               iird_json_add_num(o, "sm_res", c->setting.sm_res) &&
+              iird_json_add_num(o, "vpls_min", c->floor.vpls) &&
+              iird_json_add_num(o, "sm_res_min", c->floor.sm_res) &&
               iird_json_add_num(o, "rung", c->rung) && iird_json_add_num(o, "rungs", c->rungs) &&
-              iird_json_add_num(o, "moves", c->moves);
+              iird_json_add_num(o, "moves", c->moves) && iird_json_add_num(o, "undone", c->undone);
     return keep_if(o, ok);
 }
 
@@ -400,6 +407,7 @@ char *iird_json_stats(const iird_stats_view *v)
     bool ok = o && add_str(o, "type", "stats") && iird_json_add_num(o, "frame", v->frame) &&
               add_seq(o, v->seq) && add_str(o, "method", v->method) &&
               iird_json_add_num(o, "pass", v->pass) && add_bool(o, "converged", v->converged) &&
+              add_bool(o, "reencoded", v->reencoded) &&
               iird_json_add_num(o, "total_ms", rounded(st->total_ms, 1e3)) &&
               iird_json_add_num(o, "encode_ms", rounded(v->encode_ms, 1e3)) &&
               iird_json_add_num(o, "latency_ms", rounded(v->latency_ms, 1e3)) &&

@@ -11,8 +11,11 @@
  * ("on": false, written on a track's first key and where it changes) and its key keeps the
  * intensity it had before, so the intensity curve does not dip towards black around the switch.
  * The script lasts a whole number of frames, until at least the end of the recording, so its
- * last frame shows the state at the end. */
+ * last frame shows the state at the end. It names where and how it was made -- the scene, the
+ * folder that scene is found in and the session's frame size -- so that `iird render --anim` of
+ * it, given nothing else, renders the session's frames. */
 #include "recording.h"
+#include "iir/image.h" /* IIR_IMAGE_MAX_DIM */
 #include "protocol_internal.h"
 
 #include <math.h>
@@ -53,21 +56,33 @@ typedef struct rec_track {
 
 struct iird_recording {
     int fps;
-    char scene[129]; /* the scene it was recorded on */
-    double end;      /* iird_recording_end's time; 0 until then */
-    uint32_t total;  /* keys of every track */
+    char scene[129];   /* the scene it was recorded on */
+    char scenes[4096]; /* the folder that scene is found in ("" for none) */
+    int width, height; /* the session's frame size (iird_recording_set_size; 0: not given) */
+    double end;        /* iird_recording_end's time; 0 until then */
+    uint32_t total;    /* keys of every track */
     rec_track tracks[NUM_TRACKS];
     bool lights_started; /* iird_recording_add_lights was called: lights[] are its lights */
     uint32_t num_lights;
     rec_track *lights;
 };
 
-iird_recording *iird_recording_create(int fps, const char *scene)
+iird_recording *iird_recording_create(int fps, const char *scene, const char *scenes_dir)
 {
     iird_recording *r = calloc(1, sizeof *r);
-    if (r) r->fps = fps < 1 ? 1 : fps > 240 ? 240 : fps;
-    if (r) snprintf(r->scene, sizeof r->scene, "%s", scene ? scene : "");
+    if (!r) return NULL;
+    r->fps = fps < 1 ? 1 : fps > 240 ? 240 : fps;
+    snprintf(r->scene, sizeof r->scene, "%s", scene ? scene : "");
+    snprintf(r->scenes, sizeof r->scenes, "%s", scenes_dir ? scenes_dir : "");
     return r;
+}
+
+void iird_recording_set_size(iird_recording *r, int width, int height)
+{
+    bool ok = width >= 1 && width <= IIR_IMAGE_MAX_DIM && height >= 1 &&
+              height <= IIR_IMAGE_MAX_DIM; /* the parser's range */
+    r->width = ok ? width : 0;
+    r->height = ok ? height : 0;
 }
 
 int iird_recording_fps(const iird_recording *r)
@@ -399,15 +414,26 @@ static uint32_t light_keys(const iird_recording *r)
     return n || !r->num_lights ? n : r->lights[0].count;
 }
 
+/* "scene", "scenes" and "size": where and how the script was made (each when known). */
+static bool origin_json(cJSON *o, const iird_recording *r)
+{
+    cJSON *size = NULL;
+    return (!r->scene[0] || cJSON_AddStringToObject(o, "scene", r->scene)) &&
+           (!r->scenes[0] || cJSON_AddStringToObject(o, "scenes", r->scenes)) &&
+           (!r->width || ((size = cJSON_AddArrayToObject(o, "size")) &&
+                          cJSON_AddItemToArray(size, cJSON_CreateNumber(r->width)) &&
+                          cJSON_AddItemToArray(size, cJSON_CreateNumber(r->height))));
+}
+
 /* The script as a cJSON tree; NULL on out-of-memory. */
 static cJSON *script_json(const iird_recording *r)
 {
     cJSON *o = cJSON_CreateObject();
-    bool ok =
-        o && (!r->scene[0] || cJSON_AddStringToObject(o, "scene", r->scene)) &&
-        iird_json_add_num(o, "fps", r->fps) && iird_json_add_num(o, "duration", duration(r)) &&
-        add_track(r, o, TRACK_LIGHT, "light") && add_lights(r, o) &&
-        add_track(r, o, TRACK_CAMERA, "camera") && add_track(r, o, TRACK_EXPOSURE, "exposure");
+    bool ok = o && origin_json(o, r) && iird_json_add_num(o, "fps", r->fps) &&
+              iird_json_add_num(o, "duration", duration(r)) &&
+              add_track(r, o, TRACK_LIGHT, "light") && add_lights(r, o) &&
+              add_track(r, o, TRACK_CAMERA, "camera") &&
+              add_track(r, o, TRACK_EXPOSURE, "exposure");
     if (ok) return o;
     cJSON_Delete(o);
     return NULL;

@@ -31,8 +31,9 @@ static void render_usage(FILE *f)
         "                       With --anim a directory (created if missing) that gets\n"
         "                       frame_NNNNN.<format> and render.json\n"
         "  --method NAME        %s (default pt; with --anim iir)\n"
-        "  --size WxH           image size (default 512x512; with --anim 512 high and as wide\n"
-        "                       as the scene camera's aspect asks, 910x512 when it gives none)\n"
+        "  --size WxH           image size (default 512x512; with --anim the script's size\n"
+        "                       (a recording's: the browser's), else 512 high and as wide as\n"
+        "                       the scene camera's aspect asks, 910x512 when it gives none)\n"
         "  --exposure E         PNG (and video) exposure in stops (default 0; with --anim\n"
         "                       the script's exposure when it has one)\n"
         "  --anim PATH          animation script (docs/animation-format.md), or a path the\n"
@@ -47,8 +48,9 @@ static void render_usage(FILE *f)
         "                       with --video the video)\n"
         "  --format F           with --anim: png | exr | pfm (default png)\n"
         "  --video FILE.mp4     with --anim: also an H.264 video of the frames (needs ffmpeg)\n"
-        "  --scenes DIR         where scene names are looked up (default "
-        "./scenes)\n" IIRD_CACHE_MAX_HELP
+        "  --scenes DIR         where scene names are looked up (default: with --anim the\n"
+        "                       script's scenes folder (a recording's: the daemon's), else\n"
+        "                       ./scenes)\n" IIRD_CACHE_MAX_HELP
         "  -h, --help           this text (with --method M: M's parameters only)\n"
         "\n"
         "Exit codes: 0 ok, 2 bad input, 3 file error, 4 unsupported, 64 usage, 130 interrupted.\n",
@@ -285,7 +287,7 @@ static void print_summary(const render_opts *o, const iir_scene *scene, const ii
 static void before_render(const render_opts *o, const iir_scene *scene)
 {
     iird_note_camera("render", scene);
-    iird_warn_dropped("render", o->method, scene, scene->lights, scene->num_lights);
+    iird_warn_dropped("render", o->method, &o->params, scene, scene->lights, scene->num_lights);
 }
 
 int iird_cmd_render(int argc, char **argv)

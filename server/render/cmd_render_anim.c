@@ -213,12 +213,18 @@ static iir_status set_lights(anim_job *j, iir_error *err)
     return iir_anim_check_lights(j->anim, v.lights, v.num_lights, j->spot, err);
 }
 
-/* Without --size: the pixels of a 512x512 still's height, as wide as the scene camera's aspect
- * asks (16:9 for a scene that gives none), at most 1280 wide; even, for the video. */
-static void set_size(anim_job *j)
+/* Without --size: the script's size (a recording's: the session's frame size); else the pixels of
+ * a 512x512 still's height, as wide as the scene camera's aspect asks (16:9 for a scene that gives
+ * none), at most 1280 wide; even, for the video. */
+static void set_size(anim_job *j, const iird_anim_origin *origin)
 {
     enum { HEIGHT = 512, MAX_WIDTH = 1280 };
     if (j->opts.size_given) return;
+    if (origin->width) {
+        j->opts.width = origin->width;
+        j->opts.height = origin->height;
+        return;
+    }
     double a = j->scene->aspect > 0.f ? j->scene->aspect : 16.0 / 9.0;
     long w = 2 * lround(HEIGHT * a / 2), h = HEIGHT;
     if (w > MAX_WIDTH) w = MAX_WIDTH, h = 2 * lround(MAX_WIDTH / a / 2);
@@ -231,14 +237,14 @@ static void set_size(anim_job *j)
 static iir_status load(anim_job *j, iir_error *err)
 {
     const iird_render_opts *o = j->o;
-    const char *scenes = iird_scenes_dir(o->scenes_dir);
     iir_status st = iir_method_params_validate(o->method, &o->params, NULL, NULL, err);
     if (st == IIR_OK && o->video && o->size_given)
         st = iird_video_check(o->video, o->width, o->height, err);
-    char named[128];
-    const char *scene = iird_anim_scene_arg(o->scene, o->anim, named, sizeof named);
+    iird_anim_origin origin;
+    iird_anim_origin_read("render", o->scene, o->scenes_dir, o->anim, &origin);
+    const char *scene = origin.scene, *scenes = origin.scenes_dir;
     if (st == IIR_OK) st = iir_scene_open(scene, scenes, &j->scene, &j->rt, err);
-    if (st == IIR_OK) set_size(j);
+    if (st == IIR_OK) set_size(j, &origin);
     if (st == IIR_OK) st = iird_check_memory(o->method, &o->params, o->width, o->height, err);
     if (st == IIR_OK && o->video && !o->size_given)
         st = iird_video_check(o->video, o->width, o->height, err);
@@ -252,7 +258,8 @@ static iir_status load(anim_job *j, iir_error *err)
     if (st == IIR_OK) st = iird_prepare_dir(o->out, "--out", err);
     if (st == IIR_OK && o->video) st = iird_prepare_parent(o->video, "--video", err);
     if (st == IIR_OK)
-        iird_warn_dropped("render", o->method, j->scene, j->scene->lights, j->scene->num_lights);
+        iird_warn_dropped("render", o->method, &o->params, j->scene, j->scene->lights,
+                          j->scene->num_lights);
     return st;
 }
 
@@ -528,10 +535,12 @@ static void print_summary(const anim_job *j, int video_frames)
                iir_anim_fps(j->anim));
     const iir_ctl_report *c = &j->last.ctl;
     if (n && j->last.controlled)
-        printf("frame-time controller: target %.2f ms, frames %.2f ms (running mean)%s; last "
-               "setting %d VPLs, interleave %d, sm_res %d after %u changes\n",
-               c->target_ms, c->mean_ms, c->reachable ? "" : ", not reachable", c->setting.vpls,
-               c->setting.interleave, c->setting.sm_res, c->moves);
+        printf("frame-time controller: target %.2f ms, frames %.2f ms (running mean)%s%s; last "
+               "setting %d VPLs, interleave %d, sm_res %d after %u changes (%u cuts undone: no "
+               "time bought)\n",
+               c->target_ms, c->mean_ms, c->reachable ? "" : ", not reachable at the floor",
+               c->busy ? ", busy" : "", c->setting.vpls, c->setting.interleave, c->setting.sm_res,
+               c->moves, c->undone);
     char settings[1024];
     iird_settings_text(o->method, &o->params, settings, sizeof settings);
     printf("%s settings: %s\n", o->method, settings);

@@ -206,6 +206,20 @@ bool iird_scene_cache_in_dir(const iird_scene_cache *c, const iird_scene_entry *
     return realpath(path, real) && !strcmp(real, s->key);
 }
 
+bool iird_scene_cache_folder(const iird_scene_cache *c, const iird_scene_entry *e, char *out,
+                             size_t n)
+{
+    const cache_slot *s = (const cache_slot *)e;
+    const char *slash = strrchr(s->key, '/'); /* a key other than builtin is a real path */
+    out[0] = '\0';
+    if (!strcmp(s->key, "builtin")) return false;
+    if (c->dir_real[0] && iird_scene_cache_in_dir(c, e))
+        snprintf(out, n, "%s", c->dir_real);
+    else if (slash)
+        snprintf(out, n, "%.*s", slash == s->key ? 1 : (int)(slash - s->key), s->key);
+    return out[0] != '\0';
+}
+
 static const char *base_name(const char *path)
 {
     size_t len = strlen(path);

@@ -45,6 +45,11 @@ bool iird_scene_cache_has(const iird_scene_cache *c, const char *name);
 void iird_scene_cache_add_name(iird_scene_cache *c, const char *name);
 /* The scenes directory, as given. */
 const char *iird_scene_cache_dir(const iird_scene_cache *c);
+/* The folder, absolute, in which e's name finds e (what a recording names as its "scenes", for
+ * `iird render --anim`): the scenes directory for a scene in it, else the folder holding a scene
+ * given as a path; false for the built-in box, which needs none (out is then ""). Any thread. */
+bool iird_scene_cache_folder(const iird_scene_cache *c, const iird_scene_entry *e, char *out,
+                             size_t n);
 /* True when e is the built-in box or the scene of its name in the scenes directory (not a
  * startup scene given as a path elsewhere), so a sidecar can name it as its "base". */
 bool iird_scene_cache_in_dir(const iird_scene_cache *c, const iird_scene_entry *e);

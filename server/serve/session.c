@@ -266,7 +266,9 @@ void iird_queue_error(iird_session *s, const iird_proto_error *e)
 
 iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_proto_error *err)
 {
-    iird_recording *r = iird_recording_create(fps, s->scene->name);
+    char folder[4096];
+    iird_scene_cache_folder(s->env->scenes, s->scene, folder, sizeof folder);
+    iird_recording *r = iird_recording_create(fps, s->scene->name, folder);
     if (!r) return iird_proto_fail(err, IIRD_E_INTERNAL, NULL, "out of memory"), NULL;
     s->rec_start_ms = iir_now_ms();
     bool ok = iird_session_record_lights_locked(s, r, 0.0, err) &&
@@ -274,6 +276,12 @@ iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_
               iird_recording_add_exposure(r, 0.0, s->settings.exposure, err);
     if (!ok) iird_recording_destroy(r), r = NULL;
     return r;
+}
+
+void iird_session_record_end_locked(iird_session *s, double t)
+{
+    iird_recording_set_size(s->rec, s->settings.width, s->settings.height);
+    iird_recording_end(s->rec, t);
 }
 
 bool iird_session_record_lights_locked(iird_session *s, iird_recording *r, double t,
@@ -370,6 +378,7 @@ static bool write_frame(iird_session *s, struct lws *wsi, frame_slot *f)
                          .method = f->method,
                          .pass = f->pass,
                          .converged = f->converged,
+                         .reencoded = f->reencoded,
                          .stats = &f->stats,
                          .encode_ms = f->encode_ms,
                          .latency_ms = now - f->input_ms,

@@ -55,6 +55,7 @@ typedef struct frame_slot {
     bool full;
     uint32_t id, pass;
     bool converged;
+    bool reencoded;  /* the last image again, only its encoding changed: not rendered */
     int64_t seq;     /* of the newest input the frame shows, IIRD_NO_SEQ: none yet */
     double input_ms; /* when that input was received */
     double encode_ms;
@@ -190,9 +191,13 @@ void iird_queue_snapshot_locked(iird_session *s, const char *json, unsigned char
 void iird_queue_error(iird_session *s, const iird_proto_error *e);
 /* The session's state as the protocol's JSON builders read it (lock held). */
 iird_state_view iird_state_view_locked(const iird_session *s);
-/* A new recording of the session's scene whose first keys (t = 0) are the current lights, camera
- * and exposure; NULL with err filled on out-of-memory. Lock held. */
+/* A new recording of the session's scene (naming the folder that finds it) whose first keys
+ * (t = 0) are the current lights, camera and exposure; NULL with err filled on out-of-memory.
+ * Lock held. */
 iird_recording *iird_session_record_start_locked(iird_session *s, int fps, iird_proto_error *err);
+/* Ends s->rec at t seconds since its start, naming the session's frame size now (the size a
+ * replay renders at). Lock held. */
+void iird_session_record_end_locked(iird_session *s, double t);
 /* Adds the session's lights as rendered to recording r at t seconds; false with err filled as the
  * recording's add functions do (r is then unchanged). Lock held. */
 bool iird_session_record_lights_locked(iird_session *s, iird_recording *r, double t,

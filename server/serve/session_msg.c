@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "iir/camera_move.h"
 #include "iir/light_move.h"
 #include "iir/timer.h"
 #include "budget.h"
@@ -210,18 +211,38 @@ static bool on_light(iird_session *s, const iird_msg *m, iird_proto_error *err)
     return ok;
 }
 
+/* A moved camera keeps its view of its target (iir/camera_move.h): an eye that saw its target is
+ * stopped in front of the first surface between the new target and the new eye, so an orbit never
+ * leaves the room. True when the position changed from what was asked (the lock is held). */
+static bool keep_view_locked(const iird_session *s, iir_camera *camera)
+{
+    iir_camera kept = iir_camera_keep_view(s->scene->scene, s->scene->rt, &s->camera, camera);
+    bool moved = kept.position.x != camera->position.x || kept.position.y != camera->position.y ||
+                 kept.position.z != camera->position.z;
+    *camera = kept;
+    return moved;
+}
+
 static bool on_camera(iird_session *s, const iird_msg *m, iird_proto_error *err)
 {
     pthread_mutex_lock(&s->lock);
     iir_camera camera = s->camera;
     bool ok = iird_apply_camera(&m->u.camera, &camera, err);
+    bool moved = ok && keep_view_locked(s, &camera);
     if (ok && s->rec) /* recorded first: a full recording refuses the whole message */
         ok = iird_recording_add_camera(s->rec, rec_time_locked(s), &camera, err);
+    char *json = NULL;
     if (ok) {
         s->camera = camera;
         input_changed_locked(s, m->seq);
     }
+    if (ok && moved) { /* the client learns the position used */
+        iird_state_view v = iird_state_view_locked(s);
+        json = iird_json_state(&v, m->seq);
+        iird_queue_text_locked(s, json, false);
+    }
     pthread_mutex_unlock(&s->lock);
+    free(json);
     return ok;
 }
 
@@ -364,7 +385,7 @@ static bool on_record(iird_session *s, const iird_msg *m, iird_proto_error *err)
         ok = iird_proto_fail(err, IIRD_E_BAD_FIELD, "record.action",
                              "stop without a recording: send action start first");
     } else {
-        iird_recording_end(s->rec, rec_time_locked(s));
+        iird_session_record_end_locked(s, rec_time_locked(s));
         json = iird_json_record_stop(s->rec, m->seq);
         iird_recording_destroy(s->rec);
         s->rec = NULL;

@@ -279,12 +279,16 @@ static bool reserve_vpls(worker_state *w, uint32_t n)
     return true;
 }
 
-/* Pixel position of world point p, or (-1, -1) when behind the camera, outside the frame or
- * hidden from the camera. */
-static void project(const iir_camera_frame *cf, const iir_rt *rt, iir_vec3 p, float out[2])
+/* Pixel position of VPL v on the image, or (-1, -1) where no dot belongs: a null sample (no
+ * surface point: it sits at the light, or for a sun outside the scene), a VPL that carries no
+ * light (on a black, mirror or glass surface), one behind the camera or outside the frame, one
+ * whose surface faces away from the camera (seen from outside a room: the back of the wall it lies
+ * on) or that something hides from the camera. */
+static void project(const iir_camera_frame *cf, const iir_rt *rt, const iir_vpl *v, float out[2])
 {
     out[0] = out[1] = -1.f;
-    iir_vec3 d = iir_sub(p, cf->origin);
+    iir_vec3 p = v->position, d = iir_sub(p, cf->origin);
+    if (v->null_sample || iir_is_black(v->flux) || !(iir_dot(v->normal, d) < 0.f)) return;
     float z = iir_dot(d, cf->basis.f), dist = iir_length(d);
     if (z <= 1e-6f * dist) return;
     float sx = iir_dot(d, cf->basis.r) / (z * cf->tan_half_y * cf->aspect);
@@ -313,7 +317,7 @@ static char *domain_json(worker_state *w, const render_job *j, const iird_scene_
     for (uint32_t i = 0; i < n; i++) newest = v[i].birth > newest ? v[i].birth : newest;
     iir_camera_frame cf = iir_camera_setup(&j->camera, j->settings.width, j->settings.height);
     for (uint32_t i = 0; i < n; i++) {
-        project(&cf, sc->rt, v[i].position, w->vpl_px[i]);
+        project(&cf, sc->rt, &v[i], w->vpl_px[i]);
         bool fresh = by_site ? (dom.sites[i].flags & IIR_SITE_NEW) != 0 : v[i].birth == newest;
         w->vpl_flags[i] =
             (uint8_t)((fresh ? 1 : 0) | (v[i].null_sample ? 2 : 0) | (v[i].generation > 0 ? 4 : 0));
@@ -396,6 +400,7 @@ static void fill_slot_locked(iird_session *s, const render_job *j, frame_info *f
     slot->id = f->id;
     slot->pass = f->pass;
     slot->converged = f->converged;
+    slot->reencoded = f->reencoded;
     slot->seq = j->seq;
     slot->input_ms = j->input_ms;
     slot->encode_ms = f->encode_ms;
@@ -679,7 +684,7 @@ static void record_scene_switch_locked(iird_session *s)
 {
     if (!s->rec) return;
     iird_proto_error pe = {.seq = IIRD_NO_SEQ};
-    iird_recording_end(s->rec, (iir_now_ms() - s->rec_start_ms) / 1e3);
+    iird_session_record_end_locked(s, (iir_now_ms() - s->rec_start_ms) / 1e3);
     char *json = iird_json_record_part(s->rec, IIRD_NO_SEQ, true);
     int fps = iird_recording_fps(s->rec);
     iird_queue_text_locked(s, json, false);

@@ -5,12 +5,19 @@
 //  2. a shift-drag across 30% of the image towards the red wall leaves the light inside the box (the
 //     daemon stops it at the wall and answers with `state`; the page takes that position: model,
 //     panel and gizmo), and the image is not black; five wheel notches up leave it under the ceiling;
+//  2b. from the scene's light (y 1.9), one shift-drag up into the ceiling and back down as far brings
+//     the light back to y 1.9 (the page moves the position the user asked for, the daemon's kept
+//     position shown meanwhile; issue 26, item 11b): its gizmo where it projects, the image as before
+//     (screenshot browser_light_ceiling_back.png);
 //  3. the arrows change a straight-down spot: → tilts its aim right on screen (+x), ↑ away from the
 //     camera (up the image), and the image changes; the help overlay says so;
 //  4. dark_box: the note says the scene has no light and iird placed the spot, and the gizmo is drawn
 //     in the made-up light's colour where it projects;
 //  5. a light out of view (the camera dollied in under it) gets an arrow at the frame's edge pointing
-//     at it.
+//     at it;
+//  6. a right-drag that orbits the camera 120 degrees round, behind the red wall, leaves it in the box
+//     (the daemon keeps its view; issue 26, item 11c), still looking at its target, and the image is
+//     the lit room, not black (screenshot browser_light_orbit.png).
 // Screenshots: browser_light_wall.png, browser_light_default.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_light.mjs IIRD SOURCE_DIR
@@ -34,7 +41,66 @@ const GIZMO_MIN_PIXELS = 30;
 const NOT_BLACK = 6;
 const ARROWS_MIN = 1.2;
 
+// Measured (RelWithDebInfo, 2 cores): up into the ceiling and back, the image differs from the one
+// before by 0.2-0.4 (a new VPL set); the light left at y 1.27, as the page did before, by 15.
+const SAME_IMAGE = 2;
+
 const model = (page) => page.evaluate(() => window.iir.state);
+
+// 6: from the scene's view, a right-drag of 400 px (120 degrees) round to behind the red wall.
+async function orbitBehindTheWall(page) {
+    await page.keyboard.press('0');
+    await H.waitFor(page, () => Math.abs(window.iir.state.camera.position[2] - 3.9) < 1e-3 && !window.iir.switching);
+    await H.settle(page, 1);
+    const box = await page.locator('#frame').boundingBox();
+    const x = box.x + box.width * 0.5;
+    const y = box.y + box.height * 0.5;
+    await page.mouse.move(x - 200, y);
+    await page.mouse.down({ button: 'right' });
+    await page.mouse.move(x + 200, y, { steps: 20 });
+    await H.sleep(200);
+    await page.mouse.up({ button: 'right' });
+    await H.settle(page, 2);
+    const cam = (await model(page)).camera;
+    const t = H.tone(await H.screenRGB(page, '#frame', 128, 96, H.shotPath('browser_light_orbit.png')));
+    log(`orbited: eye ${cam.position.map((v) => v.toFixed(3))}, target ${cam.target}; brightness ${t.lum.toFixed(1)}`);
+    const p = cam.position;
+    check(p[0] > WALL_X && p[0] < 1 && p[2] > -1.04 && p[2] < 0.99 && p[1] > 0 && p[1] < CEILING_Y,
+        'the orbit leaves the camera in the box');
+    check(t.lum > NOT_BLACK, `and the image is the room, not black: brightness ${t.lum.toFixed(1)} > ${NOT_BLACK}`);
+}
+
+// 2b: one shift-drag up, 25% of the image (the ceiling stops the light), and back down as far.
+async function intoCeilingAndBack(page) {
+    await page.keyboard.press('0'); // the scene's own light and camera
+    await H.waitFor(page, () => Math.abs(window.iir.state.light.position[0]) < 1e-6 && !window.iir.switching);
+    await H.settle(page, 3);
+    const y0 = (await model(page)).light.position[1];
+    const before = await H.canvasRGB(page, 'frame', 128, 96);
+    const box = await page.locator('#frame').boundingBox();
+    const x = box.x + box.width * 0.5;
+    const y = box.y + box.height * 0.3;
+    await page.keyboard.down('Shift');
+    await page.mouse.move(x, y);
+    await page.mouse.down();
+    await page.mouse.move(x, y - box.height * 0.25, { steps: 12 });
+    await H.sleep(300);
+    const top = (await model(page)).light.position[1];
+    await page.mouse.move(x, y, { steps: 12 });
+    await H.sleep(200);
+    await page.mouse.up();
+    await page.keyboard.up('Shift');
+    await H.settle(page, 3);
+    const back = (await model(page)).light.position;
+    const after = await H.canvasRGB(page, 'frame', 128, 96);
+    await page.screenshot({ path: H.shotPath('browser_light_ceiling_back.png') });
+    log(`up into the ceiling and back: y ${y0} -> ${top.toFixed(3)} (stopped under ${CEILING_Y}) -> ${JSON.stringify(back)}`);
+    check(top < CEILING_Y && Math.abs(back[1] - y0) < 0.01 && Math.abs(back[0]) < 0.01,
+        `the light comes back to where it started: y ${back[1].toFixed(3)} (from ${y0})`);
+    const diff = H.mad(before, after);
+    check(diff < SAME_IMAGE, `and the image is the one before: difference ${diff.toFixed(2)} < ${SAME_IMAGE}`);
+    await gizmoAt(page, SCENE_LIGHT, 'back from the ceiling');
+}
 
 // Where the page drew the gizmo against where the light projects; counts its pixels there.
 async function gizmoAt(page, colour, what) {
@@ -103,6 +169,8 @@ async function main() {
     check(up[1] < CEILING_Y && up[1] > p[1] - 1e-3, `five wheel notches up leave it under the ceiling: y ${up[1].toFixed(3)} < ${CEILING_Y}`);
     t = H.tone(await H.screenRGB(page, '#frame', 128, 96));
     check(t.lum > NOT_BLACK, `the image is not black: brightness ${t.lum.toFixed(1)}`);
+
+    await intoCeilingAndBack(page);
 
     // 3. arrows on a straight-down spot
     await page.keyboard.press('0'); // the scene's own light and camera
@@ -173,6 +241,8 @@ async function main() {
     check(out.offscreen && !out.visible && out.y < 0.1 * f5.height && marks >= GIZMO_MIN_PIXELS,
         `an arrow at the frame's top edge points at it: (${out.x.toFixed(0)}, ${out.y.toFixed(0)}), ${marks} pixels of its colour`);
     await page.screenshot({ path: H.shotPath('browser_light_offscreen.png') });
+
+    await orbitBehindTheWall(page);
 
     check(page.problems.length === 0, `no console errors${page.problems.length ? `:\n  ${page.problems.join('\n  ')}` : ''}`);
     await daemon.stop();

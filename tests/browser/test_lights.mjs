@@ -7,6 +7,9 @@
 //     it moved and the spot where it was, and the daemon agrees (its next `state` says the same);
 //  3. its box switches the bulb off: state says off, the image darkens and its gizmo is drawn grey;
 //     on again, the image comes back;
+//     with the spot off too (every light off), no VPL dot is drawn over the black image (none counted,
+//     no pixel of a dot's colours on the overlay; screenshot browser_lights_off.png; issue 26, item
+//     11d), and with the spot on again they are back;
 //  4. a click on the spot's gizmo in the image selects the spot again;
 //  5. on disc_lamp (an area light shaped as a 32-gon, harness.mjs DISC_LAMP), state sends its shape
 //     and the gizmo draws the disc's outline: gizmo pixels at its rim, none at the corners of its
@@ -32,6 +35,23 @@ const BACK = 0.05; // on again: within this share of it
 const model = (page) => page.evaluate(() => window.iir.state);
 const brightness = async (page) => H.tone(await H.screenRGB(page, '#frame', 128, 96)).lum;
 const dist = (a, b) => Math.hypot(...a.map((x, i) => x - b[i]));
+
+// VPL dots on the image: how many the page drew, and the overlay's pixels of a dot's colours (view.js
+// drawVpls: a VPL, a new one, a later bounce's), gizmos aside only by colour (every light off: grey).
+async function vplDots(page) {
+    const pixels = await page.evaluate(() => {
+        const o = document.getElementById('overlay');
+        const d = o.getContext('2d').getImageData(0, 0, o.width, o.height).data;
+        const colours = [[255, 200, 60], [80, 255, 140], [70, 140, 255], [120, 220, 255]];
+        let n = 0;
+        for (let k = 0; k < d.length; k += 4) {
+            if (d[k + 3] < 150) continue;
+            if (colours.some((c) => Math.abs(d[k] - c[0]) + Math.abs(d[k + 1] - c[1]) + Math.abs(d[k + 2] - c[2]) < 45)) n++;
+        }
+        return n;
+    });
+    return { drawn: await page.evaluate(() => window.iir.vplsDrawn), pixels };
+}
 
 async function main() {
     const chromium = await H.prerequisites(IIRD, SRC);
@@ -109,6 +129,19 @@ async function main() {
     log(`brightness: both on ${lit.toFixed(2)}, bulb off ${dark.toFixed(2)}; ${grey} grey gizmo pixels at the bulb`);
     check(dark < DARKER * lit, `switched off, the image darkens: ${dark.toFixed(2)} < ${DARKER} x ${lit.toFixed(2)}`);
     check(grey >= 20, 'and the bulb\'s gizmo is drawn grey');
+    const dotsOn = await vplDots(page);
+    await page.click('#light-list .light-row:nth-child(1) input'); // the spot off too: every light
+    await H.waitFor(page, () => window.iir.state.lights.every((L) => L.on === false));
+    await H.settle(page, 2);
+    const dotsOff = await vplDots(page);
+    await page.screenshot({ path: H.shotPath('browser_lights_off.png') });
+    log(`VPL dots: spot on ${JSON.stringify(dotsOn)}, every light off ${JSON.stringify(dotsOff)}`);
+    check(dotsOn.drawn > 0 && dotsOn.pixels > 0 && dotsOff.drawn === 0 && dotsOff.pixels === 0,
+        'every light off: no VPL dots over the black image (with the spot on there were)');
+    await page.click('#light-list .light-row:nth-child(1) input');
+    await H.waitFor(page, () => window.iir.state.lights[0].on === true);
+    await H.settle(page, 2);
+    await H.waitFor(page, () => window.iir.vplsDrawn > 0);
     await page.click('#light-list .light-row:nth-child(2) input');
     await H.waitFor(page, () => window.iir.state.lights[1].on === true);
     await H.settle(page, 2);

@@ -5,12 +5,17 @@
 //     SCENES/my_view/my_view.scene.json, my_view appears in the picker, and picking it shows the same
 //     light, camera and image (screenshot difference against the image before the save); saving
 //     my_view again is refused: a save banner, the name marked;
+//     On my_view a recording (Record, a light move, Record) downloads a script that names my_view,
+//     the daemon's scenes folder (absolute) and the session's frame size, and `iird render --anim` of
+//     it alone, run from another folder, renders its first frame at that size (issue 26, item 10);
 //  2. without --allow-save: Save on server is refused once, then disabled and says why (--allow-save),
-//     and Download still works.
+//     and Download still works, named after the name typed (as a scene name: "other view" gives
+//     other_view.scene.json), and so does Enter in the name field.
 // Screenshot: browser_save.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_save.mjs IIRD SOURCE_DIR
 
+import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
 import * as H from './harness.mjs';
@@ -22,12 +27,42 @@ const { check, log } = H;
 // before the save differs by 1.0-1.04 (0-255: a new VPL set and refinement); the unmoved view
 // differs from the moved one by 12.8.
 const SAME_VIEW_MAX = 3;
+const same = (a, b) => Array.isArray(a) && a.length === b.length && a.every((x, i) => x === b[i]);
 const near = (a, b, eps = 2e-3) => a.length === b.length && a.every((x, i) => Math.abs(x - b[i]) < eps);
 
 async function download(page, click) {
     const [dl] = await Promise.all([page.waitForEvent('download', { timeout: H.WAIT_MS }), page.click(click)]);
     const file = await dl.path();
     return { name: dl.suggestedFilename(), json: JSON.parse(fs.readFileSync(file, 'utf8')) };
+}
+
+// A PNG file's width and height (its IHDR chunk).
+function pngSize(file) {
+    const b = fs.readFileSync(file);
+    return [b.readUInt32BE(16), b.readUInt32BE(20)];
+}
+
+// Records a light move on the scene shown; the script downloaded, rendered offline (its first
+// frame, pt at 1 spp) with nothing but the script from another folder: checks it says where and
+// how it was made and renders at the session's size.
+async function recordAndRender(page, scenes) {
+    const s = await page.evaluate(() => window.iir.state);
+    await page.click('#record');
+    await H.waitFor(page, () => document.querySelector('#record').textContent.includes('Stop'));
+    await page.keyboard.press('d');
+    await H.settle(page, 1);
+    const rec = await download(page, '#record');
+    log(`recording ${rec.name}: scene ${rec.json.scene}, scenes ${rec.json.scenes}, size ${JSON.stringify(rec.json.size)}`);
+    const size = [s.params.width, s.params.height];
+    check(rec.json.scene === s.scene && rec.json.scenes === fs.realpathSync(scenes) && same(rec.json.size, size),
+        `the script names the scene (${s.scene}), the daemon's scenes folder and the session's ${size.join('x')}`);
+    const dir = fs.mkdtempSync(path.join(process.env.IIR_TEST_TMP || '/tmp', 'iird-replay-'));
+    H.onCleanup(() => fs.rmSync(dir, { recursive: true, force: true }));
+    fs.writeFileSync(path.join(dir, 'path.json'), JSON.stringify(rec.json));
+    execFileSync(path.resolve(IIRD), ['render', '--anim', 'path.json', '--out', 'frames', '--frames', '0:1', '--method', 'pt', '--spp', '1'],
+        { cwd: dir, stdio: ['ignore', 'pipe', 'pipe'] });
+    const got = pngSize(path.join(dir, 'frames', 'frame_00000.png'));
+    check(same(got, size), `iird render --anim of it alone renders at the session's size: ${got.join('x')}`);
 }
 
 async function refinedImage(page) {
@@ -80,6 +115,8 @@ async function main() {
     const diff = H.mad(before, after);
     check(diff < SAME_VIEW_MAX, `and shows the same image: difference ${diff.toFixed(2)} < ${SAME_VIEW_MAX} (to the unmoved view: ${H.mad(start, after).toFixed(2)})`);
 
+    await recordAndRender(page, scenes);
+
     await page.click('#save-server'); // my_view again
     await H.waitFor(page, () => window.iir.errors.save);
     const banner = (await page.evaluate(() => window.iir.errors)).save;
@@ -91,14 +128,19 @@ async function main() {
     const plain = await H.startDaemon(IIRD, ['--scenes', scenes, ...web]);
     const page2 = await H.newPage(browser);
     await H.open(page2, plain.url);
-    await page2.fill('#save-name', 'other_view');
+    await page2.fill('#save-name', 'other view');
     // welcome.limits.allow_save is false: the button is disabled from the start, never a refusal
     const why = await page2.getAttribute('#save-server', 'title');
     check(await page2.isDisabled('#save-server') && /--allow-save/.test(why), `without --allow-save the button is disabled and says why: "${why}"`);
     check(/--allow-save/.test(await page2.textContent('#save-info')), 'so does the line under it');
     check(!fs.existsSync(path.join(scenes, 'other_view')), 'nothing was written');
     const dl2 = await download(page2, '#save-download');
-    check(dl2.name === 'other_view.scene.json' && dl2.json.base === 'builtin', `Download still works: ${dl2.name}`);
+    const said = await page2.textContent('#save-info');
+    check(dl2.name === 'other_view.scene.json' && dl2.json.base === 'builtin' && /"other view" as a scene name/.test(said),
+        `Download still works, named after the name typed: ${dl2.name} (${said})`);
+    await page2.fill('#save-name', 'third.scene.json');
+    const [dl3] = await Promise.all([page2.waitForEvent('download', { timeout: H.WAIT_MS }), page2.press('#save-name', 'Enter')]);
+    check(dl3.suggestedFilename() === 'third.scene.json', `Enter in the name downloads there too: ${dl3.suggestedFilename()}`);
 
     check(page.problems.length === 0 && page2.problems.length === 0, `no console errors${[...page.problems, ...page2.problems].map((p) => `\n  ${p}`).join('')}`);
     await plain.daemon.stop();

@@ -6,6 +6,8 @@
 //  2. the VPL chart has no point for frames without a VPL step, and no "kept" at 0 (a new set has none);
 //  3. removed-VPL crosses do not pile up: while aiming, the domain drawing holds at most the removed
 //     sites of one frame (its red pixels counted against that), and none once the frame is refined;
+//     a re-encoded frame (exposure changed) says "re-encoded" in the image's line and the stats, never
+//     "0.0 ms render" (issue 26, item 11e);
 //  4. pt: the domain says "pt has no VPL domain" at once and never "no domain from pt yet"; the stats
 //     say pt has no VPLs; ir: "ir has no disk domain", its VPL count is the set's size, a new set.
 // Screenshot: browser_stats.png in $IIR_TEST_TMP (harness shotPath).
@@ -90,7 +92,13 @@ async function main() {
     check(rows.some((x) => x[1] > 0) && chartProblems(rows).length === 0, `the VPL chart: points only for frames with a VPL step, no "kept" at 0 (${rows.length} rows; bad: ${chartProblems(rows).join(' ') || 'none'})`);
 
     // exposure: the daemon encodes the same image again (a new generation, no new VPL step); the
-    // page still has its stats and its domain
+    // page still has its stats and its domain, and says the frame was re-encoded, not "0.0 ms render"
+    await page.evaluate(() => {
+        window.__renderTexts = [];
+        const keep = () => window.__renderTexts.push(`${document.querySelector('#hud-frame').textContent} | ${document.querySelector('#st-render').textContent}`);
+        new MutationObserver(keep).observe(document.querySelector('#hud-frame'), { childList: true, characterData: true, subtree: true });
+        new MutationObserver(keep).observe(document.querySelector('#st-render'), { childList: true, characterData: true, subtree: true });
+    });
     await page.keyboard.press('=');
     await H.waitFor(page, () => window.iir.state.params.exposure === 0.5 && !window.iir.switching &&
         window.iir.lastFrame.generation >= window.iir.generation && window.iir.shownStats);
@@ -98,6 +106,29 @@ async function main() {
     log(`after exposure +0.5: ${JSON.stringify(r)}`);
     check(r.hud === r.shown.id && r.stats === r.shown.id && r.sites > 0 && /^frame \d+/.test(r.caption),
         `the re-encoded frame ${r.shown.id} has its stats and the domain of its set: "${r.caption}"`);
+    // (an exposure change that stops a refinement pass renders anew: the pass left the image half
+    // done; with refinement off it re-encodes the frame)
+    const reencoded = () => page.evaluate(() => window.__renderTexts.some((t) => /re-encoded, not rendered.*\| re-encoded$/.test(t)));
+    const refine = (on) => page.evaluate((on) => { // the Frame & stream form's box (its group folded)
+        const box = document.querySelector('#param-refine');
+        box.checked = on;
+        box.dispatchEvent(new Event('change', { bubbles: true }));
+    }, on);
+    await refine(false);
+    await H.waitFor(page, () => window.iir.state.params.refine === false);
+    await H.settle(page, 0, 500);
+    await page.mouse.move(10, 10);
+    for (let i = 0; i < 3 && !(await reencoded()); i++) {
+        await page.keyboard.press(i % 2 ? '=' : '-');
+        await H.waitFor(page, () => window.__renderTexts.some((t) => /re-encoded, not rendered.*\| re-encoded$/.test(t)), null, 5000).catch(() => {});
+    }
+    const texts = await page.evaluate(() => window.__renderTexts);
+    check(await reencoded(), `an exposure change gives a re-encoded frame, said so (${texts.length} read-outs)`);
+    await refine(true);
+    await H.waitFor(page, () => window.iir.state.params.refine === true);
+    const zero = texts.filter((t) => /\b0\.0 ms/.test(t));
+    log(`render read-outs since: ${texts.slice(0, 4).join(' ;; ')}`);
+    check(zero.length === 0, `the image's line and the stats say "re-encoded" for it, never "0.0 ms" (${zero.length} did: ${zero[0] || ''})`);
 
     // 2./3. aiming: the set changes; crosses are one frame's at most
     const box = await page.locator('#frame').boundingBox();

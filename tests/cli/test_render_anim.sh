@@ -5,7 +5,7 @@
 # command that completes the set, bad options naming themselves, the MP4 through ffmpeg, and
 # determinism. Usage: test_render_anim.sh IIRD SOURCE_DIR
 set -u
-iird=$1
+iird=$(realpath "$1") # some checks run from other folders
 src=$2
 . "$(dirname "$0")/lib.sh" render-anim
 
@@ -186,6 +186,28 @@ out=$("$iird" bench builtin --anim "$tmp/rec.json" --methods iir --frames 0:2 --
     fail "bench with a script naming another scene: $out"
 echo "$out" | grep -q "iird bench: warning: the script was made on scene 'conference'" ||
     fail "bench: no warning for a script made on another scene: $out"
+
+# ---- the script's scenes folder and size (a browser recording names both): used without --scenes
+# and --size, from another folder; a folder missing here is passed over with a warning ----
+python3 - "$tmp/rec_box.json" "$tmp/rec_where.json" "$src/scenes" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+d.update(scenes=sys.argv[3], size=[40, 30])
+json.dump(d, open(sys.argv[2], "w"))
+PY
+sed "s|\"scenes\": \"[^\"]*\"|\"scenes\": \"$tmp/gone\"|" "$tmp/rec_where.json" >"$tmp/rec_gone.json"
+mkdir -p "$tmp/elsewhere"
+out=$(cd "$tmp/elsewhere" && IIR_SCENES= "$iird" render --anim "$tmp/rec_where.json" --out "$tmp/w1" \
+    --frames 0:1 --vpls 32 --sm-res 32 2>&1) || fail "a script naming its scenes folder: $out"
+python3 -c 'import json,sys; s=json.load(open(sys.argv[1]))["settings"]; assert s["size"] == [40, 30], s' \
+    "$tmp/w1/render.json" || fail "without --size the script's size (40x30) is not the frames'"
+out=$("$iird" render --anim "$tmp/rec_gone.json" --scenes "$src/scenes" --out "$tmp/w2" --frames 0:1 \
+    "${small[@]}" 2>&1) || fail "--scenes over a script's missing folder: $out"
+echo "$out" | grep -q warning && fail "a warning for a folder --scenes replaces: $out"
+out=$(cd "$src" && "$iird" render --anim "$tmp/rec_gone.json" --out "$tmp/w3" --frames 0:1 "${small[@]}" 2>&1) ||
+    fail "a script whose scenes folder is missing here: $out"
+echo "$out" | grep -q "warning: the script's scenes folder $tmp/gone is not a folder here; looking 'cornell_box' up in scenes" ||
+    fail "no warning for a script's missing scenes folder: $out"
 
 if [ $failures -gt 0 ]; then
     echo "$failures failure(s)"

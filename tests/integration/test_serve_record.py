@@ -6,7 +6,10 @@ moves the light and the camera and changes the exposure is recorded, the script 
 render --anim` at the session's size, and its first and last frames match the session's PNG snapshots
 at the start and the stop; also on a scene without lights, whose made-up spot the script moves offline
 too, and on a scene with two lights, one moved, one switched off (issue 11: a script records every
-light, a "lights" track each). Usage: test_serve_record.py IIRD SOURCE_DIR"""
+light, a "lights" track each). The script names the session's frame size and the daemon's scenes folder
+(issue 26, item 10): `iird render --anim` of it, given neither --size nor --scenes and run from another
+folder, renders the session's frames at the session's size; --size and --scenes still override.
+Usage: test_serve_record.py IIRD SOURCE_DIR"""
 
 import asyncio
 import json
@@ -48,6 +51,9 @@ class RecordSceneTest(DaemonTest):
             seq, r = await c.request({"type": "record", "action": "stop"}, "record")
             script = r["script"]
             self.assertEqual(script.get("scene"), "cornell_box", script)
+            # the folder the daemon finds cornell_box in (its --scenes), absolute, for render --anim
+            self.assertEqual(script.get("scenes"), os.path.realpath(os.path.join(iirserve.SRC, "scenes")), script)
+            self.assertNotIn("scenes", first["script"], "the built-in box needs no scenes folder")
             self.assertEqual([t["name"] for t in script["lights"]], ["spot"], script["lights"])
             key0 = script["lights"][0]["keys"][0]
             self.assertEqual(key0.get("t"), 0)
@@ -182,16 +188,23 @@ class RecordReplayTest(DaemonTest):
         stops = [k["stops"] for k in script["exposure"]["keys"]]
         self.assertEqual(stops, [0, 1.5] if any(m["type"] == "params" for m in moves) else [0])
         self.assertGreaterEqual(len(script["camera"]["keys"]), 2)
+        # where and how it was made: the session's frame size, the daemon's scenes folder (absolute)
+        self.assertEqual(script.get("size"), [w, h], "the script names the session's frame size")
+        if scenes_dir:
+            self.assertEqual(script.get("scenes"), os.path.realpath(scenes_dir), "and the daemon's scenes folder")
+        else:
+            self.assertNotIn("scenes", script, "the built-in box needs no scenes folder")
         with tempfile.TemporaryDirectory(dir=os.environ.get("IIR_TEST_TMP")) as tmp:
             path = os.path.join(tmp, "recorded.json")
             with open(path, "w") as f:
                 json.dump(script, f)
             out = os.path.join(tmp, "frames")
-            cmd = [iirserve.IIRD, "render", "--anim", path, "--out", out, "--size", f"{w}x{h}", *PT_ARGS]
-            if scenes_dir:
-                cmd += ["--scenes", scenes_dir]
-            p = subprocess.run(cmd, capture_output=True, text=True, timeout=240)
+            # neither --size nor --scenes, and no ./scenes to fall back on: the script says both
+            cmd = [iirserve.IIRD, "render", "--anim", path, "--out", out, *PT_ARGS]
+            p = subprocess.run(cmd, capture_output=True, text=True, timeout=240, cwd=tmp)
             self.assertEqual(p.returncode, 0, f"{' '.join(cmd)}:\n{p.stdout}\n{p.stderr}")
+            if scenes_dir:
+                self.override(path, tmp, scenes_dir)
             frames = sorted(n for n in os.listdir(out) if n.endswith(".png"))
             self.assertEqual(len(frames), round(script["duration"] * script["fps"]) + 1, frames)
             from PIL import Image
@@ -214,6 +227,23 @@ class RecordReplayTest(DaemonTest):
                     sheet.paste(Image.open(os.path.join(out, name)).convert("RGB"), (w + 8, row * (h + 8)))
                 sheet.save(shots)
         return script
+
+    def override(self, path, tmp, scenes_dir):
+        """--size and --scenes win over the script's: a frame at another size, and a scenes folder
+        that lacks the scene refuses it (exit 3, naming the folder given)."""
+        out = os.path.join(tmp, "small")
+        cmd = [iirserve.IIRD, "render", "--anim", path, "--out", out, "--frames", "0:1", "--size", "64x48", *PT_ARGS]
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, cwd=tmp)
+        self.assertEqual(p.returncode, 0, f"{' '.join(cmd)}:\n{p.stdout}\n{p.stderr}")
+        from PIL import Image
+
+        with Image.open(os.path.join(out, "frame_00000.png")) as im:
+            self.assertEqual(im.size, (64, 48), "--size overrides")
+        empty = os.path.join(tmp, "no_scenes")
+        os.makedirs(empty)
+        cmd = [iirserve.IIRD, "render", "--anim", path, "--out", os.path.join(tmp, "none"), "--scenes", empty, *PT_ARGS]
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, cwd=tmp)
+        self.assertNotEqual(p.returncode, 0, f"--scenes overrides the script's folder:\n{p.stdout}\n{p.stderr}")
 
     async def send(self, c, m):
         seq = c.next_seq()

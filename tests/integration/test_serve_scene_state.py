@@ -1,5 +1,8 @@
 """test_serve_scene_state.py -- the state a client sees is the scene it picked (issue 16): a light moved
-through the Cornell box's red wall or ceiling stays inside, and the `state` reply says where; every frame
+through the Cornell box's red wall or ceiling stays inside, and the `state` reply says where; a camera
+orbited behind its walls stays in the room, in front of the wall, still looking at its target, and the
+`state` reply says where (issue 26, item 11c); one looking at the box from anywhere before its opening
+is kept as asked; every frame
 carries the generation of the state it shows, so a client can drop frames of the previous method or
 scene; a startup scene given as a path outside the scenes directory is in `welcome.scenes` and can be
 picked again after switching away; a scene without lights says its spot is made up; the notes name what
@@ -41,6 +44,39 @@ class LightBoundsTest(DaemonTest):
             self.assertLess(d[1], -0.99, f"the light aimed at the floor's centre points {d}")
         finally:
             await c.close()
+
+    async def test_a_camera_orbited_behind_a_wall_stays_in_the_room(self):
+        c = await Client.connect(self.daemon)
+        try:
+            await c.wait_frame()
+            cam = c.welcome["state"]["camera"]
+            self.assertEqual(cam["target"], [0, 1, 0], cam)
+            # before the opening (a small orbit): kept as asked, no state reply
+            seq, f = await self.camera(c, position=[0.8, 1.2, 3.8])
+            self.assertFalse([m for m in c.texts("state") if m.get("seq") == seq], "a free orbit got a state reply")
+            # 90 degrees round, behind the red wall (x -1.02), then behind the back wall (z -1.04)
+            for eye, inside in (([-3.9, 1.0, 0.0], lambda p: RED_WALL_X < p[0] < -0.8),
+                                ([0.3, 1.1, -3.9], lambda p: -1.04 < p[2] < -0.8)):
+                seq, f = await self.camera(c, position=eye)
+                st = [m for m in c.texts("state") if m.get("seq") == seq]
+                self.assertTrue(st, f"a camera behind a wall ({eye}) got no state reply")
+                p, t = st[0]["camera"]["position"], st[0]["camera"]["target"]
+                self.assertTrue(inside(p), f"the eye asked at {eye} is at {p}: not just inside the wall")
+                # on the line from the target to the eye asked: still looking at the target
+                a = [e - x for e, x in zip(eye, t)]
+                b = [e - x for e, x in zip(p, t)]
+                cos = sum(x * y for x, y in zip(a, b)) / (sum(x * x for x in a) * sum(y * y for y in b)) ** 0.5
+                self.assertGreater(cos, 0.9999, f"the eye {p} left the line from the target to {eye}")
+        finally:
+            await c.close()
+
+    async def camera(self, c, **fields):
+        """Sends a camera move; returns (seq, the frame answering it)."""
+        seq = c.next_seq()
+        at = c.mark()
+        await c.send({"type": "camera", "seq": seq, **fields})
+        f = await c.wait_frame(since=at, min_seq=seq)
+        return seq, f
 
     async def test_frames_carry_the_generation_of_their_state(self):
         c = await Client.connect(self.daemon)

@@ -234,6 +234,21 @@ class StreamTest(DaemonTest):
             for p in d.get("removed", []):
                 self.assertLessEqual(math.hypot(p[0], p[1]), r_max, f"removed {p} beyond any direction")
             self.assertGreaterEqual(len(edges), len(sites) - 1, "a triangulation connects its sites")
+            # a dot only where the image shows a VPL (issue 26, item 11d): never a null sample (it
+            # sits at the light); seen from behind the back wall (a camera outside the box, its
+            # target too, so it is not kept in the room), none: the wall's back hides them all
+            nulls = [v for v in vpls if v[2] & 2]
+            self.assertTrue(nulls and all(v[:2] == [-1, -1] for v in nulls), f"null samples on the image: {nulls[:4]}")
+            self.assertTrue(any(v[0] >= 0 for v in vpls), "and the VPLs on the walls are")
+            seq = c.next_seq()
+            at = c.mark()
+            await c.send({"type": "camera", "seq": seq, "position": [0, 1, -4], "target": [0, 1, -2]})
+            f = await c.wait_frame(since=at, min_seq=seq)
+            d = await c.wait_for(lambda m: isinstance(m, dict) and m.get("type") == "domain"
+                                 and m.get("frame", 0) >= f.id, since=at, what=f"domain of frame {f.id}")
+            seen = [v for v in d["vpls"] if v[0] >= 0]
+            self.assertEqual(seen, [], "seen from behind the back wall, no VPL is on the image")
+            await c.send({"type": "camera", "seq": c.next_seq(), "position": [0, 1, 3.9], "target": [0, 1, 0]})
 
             # domain: false stops them.
             seq, _ = await c.request({"type": "params", "domain": False}, "state")

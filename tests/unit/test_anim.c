@@ -77,6 +77,42 @@ static void test_scene_name(void **state)
     assert_null(a);
 }
 
+/* A script may name the scenes folder and the frame size it was made at (recordings do): a string,
+ * and two whole numbers of pixels in [1, 16384]. */
+static void test_scenes_and_size(void **state)
+{
+    (void)state;
+    int w = 7, h = 7;
+    iir_anim *a = parse_ok("{\"duration\": 1, \"scenes\": \"/data/scenes\", \"size\": [512, 384]}");
+    assert_string_equal(iir_anim_scenes_dir(a), "/data/scenes");
+    assert_true(iir_anim_size(a, &w, &h) && w == 512 && h == 384);
+    iir_anim_destroy(a);
+    a = parse_ok("{\"duration\": 1}");
+    assert_string_equal(iir_anim_scenes_dir(a), "");
+    assert_false(iir_anim_size(a, &w, &h));
+    assert_true(w == 512 && h == 384); /* unchanged */
+    iir_anim_destroy(a);
+    static const struct {
+        const char *json, *path;
+        iir_status st;
+    } bad[] = {
+        {"{\"duration\": 1, \"scenes\": 3}", "scenes", IIR_ERR_FORMAT},
+        {"{\"duration\": 1, \"size\": 512}", "size", IIR_ERR_FORMAT},
+        {"{\"duration\": 1, \"size\": [512]}", "size", IIR_ERR_FORMAT},
+        {"{\"duration\": 1, \"size\": [512, \"384\"]}", "size", IIR_ERR_FORMAT},
+        {"{\"duration\": 1, \"size\": [0, 384]}", "size[0]", IIR_ERR_INVALID},
+        {"{\"duration\": 1, \"size\": [512, 384.5]}", "size[1]", IIR_ERR_INVALID},
+        {"{\"duration\": 1, \"size\": [512, 16385]}", "size[1]", IIR_ERR_INVALID},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        iir_error err = {0};
+        a = NULL;
+        assert_int_equal(iir_anim_parse(bad[i].json, "t", &a, &err), bad[i].st);
+        if (!strstr(err.msg, bad[i].path)) fail_msg("%s: %s", bad[i].json, err.msg);
+        assert_null(a);
+    }
+}
+
 static void test_keys_hit_exactly(void **state)
 {
     (void)state;
@@ -803,23 +839,15 @@ static void test_paths_mean_their_names(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_scene_name),
-        cmocka_unit_test(test_keys_hit_exactly),
-        cmocka_unit_test(test_linear_midpoints),
-        cmocka_unit_test(test_catmull_rom_c1),
-        cmocka_unit_test(test_held_fields),
-        cmocka_unit_test(test_step_keys),
-        cmocka_unit_test(test_orbit_and_sweep),
-        cmocka_unit_test(test_aim_and_camera),
-        cmocka_unit_test(test_frames),
-        cmocka_unit_test(test_bad_scripts),
-        cmocka_unit_test(test_shipped_paths),
-        cmocka_unit_test(test_exposure),
-        cmocka_unit_test(test_camera_up_and_light_name),
-        cmocka_unit_test(test_recorded_script),
-        cmocka_unit_test(test_several_lights),
-        cmocka_unit_test(test_sun_paths),
-        cmocka_unit_test(test_check_lights),
+        cmocka_unit_test(test_scene_name),       cmocka_unit_test(test_scenes_and_size),
+        cmocka_unit_test(test_keys_hit_exactly), cmocka_unit_test(test_linear_midpoints),
+        cmocka_unit_test(test_catmull_rom_c1),   cmocka_unit_test(test_held_fields),
+        cmocka_unit_test(test_step_keys),        cmocka_unit_test(test_orbit_and_sweep),
+        cmocka_unit_test(test_aim_and_camera),   cmocka_unit_test(test_frames),
+        cmocka_unit_test(test_bad_scripts),      cmocka_unit_test(test_shipped_paths),
+        cmocka_unit_test(test_exposure),         cmocka_unit_test(test_camera_up_and_light_name),
+        cmocka_unit_test(test_recorded_script),  cmocka_unit_test(test_several_lights),
+        cmocka_unit_test(test_sun_paths),        cmocka_unit_test(test_check_lights),
     };
     const struct CMUnitTest scene_tests[] = {cmocka_unit_test(test_paths_mean_their_names)};
     int failed = cmocka_run_group_tests(tests, NULL, NULL);

@@ -704,8 +704,10 @@ static void test_params_apply(void **state)
 static void test_recording_round_trip(void **state)
 {
     (void)state;
-    iird_recording *r = iird_recording_create(24, "builtin");
+    iird_recording *r = iird_recording_create(24, "kitchen", "/srv/iir scenes");
     assert_non_null(r);
+    iird_recording_set_size(r, 640, 360);
+    iird_recording_set_size(r, 512, 384); /* the last size set */
     iird_proto_error e;
     enum { N = 7 };
     const double ts[N] = {0.0, 0.1, 0.35, 1.0, 1.0000001, 2.5, 3.25};
@@ -736,6 +738,11 @@ static void test_recording_round_trip(void **state)
     iir_error ie;
     if (iir_anim_parse(script, "recording", &a, &ie) != IIR_OK) fail_msg("%s\n%s", ie.msg, script);
     assert_true(iir_anim_duration(a) == 3.25 && iir_anim_fps(a) == 24.0);
+    /* where and how it was made: the scene, its folder, the session's frame size */
+    int w = 0, h = 0;
+    assert_string_equal(iir_anim_scene(a), "kitchen");
+    assert_string_equal(iir_anim_scenes_dir(a), "/srv/iir scenes");
+    assert_true(iir_anim_size(a, &w, &h) && w == 512 && h == 384);
     iir_light base = spot();
     base.position = iir_v3(9, 9, 9);
     base.smooth = 0.f;
@@ -759,17 +766,19 @@ static void test_recording_round_trip(void **state)
     iird_recording_destroy(r);
 
     /* one key at t = 0: the script lasts one frame; no key: no light track */
-    r = iird_recording_create(30, NULL);
+    r = iird_recording_create(30, NULL, NULL);
     iir_light L = spot();
     assert_true(iird_recording_add(r, 0.0, &L, &e));
     script = iird_recording_script(r);
     assert_int_equal(iir_anim_parse(script, "one", &a, &ie), IIR_OK);
     assert_float_equal(iir_anim_duration(a), 1.0 / 30.0, 1e-12);
     assert_true(iir_anim_has_light(a));
+    assert_false(iir_anim_size(a, &w, &h)); /* no size set: none named */
+    assert_string_equal(iir_anim_scenes_dir(a), "");
     iir_anim_destroy(a);
     free(script);
     iird_recording_destroy(r);
-    r = iird_recording_create(30, NULL);
+    r = iird_recording_create(30, NULL, NULL);
     script = iird_recording_script(r);
     assert_int_equal(iir_anim_parse(script, "empty", &a, &ie), IIR_OK);
     assert_false(iir_anim_has_light(a));
@@ -823,7 +832,7 @@ static void four_lights(iir_light L[4])
 static void test_recording_lights(void **state)
 {
     (void)state;
-    iird_recording *r = iird_recording_create(10, "builtin");
+    iird_recording *r = iird_recording_create(10, "builtin", NULL);
     iird_proto_error e;
     enum { N = 5 };
     const double ts[N] = {0.0, 0.1, 0.2, 0.7, 0.8};

@@ -483,6 +483,29 @@ static void test_explain_dark(void **state)
     close_scene(&o);
 }
 
+/* pt at too few bounces for glass or a mirror renders it black and says which bounces show it
+ * (issue 26, item 11a); at enough bounces, and for methods without the parameter, nothing. */
+static void test_pt_bounces_through_glass(void **state)
+{
+    (void)state;
+    iir_test_cornell l = iir_test_load(IIR_SOURCE_DIR "/scenes/cornell_spheres", "cornell_spheres");
+    iir_dropped d[8];
+    iir_params p = {0};
+    uint32_t n = iir_method_dropped_by_params("pt", l.scene, &p, d, 8); /* bounces 2: glass */
+    int g = find(d, n, "pt", "glass", "bounces 3 shows the direct light through it, 4 as");
+    assert_int_equal(n, 1);
+    assert_true(g >= 0 && !d[g].note && !strcmp(d[g].kind, "material"));
+    iir_test_set(&p, "bounces", 1); /* the mirror too */
+    n = iir_method_dropped_by_params("pt", l.scene, &p, d, 8);
+    assert_int_equal(n, 2);
+    assert_true(find(d, n, "pt", "mirror", "bounces 2 shows the direct light in it") >= 0);
+    iir_test_set(&p, "bounces", 3);
+    assert_int_equal(iir_method_dropped_by_params("pt", l.scene, &p, d, 8), 0);
+    assert_int_equal(iir_method_dropped_by_params("whitted", l.scene, &p, d, 8), 0);
+    assert_int_equal(iir_method_dropped_by_params("nope", l.scene, &p, d, 8), 0);
+    iir_test_unload(&l);
+}
+
 int main(void)
 {
     snprintf(tmp, sizeof tmp, "%s", iir_test_tmpdir("test_scene_notes"));
@@ -498,6 +521,7 @@ int main(void)
         cmocka_unit_test(test_emitter_becomes_area_light),
         cmocka_unit_test(test_gltf_emitter_becomes_area_light),
         cmocka_unit_test(test_explain_dark),
+        cmocka_unit_test(test_pt_bounces_through_glass),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -16,6 +16,10 @@
 // by equal angles, also from straight down, where a yaw about the up axis would change nothing (see
 // aimBy); on a point light (no axis) they move the light in the view plane instead.
 // The daemon keeps a moved light inside the scene: main.js puts its position back into the model.
+// Within one gesture (a shift-drag until the button goes up; wheel and key moves less than
+// INTENT_MS apart) moves add up on the position the user asked for (intent), not on the kept one:
+// the messages send it, the model shows it moved by the daemon's last difference (kept), so a move
+// into a wall and back brings the light back to where it started.
 
 import * as v from './vec.js';
 import { pick as pickMsg } from './protocol.js';
@@ -29,6 +33,7 @@ const WHEEL_STEP = 0.04; // light along its axis per wheel notch (100 deltaY), c
 const TURN_DEG_PER_PX = 0.25; // a sun turned by dragging
 const DOLLY = 1.1;
 const PICK_TIMEOUT_MS = 300; // a lost pick reply does not stall aiming
+const INTENT_MS = 1000; // wheel and key moves closer together than this are one gesture
 
 export class Controls {
     // stage: the element under the pointer; view: View; model: {light (the selected one), camera}
@@ -47,6 +52,12 @@ export class Controls {
         this.pendingPick = null; // {x, y} in frame pixels
         this.pickInFlight = null; // {seq, t}
         this.lastAim = null; // {name, position, distance}: the selected spot's last aim by the mouse
+        // {name, position (asked for), diff (the daemon's last kept - asked), shown (the model's
+        // position then), seq (of the newest light message whose outcome diff is), until (ms; a
+        // drag holds it until the button goes up)}: see moveLight
+        this.intent = null;
+        this.lightSeq = 0; // of the newest light message sent
+        this.orbitIntent = null; // {position, target}: the eye an orbit drag asked for last
         this.raf = 0;
         this.bind();
     }
@@ -95,6 +106,8 @@ export class Controls {
     up(e) {
         if (!this.drag || e.pointerId !== this.drag.id) return;
         if (this.stage.hasPointerCapture(e.pointerId)) this.stage.releasePointerCapture(e.pointerId);
+        if (this.drag.mode === 'move' && this.intent) this.intent.until = 0; // the next starts anew
+        this.orbitIntent = null;
         this.drag = null;
         delete this.stage.dataset.drag;
         this.view.setMarker(null);
@@ -161,11 +174,36 @@ export class Controls {
         this.moveLight(v.scale(this.model.light.direction, dist));
     }
 
+    // Moves the selected light by delta from the position asked for in this gesture (intent), or
+    // from where it is when a new gesture starts (or the light was moved otherwise meanwhile: a
+    // reset, another light selected). The model shows it moved by the daemon's last difference.
     moveLight(delta) {
         const L = this.model.light;
         if (isSun(L)) return; // its disk stays over the scene
-        L.position = v.add(L.position, delta);
-        this.queueLight({ position: L.position });
+        const now = performance.now();
+        let i = this.intent;
+        const held = i && i.name === L.name && (now < i.until || (this.drag && this.drag.mode === 'move')) &&
+            v.length(v.sub(i.shown, L.position)) < 1e-4; // not moved otherwise (sent values are rounded)
+        if (!held) i = { name: L.name, position: L.position, diff: [0, 0, 0], seq: this.lightSeq };
+        const position = v.add(i.position, delta);
+        L.position = v.add(position, i.diff);
+        this.intent = { ...i, position, shown: L.position, until: now + INTENT_MS };
+        this.queueLight({ position });
+    }
+
+    // The daemon used `used` where light message `seq` asked for `sent` (main.js: from the state
+    // that answers it when it kept the light inside the scene, else from the frame that does, used =
+    // sent): the position the model shows for light `name`, the one asked for in the last gesture
+    // moved by that difference. null for an answer older than one already taken or than the
+    // gesture (the model stays); undefined when no gesture moved that light.
+    kept(name, sent, used, seq) {
+        const i = this.intent;
+        if (!i || i.name !== name) return undefined;
+        if (!(seq > i.seq)) return null;
+        i.seq = seq;
+        i.diff = v.sub(used, sent);
+        i.shown = v.add(i.position, i.diff);
+        return i.shown;
     }
 
     // Tilts the spot's axis so its light pool moves right (rightDeg > 0) and up (upDeg > 0) on the
@@ -252,17 +290,22 @@ export class Controls {
         this.queueLight({ direction: L.direction });
     }
 
-    // Orbits the eye around the target; the elevation stays 2 degrees away from the poles.
+    // Orbits the eye around the target; the elevation stays 2 degrees away from the poles. The
+    // daemon keeps the eye in the room (in front of a wall it would pass): within one orbit drag the
+    // orbit goes on from the eye asked for, so swinging back past the opening comes back out.
     orbit(yawDeg, pitchDeg) {
         const c = this.model.camera;
         const up = v.normalize(c.up || [0, 1, 0]);
-        let off = v.sub(c.position, c.target);
+        const i = this.orbitIntent;
+        const held = i && this.drag && this.drag.mode === 'orbit' && v.length(v.sub(i.target, c.target)) < 1e-6;
+        let off = v.sub(held ? i.position : c.position, c.target);
         off = v.rotate(off, up, yawDeg * v.DEG);
         const dist = v.length(off);
         const elev = Math.asin(Math.max(-1, Math.min(1, v.dot(off, up) / dist))) / v.DEG;
         const pitch = Math.max(-88 - elev, Math.min(88 - elev, pitchDeg));
         off = v.rotate(off, v.sideOf(v.scale(off, -1), up), -pitch * v.DEG);
         c.position = v.add(c.target, off);
+        this.orbitIntent = { position: c.position, target: c.target.slice() };
         this.queueCamera({ position: c.position });
     }
 
@@ -314,7 +357,8 @@ export class Controls {
 
     flushLight() {
         if (!this.pendingLight) return;
-        this.send.light(roundFields(this.pendingLight));
+        const seq = this.send.light(roundFields(this.pendingLight));
+        if (seq > 0) this.lightSeq = seq;
         this.pendingLight = null;
     }
 

@@ -10,7 +10,7 @@
 //   text}), greyed, gizmo (where the selected light is drawn, frame pixels), gizmos (where each light
 //   is drawn: {name, x, y, visible, offscreen}), selected (index of the selected light in
 //   state.lights), vplChart (the VPL chart's rows), domainRemovedDrawn (removed-site crosses in the
-//   domain drawing)
+//   domain drawing), vplsDrawn (VPL dots drawn on the image)
 
 const clone = (x) => JSON.parse(JSON.stringify(x));
 
@@ -78,6 +78,9 @@ export function inspector({ app, gate, errors, curtain, view, charts, domainView
         },
         get gizmos() {
             return view.gizmosAt.map((g) => ({ ...g }));
+        },
+        get vplsDrawn() {
+            return view.vplsDrawn || 0;
         },
         get selected() {
             return app.selected;

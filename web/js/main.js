@@ -24,6 +24,7 @@ import { Switcher } from './switcher.js';
 import { SaveControls } from './saving.js';
 import { inspector } from './inspect.js';
 import { kindOf } from './gizmo.js';
+import { vplStep } from './vplstats.js';
 import * as v from './vec.js';
 
 const $ = (sel) => document.querySelector(sel);
@@ -470,19 +471,39 @@ function onState(msg) {
 
 // A state's lights into the model s: all of them when no newer light message was sent since (all),
 // else ours stay and a light kept inside the scene moves by the difference between the position
-// sent (req) and the position used.
+// sent (req) and the position used: shown where the user's gesture asked for, moved by that
+// difference (controls.kept), so that moves go on from where the user asked, not from the wall.
 function takeLights(s, msg, req, all) {
     const lights = msg.lights || (msg.light ? [msg.light] : []);
     s.scene = msg.scene;
+    const kept = req && req.kind === 'light' && req.position ? lights.find((L) => L.name === req.name) : null;
+    const shown = kept ? controls.kept(req.name, req.position, kept.position, req.seq) : null;
     if (all) {
         s.lights = lights;
         s.light = msg.light;
-    } else if (req && req.kind === 'light' && req.position) {
+    } else if (kept && shown !== null) {
         const mine = s.lights.find((L) => L.name === req.name);
-        const theirs = lights.find((L) => L.name === req.name);
-        if (mine && theirs) mine.position = v.add(mine.position, v.sub(theirs.position, req.position));
+        if (mine) mine.position = shown || v.add(mine.position, v.sub(kept.position, req.position));
     }
     linkLights(s);
+}
+
+// Light moves a frame answered: the daemon used the positions sent (it kept none inside the
+// scene, or a state would have said so first); a gesture's light is shown where it asked for.
+function lightsAnswered(done) {
+    const s = app.state;
+    let moved = false;
+    for (const r of done) {
+        if (r.kind !== 'light' || !r.position || !s || !s.lights) continue;
+        const shown = controls.kept(r.name, r.position, r.position, r.seq);
+        const mine = s.lights.find((L) => L.name === r.name);
+        if (!shown || !mine || v.length(v.sub(shown, mine.position)) < 1e-9) continue;
+        mine.position = shown;
+        moved = true;
+    }
+    if (!moved) return;
+    panel.setLights(s.lights, app.selected);
+    showGizmo();
 }
 
 function onStats(msg) {
@@ -491,7 +512,10 @@ function onStats(msg) {
     charts.push(msg, app.frameLatencyMs);
     app.stats.set(msg.frame, msg);
     if (app.stats.size > STATS_KEPT) app.stats.delete(app.stats.keys().next().value);
-    if (app.shown && app.shown.frameId === msg.frame) panel.setStats(msg, app.latencyMs, app.lastFrame);
+    if (app.shown && app.shown.frameId === msg.frame) {
+        panel.setStats(msg, app.latencyMs, app.lastFrame);
+        showDomain(); // whether the frame on screen has VPLs to draw
+    }
 }
 
 function onDomain(msg) {
@@ -502,11 +526,16 @@ function onDomain(msg) {
 }
 
 // The domain drawing of the frame on screen, or one line on why there is none; and the VPLs on the
-// image, marked new only on the frame that inserted them (a refinement pass changes nothing).
+// image, marked new only on the frame that inserted them (a refinement pass changes nothing): none
+// when every light is off or the frame on screen has no VPLs (its stats say so; the last domain
+// message is an older frame's). The daemon leaves out the VPLs the camera does not see.
 function showDomain() {
     const d = app.lastDomain;
     const refined = !!(d && app.shown && app.shown.pass > 0 && app.shown.base === d.frame);
-    view.setVpls(d ? d.vpls || null : null, !refined);
+    const shownStats = app.shown ? app.stats.get(app.shown.frameId) : null;
+    const dark = !!(app.state && app.state.lights && app.state.lights.length && app.state.lights.every((L) => L.on === false));
+    const empty = dark || (shownStats && vplStep(shownStats).kind === 'none');
+    view.setVpls(d && !empty ? d.vpls || null : null, !refined);
     const s = app.state;
     const m = s ? s.params.method : '';
     const row = s && app.methods ? app.methods.find((x) => x.name === m) : null;
@@ -566,7 +595,11 @@ function onFrame(h, sentAt) {
     if (h.kind === P.KIND_SNAPSHOT) return onSnapshotFile(h);
     if (h.kind !== P.KIND_FRAME) return;
     app.framesReceived++;
-    if (h.seq !== P.NO_SEQ) for (const r of requests.answeredByFrame(h.seq)) errors.succeeded(r.kind, r.seq);
+    if (h.seq !== P.NO_SEQ) {
+        const done = requests.answeredByFrame(h.seq);
+        for (const r of done) errors.succeeded(r.kind, r.seq);
+        lightsAnswered(done);
+    }
     if (!h.pass) app.lastInteractiveId = h.frameId;
     h.base = h.pass ? app.lastInteractiveId : h.frameId;
     h.sentAt = sentAt;
@@ -585,7 +618,8 @@ view.onDrawn = (h) => {
     app.shown = { frameId: h.frameId, pass: h.pass, base: h.base };
     const pass = h.pass ? ` · pass ${h.pass}${h.converged ? ' converged' : ''}` : '';
     const lat = app.latencyMs !== null ? ` · ${app.latencyMs.toFixed(0)} ms` : '';
-    $('#hud-frame').textContent = `${h.width}×${h.height} · frame ${h.frameId}${pass} · ${h.renderMs.toFixed(1)} ms render${lat}`;
+    const render = h.reencoded ? 're-encoded, not rendered' : `${P.renderTime(h.renderMs)} render`;
+    $('#hud-frame').textContent = `${h.width}×${h.height} · frame ${h.frameId}${pass} · ${render}${lat}`;
     const st = app.stats.get(h.frameId);
     if (st) panel.setStats(st, app.latencyMs, app.lastFrame);
     switcher.drawn();

@@ -11,6 +11,7 @@
 import { fmt } from './vec.js';
 import { kindOf } from './gizmo.js';
 import { vplStep, describeStep } from './vplstats.js';
+import { renderTime } from './protocol.js';
 
 const $ = (sel, root = document) => root.querySelector(sel);
 const KIND_NAMES = { point: 'point', spot: 'spot', gltf_spot: 'glTF spot', sun: 'sun', area: 'area' };
@@ -28,12 +29,18 @@ function el(tag, attrs = {}, ...children) {
 }
 
 // The frame-time controller's state (stats.ctl, null when target_fps is 0): the rate it holds
-// against its target, and its choice.
+// against its target (a running mean of interactive frames only: none before the first drag),
+// why it misses it (busy: fewer VPLs bought no time; unreachable even at its floor), its choice
+// and its quality floor (ctl_vpls_min, ctl_sm_res_min), which it never goes below.
 function describeController(c) {
     if (!c) return 'off';
-    const held = c.mean_ms > 0 ? (1000 / c.mean_ms).toFixed(0) : '–';
-    const miss = c.reachable ? '' : ' (unreachable)';
-    return `${held}/${(1000 / c.target_ms).toFixed(0)} fps${miss} · N ${c.vpls} · n ${c.interleave} · ${c.sm_res}²`;
+    const held = c.frames > 0 && c.mean_ms > 0 ? (1000 / c.mean_ms).toFixed(0) : '–';
+    let why = '';
+    if (!c.frames) why = ' (no interactive frame yet)';
+    else if (c.busy) why = ' (busy: fewer VPLs bought no time)';
+    else if (!c.reachable) why = ' (unreachable at the floor)';
+    const floor = `floor N ${c.vpls_min} · ${c.sm_res_min}²`;
+    return `${held}/${(1000 / c.target_ms).toFixed(0)} fps${why} · N ${c.vpls} · n ${c.interleave} · ${c.sm_res}² · ${floor}`;
 }
 
 export class Panel {
@@ -394,7 +401,7 @@ export class Panel {
         set('st-fps', s.fps !== undefined ? s.fps.toFixed(1) : '–');
         set('st-latency', clientLatency !== null ? `${clientLatency.toFixed(0)} ms` : '–');
         set('st-server-latency', !s.pass && s.latency_ms !== undefined ? `${s.latency_ms.toFixed(1)} ms` : '–');
-        set('st-render', `${(s.total_ms || 0).toFixed(1)} ms`);
+        set('st-render', renderTime(s.total_ms || 0, s.reencoded));
         set('st-encode', `${(s.encode_ms || 0).toFixed(1)} ms`);
         set('st-bytes', `${((s.bytes || 0) / 1024).toFixed(1)} KiB`);
         const pass = s.pass ? `pass ${s.pass}${s.converged ? ' ✓' : ''}` : 'interactive';

@@ -102,6 +102,15 @@ export function parseFrame(buf) {
     };
 }
 
+// A frame's render time as the page shows it (the image's line, the stats panel): "re-encoded" for a
+// frame that was not rendered (only quality or exposure changed: the last image encoded again, its
+// time 0), else the milliseconds, with two decimals under one (a fast frame never reads "0.0 ms").
+export function renderTime(ms, reencoded) {
+    if (reencoded) return 're-encoded';
+    if (!(ms >= 0.005)) return '< 0.01 ms';
+    return `${ms.toFixed(ms < 1 ? 2 : 1)} ms`;
+}
+
 // One line for an error reply: "light.cone_angle must be in (0, 90] degrees, got 120 [out_of_range]"
 // (the field is named in front unless the server's message already names it).
 export function describeError(msg) {

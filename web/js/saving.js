@@ -1,11 +1,21 @@
 // saving.js -- the panel's "save the lights and camera as a scene" controls (docs/protocol.md `save`):
-// Download asks for the sidecar and downloads it (NAME.scene.json, to put in SCENES/NAME/ and render
-// with `iird render NAME`); Save on server asks the daemon to write it as a new scene NAME, which
+// Download asks for the sidecar and downloads it (NAME.scene.json, NAME the name typed made a scene
+// name by downloadName, to put in SCENES/NAME/ and render with `iird render NAME`; Enter does it
+// where the server does not write scenes); Save on server asks the daemon to write it as a new scene NAME, which
 // then appears in the scene picker. A daemon started without --allow-save refuses that: the button
 // is then disabled and says why (known from welcome.limits.allow_save when the daemon sends it, else
 // from its first refusal). Sending, downloading and the picker are the caller's (main.js).
 
 const NAME_RE = /^[A-Za-z0-9_.-]{1,100}$/;
+
+// The name typed as a file and scene name for Download: a trailing .scene.json (or .json) goes,
+// what a scene name cannot hold (spaces, /, ...) becomes _, leading dots and runs of dots go; ''
+// when nothing usable is left (or it is builtin, the built-in box's name).
+export function downloadName(typed) {
+    const n = typed.trim().replace(/(\.scene)?\.json$/i, '').replace(/[^A-Za-z0-9_.-]+/g, '_')
+        .replace(/\.{2,}/g, '.').replace(/^\.+/, '').slice(0, 100);
+    return NAME_RE.test(n) && n !== 'builtin' ? n : '';
+}
 const NO_SAVE = 'this server does not write scenes (it was started without --allow-save); Download gives the sidecar';
 
 export class SaveControls {
@@ -19,8 +29,9 @@ export class SaveControls {
         this.blocked = null; // {reason, scene}: why Save on server cannot work (scene null: any scene)
         root.querySelector('#save-download').addEventListener('click', () => this.ask(false));
         this.server.addEventListener('click', () => this.ask(true));
+        // Enter saves on the server, or downloads where the server does not write scenes
         this.name.addEventListener('keydown', (e) => {
-            if (e.key === 'Enter') this.ask(true);
+            if (e.key === 'Enter') this.ask(!this.blocked);
         });
     }
 
@@ -55,10 +66,13 @@ export class SaveControls {
         return null;
     }
 
+    // Download (onServer false) names the file after the name typed (downloadName), else
+    // SCENE_view; Save on server sends the name typed, checked.
     ask(onServer) {
         this.name.classList.remove('invalid');
         let msg = { type: 'save' };
-        let file = this.name.value.trim();
+        const typed = this.name.value.trim();
+        let file = downloadName(typed) || `${this.h.scene()}_view`;
         if (onServer) {
             if (this.blocked) return;
             const name = this.checkedName();
@@ -66,8 +80,7 @@ export class SaveControls {
             msg = { type: 'save', name };
             file = name;
         }
-        if (!NAME_RE.test(file) || file.startsWith('.')) file = `${this.h.scene()}_view`;
-        const seq = this.h.send(msg, { file, onServer });
+        const seq = this.h.send(msg, { file, typed, onServer });
         if (seq > 0) this.say(onServer ? `saving ${file} on the server…` : 'asking for the sidecar…');
     }
 
@@ -80,7 +93,9 @@ export class SaveControls {
             const file = (req && req.file) || `${this.h.scene()}_view`;
             const text = `${JSON.stringify(msg.sidecar, null, 2)}\n`;
             this.h.download(new Blob([text], { type: 'application/json' }), `${file}.scene.json`);
-            this.say(`downloaded ${file}.scene.json: put it in SCENES/${file}/ and run iird render ${file} --scenes SCENES`);
+            const typed = req && req.typed;
+            const as = typed && typed !== file ? ` ("${typed}" as a scene name: letters, digits, _ - .)` : '';
+            this.say(`downloaded ${file}.scene.json${as}: put it in SCENES/${file}/ and run iird render ${file} --scenes SCENES`);
         }
     }
 

@@ -178,6 +178,7 @@ export class View {
         const dpr = window.devicePixelRatio || 1;
         this.gizmoAt = { x: NaN, y: NaN, visible: false };
         this.gizmosAt = [];
+        this.vplsDrawn = 0;
         if (this.greyed) return; // nothing of the old state over a greyed image
         if (this.showVpls && this.vpls) this.drawVpls(o, sx, sy, dpr);
         if (this.gizmo && this.drawnId) this.drawGizmos(o, sx, sy, dpr);
@@ -220,6 +221,7 @@ export class View {
         o.lineWidth = dpr;
         for (const [x, y, f] of this.vpls) {
             if (x < 0 || y < 0) continue;
+            this.vplsDrawn++;
             const flags = this.vplsMarkNew ? f : f & ~1;
             const px = x * sx;
             const py = y * sy;

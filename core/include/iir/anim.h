@@ -46,6 +46,12 @@ double iir_anim_duration(const iir_anim *a);
 double iir_anim_fps(const iir_anim *a);
 /* The scene the script names ("scene": recordings name the scene they were made on), "" if none. */
 const char *iir_anim_scene(const iir_anim *a);
+/* The scenes folder the script names ("scenes": a recording's is the daemon's --scenes folder, an
+ * absolute path), "" if none. */
+const char *iir_anim_scenes_dir(const iir_anim *a);
+/* The frame size the script names ("size": a recording's is the session's frame size): true with
+ * *width and *height set, each in [1, 16384]; false, leaving them unchanged, when it names none. */
+bool iir_anim_size(const iir_anim *a, int *width, int *height);
 
 /* Number of frames: floor(duration * fps) + 1 (frame 0 is t = 0; the last frame is at or just
  * before t = duration). Always >= 1. */

@@ -148,6 +148,15 @@ uint32_t iir_method_dropped(const char *name, const struct iir_scene *scene,
                             const iir_light *lights, uint32_t num_lights, iir_dropped *out,
                             uint32_t max);
 
+/* What method `name` leaves out of the scene because of its parameters p (missing ones: their
+ * defaults), as warnings in the terms of iir_method_dropped: pt at too few `bounces` for a mirror
+ * or glass (a camera path spends one bounce on a mirror, two crossing glass, before it reaches a
+ * rough surface) renders it black, and the warning says the bounces that show it. Writes at most
+ * max entries into out (NULL when max is 0) and returns how many there are; 0 for an unknown name
+ * or parameters it refuses. */
+uint32_t iir_method_dropped_by_params(const char *name, const struct iir_scene *scene,
+                                      const iir_params *p, iir_dropped *out, uint32_t max);
+
 /* Creates method `name` over a scene and its ray tracer (both must outlive the method).
  * IIR_ERR_INVALID for an unknown name (the message lists the known ones) or bad parameters. */
 iir_status iir_method_create(const char *name, const struct iir_scene *scene, const iir_rt *rt,

@@ -43,6 +43,10 @@ typedef struct iir_material {
 /* "diffuse", "mirror" or "glass" (the sidecar's "kind"). */
 const char *iir_material_kind_name(iir_material_kind kind);
 
+/* The bounces a camera path spends on the material before it reaches a rough surface behind it: 0
+ * for a diffuse one, 1 for a mirror (off it), 2 for glass (in and out of a closed body). */
+int iir_material_specular_depth(const iir_material *m);
+
 /* Something of a scene that is not rendered, for warnings (the CLI prints them; the daemon can send
  * them), or a note on what was made of it (`note`): a light or material by its name in the scene
  * that no method renders (the loader's list, iir_scene.dropped, method "") or that one method

@@ -65,8 +65,10 @@ typedef struct iir_anim_track {
 } iir_anim_track;
 
 struct iir_anim {
-    char source[160]; /* the script's file or label, for messages */
-    char scene[129];  /* the scene the script was made for ("" when it names none) */
+    char source[160];  /* the script's file or label, for messages */
+    char scene[129];   /* the scene the script was made for ("" when it names none) */
+    char scenes[4096]; /* the scenes folder it was found in ("" when the script names none) */
+    int width, height; /* the frame size it was made at ("size"; 0 when it gives none) */
     double fps, duration;
     iir_anim_track light, camera, exposure; /* light.name: "" when it names none */
     int num_lights;                         /* "lights": named tracks, names distinct */

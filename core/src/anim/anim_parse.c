@@ -2,6 +2,7 @@
  * arithmetic; not evaluating tracks (anim_eval.c) or checking them against a scene's lights
  * (anim_check.c). The format is docs/animation-format.md. */
 #include "anim_internal.h"
+#include "iir/image.h" /* IIR_IMAGE_MAX_DIM: a "size" side */
 
 #include <cjson/cJSON.h>
 
@@ -516,8 +517,9 @@ static iir_status parse_track(iir_anim_ctx *c, const cJSON *obj, const char *nam
 
 /* ======================== the script ======================== */
 
-static const char *const TOP_FIELDS[] = {"fps",         "duration", "light",    "lights", "camera",
-                                         "description", "scene",    "exposure", NULL};
+static const char *const TOP_FIELDS[] = {"fps",    "duration",    "light", "lights",
+                                         "camera", "description", "scene", "scenes",
+                                         "size",   "exposure",    NULL};
 
 /* Track i of "lights" (at path): a light track with a name no other track of the script has. */
 static iir_status parse_named_track(iir_anim_ctx *c, const cJSON *obj, const char *path,
@@ -560,18 +562,55 @@ static iir_status parse_lights(iir_anim_ctx *c, const cJSON *arr, iir_anim *a)
     return st;
 }
 
+/* A string member of at most n - 1 bytes, copied into out (n bytes); what: its meaning, for the
+ * message. */
+static iir_status get_string(const iir_anim_ctx *c, const cJSON *obj, const char *name, char *out,
+                             size_t n, const char *what)
+{
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
+    if (!m) return IIR_OK;
+    if (!cJSON_IsString(m) || strlen(m->valuestring) >= n)
+        return anim_fail(c, IIR_ERR_FORMAT, name, "must be %s of at most %zu bytes", what, n - 1);
+    snprintf(out, n, "%s", m->valuestring);
+    return IIR_OK;
+}
+
+/* "size": [width, height], whole numbers of pixels in [1, IIR_IMAGE_MAX_DIM]. */
+static iir_status get_frame_size(const iir_anim_ctx *c, const cJSON *root, iir_anim *a)
+{
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(root, "size");
+    if (!m) return IIR_OK;
+    const cJSON *w = cJSON_GetArrayItem(m, 0), *h = cJSON_GetArrayItem(m, 1);
+    if (!cJSON_IsArray(m) || cJSON_GetArraySize(m) != 2 || !cJSON_IsNumber(w) || !cJSON_IsNumber(h))
+        return anim_fail(c, IIR_ERR_FORMAT, "size", "must be [width, height] in pixels");
+    for (const cJSON *d = w; d; d = d->next)
+        if (!(d->valuedouble >= 1.0 && d->valuedouble <= IIR_IMAGE_MAX_DIM) ||
+            d->valuedouble != floor(d->valuedouble))
+            return anim_fail(c, IIR_ERR_INVALID, d == w ? "size[0]" : "size[1]",
+                             "%g is not a whole number of pixels in [1, %d]", d->valuedouble,
+                             IIR_IMAGE_MAX_DIM);
+    a->width = (int)w->valuedouble;
+    a->height = (int)h->valuedouble;
+    return IIR_OK;
+}
+
+/* What the script says of where it was made: "description", "scene", "scenes", "size". */
+static iir_status parse_origin(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
+{
+    const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
+    if (desc && !cJSON_IsString(desc))
+        return anim_fail(c, IIR_ERR_FORMAT, "description", "must be a string");
+    iir_status st = get_string(c, root, "scene", a->scene, sizeof a->scene, "a scene name");
+    if (st == IIR_OK)
+        st = get_string(c, root, "scenes", a->scenes, sizeof a->scenes, "a folder's path");
+    return st == IIR_OK ? get_frame_size(c, root, a) : st;
+}
+
 static iir_status parse_root(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
 {
     bool has;
     iir_status st = check_fields(c, root, "", TOP_FIELDS);
-    const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
-    if (st == IIR_OK && desc && !cJSON_IsString(desc))
-        return anim_fail(c, IIR_ERR_FORMAT, "description", "must be a string");
-    const cJSON *scene = cJSON_GetObjectItemCaseSensitive(root, "scene");
-    if (st == IIR_OK && scene &&
-        (!cJSON_IsString(scene) || strlen(scene->valuestring) >= sizeof a->scene))
-        return anim_fail(c, IIR_ERR_FORMAT, "scene", "must be a scene name of at most 128 bytes");
-    if (scene) snprintf(a->scene, sizeof a->scene, "%s", scene->valuestring);
+    if (st == IIR_OK) st = parse_origin(c, root, a);
     a->fps = 30.0;
     if (st == IIR_OK) st = get_ranged(c, root, "", "fps", 1.0, false, 1000.0, &a->fps, &has);
     if (st == IIR_OK)
@@ -661,6 +700,19 @@ double iir_anim_fps(const iir_anim *a)
 const char *iir_anim_scene(const iir_anim *a)
 {
     return a->scene;
+}
+
+const char *iir_anim_scenes_dir(const iir_anim *a)
+{
+    return a->scenes;
+}
+
+bool iir_anim_size(const iir_anim *a, int *width, int *height)
+{
+    if (!a->width) return false;
+    *width = a->width;
+    *height = a->height;
+    return true;
 }
 
 int iir_anim_frame_count(const iir_anim *a)

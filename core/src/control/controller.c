@@ -1,5 +1,6 @@
-/* controller.c -- the frame-time controller (controller.h): the ladder, the cost model and the
- * move rule. Not how a method applies a setting (iir.c). */
+/* controller.c -- the frame-time controller (controller.h): the ladder, the cost model, the move
+ * rule and the evidence that a cut bought time. Not how a method applies a setting, nor which of
+ * its frames are interactive (iir.c). */
 #include <math.h>
 #include <stdlib.h>
 
@@ -14,7 +15,14 @@ enum {
     UNDO_WINDOW = 30,   /* a move undoing the last one within this many frames doubles patience */
     QUIET_FRAMES = 100, /* frames without an undo that halve patience again */
     MAX_CLIMB = STEPS_PER_OCTAVE,
-    SM_COARSEST = 2 /* maps down to a quarter of the configured resolution */
+    SM_COARSEST = 2,     /* maps down to a quarter of the configured resolution (and the floor) */
+    EVIDENCE_FRAMES = 6, /* frames at a setting under check before it is judged */
+    SETTLE_MAX = 8,      /* frames after a move a growing set's frames are left out, at most */
+    BEFORE_MIN = 3,      /* frames at the current setting before a cut, the last ones (which
+                            wanted it: the conditions it answers) to judge it by */
+    AT_MAX = 16,         /* frame times kept of the current setting */
+    BUSY_MIN = 60,       /* frames without cuts after one bought no time, doubling ... */
+    BUSY_MAX = 480       /* ... up to this */
 };
 
 static const double ALPHA = 0.2;      /* the model's running means */
@@ -23,6 +31,9 @@ static const double OVER = 1.08;      /* the current rung is too dear above 108%
 static const double MAPS_HIGH = 0.30; /* maps coarser when they would take more of the target */
 static const double MAPS_LOW = 0.15;  /* and finer again when the finer ones would take less */
 static const double GROWN = 0.9;      /* no climbing while the set holds less of its N */
+static const double CHECKED = 0.15; /* cuts promising at least this share of a frame are checked */
+static const double BOUGHT = 0.4;   /* and kept when they saved this share of their promise */
+static const double NEAR = 0.05;    /* unreachable: the best rung this near the cheapest */
 
 /* The model's units (controller.h), each a running mean; `have_*` says it was measured. */
 typedef struct cost_model {
@@ -35,6 +46,20 @@ typedef struct rung {
     int vpls, interleave;
 } rung;
 
+/* A cut being checked against the clock (controller.h, "The evidence"): first its own frames
+ * against the ones that wanted it; when those say it bought nothing, the old setting's frames
+ * again, right after (the same conditions), against the cut's. */
+typedef enum check_phase { CHECK_NONE, CHECK_CUT, CHECK_BACK } check_phase;
+
+typedef struct cut_check {
+    check_phase phase;
+    int rung, shift;         /* the setting before the cut */
+    int cut_rung, cut_shift; /* the cut's */
+    double before_ms;        /* the median frame before the cut */
+    double cut_ms;           /* the median frame of the cut */
+    double promised;         /* the share of a frame the model said the cut saves */
+} cut_check;
+
 struct iir_ctl {
     iir_ctl_config cfg;
     rung rung[IIR_CTL_MAX_RUNGS];
@@ -43,12 +68,19 @@ struct iir_ctl {
     cost_model m;
     double mean_ms;
     bool have_mean;
-    double prev_vpls; /* the last sample's set size: growth is not a rate of maps */
-    int want_streak;  /* consecutive frames wanting a dearer (+) or cheaper (-) setting */
-    int held;         /* frames left holding the current setting */
-    int patience;     /* frames wanting a dearer setting before taking it */
-    int last_dir;     /* direction of the last move (+1 dearer, -1 cheaper, 0 none) */
-    uint64_t frame;   /* measured frames */
+    double prev_vpls;     /* the last sample's set size: growth is not a rate of maps */
+    double at_ms[AT_MAX]; /* the latest frame times at the current setting (ring) ... */
+    int at_n;             /* ... how many since the last move (its first frame left out) */
+    int since_move;       /* samples since the last move */
+    cut_check check;      /* the last cut, while it is judged */
+    uint64_t busy_until;  /* no cuts before this frame: the last one bought no time */
+    int busy_hold;        /* the next such hold, in frames */
+    uint32_t undone;      /* cuts undone */
+    int want_streak;      /* consecutive frames wanting a dearer (+) or cheaper (-) setting */
+    int held;             /* frames left holding the current setting */
+    int patience;         /* frames wanting a dearer setting before taking it */
+    int last_dir;         /* direction of the last move (+1 dearer, -1 cheaper, 0 none) */
+    uint64_t frame;       /* measured frames */
     uint64_t last_move, last_undo;
     uint32_t moves;
 };
@@ -68,12 +100,13 @@ static void add_rung(iir_ctl *c, int vpls, int n)
     c->rung[c->rungs++] = (rung){vpls, n};
 }
 
+/* The main rungs from the floor N_min up to N_max, then N_max with narrower interleaves; none
+ * below the floor, so none with a wider interleave (controller.h). */
 static void build_ladder(iir_ctl *c)
 {
     const iir_ctl_config *g = &c->cfg;
-    int n_min = g->vpls_max < IIR_CTL_MIN_VPLS ? g->vpls_max : IIR_CTL_MIN_VPLS;
+    int n_min = g->vpls_max < g->vpls_min ? g->vpls_max : g->vpls_min;
     c->rungs = 0;
-    for (int n = clampi(g->interleave + 2, 1, 8); n > g->interleave; n--) add_rung(c, n_min, n);
     for (int k = 0;; k++) {
         int vpls = (int)lround(n_min * exp2((double)k / STEPS_PER_OCTAVE));
         if (vpls >= g->vpls_max) break;
@@ -97,11 +130,25 @@ static int nearest_rung(const iir_ctl *c, int vpls)
     return best;
 }
 
-/* The maps' resolution at shift k: the configured one halved k times, not below 8. */
+/* The maps' floor: sm_res_min, or the configured resolution when that is coarser. */
+static int sm_floor(const iir_ctl *c)
+{
+    return c->cfg.sm_res < c->cfg.sm_res_min ? c->cfg.sm_res : c->cfg.sm_res_min;
+}
+
+/* The maps' resolution at shift k: the configured one halved k times, not below the floor. */
 static int sm_res_at(const iir_ctl *c, int k)
 {
     int r = c->cfg.sm_res >> k;
-    return r < 8 ? 8 : r;
+    return r < sm_floor(c) ? sm_floor(c) : r;
+}
+
+/* The coarsest shift that still coarsens the maps (at most SM_COARSEST). */
+static int coarsest_shift(const iir_ctl *c)
+{
+    int k = 0;
+    while (k < SM_COARSEST && sm_res_at(c, k + 1) < sm_res_at(c, k)) k++;
+    return k;
 }
 
 static iir_ctl_setting setting_of(const iir_ctl *c, int rung, int shift)
@@ -118,12 +165,18 @@ static iir_status check_config(const iir_ctl_config *g, iir_error *err)
     if (g->vpls_max < 1 || g->vpls_max > 16384)
         return iir_fail(err, IIR_ERR_INVALID, "controller: vpls_max %d is outside [1, 16384]",
                         g->vpls_max);
+    if (g->vpls_min < 1 || g->vpls_min > 16384)
+        return iir_fail(err, IIR_ERR_INVALID, "controller: vpls_min %d is outside [1, 16384]",
+                        g->vpls_min);
     if (g->interleave < 1 || g->interleave > 8)
         return iir_fail(err, IIR_ERR_INVALID, "controller: interleave %d is outside [1, 8]",
                         g->interleave);
     if (g->sm_res < 8 || g->sm_res > 2048)
         return iir_fail(err, IIR_ERR_INVALID, "controller: sm_res %d is outside [8, 2048]",
                         g->sm_res);
+    if (g->sm_res_min < 8 || g->sm_res_min > 2048)
+        return iir_fail(err, IIR_ERR_INVALID, "controller: sm_res_min %d is outside [8, 2048]",
+                        g->sm_res_min);
     return IIR_OK;
 }
 
@@ -138,6 +191,7 @@ iir_status iir_ctl_create(const iir_ctl_config *cfg, int start_vpls, iir_ctl **o
     build_ladder(c);
     c->cur = nearest_rung(c, start_vpls > 0 ? start_vpls : 1);
     c->patience = PATIENCE_MIN;
+    c->busy_hold = BUSY_MIN;
     *out = c;
     return IIR_OK;
 }
@@ -147,15 +201,27 @@ void iir_ctl_destroy(iir_ctl *c)
     free(c);
 }
 
+static bool same_config(const iir_ctl_config *a, const iir_ctl_config *b)
+{
+    return a->target_ms == b->target_ms && a->vpls_max == b->vpls_max &&
+           a->vpls_min == b->vpls_min && a->interleave == b->interleave && a->sm_res == b->sm_res &&
+           a->sm_res_min == b->sm_res_min;
+}
+
 iir_status iir_ctl_configure(iir_ctl *c, const iir_ctl_config *cfg, iir_error *err)
 {
     iir_status st = check_config(cfg, err);
     if (st != IIR_OK) return st;
+    if (same_config(&c->cfg, cfg)) return IIR_OK; /* another parameter changed: nothing here */
     int vpls = c->rung[c->cur].vpls;
     c->cfg = *cfg;
     build_ladder(c);
     c->cur = nearest_rung(c, vpls);
+    c->sm_shift = c->sm_shift < coarsest_shift(c) ? c->sm_shift : coarsest_shift(c);
     c->want_streak = 0;
+    c->check.phase = CHECK_NONE; /* a new ladder: the frames before are no evidence */
+    c->at_n = 0;
+    c->busy_until = 0;
     return IIR_OK;
 }
 
@@ -228,17 +294,16 @@ static int wanted_shift(const iir_ctl *c)
 {
     double T = c->cfg.target_ms;
     int k = c->sm_shift;
-    if (k < SM_COARSEST && sm_res_at(c, k + 1) < sm_res_at(c, k) &&
-        maps_ms(&c->m, sm_res_at(c, k)) > MAPS_HIGH * T)
-        return k + 1;
+    if (k < coarsest_shift(c) && maps_ms(&c->m, sm_res_at(c, k)) > MAPS_HIGH * T) return k + 1;
     if (k > 0 && maps_ms(&c->m, sm_res_at(c, k - 1)) < MAPS_LOW * T) return k - 1;
     return k;
 }
 
 /* The rung wanted with maps at shift k: the current one while its prediction is within OVER of
  * the target and the next is not within FIT (or the set is still growing to its N); else the
- * highest within FIT, at most MAX_CLIMB above the current; when none is, the cheapest (a wider
- * interleave costs the filter more: where the filter dominates, the bottom rungs are dearer). */
+ * highest within FIT, at most MAX_CLIMB above the current; when none is (the target is out of
+ * reach), the highest predicted within NEAR of the cheapest: no quality is given for a few per
+ * cent of a frame that still misses the target. */
 static int wanted_rung(const iir_ctl *c, int k, bool growing)
 {
     double T = c->cfg.target_ms;
@@ -246,14 +311,17 @@ static int wanted_rung(const iir_ctl *c, int k, bool growing)
     bool room = !growing && c->cur + 1 < c->rungs && predict_at(c, c->cur + 1, k) <= FIT * T;
     if (!over && !room) return c->cur;
     int top = over ? c->cur : clampi(c->cur + MAX_CLIMB, 0, c->rungs - 1);
-    int cheapest = 0;
+    double cheapest = INFINITY;
     for (int i = top; i >= 0; i--) {
         double t = predict_at(c, i, k);
         if (t <= FIT * T) return i;
-        if (t < predict_at(c, cheapest, k)) cheapest = i;
+        if (t < cheapest) cheapest = t;
     }
-    return cheapest;
+    for (int i = top; i > 0; i--)
+        if (predict_at(c, i, k) <= (1.0 + NEAR) * cheapest) return i;
+    return 0;
 }
+
 static void move_to(iir_ctl *c, int rung, int shift, int dir)
 {
     if (c->last_dir && dir != c->last_dir && c->frame - c->last_move <= UNDO_WINDOW) {
@@ -267,28 +335,120 @@ static void move_to(iir_ctl *c, int rung, int shift, int dir)
     c->held = HOLD_FRAMES;
     c->want_streak = 0;
     c->moves++;
+    c->at_n = 0;
+    c->since_move = 0;
+}
+
+/* ---- the evidence ---- */
+
+/* The median of the last k frame times kept at the current setting (fewer when fewer are kept; 0
+ * when none). */
+static double at_median(const iir_ctl *c, int k)
+{
+    int n = c->at_n < AT_MAX ? c->at_n : AT_MAX;
+    n = n < k ? n : k;
+    double v[AT_MAX] = {0};
+    for (int i = 0; i < n; i++) {
+        double x = c->at_ms[(c->at_n - 1 - i) % AT_MAX];
+        int j = i;
+        for (; j > 0 && v[j - 1] > x; j--) v[j] = v[j - 1];
+        v[j] = x;
+    }
+    if (n == 0) return 0.0;
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* A frame's time at the current setting, kept unless it is the first after a move (the set still
+ * shrinks to its N, the maps change) or its set is still growing to its N, up to SETTLE_MAX frames
+ * after the move (a set that grows no further is as grown as it gets). */
+static void note_time(iir_ctl *c, const iir_ctl_sample *s)
+{
+    bool growing = s->vpls < GROWN * s->setting.vpls && c->since_move < SETTLE_MAX;
+    if (c->since_move++ > 0 && !growing) c->at_ms[c->at_n++ % AT_MAX] = s->total_ms;
+}
+
+/* Before a cut from the current setting to (rung, shift) (taken only with BEFORE_MIN frames at
+ * the current setting to compare with): checked when it promises CHECKED of a frame or more. */
+static void start_check(iir_ctl *c, int rung, int shift)
+{
+    double was = predict_at(c, c->cur, c->sm_shift), will = predict_at(c, rung, shift);
+    double promised = was > 0.0 ? 1.0 - will / was : 0.0;
+    c->check = (cut_check){.phase = promised >= CHECKED ? CHECK_CUT : CHECK_NONE,
+                           .rung = c->cur,
+                           .shift = c->sm_shift,
+                           .cut_rung = rung,
+                           .cut_shift = shift,
+                           .before_ms = at_median(c, BEFORE_MIN),
+                           .promised = promised};
+}
+
+/* Whether frames at `slow_ms` against frames at `fast_ms` show the saving the cut promised. */
+static bool bought(const iir_ctl *c, double fast_ms, double slow_ms)
+{
+    return slow_ms > 0.0 && 1.0 - fast_ms / slow_ms >= BOUGHT * c->check.promised;
+}
+
+/* The cut under check, once the setting in force has EVIDENCE_FRAMES frames. The cut's frames
+ * against the ones before it: kept when they show BOUGHT of its promise; else the old setting
+ * again. Its frames against the cut's: the cut again when they show it (the conditions had
+ * changed), else the machine is busy -- the old setting stays and no cut is taken for busy_hold
+ * frames (which doubles; a cut that bought its time sets it back to BUSY_MIN). Returns true when
+ * the setting changed. */
+static bool judge_cut(iir_ctl *c)
+{
+    cut_check *k = &c->check;
+    if (k->phase == CHECK_NONE || c->at_n < EVIDENCE_FRAMES) return false;
+    double now = at_median(c, EVIDENCE_FRAMES);
+    if (k->phase == CHECK_CUT && !bought(c, now, k->before_ms)) {
+        k->phase = CHECK_BACK;
+        k->cut_ms = now;
+        move_to(c, k->rung, k->shift, +1);
+        c->last_dir = 0; /* not the model's undo: patience stays */
+        return true;
+    }
+    bool back = k->phase == CHECK_BACK;
+    k->phase = CHECK_NONE;
+    if (!back) {
+        c->busy_hold = BUSY_MIN;
+        return false;
+    }
+    if (bought(c, k->cut_ms, now)) {
+        move_to(c, k->cut_rung, k->cut_shift, -1);
+        c->busy_hold = BUSY_MIN;
+        return true;
+    }
+    c->busy_until = c->frame + (uint64_t)c->busy_hold;
+    c->busy_hold = c->busy_hold * 2 > BUSY_MAX ? BUSY_MAX : c->busy_hold * 2;
+    c->undone++;
+    return false;
 }
 
 bool iir_ctl_update(iir_ctl *c, const iir_ctl_sample *s)
 {
     if (!(s->total_ms > 0.0) || !isfinite(s->total_ms)) return false;
-    if (c->frame++ > 0) measure(&c->m, s, c->prev_vpls); /* the first: a whole set, G-buffer */
+    c->frame++;
+    measure(&c->m, s, c->prev_vpls);
     c->prev_vpls = s->vpls;
     mean_in(&c->mean_ms, &c->have_mean, s->total_ms);
-    if (!c->m.have_rest) return false;
+    note_time(c, s);
     if (c->frame - c->last_undo > QUIET_FRAMES && c->patience > PATIENCE_MIN) {
         c->patience /= 2;
         c->last_undo = c->frame;
     }
+    if (judge_cut(c)) return true;
     if (c->held > 0) return c->held--, false;
+    if (c->check.phase != CHECK_NONE) return false; /* one cut judged at a time */
     bool growing = s->vpls < GROWN * s->setting.vpls;
     int k = wanted_shift(c), want = wanted_rung(c, k, growing);
     int dir = 0;
     if (want != c->cur || k != c->sm_shift)
         dir = predict_at(c, want, k) > predict_at(c, c->cur, c->sm_shift) ? 1 : -1;
+    if (dir < 0 && (c->frame < c->busy_until || c->at_n < BEFORE_MIN))
+        dir = 0; /* the last cut bought nothing, or this one could not be judged: hold */
     if (dir == 0 || (c->want_streak != 0 && (dir > 0) != (c->want_streak > 0))) c->want_streak = 0;
     c->want_streak += dir;
     if ((dir < 0 && -c->want_streak >= DOWN_FRAMES) || (dir > 0 && c->want_streak >= c->patience)) {
+        if (dir < 0) start_check(c, want, k);
         move_to(c, want, k, dir);
         return true;
     }
@@ -315,8 +475,12 @@ void iir_ctl_get_report(const iir_ctl *c, iir_ctl_report *out)
     out->target_ms = c->cfg.target_ms;
     out->predicted_ms = iir_ctl_predict(c, &out->setting);
     out->mean_ms = c->have_mean ? c->mean_ms : 0.0;
+    out->frames = c->frame;
     out->reachable = !c->m.have_rest;
     for (int i = 0; i < c->rungs && !out->reachable; i++)
-        out->reachable = predict_at(c, i, SM_COARSEST) <= c->cfg.target_ms;
+        out->reachable = predict_at(c, i, coarsest_shift(c)) <= c->cfg.target_ms;
+    out->busy = c->frame < c->busy_until && c->mean_ms > OVER * c->cfg.target_ms;
+    out->floor = setting_of(c, 0, coarsest_shift(c));
     out->moves = c->moves;
+    out->undone = c->undone;
 }

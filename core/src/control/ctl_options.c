@@ -1,6 +1,7 @@
-/* ctl_options.c -- the frame-time controller's parameters (target_fps, ctl_vpls_max) as the VPL
- * methods list them, and the glue between a method's frames and the controller (controller.h);
- * not the controller itself. */
+/* ctl_options.c -- the frame-time controller's parameters (target_fps, its ceiling ctl_vpls_max
+ * and its quality floor ctl_vpls_min, ctl_sm_res_min) as the VPL methods list them, and the glue
+ * between a method's frames and the controller (controller.h); not the controller itself, nor
+ * which frames it is given (iir.c). */
 #include <stddef.h>
 
 #include "method_internal.h"
@@ -15,6 +16,19 @@ static const iir_param CTL_ROWS[] = {
      "VPLs",
      "the most VPLs the controller uses: where the scene's error stops falling (iird bench "
      "--sweep vpls)",
+     IIR_PARAM_LIVE},
+    /* the Cornell orbit at 256x192, interactive frames, relMSE against pt: 0.0100 at 16 VPLs
+       (blotchy while dragging), 0.0029 at 32, 0.0028 at 64, 0.0013 at 128, 0.0010 at 256; flicker
+       0.0056, 0.0028, 0.0028, 0.0006, 0.0003 (docs/experiments.md) */
+    {"ctl_vpls_min", IIR_PARAM_INT, offsetof(iir_ctl_options, vpls_min), 64, 1, 16384, 4096, NULL,
+     "VPLs",
+     "the fewest VPLs the controller uses, its quality floor (at most ctl_vpls_max): below it a "
+     "frame is blotchy, whatever the rate",
+     IIR_PARAM_LIVE},
+    {"ctl_sm_res_min", IIR_PARAM_INT, offsetof(iir_ctl_options, sm_res_min), 64, 8, 2048, 0, NULL,
+     "pixels",
+     "the coarsest shadow maps the controller builds (at most sm_res): its floor for the maps "
+     "of a fast light's new VPLs",
      IIR_PARAM_LIVE},
 };
 
@@ -31,8 +45,10 @@ iir_status iir_ctl_follow(iir_ctl **ctl, const iir_ctl_options *o, const iir_vpl
     }
     iir_ctl_config cfg = {.target_ms = 1000.0 / o->target_fps,
                           .vpls_max = o->vpls_max,
+                          .vpls_min = o->vpls_min,
                           .interleave = v->interleave,
-                          .sm_res = v->sm_res};
+                          .sm_res = v->sm_res,
+                          .sm_res_min = o->sm_res_min};
     if (*ctl) return iir_ctl_configure(*ctl, &cfg, err);
     return iir_ctl_create(&cfg, start_vpls, ctl, err);
 }

@@ -1,10 +1,12 @@
 /* dropped.c -- what the methods leave out of a scene, as the named entries of iir_method_dropped
  * (method.h): the scene's own notes (lights and materials nothing renders) and each method's (ir:
  * the indirect light of emissive materials, and mirrors and glass, which it renders black; iir:
- * those too, and every light's but the first spot's).
- * Not the loader's notes (scene_assimp.c makes them). */
+ * those too, and every light's but the first spot's), and what a method leaves out at its
+ * parameters (pt: mirrors and glass at too few bounces). Not the loader's notes (scene_assimp.c
+ * makes them). */
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "iir/scene.h"
@@ -45,6 +47,17 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
                         "punctual lights only (its direct light is rendered)",
                         method);
     }
+    return n;
+}
+
+uint32_t iir_method_dropped_by_params(const char *name, const iir_scene *scene, const iir_params *p,
+                                      iir_dropped *out, uint32_t max)
+{
+    const iir_method_ops *ops = iir_method_ops_of(name);
+    if (!ops || !ops->dropped_by_params) return 0;
+    void *opts = iir_method_bind_opts(ops, p);
+    uint32_t n = opts ? ops->dropped_by_params(scene, opts, out, max) : 0;
+    free(opts);
     return n;
 }
 

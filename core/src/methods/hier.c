@@ -1,24 +1,29 @@
 /* hier.c -- hierarchical image-space shading (Nichols, Shopf & Wyman 2009, with Nichols & Wyman's
- * multiresolution splatting), method "hier": all light is shaded in image space on the G-buffer's
- * multiresolution hierarchy (multires.h: coarse where the surface is smooth, per pixel at depth
- * and normal discontinuities), with cheap visibility:
+ * multiresolution splatting), method "hier": all light is shaded in image space on hierarchies of
+ * the G-buffer, coarse where it is smooth, with cheap visibility:
  *  - direct light from every light of the view, an area light as K point samples, shadowed by a
- *    coarse voxel grid of the scene (3DDA, or a few probes along the ray) -- hier_light.h;
+ *    coarse voxel grid of the scene (3DDA, or a few probes along the ray) -- hier_light.h -- on a
+ *    quadtree refined at depth and normal discontinuities and where the light at neighbouring
+ *    corners differs (light_split), so cone edges, shadow edges and the spot's pool end at pixel
+ *    resolution -- hier_tree.h;
  *  - one-bounce indirect light gathered from the lights' reflective shadow maps without
- *    visibility, as rsm does (rsm_map.h).
+ *    visibility, as rsm does (rsm_map.h), on the multiresolution hierarchy (multires.h: coarse
+ *    where the surface is smooth, per pixel at discontinuities).
  * Its failures are the chart's: shadows that stop at voxel resolution (light leaks through thin
- * walls and under contacts, blurred and blocky penumbrae), shadow edges blurred by the coarse
- * levels (the hierarchy follows geometry, not light), and RSM's leaks in the bounced light.
+ * walls and under contacts, stair-stepped penumbrae a cell wide), RSM's leaks in the bounced light
+ * and its gather pattern's streaks, which the coarse texels turn into blotches.
  *
- * The voxel grid is built once, when the method is created (the scene is static); the maps every
- * frame; the hierarchy when the G-buffer changes. The renderer (render.h) gives the G-buffer and
- * the light of emissive triangles (with its exact shadow rays); an area light seen by the camera
- * is added here. No refinement: a frame is what the method gives. */
+ * The voxel grid is built once, when the method is created (the scene is static); the maps and the
+ * direct light's tree every frame; the bounce hierarchy when the G-buffer changes. The renderer
+ * (render.h) gives the G-buffer and the light of emissive triangles (with its exact shadow rays);
+ * an area light seen by the camera is added here. No refinement: a frame is what the method
+ * gives. */
 #include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
 
 #include "hier_light.h"
+#include "hier_tree.h"
 #include "iir/method.h"
 #include "iir/multires.h"
 #include "iir/timer.h"
@@ -37,6 +42,7 @@ typedef struct hier_options {
     int voxel_res; /* cells along the scene's longest side */
     hier_visibility vis;
     int vis_points;
+    float light_split; /* the direct light's tree: hier_tree.h's threshold t */
 } hier_options;
 
 static const char *const VIS_CHOICES[] = {"voxels", "points", "none", NULL};
@@ -54,6 +60,12 @@ static const iir_param HIER_ROWS[] = {
      IIR_PARAM_LIVE},
     {"vis_points", IIR_PARAM_INT, offsetof(hier_options, vis_points), 4, 1, 64, 0, NULL, "points",
      "hier_visibility points: probes per shadow ray", IIR_PARAM_LIVE},
+    {"light_split", IIR_PARAM_FLOAT, offsetof(hier_options, light_split), 0.02, 0, 1, 0, NULL, "",
+     "direct light: split a texel where its light changes -- its centre off its corners' "
+     "interpolation by more than this fraction of the brightest, or a corner under (1 - this) / 4 "
+     "of the brightest (0: wherever the light is not linear; 1: only at depth and normal "
+     "discontinuities)",
+     IIR_PARAM_LIVE},
 };
 static const iir_param_table HIER_TABLE = {"hier: direct light and voxel visibility", HIER_ROWS,
                                            sizeof HIER_ROWS / sizeof HIER_ROWS[0], NULL};
@@ -69,10 +81,11 @@ typedef struct hier_state {
     iir_multires *mr;
     uint64_t gb_serial; /* G-buffers rendered: the hierarchy's key */
     hier_lights lights;
+    hier_tree tree; /* the direct light */
     rsm_map maps[IIR_VPLSETS_MAX_LIGHTS];
     uint32_t num_maps;
     rsm_pattern pattern;
-    iir_vec3 *E; /* per pixel: the demodulated light */
+    iir_vec3 *E; /* per pixel: the demodulated bounce light (the direct light: tree.D) */
     size_t E_cap;
     iir_stop_fn stop;
     void *stop_ctx;
@@ -80,10 +93,10 @@ typedef struct hier_state {
 
 /* ---- shading ---- */
 
-/* Direct plus indirect irradiance at (x, n); the evaluations (light points and gather samples). */
-static iir_vec3 shade_point(const hier_state *s, iir_vec3 x, iir_vec3 n, uint64_t *evals)
+/* Bounce irradiance at (x, n) from the lights' maps; adds the gather samples to *evals. */
+static iir_vec3 bounce_point(const hier_state *s, iir_vec3 x, iir_vec3 n, uint64_t *evals)
 {
-    iir_vec3 E = hier_direct(&s->lights, x, n, evals);
+    iir_vec3 E = iir_v3s(0.f);
     for (uint32_t l = 0; l < s->num_maps; l++)
         E = iir_add(E, rsm_gather_map(&s->pattern, &s->maps[l], x, n));
     *evals += (uint64_t)s->num_maps * (uint64_t)s->pattern.m;
@@ -97,7 +110,7 @@ static uint64_t shade_samples(void *ctx, int m, uint32_t cls, const iir_mr_sampl
     (void)m, (void)cls, (void)st;
     const hier_state *s = ctx;
     uint64_t evals = 0;
-    for (int i = 0; i < count; i++) E[i] = shade_point(s, smp[i].position, smp[i].normal, &evals);
+    for (int i = 0; i < count; i++) E[i] = bounce_point(s, smp[i].position, smp[i].normal, &evals);
     return evals;
 }
 
@@ -109,7 +122,7 @@ static uint64_t shade_pixels(hier_state *s, const iir_gbuffer *gb, const uint8_t
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : evals)
     for (int p = 0; p < n; p++) {
         if (levels[p] != 0) continue;
-        s->E[p] = isfinite(gb->depth[p]) ? shade_point(s, gb->position[p], gb->normal[p], &evals)
+        s->E[p] = isfinite(gb->depth[p]) ? bounce_point(s, gb->position[p], gb->normal[p], &evals)
                                          : iir_v3s(0.f);
     }
     return evals;
@@ -127,7 +140,8 @@ static iir_mr_params mr_params(const hier_options *o)
                            .filter_depth = f.filter_depth};
 }
 
-/* Fills s->E for every pixel: the hierarchy's levels, then the level-0 pixels. */
+/* Fills s->E (bounce light) for every pixel -- the hierarchy's levels, then the level-0 pixels --
+ * and s->tree.D (direct light) on the tree refined from that hierarchy where the light changes. */
 static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *stats,
                         iir_error *err)
 {
@@ -144,8 +158,12 @@ static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *s
     if (iir_multires_shade(s->mr, shade_samples, s, 1u, s->E, s->stop, s->stop_ctx, &stats->rays,
                            &evals))
         return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
-    stats->vpl_evals = evals + shade_pixels(s, gb, iir_multires_levels(s->mr));
-    return IIR_OK;
+    evals += shade_pixels(s, gb, iir_multires_levels(s->mr));
+    const iir_stop stop = {s->stop, s->stop_ctx};
+    hier_tree_input in = {gb, s->mr, &s->lights, s->o.mr.mr_levels, s->o.light_split};
+    st = hier_tree_shade(&s->tree, &in, &stop, &evals, err);
+    stats->vpl_evals = evals;
+    return st;
 }
 
 /* ---- the frame ---- */
@@ -209,7 +227,8 @@ static iir_status hier_render(void *state, const iir_view *view, iir_image *out,
     if (st != IIR_OK) return st;
     for (size_t p = 0; p < (size_t)gb->width * gb->height; p++)
         out->pixels[p] =
-            iir_madd(out->pixels[p], iir_mul(gb->albedo[p], s->E[p]), 1.f / (float)M_PI);
+            iir_madd(out->pixels[p], iir_mul(gb->albedo[p], iir_add(s->tree.D[p], s->E[p])),
+                     1.f / (float)M_PI);
     add_seen_area_lights(view, gb, out);
     uint64_t evals = stats->vpl_evals;
     iir_render_timing_to_stats(&rt, stats);
@@ -229,6 +248,7 @@ static void hier_destroy(void *state)
     for (uint32_t l = 0; l < IIR_VPLSETS_MAX_LIGHTS; l++) rsm_map_free(&s->maps[l]);
     rsm_pattern_free(&s->pattern);
     hier_lights_free(&s->lights);
+    hier_tree_free(&s->tree);
     iir_multires_destroy(s->mr);
     iir_voxels_destroy(s->grid);
     iir_renderer_destroy(s->renderer);
@@ -288,15 +308,16 @@ static void hier_set_stop(void *state, iir_stop_fn fn, void *ctx)
     iir_renderer_set_stop(s->renderer, fn, ctx);
 }
 
-/* The renderer's G-buffer and scratch, the hierarchy (about a third of a level-0 copy), E, one
- * light's map, the voxel grid (for a cube: the worst case). */
+/* The renderer's G-buffer and scratch, the hierarchy (about a third of a level-0 copy), E, the
+ * direct light's tree, one light's map, the voxel grid (for a cube: the worst case). */
 static uint64_t hier_memory(const void *opts, int width, int height)
 {
     const hier_options *o = opts;
     uint64_t px = (uint64_t)width * (uint64_t)height;
     uint64_t texels = (uint64_t)o->rsm.res * (uint64_t)o->rsm.res;
-    return px * (56 + 12 + 16) + px * (48 + 12) + texels * sizeof(iir_vpl) +
-           iir_voxels_memory(iir_v3s(1.f), o->voxel_res) + (uint64_t)o->rsm.samples * 12;
+    return px * (56 + 12 + 16) + px * (48 + 12) + hier_tree_memory(width, height) +
+           texels * sizeof(iir_vpl) + iir_voxels_memory(iir_v3s(1.f), o->voxel_res) +
+           (uint64_t)o->rsm.samples * 12;
 }
 
 /* The maps come from the lights only: emitters' indirect light is left out. */

@@ -5,8 +5,6 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "iir/rng.h"
-
 static bool grow_points(hier_lights *hl, uint32_t need)
 {
     if (need <= hl->cap) return true;
@@ -17,22 +15,38 @@ static bool grow_points(hier_lights *hl, uint32_t need)
     return true;
 }
 
-/* K points of area light l: stratified over its emitter, each dA = A / K of it. */
+/* The grid of nx x ny cells an area light's K points sit at the centres of: as near square cells
+ * on its rectangle as nx ny <= K allows. */
+static void area_grid(const iir_light *l, int samples, int *nx, int *ny)
+{
+    float aspect = l->size.x / l->size.y;
+    int x = (int)lroundf(sqrtf((float)samples * aspect));
+    x = x < 1 ? 1 : x > samples ? samples : x;
+    *nx = x;
+    *ny = samples / x;
+}
+
+/* At most K points of area light l: the centres of a grid of cells over u in [0, 1)^2, mapped onto
+ * its emitter (iir_area_light_sample_q: the rectangle's cells, or strata of its shape), each
+ * dA = A / (nx ny) of it. Cell centres rather than a low-discrepancy set: the points are as
+ * symmetric as the emitter, so a symmetric emitter lights a symmetric receiver symmetrically. */
 static void area_points(hier_lights *hl, const iir_light *l, uint32_t li, int samples)
 {
     iir_frame fr = iir_spot_frame(l);
-    float dA = iir_area_light_area(l) / (float)samples;
-    for (int k = 0; k < samples; k++) {
-        iir_vec2 u =
-            iir_v2(iir_radical_inverse(2, (uint32_t)k), iir_radical_inverse(3, (uint32_t)k));
-        hier_point *p = &hl->pts[hl->num_pts++];
-        iir_vec2 q = iir_area_light_sample_q(l, u);
-        p->p = iir_area_light_point(l, &fr, q);
-        p->f = fr.f;
-        p->L_dA = iir_scale(iir_area_light_radiance(l, q), dA);
-        p->dA_over_pi = dA / (float)M_PI;
-        p->light = li;
-    }
+    int nx, ny;
+    area_grid(l, samples, &nx, &ny);
+    float dA = iir_area_light_area(l) / (float)(nx * ny);
+    for (int j = 0; j < ny; j++)
+        for (int i = 0; i < nx; i++) {
+            iir_vec2 u = iir_v2(((float)i + 0.5f) / (float)nx, ((float)j + 0.5f) / (float)ny);
+            hier_point *p = &hl->pts[hl->num_pts++];
+            iir_vec2 q = iir_area_light_sample_q(l, u);
+            p->p = iir_area_light_point(l, &fr, q);
+            p->f = fr.f;
+            p->L_dA = iir_scale(iir_area_light_radiance(l, q), dA);
+            p->dA_over_pi = dA / (float)M_PI;
+            p->light = li;
+        }
 }
 
 bool hier_lights_prepare(hier_lights *hl, const iir_light *lights, uint32_t num_lights, int samples)

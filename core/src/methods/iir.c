@@ -108,6 +108,7 @@ typedef struct iir_state {
     iir_options asked;  /* the parameters given */
     iir_options params; /* the ones in use: asked, with the controller's setting when it is on */
     iir_ctl *ctl;       /* target_fps > 0: the frame-time controller; else NULL */
+    bool restore;       /* target_fps just went to 0: the next frame brings back the asked set */
     iir_renderer *renderer;
     iir_vplsets *sets;
     iir_ism_points *ism; /* visibility=ism: the scene's point set, made on first use */
@@ -115,6 +116,8 @@ typedef struct iir_state {
     iir_refine *refine;
     iir_light lights[IIR_VPLSETS_MAX_LIGHTS]; /* the lights of the frame being refined */
     uint32_t num_lights, drawn;               /* their number; the light whose domain is drawn */
+    iir_camera camera;                        /* that frame's camera ... */
+    bool have_view;                           /* ... once a frame was rendered */
     iir_vpl *fresh;                           /* [fresh_cap]: refinement's fresh sets */
     uint32_t fresh_n, fresh_cap;
     uint32_t refine_frame; /* the frame being refined: the fresh sets' stream */
@@ -205,18 +208,24 @@ enum { GROW_FRAMES = 4 }; /* the controller's new N: reached in about this many 
  * the budget buys, k_min kmin while the set is full and 0 while it is short of N (the budget goes
  * to refilling it, not to churn; the churn resumes once it is full). With the frame-time controller
  * and a set short of its N: kmax plus a quarter of the shortfall, so that a raised N is reached in
- * GROW_FRAMES frames (the controller does not climb further meanwhile). */
+ * GROW_FRAMES frames (the controller does not climb further meanwhile). Right after the controller
+ * was turned off (restore): the whole shortfall, so the user's N is back in this frame. */
 static void apply_insert_limit(iir_state *s)
 {
-    if (s->params.insert_ms <= 0.f && !s->ctl) return;
+    bool restore = s->restore;
+    s->restore = false;
+    if (s->params.insert_ms <= 0.f && !s->ctl && !restore) return;
     uint32_t count = set_count(s), N = (uint32_t)s->params.vpls;
     bool short_of_n = count < N;
     uint32_t k_max = insert_limit(s), k_min = (uint32_t)s->params.kmin;
     if (s->params.insert_ms > 0.f && short_of_n) k_min = 0;
-    if (s->params.insert_ms <= 0.f && short_of_n) {
+    if (restore && short_of_n) {
+        k_max += N - count;
+        k_min = 0;
+    } else if (s->params.insert_ms <= 0.f && short_of_n) {
         k_max += (N - count + GROW_FRAMES - 1) / GROW_FRAMES;
-        if (k_max > N) k_max = N;
     }
+    if (k_max > N) k_max = N;
     iir_incr_params ip = incr_params(&s->params, k_max, k_min);
     iir_error err;
     iir_vplsets_set_params(s->sets, &ip, &err); /* valid by construction */
@@ -239,14 +248,25 @@ static iir_options controlled(const iir_state *s)
     return o;
 }
 
-/* After a finished frame: its measurement to the controller, and the next setting in use. The sets
- * keep their VPLs under a new N (they grow by insertions, shrink by deletions of the crowded ones);
- * maps of a new resolution are for new VPLs only (maps_of). */
-static void control(iir_state *s, iir_frame_stats *stats)
+/* Whether the view differs from the last rendered frame's: a light (of the first
+ * IIR_VPLSETS_MAX_LIGHTS) or the camera moved. Only such frames are interactive ones, the
+ * controller's samples; a method's first frame (a whole set, the G-buffer) and a re-render of the
+ * same view (a parameter change, a new image size) are not. */
+static bool view_moved(const iir_state *s, const iir_view *view, uint32_t nl)
+{
+    return s->have_view &&
+           (s->num_lights != nl || memcmp(s->lights, view->lights, nl * sizeof *s->lights) ||
+            memcmp(&s->camera, &view->camera, sizeof s->camera));
+}
+
+/* After a finished frame: its measurement to the controller when it is interactive, and the next
+ * setting in use. The sets keep their VPLs under a new N (they grow by insertions, shrink by
+ * deletions of the crowded ones); maps of a new resolution are for new VPLs only (maps_of). */
+static void control(iir_state *s, bool interactive, iir_frame_stats *stats)
 {
     if (!s->ctl) return;
     iir_ctl_sample m = iir_ctl_sample_of(stats, iir_ctl_current(s->ctl));
-    if (iir_ctl_update(s->ctl, &m)) {
+    if (interactive && iir_ctl_update(s->ctl, &m)) {
         s->params = controlled(s);
         iir_incr_params ip = incr_params(&s->params, insert_limit(s), (uint32_t)s->params.kmin);
         iir_error err;
@@ -378,6 +398,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     iir_incr_stats is;
     uint32_t nl =
         view->num_lights < IIR_VPLSETS_MAX_LIGHTS ? view->num_lights : IIR_VPLSETS_MAX_LIGHTS;
+    bool interactive = view_moved(s, view, nl);
     apply_insert_limit(s);
     st = iir_vplsets_update(s->sets, view->lights, nl, &is, err);
     if (st != IIR_OK) return st;
@@ -408,6 +429,8 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
                               out->height, &rp, err);
     memcpy(s->lights, view->lights, nl * sizeof *s->lights);
     s->num_lights = nl;
+    s->camera = view->camera;
+    s->have_view = true;
     s->drawn = drawn_light(view->lights, nl);
     s->refine_frame = s->frame;
     stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
@@ -415,7 +438,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     iir_render_timing_to_stats(&rt, stats);
     stats->total_ms = iir_now_ms() - t0;
     fill_counts(&is, maps, &stats->vpl);
-    if (st == IIR_OK) control(s, stats);
+    if (st == IIR_OK) control(s, interactive, stats);
     s->frame++;
     return st;
 }
@@ -520,25 +543,31 @@ static void iir_m_set_stop(void *state, iir_stop_fn fn, void *ctx)
     iir_renderer_set_stop(s->renderer, fn, ctx);
 }
 
-/* Drops every map, so the next frame builds them anew (exact maps and ISMs may share a res). */
-static void release_maps(iir_state *s)
+/* Drops every map but those of resolution keep (0: every one), so the next frame builds them anew
+ * (exact maps and ISMs may share a res). */
+static void release_maps(iir_state *s, int keep)
 {
     for (uint32_t k = 0; k < iir_vplsets_lights(s->sets); k++) {
         iir_incr *set = iir_vplsets_set(s->sets, k);
         uint32_t n = 0;
         iir_vpl *v = set ? iir_incr_vpls(set, &n) : NULL;
-        for (uint32_t i = 0; i < n; i++) iir_smap_release(&v[i].smap);
+        for (uint32_t i = 0; i < n; i++)
+            if (v[i].smap.res != keep) iir_smap_release(&v[i].smap);
         v = iir_vplsets_descendants(s->sets, k, &n);
-        for (uint32_t i = 0; i < n; i++) iir_smap_release(&v[i].smap);
+        for (uint32_t i = 0; i < n; i++)
+            if (v[i].smap.res != keep) iir_smap_release(&v[i].smap);
     }
 }
 
 /* Only IIR_PARAM_LIVE rows changed: the step's budgets, weights and threshold go to the step; a
- * change of visibility to or from ism drops the maps of the other kind. */
+ * change of visibility to or from ism drops the maps of the other kind. target_fps going to 0
+ * brings the asked settings back at once: the next frame fills the set to vpls (restore) and
+ * rebuilds the maps the controller made coarser. */
 static void iir_m_update(void *state, const void *opts)
 {
     iir_state *s = state;
     iir_visibility was = s->params.vpl.visibility;
+    bool controlled_before = s->ctl != NULL;
     s->asked = *(const iir_options *)opts;
     iir_error err;
     if (iir_ctl_follow(&s->ctl, &s->asked.ctl, &s->asked.vpl, s->params.vpls, &err) != IIR_OK) {
@@ -546,9 +575,13 @@ static void iir_m_update(void *state, const void *opts)
         s->ctl = NULL;
     }
     s->params = controlled(s);
+    if (controlled_before && !s->ctl) {
+        s->restore = true;
+        if (s->params.vpl.visibility == IIR_VIS_SHADOWMAP) release_maps(s, s->params.vpl.sm_res);
+    }
     if (was != s->params.vpl.visibility &&
         (was == IIR_VIS_ISM || s->params.vpl.visibility == IIR_VIS_ISM))
-        release_maps(s);
+        release_maps(s, 0);
     iir_incr_params ip = incr_params(&s->params, insert_limit(s), (uint32_t)s->params.kmin);
     iir_vplsets_set_params(s->sets, &ip, &err); /* valid once bound (N: the sets follow it) */
     iir_vplsets_set_bounces(s->sets, s->params.bounces); /* new: descendants traced anew */

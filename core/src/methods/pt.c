@@ -19,6 +19,7 @@
  * shadow). */
 #include <omp.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -362,6 +363,33 @@ static uint64_t pt_memory(const void *opts, int width, int height)
     return (uint64_t)width * (uint64_t)height * sizeof(iir_vec3); /* the sum image */
 }
 
+/* Mirrors and glass at too few bounces: a camera path spends iir_material_specular_depth bounces
+ * on one before it reaches a rough surface, which then shows only the bounces left (Li ends the
+ * path after `bounces` of them); with none left the material is black. One warning for each such
+ * material, with the bounces that show the direct light through it and the image's own diffuse
+ * bounces there. */
+static uint32_t pt_dropped_by_params(const iir_scene *scene, const void *opts, iir_dropped *out,
+                                     uint32_t max)
+{
+    const pt_options *o = opts;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < scene->num_materials; i++) {
+        const iir_material *m = &scene->material_list[i];
+        int depth = iir_material_specular_depth(m);
+        if (!depth || o->bounces > depth) continue;
+        bool glass = depth > 1;
+        char more[64] = ""; /* the image's own diffuse bounces there, when it has any */
+        if (o->bounces > 1)
+            snprintf(more, sizeof more, ", %d as the rest of the image", depth + o->bounces);
+        iir_dropped_add(out, max, &n, "pt", "material", m->name,
+                        "is %s: at bounces %d pt's paths end %s it, so it shows black; bounces %d "
+                        "shows the direct light %s it%s",
+                        glass ? "glass" : "a mirror", o->bounces, glass ? "inside" : "on",
+                        depth + 1, glass ? "through" : "in", more);
+    }
+    return n;
+}
+
 const iir_method_ops iir_method_pt = {
     .name = "pt",
     .summary = "path tracer: the reference (next-event estimation, Russian roulette)",
@@ -378,4 +406,5 @@ const iir_method_ops iir_method_pt = {
     .update = pt_update,
     .memory = pt_memory,
     .converged_at = pt_converged_at,
+    .dropped_by_params = pt_dropped_by_params,
 };

@@ -19,6 +19,11 @@ const char *iir_material_kind_name(iir_material_kind kind)
     return "unknown";
 }
 
+int iir_material_specular_depth(const iir_material *m)
+{
+    return m->kind == IIR_MATERIAL_GLASS ? 2 : m->kind == IIR_MATERIAL_MIRROR ? 1 : 0;
+}
+
 static bool unit_range(iir_vec3 c)
 {
     return c.x >= 0.f && c.x <= 1.f && c.y >= 0.f && c.y <= 1.f && c.z >= 0.f && c.z <= 1.f;
