@@ -9,74 +9,42 @@
 
 #include "bench.h"
 #include "cli.h"
+#include "iir/hash.h"
 #include "iir/timer.h"
 
 /* Bump when pt or the reference settings change what a cached file would hold. */
-static const char CACHE_TAG[] = "iir-bench-ref-v2";
+static const char CACHE_TAG[] = "iir-bench-ref-v3";
 
 /* ---- hashing ---- */
 
-static uint64_t fnv1a(uint64_t h, const void *data, size_t n)
-{
-    const unsigned char *p = data;
-    for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 0x100000001b3ull;
-    return h;
-}
-
-#define HASH(h, x) fnv1a((h), &(x), sizeof(x))
-
 uint64_t iird_bench_scene_hash(const iir_scene *s)
 {
-    uint64_t h = 0xcbf29ce484222325ull;
-    h = HASH(h, s->num_triangles);
+    uint64_t h = IIR_HASH_BASIS;
+    h = IIR_HASH(h, s->num_triangles);
     for (uint32_t t = 0; t < s->num_triangles; t++) {
-        for (int k = 0; k < 3; k++) h = HASH(h, s->positions[s->indices[3 * t + k]]);
-        const iir_material *m = &s->material_list[s->materials[t]];
-        h = HASH(h, m->albedo);
-        h = HASH(h, m->emission);
-        if (m->kind == IIR_MATERIAL_DIFFUSE) continue; /* diffuse scenes keep their keys */
-        int32_t kind = (int32_t)m->kind;
-        h = HASH(h, kind);
-        h = HASH(h, m->specular);
-        h = HASH(h, m->ior);
+        for (int k = 0; k < 3; k++) h = IIR_HASH(h, s->positions[s->indices[3 * t + k]]);
+        h = iir_material_hash(h, &s->material_list[s->materials[t]]);
     }
     return h;
 }
 
-/* Field by field, so padding and the name's unused bytes never enter the key. */
-static uint64_t hash_light(uint64_t h, const iir_light *l)
-{
-    int32_t type = (int32_t)l->type;
-    h = HASH(h, type);
-    h = HASH(h, l->position);
-    h = HASH(h, l->direction);
-    h = HASH(h, l->up);
-    h = HASH(h, l->cone_angle);
-    h = HASH(h, l->smooth);
-    int32_t profile = (int32_t)l->profile;
-    h = HASH(h, profile);
-    h = HASH(h, l->inner_angle);
-    h = HASH(h, l->radius);
-    return HASH(h, l->intensity);
-}
-
 static uint64_t ref_key(const iird_bench *b, const iir_view *v, const iir_params *p)
 {
-    uint64_t h = fnv1a(0xcbf29ce484222325ull, CACHE_TAG, sizeof CACHE_TAG);
-    h = HASH(h, b->scene_hash);
-    h = HASH(h, v->num_lights);
-    for (uint32_t i = 0; i < v->num_lights; i++) h = hash_light(h, &v->lights[i]);
-    h = HASH(h, v->camera.position);
-    h = HASH(h, v->camera.target);
-    h = HASH(h, v->camera.up);
-    h = HASH(h, v->camera.fov_y);
+    uint64_t h = iir_hash_bytes(IIR_HASH_BASIS, CACHE_TAG, sizeof CACHE_TAG);
+    h = IIR_HASH(h, b->scene_hash);
+    h = IIR_HASH(h, v->num_lights);
+    for (uint32_t i = 0; i < v->num_lights; i++) h = iir_light_hash(h, &v->lights[i]);
+    h = IIR_HASH(h, v->camera.position);
+    h = IIR_HASH(h, v->camera.target);
+    h = IIR_HASH(h, v->camera.up);
+    h = IIR_HASH(h, v->camera.fov_y);
     int32_t size[2] = {b->o->width, b->o->height};
-    h = HASH(h, size);
+    h = IIR_HASH(h, size);
     const iir_param_table *const *t = iir_method_tables("pt"); /* every value pt renders with */
     for (int k = 0; t[k]; k++)
         for (int i = 0; i < t[k]->count; i++) {
             double v = iir_method_param_value(&t[k]->rows[i], p);
-            h = HASH(h, v);
+            h = IIR_HASH(h, v);
         }
     return h;
 }

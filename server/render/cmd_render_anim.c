@@ -26,6 +26,7 @@
 
 #include "animview.h"
 #include "cli.h"
+#include "iir/hash.h"
 #include "iir/timer.h"
 #include "iir/anim.h"
 #include "iir/image.h"
@@ -127,18 +128,11 @@ static iir_view frame_view(const anim_job *j, int f)
     return iird_anim_view(j->anim, j->scene, j->spot, j->lights, f);
 }
 
-/* FNV-1a 64 over bytes. */
-static uint64_t fnv(uint64_t h, const void *data, size_t n)
-{
-    const unsigned char *p = data;
-    for (size_t i = 0; i < n; i++) h = (h ^ p[i]) * 0x100000001b3ull;
-    return h;
-}
-
-static uint64_t fnv_vec(uint64_t h, iir_vec3 v)
+/* h extended by v's three floats. */
+static uint64_t hash_vec(uint64_t h, iir_vec3 v)
 {
     float f[3] = {v.x, v.y, v.z};
-    return fnv(h, f, sizeof f);
+    return iir_hash_bytes(h, f, sizeof f);
 }
 
 /* The exposure of frame f: --exposure when given, else the script's (--exposure's default, 0,
@@ -149,30 +143,22 @@ static float frame_exposure(const anim_job *j, int f)
     return iir_anim_exposure(j->anim, j->o->exposure, iir_anim_frame_time(j->anim, f));
 }
 
-static uint64_t hash_light(uint64_t h, const iir_light *l)
-{
-    h = fnv_vec(fnv_vec(fnv_vec(h, l->position), l->direction), l->intensity);
-    h = fnv(fnv(fnv_vec(h, l->up), &l->cone_angle, sizeof l->cone_angle), &l->smooth,
-            sizeof l->smooth);
-    return fnv(fnv(h, &l->inner_angle, sizeof l->inner_angle), &l->size, sizeof l->size);
-}
-
 /* A hash of what the script does at every frame (the lights, the camera and, when it sets the
  * frames' exposure, the exposure), so a resume with an edited script is refused while the same
  * script by another path is not. */
 static uint64_t script_hash(anim_job *j)
 {
-    uint64_t h = fnv(0xcbf29ce484222325ull, &j->count, sizeof j->count);
+    uint64_t h = iir_hash_bytes(IIR_HASH_BASIS, &j->count, sizeof j->count);
     double fps = iir_anim_fps(j->anim);
-    h = fnv(h, &fps, sizeof fps);
+    h = iir_hash_bytes(h, &fps, sizeof fps);
     for (int f = 0; f < j->count; f++) {
         iir_view v = frame_view(j, f);
-        h = fnv_vec(fnv_vec(h, v.camera.position), v.camera.target);
-        h = fnv(fnv_vec(h, v.camera.up), &v.camera.fov_y, sizeof v.camera.fov_y);
+        h = hash_vec(hash_vec(h, v.camera.position), v.camera.target);
+        h = iir_hash_bytes(hash_vec(h, v.camera.up), &v.camera.fov_y, sizeof v.camera.fov_y);
         float exposure = frame_exposure(j, f);
         if (!j->o->exposure_given && iir_anim_has_exposure(j->anim))
-            h = fnv(h, &exposure, sizeof exposure);
-        for (uint32_t i = 0; i < v.num_lights; i++) h = hash_light(h, &v.lights[i]);
+            h = iir_hash_bytes(h, &exposure, sizeof exposure);
+        for (uint32_t i = 0; i < v.num_lights; i++) h = iir_light_hash(h, &v.lights[i]);
     }
     return h;
 }

@@ -118,6 +118,11 @@ typedef struct iir_light {
  * without a size (a side not finite and > 0) or with a bad shape (iir_area_shape_check). */
 iir_status iir_light_validate(const iir_light *light, iir_error *err);
 
+/* h extended by every field of the light that changes an image: its kind, placement, cone, disk,
+ * size, shape, radiance image (size and texels) and intensity; not its name. Two lights with
+ * the same hash light a scene the same (iird bench's reference cache keys on it). */
+uint64_t iir_light_hash(uint64_t h, const iir_light *light);
+
 /* The light a user moves in scene (the daemon's session light, an animation script's light track):
  * the first spot, else the first light; for a scene without lights a white spot made up just under
  * the middle of the scene's top, aimed down (60 degree half-angle, intensity the bounds' diagonal

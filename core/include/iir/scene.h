@@ -47,6 +47,9 @@ const char *iir_material_kind_name(iir_material_kind kind);
  * for a diffuse one, 1 for a mirror (off it), 2 for glass (in and out of a closed body). */
 int iir_material_specular_depth(const iir_material *m);
 
+/* h extended by every field of the material that changes an image (not its name). */
+uint64_t iir_material_hash(uint64_t h, const iir_material *m);
+
 /* Something of a scene that is not rendered, for warnings (the CLI prints them; the daemon can send
  * them), or a note on what was made of it (`note`): a light or material by its name in the scene
  * that no method renders (the loader's list, iir_scene.dropped, method "") or that one method

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "iir/hash.h"
 #include "iir/rng.h"
 #include "iir/scene.h"
 
@@ -311,4 +312,36 @@ uint32_t iir_scene_moved_light(const iir_scene *scene, iir_light *out)
                        .intensity = iir_scale(iir_v3(1, 1, 1), diag * diag)};
     snprintf(out->name, sizeof out->name, "spot");
     return scene->num_lights;
+}
+
+/* ---- the light's content key ---- */
+
+static uint64_t hash_map(uint64_t h, const iir_emission_map *m)
+{
+    uint8_t has = m != NULL;
+    h = IIR_HASH(h, has);
+    if (!m) return h;
+    h = IIR_HASH(h, m->width);
+    h = IIR_HASH(h, m->height);
+    return iir_hash_bytes(h, m->texels, (size_t)m->width * (size_t)m->height * sizeof *m->texels);
+}
+
+uint64_t iir_light_hash(uint64_t h, const iir_light *l)
+{
+    int32_t type = (int32_t)l->type, profile = (int32_t)l->profile;
+    h = IIR_HASH(h, type);
+    h = IIR_HASH(h, l->position);
+    h = IIR_HASH(h, l->direction);
+    h = IIR_HASH(h, l->up);
+    h = IIR_HASH(h, l->cone_angle);
+    h = IIR_HASH(h, l->smooth);
+    h = IIR_HASH(h, profile);
+    h = IIR_HASH(h, l->inner_angle);
+    h = IIR_HASH(h, l->radius);
+    h = IIR_HASH(h, l->size);
+    h = IIR_HASH(h, l->shape.num_triangles);
+    for (uint32_t t = 0; t < l->shape.num_triangles && t < IIR_AREA_MAX_TRIANGLES; t++)
+        h = IIR_HASH(h, l->shape.tri[t]);
+    h = hash_map(h, l->map);
+    return IIR_HASH(h, l->intensity);
 }

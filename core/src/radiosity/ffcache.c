@@ -16,6 +16,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "iir/hash.h"
 #include "iir/ffcache.h"
 #include "radiosity.h"
 
@@ -31,31 +32,23 @@ typedef struct ff_header {
 
 /* ---- hashing ---- */
 
-static uint64_t fnv(uint64_t h, const void *data, size_t len)
-{
-    const unsigned char *p = data;
-    for (size_t i = 0; i < len; i++) h = (h ^ p[i]) * 1099511628211ull;
-    return h;
-}
-static const uint64_t FNV_BASIS = 14695981039346656037ull;
-
 uint64_t rad_ff_key(const iir_scene *s, float target_area, int res)
 {
-    uint64_t h = FNV_BASIS, version = FF_VERSION;
-    h = fnv(h, &version, sizeof version);
-    h = fnv(h, &target_area, sizeof target_area);
-    h = fnv(h, &res, sizeof res);
-    h = fnv(h, &s->num_triangles, sizeof s->num_triangles);
+    uint64_t h = IIR_HASH_BASIS, version = FF_VERSION;
+    h = iir_hash_bytes(h, &version, sizeof version);
+    h = iir_hash_bytes(h, &target_area, sizeof target_area);
+    h = iir_hash_bytes(h, &res, sizeof res);
+    h = iir_hash_bytes(h, &s->num_triangles, sizeof s->num_triangles);
     for (uint32_t k = 0; k < 3 * s->num_triangles; k++)
-        h = fnv(h, &s->positions[s->indices[k]], sizeof(iir_vec3));
+        h = iir_hash_bytes(h, &s->positions[s->indices[k]], sizeof(iir_vec3));
     return h;
 }
 
 static uint64_t payload_checksum(const rad_ff *ff)
 {
-    uint64_t h = fnv(FNV_BASIS, ff->row, ((size_t)ff->n + 1) * sizeof *ff->row);
-    h = fnv(h, ff->col, ff->nnz * sizeof *ff->col);
-    return fnv(h, ff->val, ff->nnz * sizeof *ff->val);
+    uint64_t h = iir_hash_bytes(IIR_HASH_BASIS, ff->row, ((size_t)ff->n + 1) * sizeof *ff->row);
+    h = iir_hash_bytes(h, ff->col, ff->nnz * sizeof *ff->col);
+    return iir_hash_bytes(h, ff->val, ff->nnz * sizeof *ff->val);
 }
 
 /* ---- the configuration ---- */

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdio.h>
 
+#include "iir/hash.h"
 #include "scene_build.h"
 
 const char *iir_material_kind_name(iir_material_kind kind)
@@ -22,6 +23,16 @@ const char *iir_material_kind_name(iir_material_kind kind)
 int iir_material_specular_depth(const iir_material *m)
 {
     return m->kind == IIR_MATERIAL_GLASS ? 2 : m->kind == IIR_MATERIAL_MIRROR ? 1 : 0;
+}
+
+uint64_t iir_material_hash(uint64_t h, const iir_material *m)
+{
+    int32_t kind = (int32_t)m->kind;
+    h = IIR_HASH(h, kind);
+    h = IIR_HASH(h, m->albedo);
+    h = IIR_HASH(h, m->emission);
+    h = IIR_HASH(h, m->specular);
+    return IIR_HASH(h, m->ior);
 }
 
 static bool unit_range(iir_vec3 c)
