@@ -154,6 +154,11 @@ typedef struct iir_renderer iir_renderer;
 iir_renderer *iir_renderer_create(const struct iir_scene *scene, const iir_rt *rt);
 void iir_renderer_destroy(iir_renderer *r);
 
+/* Bytes a renderer holds for frames of width x height: its G-buffer and its per-pixel scratch (the
+ * raw indirect light, the filter's rows, the tiles' flags). The methods' memory estimates start
+ * from it. */
+uint64_t iir_renderer_memory(int width, int height);
+
 /* The G-buffer of the last frame (width 0 before the first). Valid until the next frame or
  * destroy; owned by the renderer. */
 const iir_gbuffer *iir_renderer_gbuffer(const iir_renderer *r);

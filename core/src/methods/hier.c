@@ -315,7 +315,7 @@ static uint64_t hier_memory(const void *opts, int width, int height)
     const hier_options *o = opts;
     uint64_t px = (uint64_t)width * (uint64_t)height;
     uint64_t texels = (uint64_t)o->rsm.res * (uint64_t)o->rsm.res;
-    return px * (56 + 12 + 16) + px * (48 + 12) + hier_tree_memory(width, height) +
+    return iir_renderer_memory(width, height) + px * (48 + 12) + hier_tree_memory(width, height) +
            texels * sizeof(iir_vpl) + iir_voxels_memory(iir_v3s(1.f), o->voxel_res) +
            (uint64_t)o->rsm.samples * 12;
 }

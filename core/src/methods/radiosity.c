@@ -263,7 +263,7 @@ static void rad_set_stop(void *state, iir_stop_fn fn, void *ctx)
 /* The frame's part of rad_memory: G-buffer and scratch as the VPL renderer's, the direct copy. */
 static uint64_t frame_bytes(int width, int height)
 {
-    return (uint64_t)width * (uint64_t)height * (56 + 12 + 16 + 12);
+    return iir_renderer_memory(width, height) + (uint64_t)width * (uint64_t)height * 12;
 }
 
 /* The solution, and the frame: G-buffer and scratch as the VPL renderer's, plus the direct-light

@@ -403,7 +403,7 @@ static uint64_t rsm_memory(const void *opts, int width, int height)
     const rsm_options *o = opts;
     uint64_t px = (uint64_t)width * (uint64_t)height;
     uint64_t texels = (uint64_t)o->map.res * (uint64_t)o->map.res;
-    return px * (56 + 12 + 16) + px / ((uint64_t)o->lowres * o->lowres) * 12 +
+    return iir_renderer_memory(width, height) + px / ((uint64_t)o->lowres * o->lowres) * 12 +
            2 * texels * sizeof(iir_vpl) + (uint64_t)o->map.samples * 12;
 }
 

@@ -138,7 +138,7 @@ iir_indirect_params iir_vpl_indirect(const iir_vpl_options *o, int bounces)
 uint64_t iir_vpl_memory(const iir_vpl_options *o, uint32_t n, int width, int height)
 {
     uint64_t px = (uint64_t)width * (uint64_t)height;
-    uint64_t bytes = px * (56 + 12 + 16); /* G-buffer, raw indirect, filter rows */
+    uint64_t bytes = iir_renderer_memory(width, height);
     /* multires.c: per pixel a level, a flag, an order and a class entry; per texel of the coarser
        levels (a third of the pixels) a flag, a sample, a depth, E, F and an order entry */
     if (o->shading == IIR_SHADING_MULTIRES) bytes += px * (1 + 1 + 4 + 4) + px / 3 * 69;

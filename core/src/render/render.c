@@ -158,6 +158,15 @@ static iir_status check_inputs(const iir_camera *cam, const iir_light *lights, u
     return s == IIR_OK ? iir_indirect_params_validate(p, err) : s;
 }
 
+uint64_t iir_renderer_memory(int width, int height)
+{
+    const iir_gbuffer *g = NULL;
+    uint64_t gbuffer = 4 * sizeof *g->position + sizeof *g->depth + sizeof *g->prim;
+    uint64_t scratch = sizeof(iir_vec3) + sizeof(iir_filter_row);
+    uint64_t px = (uint64_t)width * (uint64_t)height;
+    return px * (gbuffer + scratch) + (uint64_t)iir_tile_count(width, height, IIR_RENDER_TILE);
+}
+
 /* Sizes the G-buffer and the per-pixel scratch for a w x h frame (only when the size changed). On
  * failure everything is freed (width 0), so the next frame tries again. */
 static iir_status resize(iir_renderer *r, int w, int h, iir_error *err)
