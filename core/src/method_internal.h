@@ -29,7 +29,7 @@ typedef struct iir_multires_options {
 } iir_multires_options;
 extern const iir_param_table iir_multires_table;
 
-/* ---- the VPL shading of ir and iir (table iir_vpl_table, render.c) ---- */
+/* ---- the VPL shading of ir, iir and ism (tables iir_vpl_table etc., vpl_options.c) ---- */
 typedef struct iir_vpl_options {
     iir_visibility visibility;
     int sm_res; /* shadow-map resolution */
@@ -41,7 +41,7 @@ typedef struct iir_vpl_options {
     iir_multires_options mr;   /* table iir_multires_table */
     int area_samples;          /* direct light: stratified samples per pixel per area light */
 } iir_vpl_options;
-extern const iir_param_table iir_vpl_table; /* sm_bias, interleave */
+extern const iir_param_table iir_vpl_table; /* sm_bias, interleave, area_samples */
 /* visibility and sm_res, of the same struct (ism always uses ISMs: it does not list them) */
 extern const iir_param_table iir_vis_table;
 /* `shading` (full or multires), one iir_shading, wherever a method keeps it (vpl.shading for ir,

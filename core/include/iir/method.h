@@ -140,8 +140,9 @@ iir_status iir_method_supports(const char *name, const iir_light *lights, uint32
 
 /* What method `name` does not render of the scene and these lights: first the scene's own notes
  * (lights and materials of the file that no method renders: iir_scene.dropped, method ""), then
- * the method's (method `name`; ir: the indirect light of emissive materials; iir: that too, and
- * the indirect light of every light but the first spot). For warnings: the CLI prints them, the
+ * the method's (method `name`, its ops' `dropped` list: e.g. ir and iir leave out the indirect
+ * light of emissive materials, and beyond IIR_VPLSETS_MAX_LIGHTS lights iir the indirect light of
+ * the rest). For warnings: the CLI prints them, the
  * daemon can send them. Writes at most max entries into out (NULL when max is 0) and returns how
  * many there are; 0 for an unknown name. */
 uint32_t iir_method_dropped(const char *name, const struct iir_scene *scene,

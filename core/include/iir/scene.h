@@ -91,7 +91,7 @@ typedef struct iir_scene {
     uint32_t num_materials;
     iir_material *material_list;
 
-    uint32_t num_lights; /* punctual lights (spot, point) */
+    uint32_t num_lights; /* the lights: point, spot, sun and area (light.h) */
     iir_light *lights;
 
     iir_camera camera;

@@ -1,9 +1,8 @@
 /* dropped.c -- what the methods leave out of a scene, as the named entries of iir_method_dropped
- * (method.h): the scene's own notes (lights and materials nothing renders) and each method's (ir:
- * the indirect light of emissive materials, and mirrors and glass, which it renders black; iir:
- * those too, and every light's but the first spot's), and what a method leaves out at its
- * parameters (pt: mirrors and glass at too few bounces). Not the loader's notes (scene_assimp.c
- * makes them). */
+ * (method.h): the scene's own notes (lights and materials nothing renders), then each method's own
+ * list (its ops' `dropped`, in the method's file; the emitters' entries are built here), and what
+ * a method leaves out at its parameters (pt: mirrors and glass at too few bounces). Not the
+ * loader's notes (scene_assimp.c makes them). */
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>

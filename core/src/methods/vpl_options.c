@@ -50,7 +50,7 @@ static const iir_param SHADING_ROWS[] = {
      "(multires)",
      IIR_PARAM_LIVE},
 };
-const iir_param_table iir_shading_table = {"shading (ir, iir)", SHADING_ROWS,
+const iir_param_table iir_shading_table = {"shading (ir, iir, ism, rsm)", SHADING_ROWS,
                                            sizeof SHADING_ROWS / sizeof SHADING_ROWS[0], NULL};
 
 /* multires.h's hierarchy, for every method that shades on it. */
