@@ -904,19 +904,27 @@ static void test_smooth_path_steady(void **state)
 
 /* ---- memory: buffers are reused, nothing grows with the number of frames --------------------- */
 
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+/* The sanitizer's allocator, which mallinfo2 does not see (sanitizer/allocator_interface.h, which
+ * Debian's gcc does not ship). */
+size_t __sanitizer_get_current_allocated_bytes(void);
+#endif
+
+/* Bytes allocated and not freed: the sanitizer's count in the test build, else glibc's. */
 static size_t heap_in_use(void)
 {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+    return __sanitizer_get_current_allocated_bytes();
+#else
     struct mallinfo2 mi = mallinfo2();
     return mi.uordblks + mi.hblkhd;
+#endif
 }
 
 static void test_memory_steady(void **state)
 {
     const env *e = *state;
-    if (heap_in_use() == 0) {
-        print_message("mallinfo2 reports nothing under a sanitizer: not checked\n");
-        return;
-    }
+    assert_true(heap_in_use() > 0); /* the count is real wherever the test runs */
     iir_incr *inc = make_incr(e, 256, IIR_WEIGHTS_VORONOI, 4);
     iir_light l = cornell_spot(e);
     size_t at[4] = {0};
