@@ -1,5 +1,6 @@
 /* surface.h -- what shading needs at a ray hit: position, geometric normal facing the viewer,
- * material; and the shadow ray from it to a light sample. Internal to libiircore; inline. */
+ * material; where light arrives at it and the shadow ray to a light sample. Internal to libiircore;
+ * inline. */
 #ifndef IIR_SURFACE_H
 #define IIR_SURFACE_H
 
@@ -39,19 +40,30 @@ static inline iir_vec3 iir_surface_offset(const iir_surface *sf, float eps)
     return iir_madd(sf->p, sf->ns, eps);
 }
 
-/* The shadow ray from o (the shading point lifted off its surface) to light sample ls taken at p:
- * aimed at the sampled point itself and stopping 2 eps short of it, so that the lift does not
- * carry a grazing ray through the light's own surface just before the point (an emissive triangle
- * is geometry: aimed along ls.wi from o, a ray at 20 degrees above the emitter's plane met the
- * emitter 3 eps early and most such samples counted as shadowed); a sun's goes along wi. */
+/* Where light arrives at sf: its point and normal, for iir_light_sample_li and
+ * iir_lightset_sample_li. */
+static inline iir_light_ctx iir_surface_light_ctx(const iir_surface *sf, float eps)
+{
+    iir_light_ctx ctx = {sf->p, sf->ns, eps};
+    return ctx;
+}
+
+/* A light segment as a ray. */
+static inline iir_ray iir_segment_ray(const iir_light_segment *seg)
+{
+    return iir_make_ray(seg->org, seg->dir, 0.f, seg->tmax);
+}
+
+/* The shadow ray from o (the shading point lifted off its surface: iir_surface_offset) to light
+ * sample ls taken at p with iir_lightset_sample: the light module's one rule (iir_light_shadow),
+ * for callers that sample without a context; p is ls's receiving point (unused: ls has the
+ * sampled point). */
 static inline iir_ray iir_light_sample_ray(iir_vec3 o, iir_vec3 p, const iir_light_sample *ls,
                                            float eps)
 {
-    if (isinf(ls->dist)) return iir_make_ray(o, ls->wi, 0.f, INFINITY);
-    iir_vec3 d = iir_sub(iir_madd(p, ls->wi, ls->dist), o);
-    float len = iir_length(d);
-    if (!(len > 2.f * eps)) return iir_make_ray(o, ls->wi, 0.f, 0.f);
-    return iir_make_ray(o, iir_scale(d, 1.f / len), 0.f, len - 2.f * eps);
+    (void)p;
+    iir_light_segment seg = iir_light_shadow(o, ls, eps);
+    return iir_segment_ray(&seg);
 }
 
 #endif

@@ -1,8 +1,9 @@
 /* light.h -- the lights a scene moves (delta lights: spot with a cosine lobe or glTF's profile
  * inside a cone, isotropic point, the sun; and the planar area light), the maps from their
  * directions to the disks of their VPL domains (light_domain.h), the area light's rectangle and
- * shape (sampling them, hitting them), and the light set that samples all of them and the emissive
- * triangles for next-event estimation. Not VPLs.
+ * shape (sampling them, hitting them), the light arriving at a point (every method's one way to
+ * sample a light: direction, distance, radiance, pdf and the shadow segment), and the light set
+ * that samples all of them and the emissive triangles for next-event estimation. Not VPLs.
  *
  * Cosine spot (profile IIR_SPOT_COSINE, iir's own): frame (p; r, u, f), half-angle alpha in
  * (0, 90] degrees, I(w) = I0 cos(theta) inside the cone, optionally faded to zero over an edge of
@@ -147,7 +148,7 @@ iir_vec3 iir_light_flux(const iir_light *light);
 /* Radiant intensity (W/sr) emitted towards the unit world direction w (pointing away from the
  * light). A sun has none (0): use its irradiance, `intensity`, along `direction`. An area light's
  * is its far field, the cosine lobe L A max(0, w.f) as if all of it sat at its centre: right for
- * whoever sees it from many times its size away (iir_area_light_sample is exact near it). */
+ * whoever sees it from many times its size away (iir_light_sample_li is exact near it). */
 iir_vec3 iir_light_intensity(const iir_light *light, iir_vec3 w);
 
 /* A light prepared for evaluating many directions: the spot's (and the area light's) frame and disk
@@ -286,6 +287,59 @@ iir_vec3 iir_area_light_mean_radiance(const iir_light *l);
  * when it misses it, meets it from behind or runs parallel to it. */
 float iir_area_light_hit(const iir_light *l, iir_vec3 o, iir_vec3 d, float tmax);
 
+/* ---- light arriving at a point (lightset.c): how every method asks a light ---- */
+
+/* Where light is wanted (pbrt's LightSampleContext). */
+typedef struct iir_light_ctx {
+    iir_vec3 p; /* the receiving point, on its surface (not lifted off it) */
+    iir_vec3 n; /* its surface's unit normal, either orientation; 0 for a point in space */
+    float eps;  /* the scene's ray epsilon (iir_rt_epsilon; hier: a voxel cell's diagonal) */
+} iir_light_ctx;
+
+/* The segment a shadow ray tests: org + t dir (unit dir) for t in (0, tmax); tmax is INFINITY
+ * for a sun, 0 when the ends are too close to test (count the light as unblocked). */
+typedef struct iir_light_segment {
+    iir_vec3 org, dir;
+    float tmax;
+} iir_light_segment;
+
+/* The light arriving at a receiving point from one sampled point of a light (pbrt's
+ * LightLiSample); Li cos / pdf is the estimate, cos the receiver's n . wi. */
+typedef struct iir_light_sample {
+    iir_vec3 wi;      /* unit direction from ctx->p to the light */
+    float dist;       /* distance from ctx->p to p_light; INFINITY for a sun */
+    iir_vec3 Li;      /* radiance (areas), I/d^2 (point, spot) or E (sun), not divided by pdf */
+    float pdf;        /* solid angle (areas); 1 for a delta light (times the pick's pmf in a set) */
+    bool is_delta;    /* point, spot or sun: no MIS */
+    iir_vec3 p_light; /* the sampled point (the position of a point or spot; none for a sun) */
+    iir_vec3 n_light; /* the emitter's unit normal there, towards ctx->p; 0 for delta lights */
+    iir_light_segment shadow; /* what to test: the one rule (iir_light_shadow) */
+} iir_light_sample;
+
+/* The light arriving at ctx->p from the prepared light e (iir_light_prepare, any kind), for u in
+ * [0, 1)^2 (delta lights ignore it): point, spot: from its position, Li = I(-wi) / d^2; sun:
+ * along -direction, Li = E; area light: a point uniform by area on its emitter
+ * (iir_area_light_sample_q(l, u)), Li its radiance there, pdf d^2 / (A cos theta_l). Fills the
+ * shadow segment. pdf == 0 means no light arrives: ctx->p is at the light, or behind an area
+ * light's plane. Whether ctx's surface faces wi is the caller's to test. */
+iir_light_sample iir_light_sample_li(const iir_light_eval *e, const iir_light_ctx *ctx, iir_vec2 u);
+
+/* The solid-angle pdf iir_light_sample_li gives area light l's point at distance dist along unit
+ * wi from the receiving point (0 when wi meets it from behind), the pick probability not included.
+ */
+float iir_area_light_pdf(const iir_light *l, iir_vec3 wi, float dist);
+
+/* The receiver's end of a shadow segment towards w: ctx->p moved ctx->eps along its normal, on
+ * w's side (along w itself when ctx->n is 0). */
+iir_vec3 iir_light_ctx_origin(const iir_light_ctx *ctx, iir_vec3 w);
+
+/* The one shadow-ray rule, from o, the receiver's end (iir_light_ctx_origin), to ls's light: the
+ * segment keeps eps off both its ends. Off the receiver's surface by o; off an emitter along its
+ * normal (the segment ends at p_light + eps n_light, so a grazing ray does not cross the emitter's
+ * own surface before the point); off a point or spot, which lies on no surface, by stopping eps
+ * short of its position. A sun's runs from o along wi to infinity. */
+iir_light_segment iir_light_shadow(iir_vec3 o, const iir_light_sample *ls, float eps);
+
 /* ---- the light set: the scene's lights + emissive triangles, for next-event estimation ---- */
 
 typedef struct iir_lightset iir_lightset;
@@ -301,16 +355,15 @@ bool iir_lightset_empty(const iir_lightset *set);
  * find light). */
 bool iir_lightset_has_area_lights(const iir_lightset *set);
 
-typedef struct iir_light_sample {
-    iir_vec3 wi;   /* unit direction from the shading point to the light */
-    float dist;    /* distance to the sampled point; INFINITY for a sun */
-    iir_vec3 Li;   /* radiance (areas), I/d^2 (point, spot) or E (sun), not divided by pdf */
-    float pdf;     /* solid-angle pdf (areas) or the pmf of choosing a delta light */
-    bool is_delta; /* punctual: no MIS */
-} iir_light_sample;
+/* Samples one of the set's lights (or emissive triangles) for ctx: u_pick chooses it by flux, then
+ * as iir_light_sample_li (an emissive triangle: a point uniform by area on it, n_light its
+ * normal), pdf times the pick's probability. pdf == 0 means nothing was sampled (no lights, or the
+ * point is behind the sampled emitter). */
+iir_light_sample iir_lightset_sample_li(const iir_lightset *set, const iir_light_ctx *ctx,
+                                        float u_pick, iir_vec2 u);
 
-/* Samples one light for shading point x. u_pick chooses the light, u a point on it. pdf == 0 means
- * nothing was sampled (no lights, or the point faces away). */
+/* The same at a point x in space with no offsets (ctx {x, 0, 0}: the shadow segment runs from x
+ * to the sampled point itself); for callers that build their own shadow ray (surface.h). */
 iir_light_sample iir_lightset_sample(const iir_lightset *set, iir_vec3 x, float u_pick, iir_vec2 u);
 
 /* Solid-angle pdf with which iir_lightset_sample would have chosen the point on emissive triangle
@@ -332,15 +385,6 @@ typedef struct iir_emitter_hit {
  * never met. Area lights do not block rays: a caller adds every light met before its surface. */
 iir_emitter_hit iir_lightset_hit_light(const iir_lightset *set, uint32_t i, iir_vec3 o, iir_vec3 d,
                                        float tmax);
-
-/* Next-event sample of area light l alone from shading point x: a point uniform on its emitter
- * (iir_area_light_sample_q(l, u)), Li = L when x is on the emitting side, pdf in solid angle
- * d^2 / (A cos theta_l), the pick probability not included; pdf 0 when x is behind its plane. */
-iir_light_sample iir_area_light_sample(const iir_light *l, iir_vec3 x, iir_vec2 u);
-
-/* The solid-angle pdf iir_area_light_sample gives the point at distance dist along unit wi from
- * the shading point (0 when wi meets it from behind). */
-float iir_area_light_pdf(const iir_light *l, iir_vec3 wi, float dist);
 
 #ifdef __cplusplus
 }

@@ -1,5 +1,6 @@
 /* hier_light.c -- the hierarchical method's direct light (hier_light.h): the lights' points for a
- * frame, and the voxel-shadowed irradiance they give a point. */
+ * frame, and the voxel-shadowed irradiance they give a point (each asked of its light with
+ * iir_light_sample_li). */
 #include "hier_light.h"
 
 #include <math.h>
@@ -27,23 +28,20 @@ static void area_grid(const iir_light *l, int samples, int *nx, int *ny)
 }
 
 /* At most K points of area light l: the centres of a grid of cells over u in [0, 1)^2, mapped onto
- * its emitter (iir_area_light_sample_q: the rectangle's cells, or strata of its shape), each
- * dA = A / (nx ny) of it. Cell centres rather than a low-discrepancy set: the points are as
- * symmetric as the emitter, so a symmetric emitter lights a symmetric receiver symmetrically. */
+ * its emitter by iir_light_sample_li (iir_area_light_sample_q: the rectangle's cells, or strata of
+ * its shape), each dA = A / (nx ny) of it. Cell centres rather than a low-discrepancy set: the
+ * points are as symmetric as the emitter, so a symmetric emitter lights a symmetric receiver
+ * symmetrically. */
 static void area_points(hier_lights *hl, const iir_light *l, uint32_t li, int samples)
 {
-    iir_frame fr = iir_spot_frame(l);
     int nx, ny;
     area_grid(l, samples, &nx, &ny);
     float dA = iir_area_light_area(l) / (float)(nx * ny);
     for (int j = 0; j < ny; j++)
         for (int i = 0; i < nx; i++) {
-            iir_vec2 u = iir_v2(((float)i + 0.5f) / (float)nx, ((float)j + 0.5f) / (float)ny);
             hier_point *p = &hl->pts[hl->num_pts++];
-            iir_vec2 q = iir_area_light_sample_q(l, u);
-            p->p = iir_area_light_point(l, &fr, q);
-            p->f = fr.f;
-            p->L_dA = iir_scale(iir_area_light_radiance(l, q), dA);
+            p->u = iir_v2(((float)i + 0.5f) / (float)nx, ((float)j + 0.5f) / (float)ny);
+            p->weight = 1.f / (float)(nx * ny);
             p->dA_over_pi = dA / (float)M_PI;
             p->light = li;
         }
@@ -71,9 +69,8 @@ bool hier_lights_prepare(hier_lights *hl, const iir_light *lights, uint32_t num_
             area_points(hl, l, i, samples);
             continue;
         }
-        hier_point *p = &hl->pts[hl->num_pts++];
-        p->p = l->type == IIR_LIGHT_SUN ? iir_normalize(l->direction) : l->position;
-        p->light = i;
+        hier_point p = {{0.f, 0.f}, 1.f, 0.f, i};
+        hl->pts[hl->num_pts++] = p;
     }
     return true;
 }
@@ -87,60 +84,40 @@ void hier_lights_free(hier_lights *hl)
     hl->num_pts = hl->cap = hl->eval_cap = 0;
 }
 
-/* Whether the segment from x' (x moved off its surface) to light point y, less the last `skip` of
- * it, is blocked. */
-static bool blocked(const hier_lights *hl, iir_vec3 x, iir_vec3 y, float skip)
+/* Whether shadow segment seg (a sun's cut at the scene's diameter) is blocked. */
+static bool blocked(const hier_lights *hl, const iir_light_segment *seg)
 {
-    if (hl->vis == HIER_VIS_NONE || !hl->grid) return false;
-    if (hl->vis == HIER_VIS_VOXELS) return iir_voxels_occluded(hl->grid, x, y, 0.f, skip);
-    iir_vec3 d = iir_sub(y, x);
-    float len = iir_length(d), span = len - skip;
-    for (int i = 0; span > 0.f && i < hl->vis_points; i++) {
-        float t = span * ((float)i + 0.5f) / (float)hl->vis_points;
-        if (iir_voxels_marked_at(hl->grid, iir_madd(x, d, t / len))) return true;
+    if (hl->vis == HIER_VIS_NONE || !hl->grid || !(seg->tmax > 0.f)) return false;
+    float len = isinf(seg->tmax) ? 2.f * hl->scene_radius : seg->tmax;
+    if (hl->vis == HIER_VIS_VOXELS)
+        return iir_voxels_occluded(hl->grid, seg->org, iir_madd(seg->org, seg->dir, len), 0.f, 0.f);
+    for (int i = 0; i < hl->vis_points; i++) {
+        float t = len * ((float)i + 0.5f) / (float)hl->vis_points;
+        if (iir_voxels_marked_at(hl->grid, iir_madd(seg->org, seg->dir, t))) return true;
     }
     return false;
 }
 
-/* Irradiance from point pt at x (normal n), unshadowed; the shadow segment ends at *to, less its
- * last *skip: an area light's point moved off its emitter along the normal (the emitter usually
- * lies on a surface, whose cells are marked), a delta light's position less a cell's diagonal. */
-static iir_vec3 unshadowed(const hier_lights *hl, const hier_point *pt, iir_vec3 x, iir_vec3 n,
-                           iir_vec3 *to, float *skip)
+/* Irradiance from point pt at x (normal n), unshadowed: Li cos / pdf, an area sample's as from a
+ * disk of area dA (d^2 / (d^2 + dA / pi) of it: bounded where x comes close). */
+static iir_vec3 unshadowed(const hier_point *pt, const iir_light_sample *ls, iir_vec3 n)
 {
-    const iir_light *l = &hl->lights[pt->light];
-    *skip = 0.f;
-    if (l->type == IIR_LIGHT_SUN) {
-        float c = -iir_dot(n, pt->p);
-        *to = iir_madd(x, pt->p, -2.f * hl->scene_radius);
-        return c > 0.f ? iir_scale(l->intensity, c) : iir_v3s(0.f);
-    }
-    iir_vec3 w = iir_sub(x, pt->p); /* from the light to the receiver */
-    float d2 = iir_dot(w, w), cos_x = -iir_dot(n, w);
-    *to = pt->p;
-    *skip = hl->offset;
-    if (!(d2 > 0.f) || cos_x <= 0.f) return iir_v3s(0.f);
-    float d = sqrtf(d2);
-    if (l->type == IIR_LIGHT_AREA) {
-        float cos_l = iir_dot(pt->f, w) / d;
-        if (cos_l <= 0.f) return iir_v3s(0.f);
-        *to = iir_madd(pt->p, pt->f, hl->offset);
-        *skip = 0.f;
-        return iir_scale(pt->L_dA, cos_l * (cos_x / d) / (d2 + pt->dA_over_pi));
-    }
-    iir_vec3 I = iir_light_eval_intensity(&hl->eval[pt->light], iir_scale(w, 1.f / d));
-    return iir_scale(I, cos_x / (d * d2));
+    float cos_x = iir_dot(n, ls->wi);
+    if (ls->pdf <= 0.f || cos_x <= 0.f) return iir_v3s(0.f);
+    float k = cos_x * pt->weight / ls->pdf;
+    if (pt->dA_over_pi > 0.f) k *= ls->dist * ls->dist / (ls->dist * ls->dist + pt->dA_over_pi);
+    return iir_scale(ls->Li, k);
 }
 
 iir_vec3 hier_direct(const hier_lights *hl, iir_vec3 x, iir_vec3 n, uint64_t *evals)
 {
     iir_vec3 E = iir_v3s(0.f);
-    iir_vec3 from = iir_madd(x, n, hl->offset);
+    iir_light_ctx ctx = {x, n, hl->offset};
     for (uint32_t k = 0; k < hl->num_pts; k++) {
-        iir_vec3 to;
-        float skip;
-        iir_vec3 e = unshadowed(hl, &hl->pts[k], x, n, &to, &skip);
-        if (iir_is_black(e) || blocked(hl, from, to, skip)) continue;
+        const hier_point *pt = &hl->pts[k];
+        iir_light_sample ls = iir_light_sample_li(&hl->eval[pt->light], &ctx, pt->u);
+        iir_vec3 e = unshadowed(pt, &ls, n);
+        if (iir_is_black(e) || blocked(hl, &ls.shadow)) continue;
         E = iir_add(E, e);
     }
     *evals += hl->num_pts;

@@ -2,8 +2,8 @@
  * the view, an area light as K point samples on its emitter, shadowed by the coarse voxel grid
  * (voxels.h) instead of rays. Internal to the hier method.
  *
- * An area light of radiance L and area A becomes K points y_k stratified over its emitter (Halton
- * 2, 3 through the emitter's area map: iir_area_light_sample_q), each a patch of area dA = A / K
+ * An area light of radiance L and area A becomes K points y_k stratified over its emitter (cell
+ * centres of a grid through its area map: iir_area_light_sample_q), each a patch of area dA = A / K
  * facing the light's normal f; a receiver x with normal n gets the irradiance of a disk of area dA
  * (Wallace, Elmquist & Haines 1989), which stays bounded where x comes close:
  *     E_k = L dA max(0, f . w) max(0, -n . w) / (d^2 + dA / pi),   w = (x - y_k) / d.
@@ -27,12 +27,11 @@ typedef enum hier_visibility {
     HIER_VIS_NONE
 } hier_visibility;
 
-/* One point of a light: where light leaves (the sun: its direction), what it carries. */
+/* One point of a light: the sample its light is asked for (iir_light_sample_li). */
 typedef struct hier_point {
-    iir_vec3 p;       /* position; the sun: the unit direction its light travels */
-    iir_vec3 f;       /* area sample: the emitter's normal */
-    iir_vec3 L_dA;    /* area sample: L dA (RGB) */
-    float dA_over_pi; /* area sample: dA / pi */
+    iir_vec2 u;       /* area sample: its cell's centre in [0, 1)^2; delta lights: unused */
+    float weight;     /* area sample: 1 / K; delta lights: 1 */
+    float dA_over_pi; /* area sample: dA / pi; delta lights: 0 */
     uint32_t light;   /* index of its light */
 } hier_point;
 
@@ -41,12 +40,12 @@ typedef struct hier_lights {
     uint32_t num_lights;
     hier_point *pts; /* every light's points, in light order */
     uint32_t num_pts, cap;
-    iir_light_eval *eval; /* per light: spots' profiles */
+    iir_light_eval *eval; /* per light, prepared */
     uint32_t eval_cap;
     const iir_voxels *grid;
     hier_visibility vis;
     int vis_points;
-    float offset; /* a cell's diagonal: the receiver's offset and the light end's skip */
+    float offset; /* a cell's diagonal: the shadow segment's offset from both ends */
     float scene_radius;
 } hier_lights;
 

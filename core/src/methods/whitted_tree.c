@@ -67,8 +67,7 @@ struct whitted_tree {
     const whitted_frame *f;  /* during a render */
     const iir_light *lights; /* the view's, during a render */
     uint32_t num_lights;
-    iir_light_eval eval[64]; /* the first 64 delta lights, prepared; the rest evaluated per call */
-    iir_frame frames[64];    /* area lights' frames, likewise */
+    iir_light_eval eval[64]; /* the first 64 lights, prepared; the rest prepared per call */
     iir_camera_frame cam;
     float eps;
 };
@@ -83,53 +82,39 @@ typedef struct tracer {
 
 /* ---- local shading ---- */
 
-/* Whether the segment from o to p (or along wi to infinity when dist is infinite) is blocked. */
-static bool blocked(const tracer *t, iir_vec3 o, iir_vec3 wi, float dist)
+/* Light i of the view, prepared. */
+static iir_light_eval light_eval(const whitted_tree *w, uint32_t i)
 {
-    float tfar = isinf(dist) ? INFINITY : dist - 2.f * t->w->eps;
-    if (!(tfar > 0.f)) return false;
-    iir_ray r = iir_make_ray(o, wi, 0.f, tfar);
-    return iir_rt_occluded(t->w->rt, &r, t->st, IIR_RAYS_SHADOW);
+    return i < 64 ? w->eval[i] : iir_light_prepare(&w->lights[i]);
 }
 
-/* Irradiance-like sum Li cos from delta light i at sf (one shadow ray). */
-static iir_vec3 delta_light(const tracer *t, const iir_surface *sf, iir_vec3 o, uint32_t i)
+/* Li cos / pdf of sample ls at sf, or 0 when it faces away or its shadow segment is blocked. */
+static iir_vec3 arriving(const tracer *t, const iir_surface *sf, const iir_light_sample *ls)
 {
-    const iir_light *l = &t->w->lights[i];
-    iir_vec3 wi, Li;
-    float dist;
-    if (l->type == IIR_LIGHT_SUN) {
-        wi = iir_neg(iir_normalize(l->direction));
-        dist = INFINITY;
-        Li = l->intensity; /* E on a surface facing it */
-    } else {
-        iir_vec3 d = iir_sub(l->position, sf->p);
-        dist = iir_length(d);
-        if (!(dist > 0.f)) return iir_v3s(0.f);
-        wi = iir_scale(d, 1.f / dist);
-        iir_vec3 I = i < 64 ? iir_light_eval_intensity(&t->w->eval[i], iir_neg(wi))
-                            : iir_light_intensity(l, iir_neg(wi));
-        Li = iir_scale(I, 1.f / (dist * dist));
+    float cos_theta = iir_dot(sf->ns, ls->wi);
+    if (ls->pdf <= 0.f || cos_theta <= 0.f || iir_is_black(ls->Li)) return iir_v3s(0.f);
+    iir_ray r = iir_segment_ray(&ls->shadow);
+    if (r.tfar > 0.f && iir_rt_occluded(t->w->rt, &r, t->st, IIR_RAYS_SHADOW)) return iir_v3s(0.f);
+    return iir_scale(ls->Li, cos_theta / ls->pdf);
+}
+
+/* Mean of Li cos / pdf over the samples of light e (area_samples points of an area light, or of
+ * the scene's emissive triangles when e is NULL; a delta light's one), a shadow ray each. */
+static iir_vec3 light_at(tracer *t, const iir_surface *sf, const iir_light_eval *e)
+{
+    iir_light_ctx ctx = iir_surface_light_ctx(sf, t->w->eps);
+    if (e && e->light->type != IIR_LIGHT_AREA) {
+        iir_light_sample ls = iir_light_sample_li(e, &ctx, iir_v2(0.f, 0.f));
+        return arriving(t, sf, &ls);
     }
-    float cos_theta = iir_dot(sf->ns, wi);
-    if (cos_theta <= 0.f || iir_is_black(Li) || blocked(t, o, wi, dist)) return iir_v3s(0.f);
-    return iir_scale(Li, cos_theta);
-}
-
-/* Mean of Li cos / pdf over area_samples next-event samples (one shadow ray each). */
-static iir_vec3 sampled_light(tracer *t, const iir_surface *sf, iir_vec3 o, const iir_light *area)
-{
     int n = t->w->f->p->area_samples;
     iir_vec3 sum = iir_v3s(0.f);
     for (int k = 0; k < n; k++) {
         iir_vec2 u = iir_rng_uniform2(&t->rng);
         iir_light_sample ls =
-            area ? iir_area_light_sample(area, sf->p, u)
-                 : iir_lightset_sample(t->w->emitters, sf->p, iir_rng_uniform(&t->rng), u);
-        float cos_theta = iir_dot(sf->ns, ls.wi);
-        if (ls.pdf <= 0.f || cos_theta <= 0.f || iir_is_black(ls.Li)) continue;
-        if (blocked(t, o, ls.wi, ls.dist)) continue;
-        sum = iir_add(sum, iir_scale(ls.Li, cos_theta / ls.pdf));
+            e ? iir_light_sample_li(e, &ctx, u)
+              : iir_lightset_sample_li(t->w->emitters, &ctx, iir_rng_uniform(&t->rng), u);
+        sum = iir_add(sum, arriving(t, sf, &ls));
     }
     return iir_scale(sum, 1.f / (float)n);
 }
@@ -140,14 +125,12 @@ static iir_vec3 diffuse(tracer *t, const iir_surface *sf, const iir_hit *hit)
 {
     const whitted_tree *w = t->w;
     iir_vec3 extra = w->f->extra ? w->f->extra(w->f->extra_ctx, hit, sf->mat) : iir_v3s(0.f);
-    iir_vec3 o = iir_surface_offset(sf, w->eps), E = iir_v3s(w->f->p->ambient * IIR_PI);
+    iir_vec3 E = iir_v3s(w->f->p->ambient * IIR_PI);
     for (uint32_t i = 0; w->f->local_direct && i < w->num_lights; i++) {
-        const iir_light *l = &w->lights[i];
-        iir_vec3 Ei =
-            l->type == IIR_LIGHT_AREA ? sampled_light(t, sf, o, l) : delta_light(t, sf, o, i);
-        E = iir_add(E, Ei);
+        iir_light_eval e = light_eval(w, i);
+        E = iir_add(E, light_at(t, sf, &e));
     }
-    if (w->f->local_direct && w->has_emitters) E = iir_add(E, sampled_light(t, sf, o, NULL));
+    if (w->f->local_direct && w->has_emitters) E = iir_add(E, light_at(t, sf, NULL));
     return iir_madd(extra, iir_mul(sf->mat->albedo, E), IIR_INV_PI);
 }
 
@@ -160,8 +143,8 @@ static iir_vec3 area_lights_seen(const whitted_tree *w, const iir_ray *ray, floa
         if (l->type != IIR_LIGHT_AREA) continue;
         float t = iir_area_light_hit(l, ray->org, ray->dir, t_max);
         if (isinf(t)) continue;
-        iir_frame fr = i < 64 ? w->frames[i] : iir_spot_frame(l);
-        L = iir_add(L, iir_area_light_radiance_at(l, &fr, iir_madd(ray->org, ray->dir, t)));
+        iir_light_eval e = light_eval(w, i);
+        L = iir_add(L, iir_area_light_radiance_at(l, &e.frame, iir_madd(ray->org, ray->dir, t)));
     }
     return L;
 }
@@ -297,10 +280,8 @@ iir_status whitted_tree_render(whitted_tree *w, const whitted_frame *f, const ii
     w->f = f;
     w->lights = view->lights;
     w->num_lights = view->num_lights;
-    for (uint32_t i = 0; i < view->num_lights && i < 64; i++) {
+    for (uint32_t i = 0; i < view->num_lights && i < 64; i++)
         w->eval[i] = iir_light_prepare(&view->lights[i]);
-        if (view->lights[i].type == IIR_LIGHT_AREA) w->frames[i] = iir_spot_frame(&view->lights[i]);
-    }
     w->cam = iir_camera_setup(&view->camera, out->width, out->height);
     w->eps = iir_rt_epsilon(w->rt);
     iir_status st = render_tiles(w, out, stats, err);

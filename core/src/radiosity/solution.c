@@ -31,29 +31,18 @@ static iir_vec3 patch_point(const rad_mesh *m, uint32_t p, int k, int S, uint64_
                    iir_add(iir_scale(v[c[1]], w2), iir_scale(v[c[2]], 1.f - w1 - w2)));
 }
 
-/* Irradiance at x (normal n) from light l, with a shadow ray; u for an area light's point. */
-static iir_vec3 light_irradiance(const iir_rt *rt, const iir_light *l, const iir_light_eval *ev,
-                                 iir_vec3 x, iir_vec3 n, iir_vec2 u, iir_raystats *st)
+/* Irradiance at x (normal n) from prepared light e, with a shadow ray; u for an area light's
+ * point. */
+static iir_vec3 light_irradiance(const iir_rt *rt, const iir_light_eval *e, iir_vec3 x, iir_vec3 n,
+                                 iir_vec2 u, iir_raystats *st)
 {
-    iir_vec3 wi, E;
-    float dist;
-    if (l->type == IIR_LIGHT_SUN) {
-        wi = iir_normalize(iir_neg(l->direction)), dist = INFINITY;
-        E = iir_scale(l->intensity, fmaxf(0.f, iir_dot(n, wi)));
-    } else if (l->type == IIR_LIGHT_AREA) {
-        iir_light_sample ls = iir_area_light_sample(l, x, u);
-        if (ls.pdf <= 0.f) return iir_v3s(0.f);
-        wi = ls.wi, dist = ls.dist;
-        E = iir_scale(ls.Li, fmaxf(0.f, iir_dot(n, wi)) / ls.pdf);
-    } else {
-        iir_vec3 d = iir_sub(l->position, x);
-        dist = iir_length(d), wi = iir_scale(d, 1.f / fmaxf(dist, 1e-30f));
-        E = iir_scale(iir_light_eval_intensity(ev, iir_neg(wi)),
-                      fmaxf(0.f, iir_dot(n, wi)) / fmaxf(dist * dist, 1e-30f));
-    }
+    iir_light_ctx ctx = {x, n, iir_rt_epsilon(rt)};
+    iir_light_sample ls = iir_light_sample_li(e, &ctx, u);
+    if (ls.pdf <= 0.f) return iir_v3s(0.f);
+    iir_vec3 E = iir_scale(ls.Li, fmaxf(0.f, iir_dot(n, ls.wi)) / ls.pdf);
     if (iir_is_black(E)) return E;
-    float eps = iir_rt_epsilon(rt);
-    iir_ray r = iir_make_ray(iir_madd(x, n, eps), wi, 0.f, dist * (1.f - 1e-4f) - eps);
+    if (!(ls.shadow.tmax > 0.f)) return E;
+    iir_ray r = iir_make_ray(ls.shadow.org, ls.shadow.dir, 0.f, ls.shadow.tmax);
     return iir_rt_occluded(rt, &r, st, IIR_RAYS_SHADOW) ? iir_v3s(0.f) : E;
 }
 
@@ -91,8 +80,7 @@ static bool shoot_direct(rad_solution *s, const iir_light *lights, uint32_t num_
                     iir_vec3 x = patch_point(m, p, k, S, h);
                     iir_vec2 u = iir_v2(((float)k + u01(iir_mix64(h + 1))) / (float)S,
                                         u01(iir_hash3(h, (uint64_t)k, 7)));
-                    Ed = iir_add(
-                        Ed, light_irradiance(s->rt, &lights[l], &ev[l], x, m->normal[p], u, &st));
+                    Ed = iir_add(Ed, light_irradiance(s->rt, &ev[l], x, m->normal[p], u, &st));
                 }
             s->Ed[p] = iir_scale(Ed, 1.f / (float)S);
             s->E[p] = iir_add(m->emit[p], iir_mul(m->rho[p], s->Ed[p]));

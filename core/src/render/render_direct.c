@@ -131,66 +131,27 @@ static void resolve(const iir_renderer *r, block *b, iir_raystats *st)
         if (b->rays.valid[k] && !occluded[k]) b->L[k] = iir_add(b->L[k], b->pending[k]);
 }
 
-/* Lane k's unshadowed f E cos for a sun (irradiance E from -direction), and its shadow ray to
- * infinity. */
-static void sun_lane(const iir_renderer *r, const iir_light *l, block *b, int k)
+/* Where light arrives at lane k's pixel. */
+static iir_light_ctx lane_ctx(const iir_renderer *r, const block *b, int k)
 {
-    const iir_gbuffer *gb = &r->gb;
-    iir_vec3 p = gb->position[b->index[k]], n = gb->normal[b->index[k]];
-    iir_vec3 wi = iir_neg(iir_normalize(l->direction));
-    float cos_theta = iir_dot(n, wi);
-    if (cos_theta <= 0.f || iir_is_black(l->intensity)) return;
-    b->pending[k] = iir_scale(iir_mul(b->f[k], l->intensity), cos_theta);
-    set_lane(&b->rays, k, iir_madd(p, n, r->eps), wi, INFINITY);
+    iir_light_ctx ctx = {r->gb.position[b->index[k]], r->gb.normal[b->index[k]], r->eps};
+    return ctx;
 }
 
-/* Lane k's unshadowed f I(-wi) cos / d^2 for the prepared light e (point, cosine or glTF spot;
- * a sun goes to sun_lane), and its shadow ray. */
-static void punctual_lane(const iir_renderer *r, const iir_light_eval *e, block *b, int k)
+/* Lane k's unshadowed f Li cos w / pdf for sample ls (w: 1 / N for one of N samples), and its
+ * shadow ray; added at once when the segment is too short to test. */
+static void sample_lane(const iir_renderer *r, block *b, int k, const iir_light_sample *ls, float w)
 {
-    const iir_light *l = e->light;
-    if (l->type == IIR_LIGHT_SUN) {
-        sun_lane(r, l, b, k);
-        return;
-    }
-    const iir_gbuffer *gb = &r->gb;
-    iir_vec3 p = gb->position[b->index[k]], n = gb->normal[b->index[k]];
-    iir_vec3 d = iir_sub(l->position, p);
-    float dist2 = iir_length_sq(d);
-    if (!(dist2 > 0.f)) return;
-    float dist = sqrtf(dist2);
-    iir_vec3 wi = iir_scale(d, 1.f / dist);
-    float cos_theta = iir_dot(n, wi);
-    if (cos_theta <= 0.f) return;
-    iir_vec3 I = iir_light_eval_intensity(e, iir_neg(wi));
-    if (iir_is_black(I)) return;
-    b->pending[k] = iir_scale(iir_mul(b->f[k], I), cos_theta / dist2);
-    set_lane(&b->rays, k, iir_madd(p, n, r->eps), wi, dist - 2.f * r->eps);
-}
-
-/* Lane k's shadow ray from p (normal n) to the point sampled by ls: from the lifted point aimed at
- * the sampled point itself, stopping 2 eps short (surface.h's iir_light_sample_ray: along wi from
- * the lifted point, a grazing ray met an emissive triangle just before the point). */
-static void aim_lane(const iir_renderer *r, block *b, int k, iir_vec3 p, iir_vec3 n,
-                     const iir_light_sample *ls)
-{
-    iir_vec3 o = iir_madd(p, n, r->eps);
-    iir_vec3 d = iir_sub(iir_madd(p, ls->wi, ls->dist), o);
-    float len = iir_length(d);
-    if (!(len > 2.f * r->eps)) return;
-    set_lane(&b->rays, k, o, iir_scale(d, 1.f / len), len - 2.f * r->eps);
-}
-
-/* Lane k's unshadowed f Li cos / (pdf N) for sample ls of N (c->samples), and its shadow ray. */
-static void sample_lane(const direct_ctx *c, block *b, int k, const iir_light_sample *ls)
-{
-    const iir_gbuffer *gb = &c->r->gb;
-    iir_vec3 p = gb->position[b->index[k]], n = gb->normal[b->index[k]];
+    iir_vec3 n = r->gb.normal[b->index[k]];
     if (ls->pdf <= 0.f || iir_is_black(ls->Li)) return;
     float cos_theta = iir_dot(n, ls->wi);
     if (cos_theta <= 0.f) return;
-    b->pending[k] = iir_scale(iir_mul(b->f[k], ls->Li), cos_theta * c->inv_samples / ls->pdf);
-    aim_lane(c->r, b, k, p, n, ls);
+    b->pending[k] = iir_scale(iir_mul(b->f[k], ls->Li), cos_theta * w / ls->pdf);
+    const iir_light_segment *seg = &ls->shadow;
+    if (seg->tmax > 0.f)
+        set_lane(&b->rays, k, seg->org, seg->dir, seg->tmax);
+    else
+        b->L[k] = iir_add(b->L[k], b->pending[k]);
 }
 
 /* The block's sample streams of stream number `stream` (area light li: 1 + li; emissive
@@ -201,21 +162,31 @@ static void block_strats(const direct_ctx *c, const block *b, uint64_t stream, s
         s[k] = strat_make(c->seed, b->x0 + k % BLOCK_W, b->y0 + k / BLOCK_W, stream);
 }
 
-/* Area light l's direct light at the block: sample i of each shaded pixel's stratified stream
- * (a point uniform by area on the emitter), one packet of shadow rays per sample. */
-static void area_light_samples(const direct_ctx *c, const iir_light *l, uint32_t li, block *b,
-                               iir_raystats *st)
+/* Sample i of light e (NULL: the emissive triangles) for ctx, drawn from stream s: a point by the
+ * 2D net, and for the emissive triangles a triangle picked by a stratified 1D number. */
+static iir_light_sample draw(const direct_ctx *c, const iir_light_eval *e, const iir_light_ctx *ctx,
+                             const strat *s, uint32_t i)
+{
+    iir_vec2 u = strat_point(s, i);
+    if (e) return iir_light_sample_li(e, ctx, u);
+    return iir_lightset_sample_li(c->r->area_lights, ctx, strat_pick(s, i), u);
+}
+
+/* The direct light of area light e (stream 1 + its index), or of the emissive triangles (e NULL,
+ * stream 0), at the block: sample i of each shaded pixel's stratified stream, one packet of
+ * shadow rays per sample. */
+static void light_samples(const direct_ctx *c, const iir_light_eval *e, uint64_t stream, block *b,
+                          iir_raystats *st)
 {
     strat s[8];
-    block_strats(c, b, 1u + (uint64_t)li, s);
-    const iir_gbuffer *gb = &c->r->gb;
+    block_strats(c, b, stream, s);
     for (int i = 0; i < c->samples; i++) {
         clear_rays(b);
         for (int k = 0; k < 8; k++) {
             if (!b->shaded[k]) continue;
-            iir_vec3 p = gb->position[b->index[k]];
-            iir_light_sample ls = iir_area_light_sample(l, p, strat_point(&s[k], (uint32_t)i));
-            sample_lane(c, b, k, &ls);
+            iir_light_ctx ctx = lane_ctx(c->r, b, k);
+            iir_light_sample ls = draw(c, e, &ctx, &s[k], (uint32_t)i);
+            sample_lane(c->r, b, k, &ls, c->inv_samples);
         }
         resolve(c->r, b, st);
     }
@@ -223,58 +194,40 @@ static void area_light_samples(const direct_ctx *c, const iir_light *l, uint32_t
 
 /* Adds area light l's radiance to the pixels whose camera rays meet it from the front before their
  * surface (or with no surface behind). */
-static void area_light_seen(const direct_ctx *c, const iir_light *l, block *b)
+static void area_light_seen(const direct_ctx *c, const iir_light_eval *e, block *b)
 {
+    const iir_light *l = e->light;
     const iir_gbuffer *gb = &c->r->gb;
     iir_vec2 shift = c->r->gb_shift;
-    iir_frame fr = iir_spot_frame(l);
     for (int k = 0; k < 8; k++) {
         int x = b->x0 + k % BLOCK_W, y = b->y0 + k / BLOCK_W;
         if (x >= gb->width || y >= gb->height) continue;
         iir_vec3 d = iir_camera_dir(&c->cam, x + 0.5f + shift.x, y + 0.5f + shift.y);
         float t = iir_area_light_hit(l, c->cam.origin, d, gb->depth[b->index[k]]);
         if (!isinf(t))
-            b->L[k] =
-                iir_add(b->L[k], iir_area_light_radiance_at(l, &fr, iir_madd(c->cam.origin, d, t)));
+            b->L[k] = iir_add(
+                b->L[k], iir_area_light_radiance_at(l, &e->frame, iir_madd(c->cam.origin, d, t)));
     }
 }
 
-/* One light's direct light at the block: a delta light's or an area light's sample per pixel, and
- * an area light seen by the camera. */
+/* One light's direct light at the block: a delta light's sample per pixel (one packet), an area
+ * light's samples and where the camera sees it. */
 static void shade_light(const direct_ctx *c, uint32_t li, block *b, iir_raystats *st)
 {
-    const iir_light *l = &c->lights[li];
-    if (l->type == IIR_LIGHT_AREA) {
-        area_light_samples(c, l, li, b, st);
-        area_light_seen(c, l, b);
+    iir_light_eval e = iir_light_prepare(&c->lights[li]);
+    if (e.light->type == IIR_LIGHT_AREA) {
+        light_samples(c, &e, 1u + (uint64_t)li, b, st);
+        area_light_seen(c, &e, b);
         return;
     }
-    iir_light_eval e = iir_light_prepare(l);
     clear_rays(b);
-    for (int k = 0; k < 8; k++)
-        if (b->shaded[k]) punctual_lane(c->r, &e, b, k);
-    resolve(c->r, b, st);
-}
-
-/* The emissive triangles' direct light at the block: sample i of each shaded pixel's stream (a
- * triangle picked by a stratified 1D number, a point on it by the 2D net), a packet per sample. */
-static void emissive_samples(const direct_ctx *c, block *b, iir_raystats *st)
-{
-    strat s[8];
-    block_strats(c, b, 0, s);
-    const iir_gbuffer *gb = &c->r->gb;
-    for (int i = 0; i < c->samples; i++) {
-        clear_rays(b);
-        for (int k = 0; k < 8; k++) {
-            if (!b->shaded[k]) continue;
-            iir_vec3 p = gb->position[b->index[k]];
-            iir_light_sample ls =
-                iir_lightset_sample(c->r->area_lights, p, strat_pick(&s[k], (uint32_t)i),
-                                    strat_point(&s[k], (uint32_t)i));
-            sample_lane(c, b, k, &ls);
-        }
-        resolve(c->r, b, st);
+    for (int k = 0; k < 8; k++) {
+        if (!b->shaded[k]) continue;
+        iir_light_ctx ctx = lane_ctx(c->r, b, k);
+        iir_light_sample ls = iir_light_sample_li(&e, &ctx, iir_v2(0.f, 0.f));
+        sample_lane(c->r, b, k, &ls, 1.f);
     }
+    resolve(c->r, b, st);
 }
 
 /* Reads the block's pixels: emission, and which of them direct light can reach. */
@@ -297,7 +250,7 @@ static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir
     block b;
     load_block(&c->r->gb, x0, y0, &b);
     for (uint32_t l = 0; l < c->num_lights; l++) shade_light(c, l, &b, st);
-    if (c->r->area_lights) emissive_samples(c, &b, st);
+    if (c->r->area_lights) light_samples(c, NULL, 0, &b, st);
     for (int k = 0; k < 8; k++) {
         int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
         if (x < out->width && y < out->height) *iir_image_at(out, x, y) = b.L[k];
