@@ -1,5 +1,5 @@
 // stri_cell.cpp -- one spherical Voronoi cell computed from its site and Delaunay neighbours: its
-// edges, exact area, largest-empty-cap candidates, drawing polygon, and the per-site summary; not
+// edges, exact area, largest-empty-cap candidates, drawing polygon and shortest incident edge; not
 // how sites or neighbours are found (stri_domain.cpp).
 //
 // On the sphere the Delaunay triangulation is the convex hull of the sites, and the Voronoi vertex
@@ -290,44 +290,23 @@ Frame circle_frame(const Site *sites, size_t n)
     return f;
 }
 
-// ---- the summary ----
+// ---- the shortest incident edge ----
 
-void summarise(const Cell_input &in, Cell_scratch &scratch, Site_summary &out)
+bool shortest_incident(const Site &self, const Site *nbrs, size_t n, iirtri::Edge_key &out)
 {
-    // The shortest incident edge, its length computed from the younger endpoint to the older, among
-    // the neighbours whose cosine is within kBand of the nearest's (no other can be shortest).
-    out.id = in.self.id;
-    out.has_edge = in.n > 0;
+    // Only the neighbours whose cosine is within kBand of the nearest's can be shortest.
     double cmax = -2;
-    for (size_t k = 0; k < in.n; k++) cmax = std::max(cmax, dot(in.self.p, in.nbrs[k].p));
+    for (size_t k = 0; k < n; k++) cmax = std::max(cmax, dot(self.p, nbrs[k].p));
     bool first = true;
-    for (size_t k = 0; k < in.n; k++) {
-        if (!(dot(in.self.p, in.nbrs[k].p) >= cmax - kBand)) continue;
-        const Site &young = in.self.id > in.nbrs[k].id ? in.self : in.nbrs[k];
-        const Site &old = in.self.id > in.nbrs[k].id ? in.nbrs[k] : in.self;
-        Edge_key e = {angle_between(young.p, old.p), young.id, old.id};
-        if (first || shorter(e, out.edge)) out.edge = e;
+    for (size_t k = 0; k < n; k++) {
+        if (!(dot(self.p, nbrs[k].p) >= cmax - kBand)) continue;
+        const Site &young = self.id > nbrs[k].id ? self : nbrs[k];
+        const Site &old = self.id > nbrs[k].id ? nbrs[k] : self;
+        iirtri::Edge_key e = {angle_between(young.p, old.p), young.id, old.id};
+        if (first || iirtri::shorter(e, out)) out = e;
         first = false;
     }
-
-    // The cell: its area and the candidates near its largest radius, in key order.
-    const Cell &cell = make_cell(in, scratch);
-    Cell_summary &c = out.cell;
-    c.area = cell.area;
-    std::vector<Candidate> &cands = scratch.cands;
-    cands.clear();
-    cap_candidates(cell, cands);
-    c.rmax = 0;
-    for (const Candidate &k : cands) c.rmax = std::max(c.rmax, k.r);
-    const double thr = c.rmax * (1 - IIR_TRI_TIE_TOL);
-    auto end = std::remove_if(cands.begin(), cands.end(),
-                              [&](const Candidate &k) { return !(k.r >= thr); });
-    std::sort(cands.begin(), end,
-              [](const Candidate &a, const Candidate &b) { return key_less(a.key, b.key); });
-    const size_t kept = std::min<size_t>(end - cands.begin(), kTopCandidates);
-    std::copy(cands.begin(), cands.begin() + kept, c.top);
-    c.ntop = (uint32_t)kept;
-    c.overflow = (size_t)(end - cands.begin()) > kTopCandidates;
+    return n > 0;
 }
 
 } // namespace iirstri

@@ -1,24 +1,23 @@
-// stri_geom.hpp -- what the sphere sources of libiirtri share without CGAL: 3-vectors, sites, the
-// per-site summaries an iir_stri handle keeps, and the spherical Voronoi cell they are computed
-// from (stri_cell.cpp); not the CGAL types (stri_internal.hpp) nor when summaries are redone
-// (stri_domain.cpp).
+// stri_geom.hpp -- what the sphere sources of libiirtri share without CGAL: 3-vectors, sites, and
+// the spherical Voronoi cell (stri_cell.cpp) the per-site summaries (tri_cache.hpp) are computed
+// from; not the CGAL types nor when summaries are redone (stri_domain.cpp, tri_handle.hpp).
 //
-// A summary is a pure function of a Cell_input: in dimension 2 the site and its Delaunay neighbours
-// counter-clockwise (starting at the smallest id), so it stays valid until an edit changes that
-// list (see tri_cache.hpp for which edits do); in dimension 1 it also depends on the plane of all
-// sites (Frame), so every edit redoes them all; dimensions -1 and 0 have at most two sites.
+// A cell is a pure function of a Cell_input: in dimension 2 the site and its Delaunay neighbours
+// counter-clockwise (starting at the smallest id), so its summary stays valid until an edit
+// changes that list (see tri_cache.hpp for which edits do); in dimension 1 it also depends on the
+// plane of all sites (Frame), so every edit redoes them all; dimensions -1 and 0 have at most two
+// sites.
 #ifndef IIR_STRI_GEOM_HPP
 #define IIR_STRI_GEOM_HPP
 
 #include "iir/stri.h"
+#include "tri_cache.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
-
-struct iir_stri;
 
 namespace iirstri
 {
@@ -71,28 +70,9 @@ inline double angle_between(Vec3 a, Vec3 b)
     return std::atan2(norm(cross(a, b)), dot(a, b));
 }
 
-// ---- sites and summaries ----
+// ---- sites and candidates ----
 
-struct Site {
-    Vec3 p;
-    uint32_t id;
-};
-
-// A Delaunay edge by its endpoints, the younger (larger id) first, and its geodesic length
-// computed as angle_between(young, old).
-struct Edge_key {
-    double angle;
-    uint32_t young, old;
-};
-
-// Edge order for "shortest" (stri.h): shorter first; among equal lengths, the larger younger id,
-// then the larger older id. A strict total order on distinct edges.
-inline bool shorter(const Edge_key &e, const Edge_key &f)
-{
-    if (e.angle != f.angle) return e.angle < f.angle;
-    if (e.young != f.young) return e.young > f.young;
-    return e.old > f.old;
-}
+using Site = iirtri::Site<Vec3>;
 
 // Which largest-empty-cap candidate this is, for ties: the ascending ids of the sites it is
 // equidistant to (unused places hold UINT32_MAX), then `side` (0 or 1: the two poles of a circle
@@ -109,74 +89,7 @@ inline bool key_less(const Cap_key &a, const Cap_key &b)
     return a.side < b.side;
 }
 
-// A candidate centre of the largest empty cap and its distance to the site of the cell it came
-// from (that site is its nearest, up to rounding).
-struct Candidate {
-    Vec3 c;
-    double r;
-    Cap_key key;
-};
-
-// How many of a cell's candidates near its own maximum a summary keeps.
-constexpr size_t kTopCandidates = 4;
-
-// One cell, summarised. `rmax` is the largest candidate radius (0 if none; NaN is ignored); `top`
-// holds, in key order, the first `ntop` candidates whose radius is >= rmax * (1 - IIR_TRI_TIE_TOL);
-// `overflow` says more than kTopCandidates qualified and only those with the smallest keys are
-// kept.
-struct Cell_summary {
-    double area;
-    double rmax;
-    uint32_t ntop;
-    bool overflow;
-    Candidate top[kTopCandidates];
-};
-
-// Everything remembered about one site: its id, its cell, its shortest edge (`has_edge` is false
-// when it has no neighbour). A free slot holds a neutral summary (no edge, no candidate), so that
-// queries may scan the slots in storage order.
-struct Site_summary {
-    Edge_key edge;
-    bool has_edge;
-    uint32_t id;
-    Cell_summary cell;
-};
-
-// The summary of a free slot.
-inline Site_summary neutral_summary()
-{
-    Site_summary s{};
-    s.has_edge = false;
-    s.cell.ntop = 0;
-    s.cell.rmax = 0;
-    return s;
-}
-
-struct Id_slot {
-    uint32_t id, slot;
-};
-
-// The sites by id and their summaries by slot. Slots are dense indices reused after removals
-// (`free_slots`); `summary[slot]` is neutral_summary() for a free slot.
-struct Site_table {
-    std::vector<Id_slot> order; // every site, ascending id
-    std::vector<Site_summary> summary;
-    std::vector<uint32_t> free_slots;
-
-    // The entry of `id` in `order`, or nullptr (binary search).
-    const Id_slot *find(uint32_t id) const
-    {
-        auto it = std::lower_bound(order.begin(), order.end(), id,
-                                   [](const Id_slot &e, uint32_t key) { return e.id < key; });
-        return it != order.end() && it->id == id ? &*it : nullptr;
-    }
-    void clear()
-    {
-        order.clear();
-        summary.clear();
-        free_slots.clear();
-    }
-};
+using Candidate = iirtri::Candidate<Vec3, Cap_key>;
 
 // ---- cells ----
 
@@ -223,7 +136,6 @@ struct Cell {
 struct Cell_scratch {
     std::vector<Site> nbrs;
     std::vector<Candidate> cands;
-    std::vector<Vec3> poly;
     Cell cell;
 };
 
@@ -239,23 +151,13 @@ void cap_candidates(const Cell &c, std::vector<Candidate> &out);
 // The cell's polygon for drawing (stri.h, DEFINITIONS) into out.
 void cell_polygon(const Cell &c, std::vector<Vec3> &out);
 
-// The summary of the cell of `in`.
-void summarise(const Cell_input &in, Cell_scratch &scratch, Site_summary &out);
+// The shortest edge from `self` to one of nbrs[0..n) into *out (tri_cache.hpp's order), its angle
+// computed from the younger endpoint to the older; false (out untouched) when n == 0.
+bool shortest_incident(const Site &self, const Site *nbrs, size_t n, iirtri::Edge_key &out);
 
 // The frame of a set of sites all on one circle (dimension 1), from the sites by ascending id:
 // deterministic for a given set.
 Frame circle_frame(const Site *sites, size_t n);
-
-// ---- the bridge into the handle (stri_domain.cpp); may throw, callers guard ----
-
-const Site_table &site_table(const iir_stri *s);
-
-// The input of the cell of `id` (neighbours gathered into scratch.nbrs); false if there is no
-// such site.
-bool cell_input(const iir_stri *s, uint32_t id, Cell_scratch &scratch, Cell_input &out);
-
-// The site nearest to the unit vector p (a greedy walk from site `from`, which must exist).
-Site nearest_site(const iir_stri *s, Vec3 p, uint32_t from);
 
 } // namespace iirstri
 

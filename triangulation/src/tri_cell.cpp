@@ -1,6 +1,7 @@
 // tri_cell.cpp -- one Voronoi cell clipped to the disk, computed exactly from its site and Delaunay
 // neighbours: half-plane clipping, then the walk that replaces the parts outside the circle by
-// arcs; not how sites or neighbours are found (tri_domain.cpp).
+// arcs, and what a summary reads from a cell; not how sites or neighbours are found
+// (tri_domain.cpp).
 //
 // The cell is first built as a convex polygon: a square of half-side 2R around the disk, cut by the
 // bisector half-plane of every neighbour (taken in the caller's order, ascending id, so the result
@@ -15,7 +16,7 @@
 #include <cmath>
 #include <cstdint>
 
-namespace iirtri
+namespace iirdisk
 {
 namespace
 {
@@ -84,8 +85,8 @@ size_t cell_polygon_in_square(const Site &self, const Site *nbrs, size_t n, doub
     size_t np = 4;
     for (size_t k = 0; k < n; k++) {
         const Site &o = nbrs[k];
-        Vec2 m = {0.5 * (self.x + o.x), 0.5 * (self.y + o.y)};
-        Vec2 d = {o.x - self.x, o.y - self.y};
+        Vec2 m = {0.5 * (self.p.x + o.p.x), 0.5 * (self.p.y + o.p.y)};
+        Vec2 d = {o.p.x - self.p.x, o.p.y - self.p.y};
         if (s.tmp.size() < 2 * np) s.tmp.resize(2 * np);
         if (s.side.size() < np) s.side.resize(np);
         size_t w = clip_halfplane(s.poly.data(), np, m, d, s.side.data(), s.tmp.data());
@@ -203,7 +204,7 @@ const Cell &clip_cell(const Site &self, const Site *nbrs, size_t n, double R, Ce
     size_t np = cell_polygon_in_square(self, nbrs, n, R, scratch);
     size_t ns = split_at_circle(scratch.poly.data(), np, R, scratch);
     Cell &c = scratch.cell;
-    c.site = {self.x, self.y};
+    c.site = self.p;
     c.R = R;
     join_into_ring(scratch.steps.data(), ns, R, c.ring);
     return c;
@@ -231,18 +232,33 @@ void cell_polygon(const Cell &c, std::vector<Vec2> &out)
     }
 }
 
-void far_candidates(const Cell &c, std::vector<Vec2> &out)
+void far_candidates(const Cell &c, std::vector<Candidate> &out)
 {
     const double s = std::hypot(c.site.x, c.site.y);
     Vec2 opposite = {0, 0};
     if (s > 0) opposite = {-c.R * c.site.x / s, -c.R * c.site.y / s};
+    uint32_t k = 0;
+    auto add = [&](Vec2 p) {
+        out.push_back({p, std::hypot(p.x - c.site.x, p.y - c.site.y), Ring_key{k++}});
+    };
     for (const Piece &p : c.ring) {
-        out.push_back(p.a);
+        add(p.a);
         if (!p.arc || s == 0) continue; // a site at the origin: every arc point is equally far
         double rel = angle_between(p.a, opposite);
         if (rel < 0) rel += kTwoPi;
-        if (rel <= p.sweep) out.push_back(opposite);
+        if (rel <= p.sweep) add(opposite);
     }
 }
 
-} // namespace iirtri
+bool shortest_incident(const Site &self, const Site *nbrs, size_t n, iirtri::Edge_key &out)
+{
+    for (size_t k = 0; k < n; k++) {
+        const Site &young = self.id > nbrs[k].id ? self : nbrs[k];
+        const Site &old = self.id > nbrs[k].id ? nbrs[k] : self;
+        iirtri::Edge_key e = {dist2(young.p, old.p), young.id, old.id};
+        if (k == 0 || iirtri::shorter(e, out)) out = e;
+    }
+    return n > 0;
+}
+
+} // namespace iirdisk

@@ -1,19 +1,34 @@
 // tri_cell.hpp -- one Voronoi cell clipped to the disk, as plain geometry: its boundary (segments
-// and arcs), exact area, drawing polygon and farthest points; not where the sites come from.
+// and arcs), exact area, drawing polygon, largest-empty-circle candidates and shortest incident
+// edge; not where the sites come from (tri_domain.cpp).
 #ifndef IIR_TRI_CELL_HPP
 #define IIR_TRI_CELL_HPP
 
-#include "tri_common.hpp"
+#include "tri_cache.hpp"
 
 #include <cstddef>
 #include <vector>
 
-namespace iirtri
+namespace iirdisk
 {
 
 struct Vec2 {
     double x, y;
 };
+
+using Site = iirtri::Site<Vec2>;
+
+// A candidate's place in far_candidates order: the first one reaching a radius wins a tie.
+struct Ring_key {
+    uint32_t k;
+};
+
+inline bool key_less(Ring_key a, Ring_key b)
+{
+    return a.k < b.k;
+}
+
+using Candidate = iirtri::Candidate<Vec2, Ring_key>;
 
 // One piece of the boundary of a clipped cell, counter-clockwise; piece k ends where piece k+1
 // starts. A segment lies on a Voronoi edge inside the disk; an arc runs counter-clockwise on the
@@ -39,17 +54,16 @@ struct Step {
     bool inside;
 };
 
-// Working buffers of clip_cell and of the cell summaries (tri_voronoi.cpp). Whoever owns one reuses
-// it across cells, so that clipping allocates only while the buffers still grow (the clipping
-// buffers are used up to a count kept aside, not up to their size). The contents between calls
-// mean nothing.
+// Working buffers of clip_cell and of the cell summaries. Whoever owns one reuses it across cells,
+// so that clipping allocates only while the buffers still grow (the clipping buffers are used up
+// to a count kept aside, not up to their size). The contents between calls mean nothing.
 struct Cell_scratch {
-    std::vector<Vec2> poly, tmp, points;
+    std::vector<Vec2> poly, tmp;
     std::vector<double> side;
     std::vector<Step> steps;
     std::vector<char> inside;
     std::vector<Site> nbrs;
-    std::vector<double> radii;
+    std::vector<Candidate> cands;
     Cell cell;
 };
 
@@ -67,10 +81,21 @@ double cell_area(const Cell &c);
 void cell_polygon(const Cell &c, std::vector<Vec2> &out);
 
 // Appends the points of the clipped cell where the distance to its site can be largest: every
-// vertex, and on each arc the point opposite the site (when the arc contains it). Their distance to
-// the site is the candidate radius.
-void far_candidates(const Cell &c, std::vector<Vec2> &out);
+// vertex, and on each arc the point opposite the site (when the arc contains it), each with its
+// distance to the site (std::hypot) and its place in this order as its key.
+void far_candidates(const Cell &c, std::vector<Candidate> &out);
 
-} // namespace iirtri
+// Squared distance, the length of an Edge_key: computed as (a - b)^2.
+inline double dist2(Vec2 a, Vec2 b)
+{
+    double dx = a.x - b.x, dy = a.y - b.y;
+    return dx * dx + dy * dy;
+}
+
+// The shortest edge from `self` to one of nbrs[0..n) into *out (tri_cache.hpp's order), its
+// length computed from the younger endpoint to the older; false (out untouched) when n == 0.
+bool shortest_incident(const Site &self, const Site *nbrs, size_t n, iirtri::Edge_key &out);
+
+} // namespace iirdisk
 
 #endif

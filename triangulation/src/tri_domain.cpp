@@ -1,60 +1,152 @@
-// tri_domain.cpp -- the iir_tri handle: lifetime, build/insert/remove, the id -> slot -> vertex
-// index, lookups, and keeping the per-site summaries (tri_cache.hpp) current across edits; not the
-// Delaunay/Voronoi queries (tri_query.cpp, tri_voronoi.cpp).
+// tri_domain.cpp -- the disk (tri.h): CGAL's Delaunay_triangulation_2 as the geometry of the
+// shared handle (tri_handle.hpp), and tri.h's functions over it; not the handle's logic
+// (tri_handle.hpp) nor the clipped cells (tri_cell.cpp). The only disk translation unit that
+// includes CGAL (each costs ~20 s to compile).
 //
-// Every mutation redoes, before it returns, the summaries of the sites whose neighbour lists it
-// changed (see tri_cache.hpp for which), so queries read summaries and never recompute a cell.
-// insert and remove redo O(degree) of them; build redoes those of the sites that moved or whose
-// neighbours did (all of them when the light moved, none when it did not).
-#include "tri_internal.hpp"
+// Sites are stored as given; neighbours are ordered by ascending id, so a cell does not depend on
+// CGAL's storage order. A position already taken is found by CGAL's locate (an exact predicate).
+#include "tri_cell.hpp"
+#include "tri_handle.hpp"
+
+#include <CGAL/Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <numeric>
 #include <tuple>
-#include <utility>
 
-using namespace iirtri;
-
-namespace
+namespace iirdisk
 {
 
-// ---- checks shared by build and insert ----
+using iirtri::Vertex_info;
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Vb = CGAL::Triangulation_vertex_base_with_info_2<Vertex_info, K>;
+using Tds = CGAL::Triangulation_data_structure_2<Vb>;
+using Delaunay = CGAL::Delaunay_triangulation_2<K, Tds>;
+using Point = Delaunay::Point;
+using Vertex_handle = Delaunay::Vertex_handle;
 
-iir_tri_status check_point(const iir_tri *tri, double x, double y)
-{
-    if (!std::isfinite(x) || !std::isfinite(y)) return IIR_TRI_BAD_ARG;
-    const double lim = tri->R * (1.0 + IIR_TRI_OUTSIDE_TOL);
-    if (x * x + y * y > lim * lim) return IIR_TRI_OUTSIDE;
-    return IIR_TRI_OK;
-}
+// The disk as the handle's geometry (see the list at the top of tri_handle.hpp).
+struct Disk {
+    using Vec = Vec2;
+    using Site = iirdisk::Site;
+    using Candidate = iirdisk::Candidate;
+    using Cell = iirdisk::Cell;
+    using Cell_scratch = iirdisk::Cell_scratch;
+    using Context = double; // R
+    using Delaunay = iirdisk::Delaunay;
+    using Vertex_handle = iirdisk::Vertex_handle;
+    static constexpr size_t kDim = 2;
 
-iir_tri_status check_build_input(const iir_tri *tri, const double *xy, const uint32_t *ids,
-                                 size_t n)
-{
-    if (n > 0 && (!xy || !ids)) return IIR_TRI_BAD_ARG;
-    for (size_t i = 0; i < n; i++) {
-        iir_tri_status st = check_point(tri, xy[2 * i], xy[2 * i + 1]);
-        if (st != IIR_TRI_OK) return st;
+    // ---- points and the metric ----
+
+    static Vec2 vec_of(const Point &p) { return {p.x(), p.y()}; }
+    static void put(Vec2 v, double *out) { out[0] = v.x, out[1] = v.y; }
+    static iir_tri_status check_point(const Delaunay &, double R, const double *p, Vec2 &out)
+    {
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1])) return IIR_TRI_BAD_ARG;
+        const double lim = R * (1.0 + IIR_TRI_OUTSIDE_TOL);
+        if (p[0] * p[0] + p[1] * p[1] > lim * lim) return IIR_TRI_OUTSIDE;
+        out = {p[0], p[1]};
+        return IIR_TRI_OK;
     }
-    std::vector<uint32_t> sorted(ids, ids + n);
-    std::sort(sorted.begin(), sorted.end());
-    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
-        return IIR_TRI_DUPLICATE_ID;
-    return IIR_TRI_OK;
-}
+    static double distance(Vec2 a, Vec2 b) { return dist2(a, b); }
+    static double edge_length(double len2) { return std::sqrt(len2); }
+    static double radius(Vec2 c, Vec2 s) { return std::hypot(c.x - s.x, c.y - s.y); }
+
+    // ---- the graph ----
+
+    template <class Fn> static void for_each_vertex(const Delaunay &dt, Fn &&fn)
+    {
+        for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) fn(v);
+    }
+    // Each finite neighbour of v. The circulator also works in dimension 1 (collinear sites),
+    // where it alternates between the two edges at v; in dimension 0 it is empty.
+    template <class Fn> static void for_each_neighbour(const Delaunay &dt, Vertex_handle v, Fn &&fn)
+    {
+        Delaunay::Vertex_circulator c = dt.incident_vertices(v), done = c;
+        if (c == nullptr) return;
+        do {
+            if (!dt.is_infinite(c)) fn(Vertex_handle(c));
+        } while (++c != done);
+    }
+    template <class Fn> static void for_each_edge(const Delaunay &dt, Fn &&fn)
+    {
+        for (auto e = dt.finite_edges_begin(); e != dt.finite_edges_end(); ++e)
+            fn(e->first->vertex(Delaunay::cw(e->second)),
+               e->first->vertex(Delaunay::ccw(e->second)));
+    }
+    // The neighbours of v as sites, ascending id (with collinear sites: the previous and next).
+    static void gather_neighbours(const Delaunay &dt, Vertex_handle v, std::vector<Site> &out)
+    {
+        out.clear();
+        for_each_neighbour(dt, v, [&](Vertex_handle o) {
+            out.push_back({vec_of(o->point()), o->info().id});
+        });
+        std::sort(out.begin(), out.end(), [](const Site &a, const Site &b) { return a.id < b.id; });
+    }
+    static Vertex_handle nearest(const Delaunay &dt, Vec2 p, Vertex_handle)
+    {
+        return dt.nearest_vertex(Point(p.x, p.y));
+    }
+
+    // ---- edits ----
+
+    static bool drop_repeated(const std::vector<Vec2> &pts, const uint32_t *ids,
+                              std::vector<size_t> &keep);
+    static bool triangulate(const std::vector<Vec2> &pts, const uint32_t *ids,
+                            const std::vector<size_t> &keep, Delaunay &dt,
+                            std::vector<Vertex_handle> &vertex);
+    static iir_tri_status insert(Delaunay &dt, Vec2 q, Vertex_handle, Vertex_handle &v)
+    {
+        Point p(q.x, q.y);
+        Delaunay::Locate_type lt;
+        int li;
+        Delaunay::Face_handle f = dt.locate(p, lt, li);
+        if (lt == Delaunay::VERTEX) return IIR_TRI_DUPLICATE_POINT;
+        v = dt.insert(p, lt, f, li);
+        return IIR_TRI_OK;
+    }
+    // A cell depends on its site, its neighbours and R only, so a build keeps a summary whatever
+    // the dimension; a change of dimension (collinear <-> not) may change any neighbour list.
+    static bool full_refresh(int before, int after) { return before != after; }
+    static bool reusable(int, int) { return true; }
+    template <class Table, class Vertices>
+    static void update_context(const Delaunay &, const Table &, const Vertices &,
+                               std::vector<Site> &, double &)
+    {
+    }
+
+    // ---- cells ----
+
+    static const Cell &make_cell(const Site &self, const std::vector<Site> &nbrs, int, double R,
+                                 Cell_scratch &s)
+    {
+        return clip_cell(self, nbrs.data(), nbrs.size(), R, s);
+    }
+    static double area(const Cell &c) { return cell_area(c); }
+    static void candidates(const Cell &c, std::vector<Candidate> &out) { far_candidates(c, out); }
+    static void polygon(const Cell &c, std::vector<Vec2> &out) { cell_polygon(c, out); }
+    static bool shortest_incident(const Site &self, const std::vector<Site> &nbrs,
+                                  iirtri::Edge_key &out)
+    {
+        return iirdisk::shortest_incident(self, nbrs.data(), nbrs.size(), out);
+    }
+};
 
 // Input indices with repeated positions removed, keeping the smallest id at each position. Returns
 // whether anything was dropped.
-bool unique_positions(const double *xy, const uint32_t *ids, size_t n, std::vector<size_t> &keep)
+bool Disk::drop_repeated(const std::vector<Vec2> &pts, const uint32_t *ids,
+                         std::vector<size_t> &keep)
 {
-    keep.resize(n);
+    keep.resize(pts.size());
     std::iota(keep.begin(), keep.end(), size_t{0});
-    auto key = [&](size_t i) { return std::make_tuple(xy[2 * i], xy[2 * i + 1], ids[i]); };
+    auto key = [&](size_t i) { return std::make_tuple(pts[i].x, pts[i].y, ids[i]); };
     std::sort(keep.begin(), keep.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
     auto same_place = [&](size_t a, size_t b) {
-        return xy[2 * a] == xy[2 * b] && xy[2 * a + 1] == xy[2 * b + 1];
+        return pts[a].x == pts[b].x && pts[a].y == pts[b].y;
     };
     auto end = std::unique(keep.begin(), keep.end(), same_place);
     bool dropped = end != keep.end();
@@ -62,102 +154,30 @@ bool unique_positions(const double *xy, const uint32_t *ids, size_t n, std::vect
     return dropped;
 }
 
-// ---- keeping the summaries current ----
-
-// The neighbours of v as sites, ascending id, into out.
-void gather_neighbours(const Delaunay &dt, Vertex_handle v, std::vector<Site> &out)
+// Triangulates pts[keep[k]] into dt by CGAL's bulk insertion (a spatial sort), giving vertex k the
+// info {ids[keep[k]], k}. False if CGAL merged points (never: they are distinct).
+bool Disk::triangulate(const std::vector<Vec2> &pts, const uint32_t *ids,
+                       const std::vector<size_t> &keep, Delaunay &dt,
+                       std::vector<Vertex_handle> &vertex)
 {
-    out.clear();
-    for_each_neighbour(dt, v, [&](Vertex_handle o) { out.push_back(site_of(o)); });
-    std::sort(out.begin(), out.end(), [](const Site &a, const Site &b) { return a.id < b.id; });
-}
-
-bool same_bits(double a, double b)
-{
-    return std::memcmp(&a, &b, sizeof a) == 0;
-}
-
-bool same_site(const Site &a, const Site &b)
-{
-    return a.id == b.id && same_bits(a.x, b.x) && same_bits(a.y, b.y);
-}
-
-// The summary tri already holds for `self` (its entry `was`, or nullptr if self.id is new), if self
-// and its neighbours `nbrs` (ascending id) are, bit for bit, the site and neighbours it was
-// computed from: a summary depends on nothing else (tri_cache.hpp). Lets iir_tri_build keep the
-// cells a rebuild did not change, e.g. every cell when the light has not moved. `before` is working
-// storage.
-const Site_summary *unchanged_summary(const iir_tri *tri, const Id_slot *was, const Site &self,
-                                      const std::vector<Site> &nbrs, std::vector<Site> &before)
-{
-    if (!was) return nullptr;
-    Vertex_handle old = tri->vertex[was->slot];
-    if (!same_site(site_of(old), self)) return nullptr;
-    gather_neighbours(tri->dt, old, before);
-    if (before.size() != nbrs.size()) return nullptr;
-    for (size_t k = 0; k < nbrs.size(); k++)
-        if (!same_site(before[k], nbrs[k])) return nullptr;
-    return &tri->table.summary[was->slot];
-}
-
-void refresh(const Delaunay &dt, Vertex_handle v, double R, Cell_scratch &scratch,
-             Site_summary &out)
-{
-    gather_neighbours(dt, v, scratch.nbrs);
-    summarise(site_of(v), scratch.nbrs.data(), scratch.nbrs.size(), R, scratch, out);
-}
-
-void refresh_all(iir_tri *tri)
-{
-    for (const Id_slot &e : tri->table.order)
-        refresh(tri->dt, tri->vertex[e.slot], tri->R, tri->scratch, tri->table.summary[e.slot]);
-}
-
-void refresh_affected(iir_tri *tri)
-{
-    for (uint32_t slot : tri->affected)
-        refresh(tri->dt, tri->vertex[slot], tri->R, tri->scratch, tri->table.summary[slot]);
-}
-
-// Runs a mutation; if it throws half-way, empties the handle so it is never left inconsistent.
-template <class F> iir_tri_status mutate(iir_tri *tri, F &&f) noexcept
-{
-    iir_tri_status st = guard(f);
-    if (st == IIR_TRI_NO_MEMORY || st == IIR_TRI_INTERNAL) {
-        tri->dt.clear();
-        tri->table.clear();
-        tri->vertex.clear();
-    }
-    return st;
-}
-
-} // namespace
-
-// ---- the bridge ----
-
-const Site_table &iirtri::site_table(const iir_tri *tri)
-{
-    return tri->table;
-}
-
-bool iirtri::neighbours(const iir_tri *tri, uint32_t id, Site &self, std::vector<Site> &out)
-{
-    out.clear();
-    const Id_slot *e = tri->table.find(id);
-    if (!e) return false;
-    Vertex_handle v = tri->vertex[e->slot];
-    self = site_of(v);
-    for_each_neighbour(tri->dt, v, [&](Vertex_handle o) { out.push_back(site_of(o)); });
-    std::sort(out.begin(), out.end(), [](const Site &a, const Site &b) { return a.id < b.id; });
+    const size_t m = keep.size();
+    std::vector<std::pair<Point, Vertex_info>> in;
+    in.reserve(m);
+    for (size_t i : keep)
+        in.emplace_back(Point(pts[i].x, pts[i].y), Vertex_info{ids[i], (uint32_t)in.size()});
+    dt.insert(in.begin(), in.end());
+    if (dt.number_of_vertices() != m) return false;
+    vertex.resize(m);
+    for_each_vertex(dt, [&](Vertex_handle v) { vertex[v->info().slot] = v; });
     return true;
 }
 
-bool iirtri::nearest(const iir_tri *tri, double x, double y, Site &out)
-{
-    if (tri->table.order.empty()) return false;
-    out = site_of(tri->dt.nearest_vertex(Point(x, y)));
-    return true;
-}
+} // namespace iirdisk
+
+struct iir_tri : iirtri::Handle<iirdisk::Disk> {
+};
+
+using iirtri::guard;
 
 // ---- lifetime ----
 
@@ -193,7 +213,7 @@ extern "C" iir_tri *iir_tri_create(double radius)
     if (!std::isfinite(radius) || radius <= 0) return nullptr;
     try {
         iir_tri *tri = new iir_tri();
-        tri->R = radius;
+        tri->ctx = radius;
         return tri;
     } catch (...) {
         return nullptr;
@@ -207,12 +227,12 @@ extern "C" void iir_tri_destroy(iir_tri *tri)
 
 extern "C" double iir_tri_radius(const iir_tri *tri)
 {
-    return tri ? tri->R : 0.0;
+    return tri ? tri->ctx : 0.0;
 }
 
 extern "C" size_t iir_tri_count(const iir_tri *tri)
 {
-    return tri ? tri->table.order.size() : 0;
+    return tri ? tri->count() : 0;
 }
 
 // ---- building and editing ----
@@ -220,153 +240,30 @@ extern "C" size_t iir_tri_count(const iir_tri *tri)
 extern "C" iir_tri_status iir_tri_build(iir_tri *tri, const double *xy, const uint32_t *ids,
                                         size_t n)
 {
-    if (!tri) return IIR_TRI_BAD_ARG;
-    return guard([&] {
-        iir_tri_status st = check_build_input(tri, xy, ids, n);
-        if (st != IIR_TRI_OK) return st;
-        std::vector<size_t> keep;
-        bool dropped = unique_positions(xy, ids, n, keep);
-        const size_t m = keep.size();
-        std::vector<std::pair<Point, Vertex_info>> pts;
-        pts.reserve(m);
-        for (size_t i : keep)
-            pts.emplace_back(Point(xy[2 * i], xy[2 * i + 1]),
-                             Vertex_info{ids[i], (uint32_t)pts.size()});
-        // Build the triangulation and its table aside and swap them in, so a failure keeps the
-        // previous set. The slot of a site is its index in pts.
-        Delaunay dt;
-        dt.insert(pts.begin(), pts.end());
-        if (dt.number_of_vertices() != m) return IIR_TRI_INTERNAL;
-        Site_table &table = tri->spare;
-        std::vector<Vertex_handle> &vertex = tri->spare_vertex;
-        table.clear();
-        table.order.resize(m);
-        table.summary.resize(m);
-        vertex.resize(m);
-        for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
-            vertex[v->info().slot] = v;
-            table.order[v->info().slot] = {v->info().id, v->info().slot};
-        }
-        std::sort(table.order.begin(), table.order.end(),
-                  [](const Id_slot &a, const Id_slot &b) { return a.id < b.id; });
-        Cell_scratch &scratch = tri->scratch;
-        const std::vector<Id_slot> &old_order = tri->table.order; // ascending id, like table.order
-        size_t o = 0;
-        for (const Id_slot &e : table.order) {
-            Vertex_handle v = vertex[e.slot];
-            const Site self = site_of(v);
-            gather_neighbours(dt, v, scratch.nbrs);
-            while (o < old_order.size() && old_order[o].id < e.id) o++;
-            const Id_slot *was =
-                o < old_order.size() && old_order[o].id == e.id ? &old_order[o] : nullptr;
-            const Site_summary *same = unchanged_summary(tri, was, self, scratch.nbrs, tri->before);
-            if (same)
-                table.summary[e.slot] = *same;
-            else
-                summarise(self, scratch.nbrs.data(), scratch.nbrs.size(), tri->R, scratch,
-                          table.summary[e.slot]);
-        }
-        tri->dt.swap(dt);
-        std::swap(tri->table, tri->spare);
-        tri->vertex.swap(tri->spare_vertex);
-        return dropped ? IIR_TRI_DUPLICATE_POINT : IIR_TRI_OK;
-    });
+    return tri ? tri->build(xy, ids, n) : IIR_TRI_BAD_ARG;
 }
 
 extern "C" iir_tri_status iir_tri_insert(iir_tri *tri, double x, double y, uint32_t id)
 {
-    if (!tri) return IIR_TRI_BAD_ARG;
-    iir_tri_status st = check_point(tri, x, y);
-    if (st != IIR_TRI_OK) return st;
-    if (tri->table.find(id)) return IIR_TRI_DUPLICATE_ID;
-    return mutate(tri, [&] {
-        Point p(x, y);
-        Delaunay::Locate_type lt;
-        int li;
-        Delaunay::Face_handle f = tri->dt.locate(p, lt, li);
-        if (lt == Delaunay::VERTEX) return IIR_TRI_DUPLICATE_POINT;
-        const int dim = tri->dt.dimension();
-        Vertex_handle v = tri->dt.insert(p, lt, f, li);
-        Site_table &table = tri->table;
-        uint32_t slot;
-        if (!table.free_slots.empty()) {
-            slot = table.free_slots.back();
-            table.free_slots.pop_back();
-        } else {
-            slot = (uint32_t)table.summary.size();
-            table.summary.emplace_back();
-            tri->vertex.emplace_back();
-        }
-        v->info() = {id, slot};
-        tri->vertex[slot] = v;
-        auto at = std::lower_bound(table.order.begin(), table.order.end(), id,
-                                   [](const Id_slot &e, uint32_t key) { return e.id < key; });
-        table.order.insert(at, {id, slot});
-        if (tri->dt.dimension() != dim) {
-            refresh_all(tri);
-            return IIR_TRI_OK;
-        }
-        // v and its neighbours after the insertion.
-        tri->affected.clear();
-        tri->affected.push_back(slot);
-        for_each_neighbour(tri->dt, v,
-                           [&](Vertex_handle o) { tri->affected.push_back(o->info().slot); });
-        refresh_affected(tri);
-        return IIR_TRI_OK;
-    });
+    const double p[2] = {x, y};
+    return tri ? tri->insert(p, id) : IIR_TRI_BAD_ARG;
 }
 
 extern "C" iir_tri_status iir_tri_remove(iir_tri *tri, uint32_t id)
 {
-    if (!tri) return IIR_TRI_BAD_ARG;
-    const Id_slot *e = tri->table.find(id);
-    if (!e) return IIR_TRI_UNKNOWN_ID;
-    const uint32_t slot = e->slot;
-    Vertex_handle v = tri->vertex[slot];
-    // v's neighbours before the removal; collected before anything changes, so running out of
-    // memory here leaves the set as it was.
-    iir_tri_status st = guard([&] {
-        tri->affected.clear();
-        for_each_neighbour(tri->dt, v,
-                           [&](Vertex_handle o) { tri->affected.push_back(o->info().slot); });
-        return IIR_TRI_OK;
-    });
-    if (st != IIR_TRI_OK) return st;
-    return mutate(tri, [&] {
-        const int dim = tri->dt.dimension();
-        tri->dt.remove(v);
-        Site_table &table = tri->table;
-        table.order.erase(table.order.begin() + (e - table.order.data()));
-        table.free_slots.push_back(slot);
-        if (tri->dt.dimension() != dim)
-            refresh_all(tri);
-        else
-            refresh_affected(tri);
-        return IIR_TRI_OK;
-    });
+    return tri ? tri->remove(id) : IIR_TRI_BAD_ARG;
 }
 
 // ---- lookup ----
 
 extern "C" iir_tri_status iir_tri_position(const iir_tri *tri, uint32_t id, double xy[2])
 {
-    if (!tri || !xy) return IIR_TRI_BAD_ARG;
-    const Id_slot *e = tri->table.find(id);
-    if (!e) return IIR_TRI_UNKNOWN_ID;
-    const Point &p = tri->vertex[e->slot]->point();
-    xy[0] = p.x();
-    xy[1] = p.y();
-    return IIR_TRI_OK;
+    return tri ? tri->position(id, xy) : IIR_TRI_BAD_ARG;
 }
 
 extern "C" iir_tri_status iir_tri_ids(const iir_tri *tri, uint32_t *ids, size_t cap, size_t *n)
 {
-    if (!tri || !n) return IIR_TRI_BAD_ARG;
-    iir_tri_status st = fits(ids, cap, tri->table.order.size(), n);
-    if (st != IIR_TRI_OK || !ids) return st;
-    size_t k = 0;
-    for (const Id_slot &e : tri->table.order) ids[k++] = e.id;
-    return IIR_TRI_OK;
+    return tri ? tri->ids(ids, cap, n) : IIR_TRI_BAD_ARG;
 }
 
 extern "C" iir_tri_status iir_tri_nearest(const iir_tri *tri, double x, double y, uint32_t *id,
@@ -374,10 +271,48 @@ extern "C" iir_tri_status iir_tri_nearest(const iir_tri *tri, double x, double y
 {
     if (!tri || !std::isfinite(x) || !std::isfinite(y)) return IIR_TRI_BAD_ARG;
     return guard([&] {
-        Site s;
-        if (!nearest(tri, x, y, s)) return IIR_TRI_TOO_FEW;
-        if (id) *id = s.id;
-        if (distance) *distance = std::hypot(x - s.x, y - s.y);
+        if (tri->count() == 0) return IIR_TRI_TOO_FEW;
+        iirdisk::Vertex_handle v = iirdisk::Disk::nearest(tri->dt, {x, y}, {});
+        if (id) *id = v->info().id;
+        if (distance) *distance = iirdisk::Disk::radius({x, y}, iirdisk::Disk::vec_of(v->point()));
         return IIR_TRI_OK;
     });
+}
+
+// ---- queries ----
+
+extern "C" iir_tri_status iir_tri_shortest_edge(const iir_tri *tri, uint32_t *denser_id,
+                                                uint32_t *other_id, double *length)
+{
+    return tri ? tri->shortest_edge(denser_id, other_id, length) : IIR_TRI_BAD_ARG;
+}
+
+extern "C" iir_tri_status iir_tri_largest_empty_circle(const iir_tri *tri, double centre[2],
+                                                       double *radius)
+{
+    return tri ? tri->largest_empty(centre, radius) : IIR_TRI_BAD_ARG;
+}
+
+extern "C" iir_tri_status iir_tri_cell_area(const iir_tri *tri, uint32_t id, double *area)
+{
+    return tri ? tri->cell_area(id, area) : IIR_TRI_BAD_ARG;
+}
+
+extern "C" iir_tri_status iir_tri_cell_areas(const iir_tri *tri, uint32_t *ids, double *areas,
+                                             size_t cap, size_t *n)
+{
+    return tri ? tri->cell_areas(ids, areas, cap, n) : IIR_TRI_BAD_ARG;
+}
+
+// ---- drawing ----
+
+extern "C" iir_tri_status iir_tri_edges(const iir_tri *tri, uint32_t *pairs, size_t cap, size_t *n)
+{
+    return tri ? tri->edges(pairs, cap, n) : IIR_TRI_BAD_ARG;
+}
+
+extern "C" iir_tri_status iir_tri_cell_polygon(const iir_tri *tri, uint32_t id, double *xy,
+                                               size_t cap, size_t *n)
+{
+    return tri ? tri->cell_polygon(id, xy, cap, n) : IIR_TRI_BAD_ARG;
 }

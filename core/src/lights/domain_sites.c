@@ -1,6 +1,6 @@
 /* domain_sites.c -- one set of calls over libiirtri's disk and sphere triangulations
- * (domain_sites.h): dispatch by the domain's shape, and the disk's points repacked from stride 3
- * to the stride 2 that tri.h takes. */
+ * (domain_sites.h): dispatch by the domain's shape, and the disk's points repacked between the
+ * stride 3 of these calls and the stride 2 of tri.h. */
 #include "domain_sites.h"
 
 #include <stdlib.h>
@@ -67,8 +67,7 @@ iir_tri_status iir_sites_remove(iir_sites *s, uint32_t id)
 int iir_sites_has(const iir_sites *s, uint32_t id)
 {
     double p[3];
-    if (s->shape == IIR_DOMAIN_SPHERE) return iir_stri_position(s->stri, id, p) == IIR_TRI_OK;
-    return iir_tri_position(s->tri, id, p) == IIR_TRI_OK;
+    return iir_sites_position(s, id, p) == IIR_TRI_OK;
 }
 
 iir_tri_status iir_sites_shortest_edge(const iir_sites *s, uint32_t *denser_id)
@@ -91,4 +90,43 @@ iir_tri_status iir_sites_cell_areas(const iir_sites *s, uint32_t *ids, double *a
 {
     if (s->shape == IIR_DOMAIN_SPHERE) return iir_stri_cell_areas(s->stri, ids, areas, cap, n);
     return iir_tri_cell_areas(s->tri, ids, areas, cap, n);
+}
+
+/* ---- reading a set for drawing ---- */
+
+iir_sites iir_sites_view(const struct iir_tri *tri, const struct iir_stri *stri)
+{
+    /* the const functions only read through these */
+    iir_sites s = {stri ? IIR_DOMAIN_SPHERE : IIR_DOMAIN_DISK, (iir_tri *)tri,
+                   (struct iir_stri *)stri, NULL, 0};
+    return s;
+}
+
+iir_tri_status iir_sites_position(const iir_sites *s, uint32_t id, double p[3])
+{
+    if (s->shape == IIR_DOMAIN_SPHERE) return iir_stri_position(s->stri, id, p);
+    iir_tri_status st = iir_tri_position(s->tri, id, p);
+    if (st == IIR_TRI_OK) p[2] = 0.0;
+    return st;
+}
+
+iir_tri_status iir_sites_edges(const iir_sites *s, uint32_t *pairs, size_t cap, size_t *n)
+{
+    if (s->shape == IIR_DOMAIN_SPHERE) return iir_stri_edges(s->stri, pairs, cap, n);
+    return iir_tri_edges(s->tri, pairs, cap, n);
+}
+
+iir_tri_status iir_sites_cell_polygon(const iir_sites *s, uint32_t id, double *xyz, size_t cap,
+                                      size_t *n)
+{
+    if (s->shape == IIR_DOMAIN_SPHERE) return iir_stri_cell_polygon(s->stri, id, xyz, cap, n);
+    iir_tri_status st = iir_tri_cell_polygon(s->tri, id, xyz, cap, n);
+    if (st != IIR_TRI_OK || !xyz) return st;
+    /* stride 2 to 3 in place, from the last point: point k's new place starts at or after its old
+     */
+    for (size_t k = *n; k-- > 0;) {
+        double x = xyz[2 * k], y = xyz[2 * k + 1];
+        xyz[3 * k] = x, xyz[3 * k + 1] = y, xyz[3 * k + 2] = 0.0;
+    }
+    return st;
 }

@@ -1,20 +1,19 @@
 /* domain_draw.c -- a VPL set's domain drawn into the unit disk (domain_draw.h): a disk's points
  * scaled by 1 / R, the sphere's by the equal-area map; edges and cells that the map would tear
- * (across the point straight up, on the rim) are left out of the drawing. */
+ * (across the point straight up, on the rim) are left out of the drawing. The triangulation is
+ * read through domain_sites.h, whichever its shape. */
 #include "domain_draw.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "iir/stri.h"
-#include "iir/tri.h"
+#include "lights/domain_sites.h"
 
 /* The set's triangulation, whichever shape, and how its points reach the unit disk. */
 typedef struct source {
-    const iir_tri *tri;
-    const iir_stri *stri;
-    float inv_r; /* disk: 1 / R */
+    iir_sites sites; /* a read-only view */
+    float inv_r;     /* disk: 1 / R */
 } source;
 
 /* Lambert's azimuthal equal-area map about -y, scaled so that the sphere fills the unit disk. */
@@ -31,7 +30,7 @@ static void sphere_to_disk(const double p[3], float out[2])
 
 static void to_disk(const source *src, const double *p, float out[2])
 {
-    if (src->stri) return sphere_to_disk(p, out);
+    if (src->sites.shape == IIR_DOMAIN_SPHERE) return sphere_to_disk(p, out);
     out[0] = (float)(p[0] * src->inv_r), out[1] = (float)(p[1] * src->inv_r);
 }
 
@@ -83,8 +82,8 @@ static uint32_t site_index(const iir_domain_site *sites, uint32_t n, uint32_t id
 static void site_point(const source *src, const iir_vpl *v, float out[2])
 {
     double p[3] = {0.0, 0.0, 0.0};
-    if (src->stri) {
-        iir_stri_position(src->stri, v->id, p);
+    if (src->sites.shape == IIR_DOMAIN_SPHERE) {
+        iir_sites_position(&src->sites, v->id, p);
         return sphere_to_disk(p, out);
     }
     out[0] = v->disk.x * src->inv_r, out[1] = v->disk.y * src->inv_r;
@@ -109,20 +108,14 @@ static bool draw_sites(const source *src, const iir_incr *set, iir_domain_draw *
     return true;
 }
 
-static iir_tri_status edges_of(const source *src, uint32_t *pairs, size_t cap, size_t *n)
-{
-    return src->stri ? iir_stri_edges(src->stri, pairs, cap, n)
-                     : iir_tri_edges(src->tri, pairs, cap, n);
-}
-
 /* Delaunay edges as index pairs; edges whose ids are not sites, or that the map tore, are
  * dropped. */
 static bool draw_edges(const source *src, iir_domain_draw *b)
 {
     size_t n = 0;
-    if (edges_of(src, NULL, 0, &n) != IIR_TRI_OK) return false;
+    if (iir_sites_edges(&src->sites, NULL, 0, &n) != IIR_TRI_OK) return false;
     if (!grow((void **)&b->pairs, &b->edges_cap, n, 2 * sizeof *b->pairs)) return false;
-    if (edges_of(src, b->pairs, b->edges_cap, &n) != IIR_TRI_OK) return false;
+    if (iir_sites_edges(&src->sites, b->pairs, b->edges_cap, &n) != IIR_TRI_OK) return false;
     uint32_t kept = 0;
     for (size_t e = 0; e < n; e++) {
         uint32_t a = site_index(b->sites, b->d.num_sites, b->pairs[2 * e]);
@@ -137,24 +130,19 @@ static bool draw_edges(const source *src, iir_domain_draw *b)
     return true;
 }
 
-static iir_tri_status cell_of(const source *src, uint32_t id, double *xy, size_t cap, size_t *n)
-{
-    return src->stri ? iir_stri_cell_polygon(src->stri, id, xy, cap / 3, n)
-                     : iir_tri_cell_polygon(src->tri, id, xy, cap / 2, n);
-}
-
 /* Appends site k's cell (empty when the triangulation does not know the id or the map tore it). */
 static bool draw_cell(const source *src, uint32_t k, iir_domain_draw *b, size_t *total)
 {
-    size_t n = 0, dim = src->stri ? 3 : 2;
-    iir_tri_status ts = cell_of(src, b->sites[k].id, b->xy, b->xy_cap, &n);
+    size_t n = 0;
+    iir_tri_status ts =
+        iir_sites_cell_polygon(&src->sites, b->sites[k].id, b->xy, b->xy_cap / 3, &n);
     if (ts == IIR_TRI_CAPACITY) {
-        if (!grow((void **)&b->xy, &b->xy_cap, dim * n, sizeof *b->xy)) return false;
-        ts = cell_of(src, b->sites[k].id, b->xy, b->xy_cap, &n);
+        if (!grow((void **)&b->xy, &b->xy_cap, 3 * n, sizeof *b->xy)) return false;
+        ts = iir_sites_cell_polygon(&src->sites, b->sites[k].id, b->xy, b->xy_cap / 3, &n);
     }
     if (ts != IIR_TRI_OK) n = 0;
     if (!grow((void **)&b->points, &b->points_cap, *total + n, sizeof *b->points)) return false;
-    for (size_t j = 0; j < n; j++) to_disk(src, &b->xy[dim * j], b->points[*total + j]);
+    for (size_t j = 0; j < n; j++) to_disk(src, &b->xy[3 * j], b->points[*total + j]);
     for (size_t j = 0; j < n; j++) {
         const float *p = b->points[*total + j], *q = b->points[*total + (j + 1) % n];
         if (torn(p[0], p[1], q[0], q[1])) return true;
@@ -175,9 +163,10 @@ static bool draw_removed(const source *src, const iir_incr *inc, iir_domain_draw
 
 bool iir_domain_draw_build(iir_domain_draw *b, const iir_incr *set, const char *map)
 {
-    source src = {iir_incr_tri(set), iir_incr_stri(set), 0.f};
-    if (!src.stri && (!src.tri || iir_tri_radius(src.tri) <= 0.0)) return false;
-    if (src.tri) src.inv_r = (float)(1.0 / iir_tri_radius(src.tri));
+    source src = {iir_sites_view(iir_incr_tri(set), iir_incr_stri(set)), 0.f};
+    const iir_tri *tri = src.sites.tri; /* NULL for the sphere */
+    if (!src.sites.stri && (!tri || iir_tri_radius(tri) <= 0.0)) return false;
+    if (tri) src.inv_r = (float)(1.0 / iir_tri_radius(tri));
     memset(&b->d, 0, sizeof b->d);
     /* a non-NULL polygon buffer, so that the triangulation answers IIR_TRI_CAPACITY, not a size
      * query */

@@ -22,7 +22,7 @@ typedef struct iir_domain_draw {
     size_t cell_start_cap;
     float (*points)[2];
     size_t points_cap;
-    double *xy; /* one cell polygon from the triangulation (stride 2 or 3) */
+    double *xy; /* one cell polygon from the triangulation (stride 3) */
     size_t xy_cap;
     float (*removed)[2];
     size_t removed_cap;
