@@ -14,30 +14,9 @@
 #include "iir/camera_move.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
+#include "testutil.h"
 
-typedef struct fixture {
-    iir_scene *scene;
-    iir_rt *rt;
-} fixture;
-
-static int setup(void **state)
-{
-    static fixture f;
-    iir_error err = {0};
-    f.scene = iir_scene_create_cornell_box();
-    assert_non_null(f.scene);
-    assert_int_equal(iir_rt_create(f.scene, &f.rt, &err), IIR_OK);
-    *state = &f;
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    fixture *f = *state;
-    iir_rt_destroy(f->rt);
-    iir_scene_destroy(f->scene);
-    return 0;
-}
+typedef iir_test_cornell fixture; /* the built-in box and its rays (testutil.h) */
 
 /* The box's camera orbited by yaw degrees about the vertical through its target. */
 static iir_camera orbited(const fixture *f, float yaw)
@@ -131,5 +110,5 @@ int main(void)
         cmocka_unit_test(test_a_dolly_through_the_floor_stops_above_it),
         cmocka_unit_test(test_a_view_into_a_block_moves_as_asked),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

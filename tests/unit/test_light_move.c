@@ -11,30 +11,9 @@
 #include "iir/light_move.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
+#include "testutil.h"
 
-typedef struct fixture {
-    iir_scene *scene;
-    iir_rt *rt;
-} fixture;
-
-static int setup(void **state)
-{
-    static fixture f;
-    iir_error err = {0};
-    f.scene = iir_scene_create_cornell_box();
-    assert_non_null(f.scene);
-    assert_int_equal(iir_rt_create(f.scene, &f.rt, &err), IIR_OK);
-    *state = &f;
-    return 0;
-}
-
-static int teardown(void **state)
-{
-    fixture *f = *state;
-    iir_rt_destroy(f->rt);
-    iir_scene_destroy(f->scene);
-    return 0;
-}
+typedef iir_test_cornell fixture; /* the built-in box and its rays (testutil.h) */
 
 static void test_a_free_move_is_kept(void **state)
 {
@@ -79,5 +58,5 @@ int main(void)
         cmocka_unit_test(test_a_move_through_the_ceiling_stops_under_it),
         cmocka_unit_test(test_a_far_target_is_clamped_into_the_box),
     };
-    return cmocka_run_group_tests(tests, setup, teardown);
+    return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }
