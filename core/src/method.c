@@ -62,7 +62,7 @@ void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *sta
     stats->vpl_evals = t->vpl_evals;
 }
 
-iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl_options *v,
+iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_indirect_params *v,
                                        int bounces)
 {
     iir_refine_params r = {

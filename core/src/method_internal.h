@@ -6,6 +6,7 @@
 #include <stddef.h>
 
 #include "iir/controller.h"
+#include "iir/render.h"
 #include "iir/method.h"
 #include "iir/refine.h"
 
@@ -20,44 +21,13 @@ extern const iir_param_table iir_common_table;
 /* `bounces`, one int wherever a method keeps it (pt, ir, iir; method.c). */
 extern const iir_param_table iir_bounces_table;
 
-/* ---- multiresolution shading (table iir_multires_table, vpl_options.c; multires.h) ---- */
-typedef struct iir_multires_options {
-    int mr_levels;   /* coarsest level */
-    float mr_depth;  /* discontinuity: tangent-plane distance relative to depth */
-    float mr_normal; /* discontinuity: minimum cosine between normals */
-    int mr_window;   /* pixels a level's interleave filter spans at most */
-} iir_multires_options;
-extern const iir_param_table iir_multires_table;
-
-/* ---- the VPL shading of ir, iir and ism (tables iir_vpl_table etc., vpl_options.c) ---- */
-typedef struct iir_vpl_options {
-    iir_visibility visibility;
-    int sm_res; /* shadow-map resolution */
-    float sm_bias;
-    int interleave;
-    float clamp;
-    iir_clamp_comp clamp_comp; /* table iir_clamp_comp_table */
-    iir_shading shading;       /* table iir_shading_table */
-    iir_multires_options mr;   /* table iir_multires_table */
-    int area_samples;          /* direct light: stratified samples per pixel per area light */
-} iir_vpl_options;
-extern const iir_param_table iir_vpl_table; /* sm_bias, interleave, area_samples */
-/* visibility and sm_res, of the same struct (ism always uses ISMs: it does not list them) */
-extern const iir_param_table iir_vis_table;
-/* `shading` (full or multires), one iir_shading, wherever a method keeps it (vpl.shading for ir,
- * iir and ism). */
-extern const iir_param_table iir_shading_table;
-/* The geometry term's clamp, one float (the VPL methods list it at their float's offset). */
-extern const iir_param_table iir_clamp_table;
-/* `clamp_compensation`, bound to a whole iir_vpl_options after its shading (ir, iir, ism list it).
- */
-extern const iir_param_table iir_clamp_comp_table;
+/* ---- the VPL shading: iir_indirect_params and its tables (render.h, render_params.c) ---- */
 /* clamp / D^2 (D the scene's bounding-box diagonal), or INFINITY for clamp 0 (rsm.c). */
 float iir_clamp_g_max(const struct iir_scene *scene, float clamp);
 /* The reflective shadow maps' gather (rsm_map.c; rsm, hier): rsm_map.h's iir_rsm_options. */
 extern const iir_param_table iir_rsm_table;
 
-/* ---- the frame-time controller (table iir_ctl_table, control/ctl_options.c; controller.h) ---- */
+/* ---- the frame-time controller (table iir_ctl_table, methods/ctl_options.c; controller.h) ---- */
 typedef struct iir_ctl_options {
     float target_fps; /* 0: off (the fixed vpls, interleave and sm_res) */
     int vpls_max;     /* ctl_vpls_max: the controller's N_max */
@@ -67,7 +37,7 @@ typedef struct iir_ctl_options {
 extern const iir_param_table iir_ctl_table;
 /* Creates, reconfigures or destroys *ctl as o asks (target_fps 0: none), its main rungs at v's
  * interleave and sm_res, a new one starting at start_vpls. On error *ctl is unchanged. */
-iir_status iir_ctl_follow(iir_ctl **ctl, const iir_ctl_options *o, const iir_vpl_options *v,
+iir_status iir_ctl_follow(iir_ctl **ctl, const iir_ctl_options *o, const iir_indirect_params *v,
                           int start_vpls, iir_error *err);
 /* One finished frame's measurement, rendered with setting `used`, from its stats. */
 iir_ctl_sample iir_ctl_sample_of(const iir_frame_stats *fs, iir_ctl_setting used);
@@ -182,7 +152,7 @@ extern const iir_method_ops iir_method_ism;
 /* ---- instant radiosity's options (ir.c), which the ism method binds too ---- */
 typedef struct iir_ir_options {
     iir_method_common common;
-    iir_vpl_options vpl;
+    iir_indirect_params vpl; /* bounces: the method's own `bounces` */
     iir_ism_options ism;
     int vpls;         /* N light paths */
     int bounces;      /* 1 = direct only, 2 = one diffuse bounce */
@@ -197,21 +167,14 @@ extern const iir_method_ops iir_method_hybrid;
 /* Shared by the VPL methods: validates the view (camera and lights), IIR_ERR_INVALID otherwise. */
 iir_status iir_view_validate(const iir_view *view, iir_error *err);
 
-/* The render.h settings the VPL options ask for, for VPLs of a method's `bounces`. */
-iir_indirect_params iir_vpl_indirect(const iir_vpl_options *o, int bounces);
-
 /* Copies the renderer's phase times into the frame stats. */
 void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *stats);
 
 /* The refine.h settings the options ask for, for VPLs of a method's `bounces`. */
-iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_vpl_options *v,
+iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_indirect_params *v,
                                        int bounces);
 
 /* A refinement pass's stats as frame stats (samples_per_pixel = passes, converged, phases). */
 void iir_refine_to_stats(const iir_refine_stats *rs, iir_frame_stats *stats);
-
-/* Bytes of the VPL renderer (G-buffer, scratch, refinement buffers) for a frame, and of n VPLs
- * with their shadow maps under these options: the VPL methods' memory estimates share them. */
-uint64_t iir_vpl_memory(const iir_vpl_options *o, uint32_t n, int width, int height);
 
 #endif

@@ -54,16 +54,4 @@ static inline iir_ray iir_segment_ray(const iir_light_segment *seg)
     return iir_make_ray(seg->org, seg->dir, 0.f, seg->tmax);
 }
 
-/* The shadow ray from o (the shading point lifted off its surface: iir_surface_offset) to light
- * sample ls taken at p with iir_lightset_sample: the light module's one rule (iir_light_shadow),
- * for callers that sample without a context; p is ls's receiving point (unused: ls has the
- * sampled point). */
-static inline iir_ray iir_light_sample_ray(iir_vec3 o, iir_vec3 p, const iir_light_sample *ls,
-                                           float eps)
-{
-    (void)p;
-    iir_light_segment seg = iir_light_shadow(o, ls, eps);
-    return iir_segment_ray(&seg);
-}
-
 #endif

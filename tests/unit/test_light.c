@@ -30,6 +30,13 @@ static iir_light make_spot(float alpha_deg, float smooth_deg)
     return l;
 }
 
+/* The set's sample at a point x in space (no surface, no offsets). */
+static iir_light_sample sample_at(const iir_lightset *set, iir_vec3 x, float u_pick, iir_vec2 u)
+{
+    iir_light_ctx ctx = {x, {0.f, 0.f, 0.f}, 0.f};
+    return iir_lightset_sample_li(set, &ctx, u_pick, u);
+}
+
 static void test_disk_round_trip(void **state)
 {
     (void)state;
@@ -455,7 +462,7 @@ static void test_lightset_sun(void **state)
     assert_non_null(set);
     double f0 = iir_luminance(iir_light_flux(&lights[0]));
     double f1 = iir_luminance(iir_light_flux(&lights[1]));
-    iir_light_sample ls = iir_lightset_sample(set, iir_v3(0.5f, 0.f, 0.f), 0.f, iir_v2(0.5f, 0.5f));
+    iir_light_sample ls = sample_at(set, iir_v3(0.5f, 0.f, 0.f), 0.f, iir_v2(0.5f, 0.5f));
     assert_true(ls.is_delta);
     assert_true(isinf(ls.dist) && ls.dist > 0.f);
     assert_true(iir_length(iir_sub(ls.wi, iir_v3(0, 1, 0))) < 1e-6f);
@@ -708,7 +715,7 @@ static void test_lightset_area(void **state)
         enum { N = 100000 };
         double E = 0;
         for (int i = 0; i < N; i++) {
-            iir_light_sample ls = iir_lightset_sample(set, x, 0.f, iir_rng_uniform2(&rng));
+            iir_light_sample ls = sample_at(set, x, 0.f, iir_rng_uniform2(&rng));
             assert_false(ls.is_delta);
             assert_true(ls.pdf > 0.f);
             assert_true(fabsf(area_local(&lights[0], iir_madd(x, ls.wi, ls.dist)).z) < 1e-4f);
@@ -726,7 +733,7 @@ static void test_lightset_area(void **state)
     }
     /* behind the light: no sample, and a BSDF ray from there meets nothing */
     iir_vec3 back = iir_madd(lights[0].position, fr.f, -0.5f);
-    iir_light_sample ls = iir_lightset_sample(set, back, 0.f, iir_v2(0.3f, 0.6f));
+    iir_light_sample ls = sample_at(set, back, 0.f, iir_v2(0.3f, 0.6f));
     assert_true(ls.pdf == 0.f);
     assert_true(isinf(iir_lightset_hit_light(set, 0, back, fr.f, INFINITY).t));
     assert_true(isinf(iir_lightset_hit_light(set, 1, back, fr.f, INFINITY).t)); /* a spot: never */
@@ -923,7 +930,7 @@ static void test_lightset_disc(void **state)
         enum { N = 200000 };
         double E = 0;
         for (int i = 0; i < N; i++) {
-            iir_light_sample ls = iir_lightset_sample(set, x, 0.5f, iir_rng_uniform2(&rng));
+            iir_light_sample ls = sample_at(set, x, 0.5f, iir_rng_uniform2(&rng));
             assert_true(ls.pdf > 0.f);
             iir_emitter_hit h = iir_lightset_hit_light(set, 0, x, ls.wi, INFINITY);
             assert_true(fabsf(h.pdf - ls.pdf) < 1e-3f * ls.pdf);

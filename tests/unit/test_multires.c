@@ -121,22 +121,21 @@ static void test_discontinuities(void **state)
         float depth, normal;
     } cases[] = {{BOTH, 0.01f, 0.999f}, {DEPTH_ONLY, 0.01f, -1.f}, {NORMAL_ONLY, 1e6f, 0.999f}};
     for (int c = 0; c < 3; c++) {
-        iir_mr_params p = {.max_level = 4,
-                           .depth = cases[c].depth,
-                           .normal = cases[c].normal,
-                           .interleave = 1,
-                           .window = 1,
-                           .filter_normal = 0.9f,
-                           .filter_depth = 0.05f};
-        assert_int_equal(iir_multires_build(mr, &s->gb, (uint64_t)c, &p, &err), IIR_OK);
-        check_marks(mr, cases[c].w, p.max_level);
+        iir_mr_params p = {.mr_levels = 4,
+                           .mr_depth = cases[c].depth,
+                           .mr_normal = cases[c].normal,
+                           .mr_window = 1};
+        assert_int_equal(iir_multires_build(mr, &s->gb, (uint64_t)c, &p, 1, &err), IIR_OK);
+        check_marks(mr, cases[c].w, p.mr_levels);
     }
     /* the default normal threshold (0.95) does not see a 3 degree crease */
-    iir_mr_params p = {4, 0.01f, 0.95f, 1, 1, 0.9f, 0.05f};
-    assert_int_equal(iir_multires_build(mr, &s->gb, 9, &p, &err), IIR_OK);
+    iir_mr_params p = {.mr_levels = 4, .mr_depth = 0.01f, .mr_normal = 0.95f, .mr_window = 1};
+    assert_int_equal(iir_multires_build(mr, &s->gb, 9, &p, 1, &err), IIR_OK);
     check_marks(mr, DEPTH_ONLY, 4);
-    p.max_level = 0;
-    assert_int_equal(iir_multires_build(mr, &s->gb, 10, &p, &err), IIR_ERR_INVALID);
+    p.mr_levels = 0;
+    assert_int_equal(iir_multires_build(mr, &s->gb, 10, &p, 1, &err), IIR_ERR_INVALID);
+    p.mr_levels = 4;
+    assert_int_equal(iir_multires_build(mr, &s->gb, 11, &p, 9, &err), IIR_ERR_INVALID);
     iir_multires_destroy(mr);
     free(s);
 }
@@ -222,7 +221,7 @@ static void test_plane_matches_full(void **state)
     p.visibility = IIR_VIS_RAYS;
     p.interleave = 1;
     p.clamp = 0.f;
-    p.mr_levels = L;
+    p.mr.mr_levels = L;
     iir_render_timing tf, tm;
     iir_error err = {0};
     iir_render_input in = {&scene->camera, NULL, 0, vpls, N, 1};

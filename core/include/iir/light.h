@@ -362,12 +362,9 @@ bool iir_lightset_has_area_lights(const iir_lightset *set);
 iir_light_sample iir_lightset_sample_li(const iir_lightset *set, const iir_light_ctx *ctx,
                                         float u_pick, iir_vec2 u);
 
-/* The same at a point x in space with no offsets (ctx {x, 0, 0}: the shadow segment runs from x
- * to the sampled point itself); for callers that build their own shadow ray (surface.h). */
-iir_light_sample iir_lightset_sample(const iir_lightset *set, iir_vec3 x, float u_pick, iir_vec2 u);
-
-/* Solid-angle pdf with which iir_lightset_sample would have chosen the point on emissive triangle
- * `prim` seen from x along unit direction wi at distance dist (for MIS when a BSDF ray hits it). */
+/* Solid-angle pdf with which iir_lightset_sample_li would have chosen the point on emissive
+ * triangle `prim` seen from x along unit direction wi at distance dist (for MIS when a BSDF ray
+ * hits it). */
 float iir_lightset_pdf_area(const iir_lightset *set, uint32_t prim, iir_vec3 wi, float dist);
 
 /* The number of lights the set was created with (emissive triangles not counted). */
@@ -377,7 +374,7 @@ uint32_t iir_lightset_num_lights(const iir_lightset *set);
 typedef struct iir_emitter_hit {
     float t;     /* along the ray; INFINITY when it meets nothing (and then Le = 0, pdf = 0) */
     iir_vec3 Le; /* radiance towards the ray's origin */
-    float pdf;   /* solid-angle pdf with which iir_lightset_sample would have chosen that point */
+    float pdf; /* solid-angle pdf with which iir_lightset_sample_li would have chosen that point */
 } iir_emitter_hit;
 
 /* Light i (< iir_lightset_num_lights) on the ray o + t d (unit d), t in (0, tmax): an area light

@@ -53,16 +53,7 @@ extern "C" {
 
 enum { IIR_MR_MAX_LEVEL = 6, IIR_MR_BATCH = 256, IIR_MR_MAX_CLASSES = 64 };
 
-typedef struct iir_mr_params {
-    int max_level;       /* coarsest level, [1, IIR_MR_MAX_LEVEL] */
-    float depth;         /* discontinuity: tangent-plane distance relative to depth, [0, inf) */
-    float normal;        /* discontinuity: minimum cosine between neighbours' normals, [-1, 1] */
-    int interleave;      /* n: the caller's lattice, n x n classes, [1, 8] */
-    int window;          /* pixels: level l uses an m x m lattice, m = window / 2^l clamped to
-                            [1, n], so its filter spans about `window` pixels, [1, 1024] */
-    float filter_normal; /* per-level filter (n > 1): as iir_indirect_params */
-    float filter_depth;
-} iir_mr_params;
+/* iir_mr_params, the hierarchy's knobs: render.h. */
 
 /* A point to evaluate: a pixel's or a coarse texel's G-buffer sample. */
 typedef struct iir_mr_sample {
@@ -83,15 +74,16 @@ typedef struct iir_multires iir_multires;
 iir_multires *iir_multires_create(void);
 void iir_multires_destroy(iir_multires *mr);
 
-/* IIR_ERR_INVALID naming the field and its range. */
-iir_status iir_mr_params_validate(const iir_mr_params *p, iir_error *err);
+/* IIR_ERR_INVALID naming the field and its range (interleave: the caller's lattice, [1, 8]). */
+iir_status iir_mr_params_validate(const iir_mr_params *p, int interleave, iir_error *err);
 
 /* Builds the hierarchy (discontinuities, samples, every pixel's level, the texels to evaluate) for
- * gb, or keeps it when `serial` (the caller's count of G-buffers rendered) and p are those of the
- * last build. Errors: IIR_ERR_INVALID for bad params, IIR_ERR_NOMEM when growing fails (the object
- * is then empty and builds again next time). */
+ * gb and the caller's n x n interleave lattice, or keeps it when `serial` (the caller's count of
+ * G-buffers rendered), p and interleave are those of the last build. Errors: IIR_ERR_INVALID for
+ * bad params, IIR_ERR_NOMEM when growing fails (the object is then empty and builds again next
+ * time). */
 iir_status iir_multires_build(iir_multires *mr, const iir_gbuffer *gb, uint64_t serial,
-                              const iir_mr_params *p, iir_error *err);
+                              const iir_mr_params *p, int interleave, iir_error *err);
 
 /* Per pixel (row-major, the G-buffer's size): the level its value comes from, 0 = the caller
  * shades it at full resolution. Valid after a build, until the next build or destroy. */

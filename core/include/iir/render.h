@@ -51,6 +51,7 @@
 #include "iir/camera.h"
 #include "iir/image.h"
 #include "iir/light.h"
+#include "iir/params.h"
 #include "iir/rt.h"
 #include "iir/rng.h"
 #include "iir/status.h"
@@ -77,8 +78,8 @@ typedef struct iir_gbuffer {
 typedef enum iir_visibility {
     IIR_VIS_SHADOWMAP, /* the VPLs' shadow maps (iir_smaps_build them first) */
     IIR_VIS_RAYS,      /* one exact occlusion ray per pixel-VPL pair (IIR_RAYS_VISIBILITY) */
-    IIR_VIS_ISM        /* a method option only: imperfect shadow maps (ism.h) in the VPLs' maps,
-                          which the renderer reads as IIR_VIS_SHADOWMAP (iir_vpl_indirect) */
+    IIR_VIS_ISM        /* imperfect shadow maps (ism.h), which the method builds into the VPLs'
+                          maps: the renderer reads them as IIR_VIS_SHADOWMAP's */
 } iir_visibility;
 
 typedef enum iir_shading {
@@ -97,37 +98,66 @@ typedef enum iir_clamp_comp {
                                   weighted n, gathered by the filter */
 } iir_clamp_comp;
 
+/* The multires hierarchy's knobs (multires.h), as the multires parameter table (mr_levels,
+ * mr_depth, mr_normal, mr_window) binds them wherever a method keeps them. */
+typedef struct iir_mr_params {
+    int mr_levels;   /* coarsest level (texels of 2^mr_levels pixels), [1, 6] */
+    float mr_depth;  /* discontinuity where a neighbour lies off a pixel's tangent plane by more
+                        than mr_depth times its camera depth, [0, inf) */
+    float mr_normal; /* discontinuity where neighbours' normals' cosine is below, [-1, 1] */
+    int mr_window;   /* pixels a level's interleave filter spans at most (level l of an n x n
+                        lattice interleaves min(n, mr_window / 2^l); 1 there = every VPL at every
+                        texel), [1, 1024] */
+} iir_mr_params;
+
+/* The geometry-aware filter's similarity (render_filter.c; multires's per-level filter): normals'
+ * cosine at least IIR_FILTER_MIN_COS, camera depths within IIR_FILTER_MAX_REL_DEPTH of the
+ * centre's. */
+#define IIR_FILTER_MIN_COS 0.9f
+#define IIR_FILTER_MAX_REL_DEPTH 0.05f
+
+/* The VPL shading's settings: the one struct the VPL parameter tables (render_params.c) bind
+ * wherever a method keeps them, and what the renderer is asked for. */
 typedef struct iir_indirect_params {
-    iir_visibility visibility;
-    iir_shading shading; /* full or multires (refinement passes are always full) */
-    int mr_levels;       /* multires: the coarsest level (texels of 2^mr_levels pixels). [1, 6] */
-    float mr_depth;      /* multires: discontinuity where a neighbour lies off a pixel's tangent
-                            plane by more than mr_depth times its camera depth. [0, inf) */
-    float mr_normal;     /* multires: discontinuity where neighbours' normals' cosine is below.
-                            [-1, 1] */
-    int mr_window;       /* multires: pixels the per-level interleave filter spans at most (level
-                            l interleaves min(n, mr_window / 2^l) x as many; 1 there = every VPL
-                            at every texel). [1, 1024] */
-    int interleave;      /* n: n x n VPL subsets; 1 = every VPL at every pixel, no filter. [1, 8] */
-    bool filter;         /* apply the geometry-aware filter when interleave > 1 (default true;
-                            false leaves the raw interleaved estimate, for tests and debugging) */
-    float clamp;         /* G <= clamp / D^2, D the scene's bounding-box diagonal; 0 = no clamp.
-                            [0, inf) */
-    float sm_bias;       /* shadow maps: constant bias as a fraction of the VPL-receiver distance,
-                            added to the slope term (shadowmap.h). [0, 1], default 0.005 */
-    iir_clamp_comp clamp_comp; /* compensation of the clamp (shading full only); default off */
-    int bounces;         /* the light bounces the VPLs stand for (the methods' `bounces`, >= 2):
-                            compensation adds no light of more bounces. Default 2 */
-    float filter_normal; /* filter: minimum cosine between the normals. [-1, 1], default 0.9 */
-    float filter_depth;  /* filter: maximum relative depth difference. (0, inf), default 0.05 */
-    int area_samples;    /* direct light: stratified samples per pixel of every area light and of
-                            the emissive triangles (render_direct.c). [1, 4096] */
+    iir_visibility visibility; /* ism: the method built ISMs into the maps (read as shadowmap) */
+    int sm_res;                /* the method's shadow maps: sm_res^2 texels per paraboloid */
+    float sm_bias;  /* shadow maps: constant bias as a fraction of the VPL-receiver distance,
+                       added to the slope term (shadowmap.h). [0, 1] */
+    int interleave; /* n: n x n VPL subsets; 1 = every VPL at every pixel, no filter. [1, 8] */
+    float clamp;    /* G <= clamp / D^2, D the scene's bounding-box diagonal; 0 = no clamp.
+                       [0, inf) */
+    iir_clamp_comp clamp_comp; /* compensation of the clamp (shading full only) */
+    iir_shading shading;       /* full or multires (refinement passes are always full) */
+    iir_mr_params mr;          /* shading multires: the hierarchy */
+    int area_samples;          /* direct light: stratified samples per pixel of every area light
+                                  and of the emissive triangles (render_direct.c). [1, 4096] */
+    int bounces;     /* the light bounces the VPLs stand for (the methods' `bounces`, >= 2):
+                        compensation adds no light of more bounces. 0 counts as 2 */
+    bool unfiltered; /* leave the raw interleaved estimate (tests, debugging); false: the
+                        geometry-aware filter when interleave > 1 */
 } iir_indirect_params;
 
-/* shadowmap, interleave 4 with the filter, clamp 100 (G stops growing below a tenth of the scene
- * diagonal; on the Cornell box orbit it gave the lowest error against pt of 0, 25, 100, 400 and
- * 1600 for both ir and iir), sm_bias 0.005, filter 0.9 / 0.05. */
+/* The VPL parameter tables' defaults (render_params.c), bounces 2, filtered. */
 iir_indirect_params iir_indirect_params_default(void);
+
+/* ---- the VPL shading's parameter tables (render_params.c), each bound at its offset ---- */
+/* visibility and sm_res of an iir_indirect_params (ism always uses ISMs: it does not list them) */
+extern const iir_param_table iir_vis_table;
+/* sm_bias, interleave, area_samples of an iir_indirect_params */
+extern const iir_param_table iir_vpl_table;
+/* `shading` (full or multires), one iir_shading, wherever a method keeps it (.shading of an
+ * iir_indirect_params for ir, iir and ism). */
+extern const iir_param_table iir_shading_table;
+/* The geometry term's clamp, one float (the VPL methods list it at their float's offset). */
+extern const iir_param_table iir_clamp_table;
+/* `clamp_compensation`, bound to a whole iir_indirect_params after its shading (ir, iir, ism). */
+extern const iir_param_table iir_clamp_comp_table;
+/* multires's hierarchy, one iir_mr_params, for every method that shades on it. */
+extern const iir_param_table iir_multires_table;
+
+/* Bytes of the VPL renderer (G-buffer, scratch, refinement buffers) for a frame, and of n VPLs
+ * with their shadow maps under these settings: the VPL methods' memory estimates share them. */
+uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int height);
 
 /* The interleaving subset of VPL `id` among n2 subsets: Fibonacci hashing of the id, so
  * consecutive ids spread evenly over the subsets while a subset's ids follow no power-of-two

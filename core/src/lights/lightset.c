@@ -299,12 +299,6 @@ iir_light_sample iir_lightset_sample_li(const iir_lightset *set, const iir_light
     return ls;
 }
 
-iir_light_sample iir_lightset_sample(const iir_lightset *set, iir_vec3 x, float u_pick, iir_vec2 u)
-{
-    iir_light_ctx ctx = {x, {0.f, 0.f, 0.f}, 0.f};
-    return iir_lightset_sample_li(set, &ctx, u_pick, u);
-}
-
 float iir_lightset_pdf_area(const iir_lightset *set, uint32_t prim, iir_vec3 wi, float dist)
 {
     const iir_scene *s = set->scene;

@@ -37,7 +37,7 @@ typedef struct hier_options {
     iir_method_common common;
     float clamp;
     iir_rsm_options rsm;
-    iir_multires_options mr;
+    iir_mr_params mr;
     int samples;   /* K points per area light */
     int voxel_res; /* cells along the scene's longest side */
     hier_visibility vis;
@@ -128,18 +128,6 @@ static uint64_t shade_pixels(hier_state *s, const iir_gbuffer *gb, const uint8_t
     return evals;
 }
 
-static iir_mr_params mr_params(const hier_options *o)
-{
-    iir_indirect_params f = iir_indirect_params_default();
-    return (iir_mr_params){.max_level = o->mr.mr_levels,
-                           .depth = o->mr.mr_depth,
-                           .normal = o->mr.mr_normal,
-                           .interleave = 1,
-                           .window = o->mr.mr_window,
-                           .filter_normal = f.filter_normal,
-                           .filter_depth = f.filter_depth};
-}
-
 /* Fills s->E (bounce light) for every pixel -- the hierarchy's levels, then the level-0 pixels --
  * and s->tree.D (direct light) on the tree refined from that hierarchy where the light changes. */
 static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *stats,
@@ -152,8 +140,7 @@ static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *s
         s->E = E, s->E_cap = n;
     }
     uint64_t evals = 0;
-    iir_mr_params p = mr_params(&s->o);
-    iir_status st = iir_multires_build(s->mr, gb, s->gb_serial, &p, err);
+    iir_status st = iir_multires_build(s->mr, gb, s->gb_serial, &s->o.mr, 1, err);
     if (st != IIR_OK) return st;
     if (iir_multires_shade(s->mr, shade_samples, s, 1u, s->E, s->stop, s->stop_ctx, &stats->rays,
                            &evals))

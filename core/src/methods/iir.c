@@ -38,7 +38,7 @@
 
 typedef struct iir_options {
     iir_method_common common;
-    iir_vpl_options vpl;
+    iir_indirect_params vpl; /* bounces: the method's own `bounces` */
     iir_ism_options ism;
     int vpls;              /* N: the VPL set's size */
     int kmin, kmax;        /* replacements per frame */
@@ -413,7 +413,8 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     measure_insert_cost(s, &is, maps, t2 - t1);
     uint32_t n = 0;
     const iir_vpl *vpls = iir_vplsets_gather(s->sets, &n);
-    iir_indirect_params ind = iir_vpl_indirect(&s->params.vpl, s->params.bounces);
+    iir_indirect_params ind = s->params.vpl;
+    ind.bounces = s->params.bounces;
     iir_render_timing rt;
     iir_render_input in = {.camera = &view->camera,
                            .lights = view->lights,

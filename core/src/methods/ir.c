@@ -257,7 +257,8 @@ static iir_status ir_render(void *state, const iir_view *view, iir_image *out,
     if (ir->stop && ir->stop(ir->stop_ctx))
         return ir->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double t2 = iir_now_ms();
-    iir_indirect_params ind = iir_vpl_indirect(&ir->params.vpl, ir->params.bounces);
+    iir_indirect_params ind = ir->params.vpl;
+    ind.bounces = ir->params.bounces;
     iir_render_timing rt;
     iir_render_input in = {.camera = &view->camera,
                            .lights = view->lights,

@@ -87,13 +87,13 @@ static iir_vec3 estimate_direct(const pt_state *pt, const iir_surface *sf, iir_r
                                 iir_raystats *st)
 {
     float u_pick = iir_rng_uniform(rng);
-    iir_light_sample ls = iir_lightset_sample(pt->lights, sf->p, u_pick, iir_rng_uniform2(rng));
+    iir_light_ctx ctx = iir_surface_light_ctx(sf, iir_rt_epsilon(pt->rt));
+    iir_light_sample ls = iir_lightset_sample_li(pt->lights, &ctx, u_pick, iir_rng_uniform2(rng));
     if (ls.pdf <= 0.f || iir_is_black(ls.Li)) return iir_v3s(0.f);
     float cos_theta = iir_dot(sf->ns, ls.wi);
     if (cos_theta <= 0.f) return iir_v3s(0.f);
 
-    float eps = iir_rt_epsilon(pt->rt);
-    iir_ray shadow = iir_light_sample_ray(iir_surface_offset(sf, eps), sf->p, &ls, eps);
+    iir_ray shadow = iir_segment_ray(&ls.shadow);
     if (iir_rt_occluded(pt->rt, &shadow, st, IIR_RAYS_SHADOW)) return iir_v3s(0.f);
 
     iir_vec3 f = iir_scale(sf->mat->albedo, IIR_INV_PI);

@@ -49,8 +49,8 @@ typedef struct rsm_options {
     float clamp;
     iir_rsm_options map; /* the maps and the gather: iir_rsm_table (rsm_map.c) */
     int lowres; /* L: gather every L-th pixel, interpolate between; 1 = every pixel gathers */
-    iir_shading shading;     /* multires: on the G-buffer's hierarchy instead (lowres unused) */
-    iir_multires_options mr; /* its hierarchy */
+    iir_shading shading; /* multires: on the G-buffer's hierarchy instead (lowres unused) */
+    iir_mr_params mr;    /* its hierarchy */
 } rsm_options;
 
 static const iir_param LOWRES_ROWS[] = {
@@ -125,12 +125,12 @@ static int node_pixel(int i, int size, int L)
 }
 
 /* Whether node pixel j may stand for pixel i's surface: the filter's test (render.h). */
-static bool node_agrees(const iir_gbuffer *gb, size_t i, size_t j, const iir_indirect_params *f)
+static bool node_agrees(const iir_gbuffer *gb, size_t i, size_t j)
 {
     if (!isfinite(gb->depth[j])) return false;
-    if (iir_dot(gb->normal[i], gb->normal[j]) < f->filter_normal) return false;
+    if (iir_dot(gb->normal[i], gb->normal[j]) < IIR_FILTER_MIN_COS) return false;
     float plane = fabsf(iir_dot(gb->normal[i], iir_sub(gb->position[j], gb->position[i])));
-    return plane <= f->filter_depth * gb->depth[i];
+    return plane <= IIR_FILTER_MAX_REL_DEPTH * gb->depth[i];
 }
 
 /* Whether the frame should end now: polled per row of the gathers (a row at the live limits is
@@ -159,7 +159,7 @@ static void gather_nodes(rsm_state *s, const iir_gbuffer *gb, int nx, int ny)
 
 /* Pixel (x, y)'s light from the four nodes around it, or NULL-free recompute; true if gathered. */
 static bool interpolate(const rsm_state *s, const iir_gbuffer *gb, int nx, int x, int y,
-                        const iir_indirect_params *f, iir_vec3 *e)
+                        iir_vec3 *e)
 {
     const int L = s->o.lowres, W = gb->width, H = gb->height;
     int i0 = x / L, j0 = y / L;
@@ -171,7 +171,7 @@ static bool interpolate(const rsm_state *s, const iir_gbuffer *gb, int nx, int x
     const int ci[4] = {i0, i1, i0, i1}, cj[4] = {j0, j0, j1, j1};
     const int px[4] = {x0, x1, x0, x1}, py[4] = {y0, y0, y1, y1};
     for (int c = 0; c < 4; c++)
-        if (!node_agrees(gb, p, (size_t)py[c] * W + px[c], f)) {
+        if (!node_agrees(gb, p, (size_t)py[c] * W + px[c])) {
             *e = gather(s, gb, p);
             return true;
         }
@@ -194,7 +194,6 @@ static iir_status shade_lowres(rsm_state *s, const iir_gbuffer *gb, iir_image *o
         return iir_fail(err, IIR_ERR_NOMEM, "rsm: out of memory for the interpolation nodes");
     s->stopped = false;
     if (L > 1) gather_nodes(s, gb, nx, ny);
-    const iir_indirect_params f = iir_indirect_params_default();
     long gathered = 0;
 #pragma omp parallel for schedule(dynamic, 4) reduction(+ : gathered)
     for (int y = 0; y < H; y++)
@@ -208,7 +207,7 @@ static iir_status shade_lowres(rsm_state *s, const iir_gbuffer *gb, iir_image *o
             } else if (x % L == 0 && y % L == 0) {
                 e = s->node[(size_t)(y / L) * nx + x / L];
             } else {
-                gathered += interpolate(s, gb, nx, x, y, &f, &e);
+                gathered += interpolate(s, gb, nx, x, y, &e);
             }
             out->pixels[p] = iir_madd(out->pixels[p], iir_mul(gb->albedo[p], e), 1.f / (float)M_PI);
         }
@@ -245,15 +244,7 @@ static iir_status shade_multires(rsm_state *s, const iir_gbuffer *gb, iir_image 
     const int n = gb->width * gb->height;
     if (!grow((void **)&s->E, &s->E_cap, (size_t)n, sizeof *s->E))
         return iir_fail(err, IIR_ERR_NOMEM, "rsm: out of memory for the frame");
-    iir_indirect_params f = iir_indirect_params_default();
-    iir_mr_params p = {.max_level = s->o.mr.mr_levels,
-                       .depth = s->o.mr.mr_depth,
-                       .normal = s->o.mr.mr_normal,
-                       .interleave = 1,
-                       .window = s->o.mr.mr_window,
-                       .filter_normal = f.filter_normal,
-                       .filter_depth = f.filter_depth};
-    iir_status st = iir_multires_build(s->mr, gb, s->gb_serial, &p, err);
+    iir_status st = iir_multires_build(s->mr, gb, s->gb_serial, &s->o.mr, 1, err);
     if (st != IIR_OK) return st;
     uint64_t evals = 0;
     if (iir_multires_shade(s->mr, gather_samples, s, 1u, s->E, s->stop, s->stop_ctx, &stats->rays,

@@ -61,6 +61,7 @@ struct iir_multires {
     bool valid;
     uint64_t serial, generation;
     iir_mr_params p;
+    int interleave; /* the caller's lattice: n x n classes */
 };
 
 /* The side, in texels, of level l's batch tiles: 64 pixels, as the full-resolution indirect tiles,
@@ -133,22 +134,23 @@ static iir_status alloc_levels(iir_multires *mr, int w, int h, iir_error *err)
     return IIR_OK;
 }
 
-iir_status iir_mr_params_validate(const iir_mr_params *p, iir_error *err)
+iir_status iir_mr_params_validate(const iir_mr_params *p, int interleave, iir_error *err)
 {
-    if (p->max_level < 1 || p->max_level > IIR_MR_MAX_LEVEL)
+    if (p->mr_levels < 1 || p->mr_levels > IIR_MR_MAX_LEVEL)
         return iir_fail(err, IIR_ERR_INVALID, "multires max level %d is outside [1, %d]",
-                        p->max_level, IIR_MR_MAX_LEVEL);
-    if (!(p->depth >= 0.f) || isinf(p->depth))
+                        p->mr_levels, IIR_MR_MAX_LEVEL);
+    if (!(p->mr_depth >= 0.f) || isinf(p->mr_depth))
         return iir_fail(err, IIR_ERR_INVALID, "multires depth %g must be finite and >= 0",
-                        (double)p->depth);
-    if (!(p->normal >= -1.f && p->normal <= 1.f))
+                        (double)p->mr_depth);
+    if (!(p->mr_normal >= -1.f && p->mr_normal <= 1.f))
         return iir_fail(err, IIR_ERR_INVALID, "multires normal %g is outside [-1, 1]",
-                        (double)p->normal);
-    if (p->interleave < 1 || p->interleave * p->interleave > IIR_MR_MAX_CLASSES)
+                        (double)p->mr_normal);
+    if (interleave < 1 || interleave * interleave > IIR_MR_MAX_CLASSES)
         return iir_fail(err, IIR_ERR_INVALID, "multires interleave %d is outside [1, 8]",
-                        p->interleave);
-    if (p->window < 1 || p->window > 1024)
-        return iir_fail(err, IIR_ERR_INVALID, "multires window %d is outside [1, 1024]", p->window);
+                        interleave);
+    if (p->mr_window < 1 || p->mr_window > 1024)
+        return iir_fail(err, IIR_ERR_INVALID, "multires window %d is outside [1, 1024]",
+                        p->mr_window);
     return IIR_OK;
 }
 
@@ -159,8 +161,8 @@ static bool dissimilar(const iir_gbuffer *gb, size_t a, size_t b, const iir_mr_p
 {
     if (gb->prim[b] == IIR_NO_HIT) return true;
     iir_vec3 na = gb->normal[a], nb = gb->normal[b], d = iir_sub(gb->position[b], gb->position[a]);
-    return iir_dot(na, nb) < p->normal || fabsf(iir_dot(na, d)) > p->depth * gb->depth[a] ||
-           fabsf(iir_dot(nb, d)) > p->depth * gb->depth[b];
+    return iir_dot(na, nb) < p->mr_normal || fabsf(iir_dot(na, d)) > p->mr_depth * gb->depth[a] ||
+           fabsf(iir_dot(nb, d)) > p->mr_depth * gb->depth[b];
 }
 
 enum { RIGHT = 1, BELOW = 2 }; /* a pixel's pair bits: dissimilar to its right / lower neighbour */
@@ -275,7 +277,7 @@ static inline bool marked_at(const mr_level *v, int i, int j)
 
 static void choose_pixels(iir_multires *mr)
 {
-    int w = mr->width, L = mr->p.max_level;
+    int w = mr->width, L = mr->p.mr_levels;
 #pragma omp parallel for schedule(static)
     for (int y = 0; y < mr->height; y++)
         for (int x = 0; x < w; x++) {
@@ -289,7 +291,7 @@ static void choose_pixels(iir_multires *mr)
 static void choose_texels(iir_multires *mr, int l)
 {
     mr_level *v = &mr->lv[l];
-    const mr_level *up = l < mr->p.max_level ? &mr->lv[l + 1] : NULL;
+    const mr_level *up = l < mr->p.mr_levels ? &mr->lv[l + 1] : NULL;
 #pragma omp parallel for schedule(static) if (v->w * v->h >= PARALLEL_MIN)
     for (int j = 0; j < v->h; j++)
         for (int i = 0; i < v->w; i++) {
@@ -395,7 +397,7 @@ static void visit_fine(const iir_multires *mr, const iir_gbuffer *gb, uint32_t *
                        uint32_t *next, uint32_t *order)
 {
     const mr_level *v = &mr->lv[1];
-    int n = mr->p.interleave, T = batch_tile(1);
+    int n = mr->interleave, T = batch_tile(1);
     for (int ty = 0; ty < v->h; ty += T)
         for (int tx = 0; tx < v->w; tx += T)
             for (int j = ty; j < ty + T && j < v->h; j++)
@@ -417,7 +419,7 @@ static void visit_fine(const iir_multires *mr, const iir_gbuffer *gb, uint32_t *
 static void sort_fine(iir_multires *mr, const iir_gbuffer *gb)
 {
     mr_level *v0 = &mr->lv[0];
-    int n2 = mr->p.interleave * mr->p.interleave;
+    int n2 = mr->interleave * mr->interleave;
     uint32_t count[IIR_MR_MAX_CLASSES + 1] = {0}, next[IIR_MR_MAX_CLASSES + 1];
     visit_fine(mr, gb, count, NULL, NULL);
     v0->start[0] = 0;
@@ -446,7 +448,7 @@ static void cut_items(iir_multires *mr, int l, int classes, int *num)
 static void build_lists(iir_multires *mr, const iir_gbuffer *gb, int *tmp)
 {
     int num = 0;
-    for (int l = 1; l <= mr->p.max_level; l++) {
+    for (int l = 1; l <= mr->p.mr_levels; l++) {
         mr_level *v = &mr->lv[l];
         coarse_classes(v, tmp);
         sort_by_class(v, batch_tile(l), v->n * v->n, tmp);
@@ -454,8 +456,8 @@ static void build_lists(iir_multires *mr, const iir_gbuffer *gb, int *tmp)
     }
     mr->num_coarse = num;
     mr_level *v0 = &mr->lv[0];
-    int n2 = mr->p.interleave * mr->p.interleave;
-    v0->n = mr->p.interleave;
+    int n2 = mr->interleave * mr->interleave;
+    v0->n = mr->interleave;
     sort_fine(mr, gb);
     v0->work = v0->start[n2];
     cut_items(mr, 0, n2, &num);
@@ -463,35 +465,36 @@ static void build_lists(iir_multires *mr, const iir_gbuffer *gb, int *tmp)
 }
 
 /* Level l's interleave: the window stays `window` pixels wide, at most n texels, at least one. */
-static int level_interleave(const iir_mr_params *p, int l)
+static int level_interleave(const iir_mr_params *p, int interleave, int l)
 {
-    int n = p->window >> l;
-    return n < 1 ? 1 : n > p->interleave ? p->interleave : n;
+    int n = p->mr_window >> l;
+    return n < 1 ? 1 : n > interleave ? interleave : n;
 }
 
 static bool same_params(const iir_mr_params *a, const iir_mr_params *b)
 {
-    return a->max_level == b->max_level && a->depth == b->depth && a->normal == b->normal &&
-           a->interleave == b->interleave && a->window == b->window &&
-           a->filter_normal == b->filter_normal && a->filter_depth == b->filter_depth;
+    return a->mr_levels == b->mr_levels && a->mr_depth == b->mr_depth &&
+           a->mr_normal == b->mr_normal && a->mr_window == b->mr_window;
 }
 
 iir_status iir_multires_build(iir_multires *mr, const iir_gbuffer *gb, uint64_t serial,
-                              const iir_mr_params *p, iir_error *err)
+                              const iir_mr_params *p, int interleave, iir_error *err)
 {
-    iir_status s = iir_mr_params_validate(p, err);
+    iir_status s = iir_mr_params_validate(p, interleave, err);
     if (s == IIR_OK) s = alloc_levels(mr, gb->width, gb->height, err);
     if (s != IIR_OK) return s;
-    if (mr->valid && mr->serial == serial && same_params(&mr->p, p)) return IIR_OK;
+    if (mr->valid && mr->serial == serial && mr->interleave == interleave && same_params(&mr->p, p))
+        return IIR_OK;
     mr->p = *p;
+    mr->interleave = interleave;
     build_fine(mr, gb, mr->cls);
     for (int l = 2; l <= IIR_MR_MAX_LEVEL; l++) build_level(mr, gb, l);
     choose_pixels(mr);
     for (int l = 1; l <= IIR_MR_MAX_LEVEL; l++) {
         mr_level *v = &mr->lv[l];
-        v->n = level_interleave(p, l);
+        v->n = level_interleave(p, interleave, l);
         int r = v->n / 2 + 1;
-        if (l > p->max_level) {
+        if (l > p->mr_levels) {
             for (size_t i = 0; i < (size_t)v->w * (size_t)v->h; i++) v->flag[i] &= MARKED;
             v->work = 0;
             continue;
@@ -617,7 +620,7 @@ static iir_vec3 filter_texel(const shade_ctx *c, int l, int i, int j)
     size_t centre = (size_t)j * (size_t)v->w + (size_t)i;
     iir_vec3 nc = v->s[centre].normal, sum = iir_v3s(0.f);
     float dc = v->depth[centre], wsum = 0.f;
-    float min_cos = c->mr->p.filter_normal, max_rel = c->mr->p.filter_depth;
+    float min_cos = IIR_FILTER_MIN_COS, max_rel = IIR_FILTER_MAX_REL_DEPTH;
     for (int dy = -h; dy <= h; dy++) {
         int jj = j + dy;
         if (jj < 0 || jj >= v->h) continue;
@@ -641,7 +644,7 @@ static iir_vec3 filter_texel(const shade_ctx *c, int l, int i, int j)
  * Called inside a parallel region. */
 static void filter_levels(const shade_ctx *c)
 {
-    for (int l = 1; l <= c->mr->p.max_level; l++) {
+    for (int l = 1; l <= c->mr->p.mr_levels; l++) {
         mr_level *v = &c->mr->lv[l];
 #pragma omp for schedule(static) nowait
         for (int j = 0; j < v->h; j++)
@@ -736,8 +739,8 @@ bool iir_multires_shade(iir_multires *mr, iir_mr_shade_fn fn, void *ctx, uint64_
 {
     if (!mr->valid) return false;
     shade_ctx c = {mr, NULL, NULL, fn, ctx, {0}};
-    for (int l = 1; l <= mr->p.max_level; l++)
-        c.live[l] = level_live(live_classes, mr->p.interleave, mr->lv[l].n);
+    for (int l = 1; l <= mr->p.mr_levels; l++)
+        c.live[l] = level_live(live_classes, mr->interleave, mr->lv[l].n);
     if (evaluate(&c, 0, mr->num_coarse, stop, stop_ctx, st, evals)) return true;
 #pragma omp parallel
     {

@@ -4,60 +4,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "method_internal.h"
 #include "render_internal.h"
 #include "iir/timer.h"
 
 /* ---- parameters ---- */
 
-/* The VPL shading table's defaults (methods/vpl_options.c), and the filter's own. */
-iir_indirect_params iir_indirect_params_default(void)
-{
-    iir_vpl_options o;
-    iir_params_defaults(&iir_vis_table, &o);
-    iir_params_defaults(&iir_vpl_table, &o);
-    iir_params_defaults(&iir_clamp_table, &o.clamp);
-    iir_params_defaults(&iir_clamp_comp_table, &o);
-    iir_params_defaults(&iir_shading_table, &o.shading);
-    iir_params_defaults(&iir_multires_table, &o.mr);
-    iir_indirect_params p = {
-        .visibility = o.visibility,
-        .interleave = o.interleave,
-        .filter = true,
-        .clamp = o.clamp,
-        .sm_bias = o.sm_bias,
-        .clamp_comp = o.clamp_comp,
-        .bounces = 2,
-        .shading = o.shading,
-        .mr_levels = o.mr.mr_levels,
-        .mr_depth = o.mr.mr_depth,
-        .mr_normal = o.mr.mr_normal,
-        .mr_window = o.mr.mr_window,
-        .filter_normal = 0.9f,
-        .filter_depth = 0.05f,
-        .area_samples = o.area_samples,
-    };
-    return p;
-}
-
-/* What multires.h is asked for by the indirect parameters. */
-static iir_mr_params multires_params(const iir_indirect_params *p)
-{
-    iir_mr_params m = {.max_level = p->mr_levels,
-                       .depth = p->mr_depth,
-                       .normal = p->mr_normal,
-                       .interleave = p->interleave,
-                       .window = p->mr_window,
-                       .filter_normal = p->filter_normal,
-                       .filter_depth = p->filter_depth};
-    return m;
-}
-
 iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error *err)
 {
-    if (p->visibility != IIR_VIS_SHADOWMAP && p->visibility != IIR_VIS_RAYS)
+    if (p->visibility != IIR_VIS_SHADOWMAP && p->visibility != IIR_VIS_RAYS &&
+        p->visibility != IIR_VIS_ISM)
         return iir_fail(err, IIR_ERR_INVALID,
-                        "indirect visibility %d is neither shadowmap nor rays", (int)p->visibility);
+                        "indirect visibility %d is not shadowmap, rays or ism", (int)p->visibility);
     if (p->interleave < 1 || p->interleave > IIR_MAX_INTERLEAVE)
         return iir_fail(err, IIR_ERR_INVALID, "indirect interleave %d is outside [1, %d]",
                         p->interleave, IIR_MAX_INTERLEAVE);
@@ -67,12 +24,6 @@ iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error 
     if (!(p->sm_bias >= 0.f && p->sm_bias <= 1.f))
         return iir_fail(err, IIR_ERR_INVALID, "indirect sm_bias %g is outside [0, 1]",
                         (double)p->sm_bias);
-    if (!(p->filter_normal >= -1.f && p->filter_normal <= 1.f))
-        return iir_fail(err, IIR_ERR_INVALID, "indirect filter_normal %g is outside [-1, 1]",
-                        (double)p->filter_normal);
-    if (!(p->filter_depth > 0.f) || isinf(p->filter_depth))
-        return iir_fail(err, IIR_ERR_INVALID, "indirect filter_depth %g must be finite and > 0",
-                        (double)p->filter_depth);
     if (p->clamp_comp < IIR_CLAMP_COMP_OFF || p->clamp_comp > IIR_CLAMP_COMP_INTERLEAVED)
         return iir_fail(err, IIR_ERR_INVALID,
                         "indirect clamp_comp %d is not off, full or interleaved",
@@ -87,10 +38,8 @@ iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error 
     if (p->shading != IIR_SHADING_FULL && p->shading != IIR_SHADING_MULTIRES)
         return iir_fail(err, IIR_ERR_INVALID, "indirect shading %d is neither full nor multires",
                         (int)p->shading);
-    if (p->shading == IIR_SHADING_MULTIRES) {
-        iir_mr_params mp = multires_params(p);
-        return iir_mr_params_validate(&mp, err);
-    }
+    if (p->shading == IIR_SHADING_MULTIRES)
+        return iir_mr_params_validate(&p->mr, p->interleave, err);
     return IIR_OK;
 }
 
@@ -245,8 +194,7 @@ static iir_status multires_phase(iir_renderer *r, const iir_indirect_params *p,
     double t0 = iir_now_ms();
     if (!r->mr && !(r->mr = iir_multires_create()))
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the multires hierarchy");
-    iir_mr_params mp = multires_params(p);
-    iir_status s = iir_multires_build(r->mr, &r->gb, r->gb_serial, &mp, err);
+    iir_status s = iir_multires_build(r->mr, &r->gb, r->gb_serial, &p->mr, p->interleave, err);
     if (s == IIR_OK) r->level = iir_multires_levels(r->mr);
     t->indirect_ms = iir_now_ms() - t0;
     return s;
@@ -349,7 +297,7 @@ iir_status iir_renderer_pass(iir_renderer *r, const iir_render_input *in, const 
     ind.shading = IIR_SHADING_FULL;
     ind.visibility = IIR_VIS_RAYS;
     ind.interleave = p->interleave;
-    ind.filter = false;
+    ind.unfiltered = true;
     ind.clamp = p->clamp;
     ind.clamp_comp = p->clamp_comp ? IIR_CLAMP_COMP_FULL : IIR_CLAMP_COMP_OFF;
     ind.bounces = p->bounces;

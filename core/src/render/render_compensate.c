@@ -52,12 +52,12 @@ typedef struct comp_ctx {
 static iir_vec3 direct_at(const comp_ctx *c, const iir_surface *sf, iir_rng *rng, iir_raystats *st)
 {
     float u_pick = iir_rng_uniform(rng);
+    iir_light_ctx ctx = iir_surface_light_ctx(sf, c->r->eps);
     iir_light_sample ls =
-        iir_lightset_sample(c->r->comp_lights, sf->p, u_pick, iir_rng_uniform2(rng));
+        iir_lightset_sample_li(c->r->comp_lights, &ctx, u_pick, iir_rng_uniform2(rng));
     float cos_theta = iir_dot(sf->ns, ls.wi);
     if (ls.pdf <= 0.f || cos_theta <= 0.f || iir_is_black(ls.Li)) return iir_v3s(0.f);
-    float eps = c->r->eps;
-    iir_ray shadow = iir_light_sample_ray(iir_surface_offset(sf, eps), sf->p, &ls, eps);
+    iir_ray shadow = iir_segment_ray(&ls.shadow);
     if (iir_rt_occluded(c->r->rt, &shadow, st, IIR_RAYS_SHADOW)) return iir_v3s(0.f);
     return iir_scale(ls.Li, cos_theta / ls.pdf);
 }

@@ -10,8 +10,8 @@
  *    (x, y), each bringing its sum and weight.
  * A tap (x + dx, y + dy) thus counts with weight w(dx) w(dy) when it is similar to (x, y + dy) and
  * that is similar to (x, y) -- the separable form of testing it against (x, y) directly. Similar:
- * the normals' cosine is at least filter_normal and the camera depths differ by at most
- * filter_depth relative to the centre's; background (depth INFINITY) is never similar.
+ * the normals' cosine is at least IIR_FILTER_MIN_COS and the camera depths differ by at most
+ * IIR_FILTER_MAX_REL_DEPTH relative to the centre's; background (depth INFINITY) is never similar.
  *
  * Multires (r->level set): only level-0 pixels are filtered, and the row pass runs only where a
  * column pass will read it; a pixel of a coarse level is a tap carrying every subset (its value is
@@ -153,8 +153,8 @@ static filter_ctx make_ctx(const iir_renderer *r, const iir_indirect_params *p)
     c.n = p->interleave;
     c.h = c.n / 2;
     c.end_weight = c.n % 2 == 0 ? 0.5f : 1.f;
-    c.min_cos = p->filter_normal;
-    c.max_rel_depth = p->filter_depth;
+    c.min_cos = IIR_FILTER_MIN_COS;
+    c.max_rel_depth = IIR_FILTER_MAX_REL_DEPTH;
     for (uint32_t k = 0; k < r->num_subsets; k++) c.live[k] = r->start[k] < r->start[k + 1];
     return c;
 }
@@ -197,7 +197,7 @@ static void compose_row(const filter_ctx *c, bool filter, int y, iir_image *out)
 void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image *out)
 {
     filter_ctx c = make_ctx(r, p);
-    bool filter = p->filter && p->interleave > 1;
+    bool filter = !p->unfiltered && p->interleave > 1;
     const iir_gbuffer *gb = &r->gb;
     int tiles = iir_tile_count(gb->width, gb->height, IIR_RENDER_TILE);
     /* the tiles near level-0 pixels change only with the hierarchy (kept while the camera is) */

@@ -35,7 +35,7 @@ static iir_status check_vpl(const iir_vpl *v, iir_visibility vis, iir_error *err
     if (!iir_is_finite3(v->flux) || v->flux.x < 0.f || v->flux.y < 0.f || v->flux.z < 0.f)
         return iir_fail(err, IIR_ERR_INVALID, "VPL %u: flux must be finite and non-negative",
                         v->id);
-    if (vis == IIR_VIS_SHADOWMAP && (v->smap.res < 1 || !v->smap.depth))
+    if (vis != IIR_VIS_RAYS && (v->smap.res < 1 || !v->smap.depth))
         return iir_fail(err, IIR_ERR_INVALID,
                         "VPL %u has no shadow map (build the maps with iir_smaps_build before "
                         "rendering with shadow-map visibility)",
@@ -399,7 +399,7 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
     indirect_ctx c = {r,
                       stoppable ? r->stop : NULL,
                       shift,
-                      p->visibility == IIR_VIS_SHADOWMAP,
+                      p->visibility != IIR_VIS_RAYS,
                       p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
                       p->sm_bias,
                       p->interleave};
@@ -441,7 +441,7 @@ iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_param
         if (!g.lit) continue;
         float V = 1.f;
         iir_ray ray;
-        if (p->visibility == IIR_VIS_SHADOWMAP) {
+        if (p->visibility != IIR_VIS_RAYS) {
             iir_smap_probe probe = iir_smap_probe_make(v->smap, p->sm_bias, r->eps);
             V = iir_smap_probe_visibility(&probe, iir_dot(g.w, v->r), iir_dot(g.w, v->u), g.ci,
                                           sqrtf(g.d2), g.cx);
@@ -509,7 +509,7 @@ bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, b
     indirect_ctx c = {r,
                       stoppable ? r->stop : NULL,
                       0,
-                      p->visibility == IIR_VIS_SHADOWMAP,
+                      p->visibility != IIR_VIS_RAYS,
                       p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
                       p->sm_bias,
                       p->interleave};

@@ -35,7 +35,7 @@ static const iir_param CTL_ROWS[] = {
 const iir_param_table iir_ctl_table = {"frame-time controller (iir)", CTL_ROWS,
                                        sizeof CTL_ROWS / sizeof CTL_ROWS[0], NULL};
 
-iir_status iir_ctl_follow(iir_ctl **ctl, const iir_ctl_options *o, const iir_vpl_options *v,
+iir_status iir_ctl_follow(iir_ctl **ctl, const iir_ctl_options *o, const iir_indirect_params *v,
                           int start_vpls, iir_error *err)
 {
     if (o->target_fps <= 0.f) {

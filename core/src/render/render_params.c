@@ -1,11 +1,13 @@
-/* vpl_options.c -- the parameters of the VPL shading that ir, iir and ism share (visibility and
- * shadow maps; bias and interleaving; shading and its hierarchy; clamping and its compensation) as
- * tables, what they ask of the renderer, and the memory the VPL renderer and a VPL set take. Not
- * how VPLs are chosen (the methods) or shaded (render.h). */
+/* render_params.c -- the VPL shading's parameters (visibility and shadow maps; bias and
+ * interleaving; shading and its hierarchy; clamping and its compensation) as tables bound to
+ * iir_indirect_params wherever a method keeps one (ir, iir and ism list them; rsm and hier the
+ * shading, clamp and multires ones), their defaults, and the memory the VPL renderer and a VPL set
+ * take. Not how VPLs are chosen (the methods) or shaded (render.c and its phases). */
 #include <stddef.h>
+#include <string.h>
 
+#include "iir/render.h"
 #include "iir/vpl.h"
-#include "method_internal.h"
 
 static const char *const VISIBILITY_CHOICES[] = {"shadowmap", "rays", "ism", NULL};
 
@@ -14,28 +16,28 @@ static const char *const SHADING_CHOICES[] = {"full", "multires", NULL};
 static const char *const CLAMP_COMP_CHOICES[] = {"off", "full", "interleaved", NULL};
 
 static const iir_param VIS_ROWS[] = {
-    {"visibility", IIR_PARAM_ENUM, offsetof(iir_vpl_options, visibility), IIR_VIS_SHADOWMAP, 0, 2,
-     0, VISIBILITY_CHOICES, "",
+    {"visibility", IIR_PARAM_ENUM, offsetof(iir_indirect_params, visibility), IIR_VIS_SHADOWMAP, 0,
+     2, 0, VISIBILITY_CHOICES, "",
      "VPL visibility: shadowmap (fast), rays (exact, slow) or ism (imperfect shadow maps, cheap)",
      IIR_PARAM_LIVE},
-    {"sm_res", IIR_PARAM_INT, offsetof(iir_vpl_options, sm_res), 128, 8, 2048, 0, NULL, "pixels",
-     "shadow-map resolution (res^2 rays and 4 res^2 bytes per VPL, paid at its birth)",
+    {"sm_res", IIR_PARAM_INT, offsetof(iir_indirect_params, sm_res), 128, 8, 2048, 0, NULL,
+     "pixels", "shadow-map resolution (res^2 rays and 4 res^2 bytes per VPL, paid at its birth)",
      IIR_PARAM_RESTART},
 };
 const iir_param_table iir_vis_table = {"VPL visibility (ir, iir)", VIS_ROWS,
                                        sizeof VIS_ROWS / sizeof VIS_ROWS[0], NULL};
 
 static const iir_param VPL_ROWS[] = {
-    {"sm_bias", IIR_PARAM_FLOAT, offsetof(iir_vpl_options, sm_bias), 0.005, 0, 1, 0, NULL, "",
+    {"sm_bias", IIR_PARAM_FLOAT, offsetof(iir_indirect_params, sm_bias), 0.005, 0, 1, 0, NULL, "",
      "shadow-map bias as a fraction of the VPL-receiver distance", IIR_PARAM_LIVE},
-    {"interleave", IIR_PARAM_INT, offsetof(iir_vpl_options, interleave), 4, 1, 8, 0, NULL, "",
+    {"interleave", IIR_PARAM_INT, offsetof(iir_indirect_params, interleave), 4, 1, 8, 0, NULL, "",
      "n x n interleaved VPL subsets with a geometry-aware filter; 1 = every VPL at every pixel",
      IIR_PARAM_LIVE},
     /* cornell_area orbit, frames 0-3 at 512x512, relRMSE against 1024 samples: 1, 4, 8, 16 and 64
        samples 0.137, 0.025, 0.013, 0.0067 and 0.0022 for 1x, 2x, 2.8x, 4.5x and 15x the CPU time
        of a frame (docs/architecture.md); a live session may ask for 64 */
-    {"area_samples", IIR_PARAM_INT, offsetof(iir_vpl_options, area_samples), 8, 1, 4096, 1024, NULL,
-     "samples",
+    {"area_samples", IIR_PARAM_INT, offsetof(iir_indirect_params, area_samples), 8, 1, 4096, 1024,
+     NULL, "samples",
      "direct light: stratified samples per pixel over each area light and the emissive triangles "
      "(one shadow ray each; a still averages refine_passes passes of them)",
      IIR_PARAM_LIVE},
@@ -43,7 +45,8 @@ static const iir_param VPL_ROWS[] = {
 const iir_param_table iir_vpl_table = {"VPL shading (ir, iir, ism)", VPL_ROWS,
                                        sizeof VPL_ROWS / sizeof VPL_ROWS[0], NULL};
 
-/* Bound to one iir_shading, wherever a method keeps it (iir_vpl_options.shading for ir and iir). */
+/* Bound to one iir_shading, wherever a method keeps it (iir_indirect_params.shading for ir and
+ * iir). */
 static const iir_param SHADING_ROWS[] = {
     {"shading", IIR_PARAM_ENUM, 0, IIR_SHADING_FULL, 0, 1, 0, SHADING_CHOICES, "",
      "indirect light at every pixel (full) or on coarse levels where the G-buffer is smooth "
@@ -55,21 +58,20 @@ const iir_param_table iir_shading_table = {"shading (ir, iir, ism, rsm)", SHADIN
 
 /* multires.h's hierarchy, for every method that shades on it. */
 static const iir_param MULTIRES_ROWS[] = {
-    {"mr_levels", IIR_PARAM_INT, offsetof(iir_multires_options, mr_levels), 4, 1, 6, 0, NULL, "",
+    {"mr_levels", IIR_PARAM_INT, offsetof(iir_mr_params, mr_levels), 4, 1, 6, 0, NULL, "",
      "multires: coarsest level (texels of 2^levels pixels)", IIR_PARAM_LIVE},
-    {"mr_depth", IIR_PARAM_FLOAT, offsetof(iir_multires_options, mr_depth), 0.01, 0, 1, 0, NULL, "",
+    {"mr_depth", IIR_PARAM_FLOAT, offsetof(iir_mr_params, mr_depth), 0.01, 0, 1, 0, NULL, "",
      "multires: a depth discontinuity where a neighbour lies off a pixel's tangent plane by more "
      "than this times its depth",
      IIR_PARAM_LIVE},
-    {"mr_normal", IIR_PARAM_FLOAT, offsetof(iir_multires_options, mr_normal), 0.95, -1, 1, 0, NULL,
-     "", "multires: a normal discontinuity where neighbours' normals' cosine is below this",
+    {"mr_normal", IIR_PARAM_FLOAT, offsetof(iir_mr_params, mr_normal), 0.95, -1, 1, 0, NULL, "",
+     "multires: a normal discontinuity where neighbours' normals' cosine is below this",
      IIR_PARAM_LIVE},
     /* Cornell box orbit, frames 0-29 at 512x384 (N 256, interleave 4), relMSE against pt over 6
        reference frames: 4, 8, 16, 32 and 64 pixels evaluated 2.0x, 3.3x, 4.7x, 6.1x and 6.4x
        fewer pixel-VPL pairs than full shading for +7%, +10%, +15%, +36% and +126% relMSE: past
        16 the coarse levels' filter blurs the light */
-    {"mr_window", IIR_PARAM_INT, offsetof(iir_multires_options, mr_window), 16, 1, 1024, 0, NULL,
-     "pixels",
+    {"mr_window", IIR_PARAM_INT, offsetof(iir_mr_params, mr_window), 16, 1, 1024, 0, NULL, "pixels",
      "multires: the widest a level's interleave filter spans (coarser levels interleave fewer, "
      "down to every VPL per texel)",
      IIR_PARAM_LIVE},
@@ -78,7 +80,7 @@ const iir_param_table iir_multires_table = {"multiresolution shading (shading=mu
                                             MULTIRES_ROWS,
                                             sizeof MULTIRES_ROWS / sizeof MULTIRES_ROWS[0], NULL};
 
-/* Bound to one float, wherever a method keeps it (iir_vpl_options.clamp for ir and iir). */
+/* Bound to one float, wherever a method keeps it (iir_indirect_params.clamp for ir and iir). */
 static const iir_param CLAMP_ROWS[] = {
     /* G stops growing below a tenth of the scene diagonal; on the Cornell box orbit 100 gave the
        lowest error against pt of 0, 25, 100, 400 and 1600 for both ir and iir */
@@ -88,10 +90,10 @@ static const iir_param CLAMP_ROWS[] = {
 const iir_param_table iir_clamp_table = {"VPL clamping (ir, iir, rsm)", CLAMP_ROWS,
                                          sizeof CLAMP_ROWS / sizeof CLAMP_ROWS[0], NULL};
 
-/* Bound to the whole iir_vpl_options after its shading (ir, iir and ism): compensation adds to
+/* Bound to the whole iir_indirect_params after its shading (ir, iir and ism): compensation adds to
  * every pixel's own indirect light, which multires shading does not have. */
 static const iir_param CLAMP_COMP_ROWS[] = {
-    {"clamp_compensation", IIR_PARAM_ENUM, offsetof(iir_vpl_options, clamp_comp),
+    {"clamp_compensation", IIR_PARAM_ENUM, offsetof(iir_indirect_params, clamp_comp),
      IIR_CLAMP_COMP_OFF, 0, 2, 0, CLAMP_COMP_CHOICES, "",
      "give back what the clamp removes near corners (Kollig & Keller): a cosine ray from every "
      "pixel (full) or from n times fewer, gathered by the interleave filter (interleaved); needs "
@@ -102,11 +104,11 @@ static const iir_param CLAMP_COMP_ROWS[] = {
 static iir_status clamp_comp_check(const void *opts, const iir_params *given, const iir_param **bad,
                                    iir_error *err)
 {
-    const iir_vpl_options *o = opts;
+    const iir_indirect_params *o = opts;
     if (o->clamp_comp == IIR_CLAMP_COMP_OFF || o->shading != IIR_SHADING_MULTIRES) return IIR_OK;
     bool blame_shading =
         iir_params_has(given, "shading") && !iir_params_has(given, "clamp_compensation");
-    *bad = blame_shading ? iir_method_any_param("shading") : &CLAMP_COMP_ROWS[0];
+    *bad = blame_shading ? &SHADING_ROWS[0] : &CLAMP_COMP_ROWS[0];
     return iir_fail(err, IIR_ERR_INVALID,
                     "%s: clamp_compensation needs shading full (multires shades coarse texels, "
                     "not every pixel's own indirect light)",
@@ -117,25 +119,21 @@ const iir_param_table iir_clamp_comp_table = {
     "clamping compensation (ir, iir, ism)", CLAMP_COMP_ROWS,
     sizeof CLAMP_COMP_ROWS / sizeof CLAMP_COMP_ROWS[0], clamp_comp_check};
 
-iir_indirect_params iir_vpl_indirect(const iir_vpl_options *o, int bounces)
+iir_indirect_params iir_indirect_params_default(void)
 {
-    iir_indirect_params ind = iir_indirect_params_default();
-    ind.visibility = o->visibility == IIR_VIS_ISM ? IIR_VIS_SHADOWMAP : o->visibility; /* ism.h */
-    ind.interleave = o->interleave;
-    ind.clamp = o->clamp;
-    ind.clamp_comp = o->clamp_comp;
-    ind.bounces = bounces;
-    ind.area_samples = o->area_samples;
-    ind.sm_bias = o->sm_bias;
-    ind.shading = o->shading;
-    ind.mr_levels = o->mr.mr_levels;
-    ind.mr_depth = o->mr.mr_depth;
-    ind.mr_normal = o->mr.mr_normal;
-    ind.mr_window = o->mr.mr_window;
-    return ind;
+    iir_indirect_params p;
+    memset(&p, 0, sizeof p);
+    iir_params_defaults(&iir_vis_table, &p);
+    iir_params_defaults(&iir_vpl_table, &p);
+    iir_params_defaults(&iir_clamp_table, &p.clamp);
+    iir_params_defaults(&iir_clamp_comp_table, &p);
+    iir_params_defaults(&iir_shading_table, &p.shading);
+    iir_params_defaults(&iir_multires_table, &p.mr);
+    p.bounces = 2;
+    return p;
 }
 
-uint64_t iir_vpl_memory(const iir_vpl_options *o, uint32_t n, int width, int height)
+uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int height)
 {
     uint64_t px = (uint64_t)width * (uint64_t)height;
     uint64_t bytes = iir_renderer_memory(width, height);
