@@ -36,7 +36,9 @@ plt.rcParams.update({
 
 METHOD_COLOURS = {"iir": "#1f77b4", "ir": "#d62728", "pt": "#2ca02c", "rsm": "#ff7f0e",
                   "ism": "#9467bd", "hier": "#8c564b"}
-PHASES = ["trace", "vpls", "shadowmaps", "gbuffer", "direct", "indirect", "filter"]
+# Pipeline order; each run has the phases its method declares (summary.json's phase_ms).
+PHASES = ["trace", "vpls", "shadowmaps", "maps", "solve", "gather", "gbuffer", "direct", "indirect",
+          "filter", "display"]
 
 
 def colour(method):
@@ -177,7 +179,9 @@ def chart_phases(summary, title, out_dir):
     names = [label(r["method"], r["setting"]) for r in runs]
     left = [0.0] * len(runs)
     cmap = plt.get_cmap("tab10")
-    for k, phase in enumerate(PHASES):
+    phases = [p for p in PHASES if any(p in r["phase_ms"] for r in runs)]
+    phases += sorted({p for r in runs for p in r["phase_ms"]} - set(phases))
+    for k, phase in enumerate(phases):
         vals = [(r["phase_ms"].get(phase) or 0.0) for r in runs]
         if not any(vals):
             continue

@@ -100,8 +100,9 @@ iir_status iir_view_validate(const iir_view *view, iir_error *err)
 
 const char *iir_phase_name(iir_phase phase)
 {
-    static const char *names[IIR_PHASE_COUNT] = {"trace",  "vpls",     "shadowmaps", "gbuffer",
-                                                 "direct", "indirect", "filter"};
+    static const char *names[IIR_PHASE_COUNT] = {"trace",    "vpls",   "shadowmaps", "maps",
+                                                 "solve",    "gather", "gbuffer",    "direct",
+                                                 "indirect", "filter", "display"};
     return phase < IIR_PHASE_COUNT ? names[phase] : "unknown";
 }
 
@@ -113,8 +114,38 @@ const char *const *iir_method_names(void)
     return names;
 }
 
+static const iir_method_ops *find_ops(const char *name);
+
+int iir_method_phases(const char *name, const iir_phase **out)
+{
+    const iir_method_ops *ops = find_ops(name);
+    *out = ops ? ops->phases : NULL;
+    int n = 0;
+    while (ops && ops->phases[n] != IIR_PHASE_COUNT) n++;
+    return n;
+}
+
+int iir_method_counters(const char *name, const iir_counter **out)
+{
+    const iir_method_ops *ops = find_ops(name);
+    *out = ops ? ops->counters : NULL;
+    int n = 0;
+    while (ops && n < IIR_MAX_COUNTERS && ops->counters[n].name) n++;
+    return n;
+}
+
+int iir_method_counter_index(const char *name, const char *counter)
+{
+    const iir_counter *c;
+    int n = iir_method_counters(name, &c);
+    for (int i = 0; i < n; i++)
+        if (!strcmp(c[i].name, counter)) return i;
+    return -1;
+}
+
 static const iir_method_ops *find_ops(const char *name)
 {
+    if (!name) return NULL;
     for (int i = 0; i < NUM_METHODS; i++)
         if (strcmp(registry[i]->name, name) == 0) return registry[i];
     return NULL;

@@ -116,6 +116,10 @@ typedef struct iir_method_ops {
     /* pt's bounce count for this method's references (iir_method_reference_bounces): 0 = the
      * method's `bounces` parameter, or 2 (one bounce) without one. */
     int reference_bounces;
+    /* The phases the method reports, in pipeline order, ending with IIR_PHASE_COUNT. */
+    iir_phase phases[IIR_PHASE_COUNT + 1];
+    /* Its own counters (frame stats' counter[i] is counters[i]), up to the first NULL name. */
+    iir_counter counters[IIR_MAX_COUNTERS + 1];
     /* NULL when the method renders all of every light it is given (pt). Otherwise appends to out
      * (at most max entries; returns how many there are) what it leaves out of these lights and
      * the scene's emissive materials (iir_method_dropped). */
@@ -143,6 +147,13 @@ void iir_dropped_add(iir_dropped *out, uint32_t max, uint32_t *n, const char *me
  * max. */
 uint32_t iir_dropped_emitters(const struct iir_scene *scene, const char *method, iir_dropped *out,
                               uint32_t max);
+
+/* The phases of the VPL renderer's methods (ir, iir, ism), ending with IIR_PHASE_COUNT. */
+#define IIR_VPL_PHASES                                                                             \
+    {                                                                                              \
+        IIR_PHASE_VPLS, IIR_PHASE_SHADOWMAPS, IIR_PHASE_GBUFFER, IIR_PHASE_DIRECT,                 \
+            IIR_PHASE_INDIRECT, IIR_PHASE_FILTER, IIR_PHASE_COUNT                                  \
+    }
 
 extern const iir_method_ops iir_method_pt;
 extern const iir_method_ops iir_method_ir;

@@ -18,7 +18,8 @@
 
 typedef struct run_summary {
     double mean_ms, median_ms, p95_ms, fps, phase[IIR_PHASE_COUNT];
-    double rmse, relmse, flicker; /* means over the frames that have them; NAN if none */
+    double counter[IIR_MAX_COUNTERS]; /* per frame: the method's counters (a share's mean) */
+    double rmse, relmse, flicker;     /* means over the frames that have them; NAN if none */
     double rays[IIR_RAY_KIND_COUNT], rays_total;  /* per frame */
     double inserted, deleted, invalidated, smaps; /* per frame */
     double vpl_evals;                             /* per frame: pixel-VPL pairs shaded */
@@ -62,6 +63,7 @@ static run_summary summarise(const iird_bench *b, int r, double *tmp)
         if (i == 0) continue;
         s.mean_ms += st->total_ms / n;
         for (int p = 0; p < IIR_PHASE_COUNT; p++) s.phase[p] += st->phase_ms[p] / n;
+        for (int c = 0; c < IIR_MAX_COUNTERS; c++) s.counter[c] += st->counter[c] / n;
         for (int k = 0; k < IIR_RAY_KIND_COUNT; k++) s.rays[k] += (double)st->rays.n[k] / n;
         s.inserted += st->vpl.inserted / n;
         s.deleted += st->vpl.deleted / n;
@@ -104,16 +106,78 @@ static int partner(const iird_bench *b, int r)
 
 /* ---- frames.csv ---- */
 
-static void csv_header(FILE *f)
+/* The columns a run's method may fill: the phases and counters some run's method declares (a row
+ * leaves those of its method's undeclared empty). */
+typedef struct csv_columns {
+    bool phase[IIR_PHASE_COUNT];
+    const char *counter[4 * IIR_MAX_COUNTERS]; /* names, first seen first */
+    int num_counters;
+} csv_columns;
+
+static csv_columns columns_of(const iird_bench *b)
+{
+    csv_columns c;
+    memset(&c, 0, sizeof c);
+    for (int r = 0; r < b->num_runs; r++) {
+        const iir_phase *ph;
+        const iir_counter *ct;
+        int np = iir_method_phases(b->runs[r].method, &ph);
+        for (int i = 0; i < np; i++) c.phase[ph[i]] = true;
+        int nc = iir_method_counters(b->runs[r].method, &ct);
+        for (int i = 0; i < nc; i++) {
+            int k = 0;
+            while (k < c.num_counters && strcmp(c.counter[k], ct[i].name)) k++;
+            if (k == c.num_counters && k < (int)(sizeof c.counter / sizeof c.counter[0]))
+                c.counter[c.num_counters++] = ct[i].name;
+        }
+    }
+    return c;
+}
+
+static bool declares_phase(const char *method, iir_phase p)
+{
+    const iir_phase *ph;
+    int n = iir_method_phases(method, &ph);
+    for (int i = 0; i < n; i++)
+        if (ph[i] == p) return true;
+    return false;
+}
+
+static void csv_header(FILE *f, const csv_columns *cols)
 {
     fprintf(f, "method,setting,frame,total_ms");
-    for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, ",%s_ms", iir_phase_name((iir_phase)p));
+    for (int p = 0; p < IIR_PHASE_COUNT; p++)
+        if (cols->phase[p]) fprintf(f, ",%s_ms", iir_phase_name((iir_phase)p));
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",rays_%s", iir_ray_kind_name((iir_ray_kind)k));
     fprintf(f, ",vpls,vpls_valid,vpls_invalidated,vpls_deleted,vpls_inserted,vpls_null,"
-               "regenerated,shadowmaps,vpls_desc,vpl_evals,recomputed,branches_cut,ctl_target_ms,"
-               "ctl_vpls,ctl_interleave,ctl_sm_res,rss_mb,method_mb,mean_lum,rmse,relmse,"
-               "flicker\n");
+               "regenerated,shadowmaps,vpls_desc,vpl_evals");
+    for (int k = 0; k < cols->num_counters; k++) fprintf(f, ",%s", cols->counter[k]);
+    fprintf(f, ",ctl_target_ms,ctl_vpls,ctl_interleave,ctl_sm_res,rss_mb,method_mb,mean_lum,rmse,"
+               "relmse,flicker\n");
+}
+
+/* A row's phase times and counters in cols' columns: empty where its method has none. */
+static void csv_declared(FILE *f, const csv_columns *cols, const char *method,
+                         const iir_frame_stats *s, bool counters)
+{
+    if (!counters) {
+        for (int p = 0; p < IIR_PHASE_COUNT; p++) {
+            if (!cols->phase[p]) continue;
+            if (declares_phase(method, (iir_phase)p))
+                fprintf(f, ",%.4f", s->phase_ms[p]);
+            else
+                fputc(',', f);
+        }
+        return;
+    }
+    for (int k = 0; k < cols->num_counters; k++) {
+        int i = iir_method_counter_index(method, cols->counter[k]);
+        if (i >= 0)
+            fprintf(f, ",%.6g", s->counter[i]);
+        else
+            fputc(',', f);
+    }
 }
 
 static void csv_number(FILE *f, double v, const char *end)
@@ -124,19 +188,21 @@ static void csv_number(FILE *f, double v, const char *end)
         fprintf(f, "%.6g%s", v, end);
 }
 
-static void csv_row(FILE *f, const iird_bench_run *run, int frame, const iird_bench_row *r)
+static void csv_row(FILE *f, const csv_columns *cols, const iird_bench_run *run, int frame,
+                    const iird_bench_row *r)
 {
     const iir_frame_stats *s = &r->stats;
     const iir_vpl_counts *c = &s->vpl;
     fprintf(f, "%s,%s,%d,%.4f", run->method, run->setting, frame, s->total_ms);
-    for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, ",%.4f", s->phase_ms[p]);
+    csv_declared(f, cols, run->method, s, false);
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",%llu", (unsigned long long)s->rays.n[k]);
+    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%u,%llu", c->count, c->valid, c->invalidated, c->deleted,
+            c->inserted, c->null_samples, c->regenerated, c->shadowmaps, c->descendants,
+            (unsigned long long)s->vpl_evals);
+    csv_declared(f, cols, run->method, s, true);
     const iir_ctl_report *k = &s->ctl; /* zero without target_fps */
-    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%u,%llu,%.4f,%llu,%.3f,%d,%d,%d,%.2f,%.3f,%.6g,", c->count,
-            c->valid, c->invalidated, c->deleted, c->inserted, c->null_samples, c->regenerated,
-            c->shadowmaps, c->descendants, (unsigned long long)s->vpl_evals, s->recomputed,
-            (unsigned long long)s->branches_cut, k->target_ms, k->setting.vpls,
+    fprintf(f, ",%.3f,%d,%d,%d,%.2f,%.3f,%.6g,", k->target_ms, k->setting.vpls,
             k->setting.interleave, k->setting.sm_res, r->rss_mb, r->method_mb, r->mean_lum);
     csv_number(f, r->rmse, ",");
     csv_number(f, r->relmse, ",");
@@ -150,10 +216,11 @@ iir_status iird_bench_write_csv(const iird_bench *b, iir_error *err)
     snprintf(path, sizeof path, "%s/frames.csv", b->o->out_dir);
     FILE *f = fopen(path, "w");
     if (!f) return iir_fail(err, IIR_ERR_IO, "cannot write %s", path);
-    csv_header(f);
+    csv_columns cols = columns_of(b);
+    csv_header(f, &cols);
     for (int r = 0; r < b->num_runs; r++)
         for (int i = 0; i < b->frames; i++)
-            csv_row(f, &b->runs[r], b->first + i, &b->rows[(size_t)r * b->frames + i]);
+            csv_row(f, &cols, &b->runs[r], b->first + i, &b->rows[(size_t)r * b->frames + i]);
     if (fclose(f) != 0) return iir_fail(err, IIR_ERR_IO, "cannot write %s", path);
     return IIR_OK;
 }
@@ -202,9 +269,14 @@ static cJSON *run_json(const iird_bench_run *run, const run_summary *s)
     add_num(o, "median_ms", s->median_ms);
     add_num(o, "p95_ms", s->p95_ms);
     add_num(o, "fps", s->fps);
-    for (int p = 0; p < IIR_PHASE_COUNT; p++)
-        add_num(ph, iir_phase_name((iir_phase)p), s->phase[p]);
+    const iir_phase *phases;
+    int np = iir_method_phases(run->method, &phases);
+    for (int p = 0; p < np; p++) add_num(ph, iir_phase_name(phases[p]), s->phase[phases[p]]);
     cJSON_AddItemToObject(o, "phase_ms", ph);
+    const iir_counter *ct;
+    int nc = iir_method_counters(run->method, &ct);
+    cJSON *counters = cJSON_AddObjectToObject(o, "counters_per_frame");
+    for (int c = 0; c < nc && counters; c++) add_num(counters, ct[c].name, s->counter[c]);
     add_num(o, "rmse", s->rmse);
     add_num(o, "relmse", s->relmse);
     add_num(o, "flicker", s->flicker);
@@ -377,6 +449,26 @@ static void print_settings(const iird_bench *b, FILE *f)
     }
 }
 
+/* A summary row's phase and counter columns (cols'), "-" where its method has none. */
+static void summary_declared(FILE *f, const csv_columns *cols, const char *method,
+                             const run_summary *s)
+{
+    for (int p = 0; p < IIR_PHASE_COUNT; p++) {
+        if (!cols->phase[p]) continue;
+        if (declares_phase(method, (iir_phase)p))
+            fprintf(f, " %10.2f", s->phase[p]);
+        else
+            fprintf(f, " %10s", "-");
+    }
+    for (int k = 0; k < cols->num_counters; k++) {
+        int i = iir_method_counter_index(method, cols->counter[k]);
+        if (i >= 0)
+            fprintf(f, " %12.6g", s->counter[i]);
+        else
+            fprintf(f, " %12s", "-");
+    }
+}
+
 void iird_bench_summary(const iird_bench *b, FILE *f)
 {
     run_summary s[IIRD_BENCH_MAX_RUNS];
@@ -390,13 +482,16 @@ void iird_bench_summary(const iird_bench *b, FILE *f)
                 b->refs_s);
     fprintf(f, "%-9s %-16s %9s %9s %7s %9s %9s %9s", "method", "setting", "ms/frame", "p95 ms",
             "fps", "rmse", "relmse", "flicker");
-    for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, " %10s", iir_phase_name((iir_phase)p));
+    csv_columns cols = columns_of(b);
+    for (int p = 0; p < IIR_PHASE_COUNT; p++)
+        if (cols.phase[p]) fprintf(f, " %10s", iir_phase_name((iir_phase)p));
+    for (int k = 0; k < cols.num_counters; k++) fprintf(f, " %12s", cols.counter[k]);
     fputc('\n', f);
     for (int r = 0; r < b->num_runs; r++) {
         fprintf(f, "%-9s %-16s %9.2f %9.2f %7.2f %9.5f %9.5f %9.5f", b->runs[r].method,
                 b->runs[r].setting, s[r].mean_ms, s[r].p95_ms, s[r].fps, s[r].rmse, s[r].relmse,
                 s[r].flicker);
-        for (int p = 0; p < IIR_PHASE_COUNT; p++) fprintf(f, " %10.2f", s[r].phase[p]);
+        summary_declared(f, &cols, b->runs[r].method, &s[r]);
         fputc('\n', f);
     }
     print_ratios(b, s, f);

@@ -248,10 +248,11 @@ typedef struct iird_stats_view {
 } iird_stats_view;
 char *iird_json_stats(const iird_stats_view *v);
 
-/* The parts of a frame's stats as JSON objects, keyed as in the `stats` message (phase names,
- * VPL counts, rays by kind); render.json writes its frames with them too. Phase times are rounded
- * to 1/scale ms. NULL only on out-of-memory. */
-struct cJSON *iird_json_phases(const iir_frame_stats *st, double scale);
+/* The parts of a frame's stats as JSON objects, keyed as in the `stats` message (the phases and
+ * counters method `method` declares, VPL counts, rays by kind); render.json writes its frames with
+ * them too. Phase times are rounded to 1/scale ms, shares to 1e-4. NULL only on out-of-memory. */
+struct cJSON *iird_json_phases(const char *method, const iir_frame_stats *st, double scale);
+struct cJSON *iird_json_counters(const char *method, const iir_frame_stats *st);
 /* The frame-time controller's state after the frame (target_ms, mean_ms, predicted_ms, reachable,
  * vpls, interleave, sm_res, rung, rungs, moves), or JSON null when it had none (target_fps 0). */
 struct cJSON *iird_json_ctl(const iir_frame_stats *st);

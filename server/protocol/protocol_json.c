@@ -277,7 +277,27 @@ char *iird_json_state_superseded(const iird_state_view *s, int64_t seq)
     return iird_json_finish(keep_if(o, o && add_bool(o, "superseded", true) && add_state(o, s)));
 }
 
-/* Per method its name, summary and parameters (each of its tables' rows, in order). */
+/* Method `name`'s phases (names, in order) and counters ({name, kind, help}) into m. */
+static bool add_declared(cJSON *m, const char *name)
+{
+    const iir_phase *ph;
+    const iir_counter *c;
+    int np = iir_method_phases(name, &ph), nc = iir_method_counters(name, &c);
+    cJSON *phases = cJSON_CreateArray(), *counters = cJSON_CreateArray();
+    bool ok = add_item(m, "phases", phases) && add_item(m, "counters", counters);
+    for (int i = 0; ok && i < np; i++)
+        ok = add_item(phases, NULL, cJSON_CreateString(iir_phase_name(ph[i])));
+    for (int i = 0; ok && i < nc; i++) {
+        cJSON *o = cJSON_CreateObject();
+        ok = add_item(counters, NULL, o) && add_str(o, "name", c[i].name) &&
+             add_str(o, "kind", c[i].kind == IIR_COUNTER_SHARE ? "share" : "events") &&
+             add_str(o, "help", c[i].help);
+    }
+    return ok;
+}
+
+/* Per method its name, summary, parameters (each of its tables' rows, in order), phases and
+ * counters. */
 static cJSON *methods_json(void)
 {
     cJSON *a = cJSON_CreateArray();
@@ -285,7 +305,7 @@ static cJSON *methods_json(void)
     for (const char *const *n = iir_method_names(); ok && *n; n++) {
         cJSON *m = cJSON_CreateObject(), *params = NULL;
         ok = add_item(a, NULL, m) && add_str(m, "name", *n) &&
-             add_str(m, "summary", iir_method_summary(*n)) &&
+             add_str(m, "summary", iir_method_summary(*n)) && add_declared(m, *n) &&
              add_item(m, "params", (params = cJSON_CreateArray()));
         for (const iir_param_table *const *t = iir_method_tables(*n); ok && *t; t++) {
             cJSON *rows = iird_json_param_table(*t), *row;
@@ -345,12 +365,27 @@ char *iird_json_welcome(const iird_state_view *s, uint32_t session, const char *
 
 /* ======================== stats ======================== */
 
-cJSON *iird_json_phases(const iir_frame_stats *st, double scale)
+cJSON *iird_json_phases(const char *method, const iir_frame_stats *st, double scale)
 {
+    const iir_phase *ph;
+    int n = iir_method_phases(method, &ph);
     cJSON *o = cJSON_CreateObject();
     bool ok = o != NULL;
-    for (int i = 0; ok && i < IIR_PHASE_COUNT; i++)
-        ok = iird_json_add_num(o, iir_phase_name((iir_phase)i), rounded(st->phase_ms[i], scale));
+    for (int i = 0; ok && i < n; i++)
+        ok = iird_json_add_num(o, iir_phase_name(ph[i]), rounded(st->phase_ms[ph[i]], scale));
+    return keep_if(o, ok);
+}
+
+cJSON *iird_json_counters(const char *method, const iir_frame_stats *st)
+{
+    const iir_counter *c;
+    int n = iir_method_counters(method, &c);
+    cJSON *o = cJSON_CreateObject();
+    bool ok = o != NULL;
+    for (int i = 0; ok && i < n; i++)
+        ok = c[i].kind == IIR_COUNTER_SHARE
+                 ? iird_json_add_num(o, c[i].name, rounded(st->counter[i], 1e4))
+                 : iird_json_add_u64(o, c[i].name, (uint64_t)st->counter[i]);
     return keep_if(o, ok);
 }
 
@@ -413,12 +448,11 @@ char *iird_json_stats(const iird_stats_view *v)
               iird_json_add_num(o, "latency_ms", rounded(v->latency_ms, 1e3)) &&
               iird_json_add_num(o, "fps", rounded(v->fps, 1e2)) &&
               iird_json_add_u64(o, "bytes", v->bytes) &&
-              add_item(o, "phases", iird_json_phases(st, 1e3)) &&
+              add_item(o, "phases", iird_json_phases(v->method, st, 1e3)) &&
               add_item(o, "vpl", iird_json_vpl_counts(&st->vpl)) &&
               add_item(o, "rays", iird_json_rays(&st->rays)) &&
               iird_json_add_u64(o, "vpl_evals", st->vpl_evals) &&
-              iird_json_add_num(o, "recomputed", rounded(st->recomputed, 1e4)) &&
-              iird_json_add_u64(o, "branches_cut", st->branches_cut) &&
+              add_item(o, "counters", iird_json_counters(v->method, st)) &&
               add_item(o, "ctl", iird_json_ctl(st)) &&
               iird_json_add_u64(o, "dropped", v->dropped) &&
               iird_json_add_u64(o, "memory_bytes", v->memory_bytes);

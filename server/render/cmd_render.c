@@ -255,9 +255,8 @@ static void work_text(const render_opts *o, const iir_frame_stats *fs, char *buf
     const char *s = done == 1 ? "" : "s";
     if (iir_method_find_param(o->method, "spp"))
         snprintf(buf, n, "%llu sample%s per pixel", done, s);
-    else if (iir_method_find_param(o->method, "min_weight")) /* whitted's adaptive depth */
-        snprintf(buf, n, "a ray tree per pixel, %llu branches cut by min-weight",
-                 (unsigned long long)fs->branches_cut);
+    else if (iir_method_find_param(o->method, "min_weight")) /* whitted, hybrid */
+        snprintf(buf, n, "a ray tree per pixel");
     else if (iir_method_find_param(o->method, "patch_area")) /* radiosity */
         snprintf(buf, n, "a radiosity solution, %llu refinement pass%s", done,
                  done == 1 ? "" : "es");
@@ -271,15 +270,31 @@ static void work_text(const render_opts *o, const iir_frame_stats *fs, char *buf
                  fs->vpl.count);
 }
 
+/* The method's own counters as ", name value" each (a share as a percentage); "" for none. */
+static void counters_text(const char *method, const iir_frame_stats *fs, char *buf, size_t n)
+{
+    const iir_counter *c;
+    int k = iir_method_counters(method, &c);
+    size_t used = 0;
+    buf[0] = '\0';
+    for (int i = 0; i < k && used < n; i++)
+        used +=
+            (size_t)(c[i].kind == IIR_COUNTER_SHARE
+                         ? snprintf(buf + used, n - used, ", %s %.2f%%", c[i].name,
+                                    100 * fs->counter[i])
+                         : snprintf(buf + used, n - used, ", %s %.0f", c[i].name, fs->counter[i]));
+}
+
 static void print_summary(const render_opts *o, const iir_scene *scene, const iir_frame_stats *fs)
 {
     double rays = (double)iir_raystats_total(&fs->rays);
-    char work[96], settings[1024];
+    char work[96], counters[256], settings[1024];
     work_text(o, fs, work, sizeof work);
+    counters_text(o->method, fs, counters, sizeof counters);
     iird_settings_text(o->method, &o->params, settings, sizeof settings);
-    printf("wrote %s: %s, %dx%d, method %s, %s, %.2f s, %.1f Mrays (%.2f Mrays/s)\n"
+    printf("wrote %s: %s, %dx%d, method %s, %s%s, %.2f s, %.1f Mrays (%.2f Mrays/s)\n"
            "%s settings: %s\n",
-           o->out, scene->name, o->width, o->height, o->method, work, fs->total_ms / 1e3,
+           o->out, scene->name, o->width, o->height, o->method, work, counters, fs->total_ms / 1e3,
            rays / 1e6, fs->total_ms > 0 ? rays / (fs->total_ms * 1e3) : 0.0, o->method, settings);
 }
 

@@ -229,7 +229,9 @@ void iird_render_log_frame(iird_render_log *l, int f, double time_s, const char 
     cJSON_AddNumberToObject(e, "exposure", float_value(exposure));
     cJSON_AddNumberToObject(e, "total_ms", r4(fs->total_ms));
     cJSON_AddNumberToObject(e, "write_ms", r4(write_ms));
-    cJSON_AddItemToObject(e, "phase_ms", iird_json_phases(fs, 1e4));
+    const char *method = cJSON_GetStringValue(cJSON_GetObjectItem(l->settings, "method"));
+    cJSON_AddItemToObject(e, "phase_ms", iird_json_phases(method ? method : "", fs, 1e4));
+    cJSON_AddItemToObject(e, "counters", iird_json_counters(method ? method : "", fs));
     cJSON_AddItemToObject(e, "rays", iird_json_rays(&fs->rays));
     cJSON_AddItemToObject(e, "vpls", iird_json_vpl_counts(&fs->vpl));
     cJSON_AddNumberToObject(e, "vpl_evals", (double)fs->vpl_evals);

@@ -54,13 +54,45 @@ void iird_metrics_init(iird_metrics *m)
     count_evictions(m); /* starts the watch when the folder exists */
 }
 
-void iird_metrics_frame_sent(iird_metrics *m, double render_ms)
+/* Index of method `name` among iir_method_names, or -1. */
+static int method_index(const char *name)
 {
+    const char *const *names = iir_method_names();
+    for (int i = 0; names[i] && i < IIRD_METRICS_METHODS; i++)
+        if (name && !strcmp(names[i], name)) return i;
+    return -1;
+}
+
+static uint_fast64_t micros(double ms)
+{
+    return (uint_fast64_t)(ms > 0 ? ms * 1e3 : 0);
+}
+
+/* Adds the frame's declared phases and event counters to method `method`'s totals. */
+static void add_method_totals(iird_metrics *m, const char *method, const iir_frame_stats *st)
+{
+    int k = method_index(method);
+    if (k < 0) return;
+    const iir_phase *ph;
+    int n = iir_method_phases(method, &ph);
+    for (int i = 0; i < n; i++)
+        atomic_fetch_add(&m->phase_us[k][ph[i]], micros(st->phase_ms[ph[i]]));
+    const iir_counter *c;
+    n = iir_method_counters(method, &c);
+    for (int i = 0; i < n; i++)
+        if (c[i].kind == IIR_COUNTER_EVENTS)
+            atomic_fetch_add(&m->counter[k][i], (uint_fast64_t)st->counter[i]);
+}
+
+void iird_metrics_frame_sent(iird_metrics *m, const char *method, const iir_frame_stats *st)
+{
+    double render_ms = st->total_ms;
+    add_method_totals(m, method, st);
     double s = render_ms / 1e3;
     int b = 0;
     while (b < IIRD_FRAME_BUCKETS && s > frame_bucket_s[b]) b++;
     atomic_fetch_add(&m->frame_buckets[b], 1);
-    atomic_fetch_add(&m->frame_us_sum, (uint_fast64_t)(render_ms > 0 ? render_ms * 1e3 : 0));
+    atomic_fetch_add(&m->frame_us_sum, micros(render_ms));
     atomic_fetch_add(&m->frames_sent, 1);
 }
 
@@ -132,6 +164,32 @@ static void section_frames(FILE *f, const iird_metrics *m)
     fprintf(f, "iird_frame_seconds_count %llu\n", cum);
 }
 
+/* Every method's declared phases and event counters, summed over the frames sent (a method no
+ * frame used shows zeros: the series exist from the start). */
+static void section_methods(FILE *f, const iird_metrics *m)
+{
+    const char *const *names = iir_method_names();
+    metric_head(f, "iird_phase_seconds_total", "counter",
+                "Render time of sent frames by method and the phases it declares.");
+    for (int k = 0; names[k] && k < IIRD_METRICS_METHODS; k++) {
+        const iir_phase *ph;
+        int n = iir_method_phases(names[k], &ph);
+        for (int i = 0; i < n; i++)
+            fprintf(f, "iird_phase_seconds_total{method=\"%s\",phase=\"%s\"} %.6f\n", names[k],
+                    iir_phase_name(ph[i]), (double)load(&m->phase_us[k][ph[i]]) / 1e6);
+    }
+    metric_head(f, "iird_method_events_total", "counter",
+                "The event counters methods declare (iir_counter), summed over the frames sent.");
+    for (int k = 0; names[k] && k < IIRD_METRICS_METHODS; k++) {
+        const iir_counter *c;
+        int n = iir_method_counters(names[k], &c);
+        for (int i = 0; i < n; i++)
+            if (c[i].kind == IIR_COUNTER_EVENTS)
+                fprintf(f, "iird_method_events_total{method=\"%s\",counter=\"%s\"} %llu\n",
+                        names[k], c[i].name, load(&m->counter[k][i]));
+    }
+}
+
 static void section_traffic(FILE *f, const iird_metrics *m)
 {
     metric_head(f, "iird_bytes_sent_total", "counter", "WebSocket payload bytes sent.");
@@ -187,6 +245,7 @@ char *iird_metrics_prometheus(iird_metrics *m, const iird_metrics_session *sessi
     section_sessions(f, m, sessions, num_sessions);
     section_sched(f, sched);
     section_frames(f, m);
+    section_methods(f, m);
     section_traffic(f, m);
     metric_head(f, "iird_scenes_loaded", "gauge", "Scenes in memory.");
     fprintf(f, "iird_scenes_loaded %zu\n", scenes_loaded);

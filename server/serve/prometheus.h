@@ -12,11 +12,14 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "iir/method.h"
 #include "protocol/protocol.h"
 #include "scheduler.h"
 
 /* Upper bounds of the frame-time histogram buckets in seconds, +Inf implied after the last. */
 #define IIRD_FRAME_BUCKETS 9
+/* Methods the per-method totals have room for (iir_method_names' order). */
+#define IIRD_METRICS_METHODS 16
 
 typedef struct iird_metrics {
     double start_ms; /* iir_now_ms() at start, for the uptime */
@@ -26,6 +29,10 @@ typedef struct iird_metrics {
     atomic_uint_fast64_t errors[IIRD_E_COUNT];
     atomic_uint_fast64_t frame_buckets[IIRD_FRAME_BUCKETS + 1]; /* per bucket, not cumulative */
     atomic_uint_fast64_t frame_us_sum;                          /* sum of render times, us */
+    /* per method (iir_method_names' order): the time of each phase it declares, us, and its
+     * IIR_COUNTER_EVENTS counters, over the frames sent */
+    atomic_uint_fast64_t phase_us[IIRD_METRICS_METHODS][IIR_PHASE_COUNT];
+    atomic_uint_fast64_t counter[IIRD_METRICS_METHODS][IIR_MAX_COUNTERS];
     /* the form-factor cache's folder (iir/ffcache.h), read at each /metrics (service thread) */
     char ffcache_dir[1024];
     uint64_t ffcache_max;
@@ -44,8 +51,8 @@ typedef struct iird_metrics_session {
  * --cache-max set it). */
 void iird_metrics_init(iird_metrics *m);
 
-/* Counts one sent frame that took `render_ms` to render. */
-void iird_metrics_frame_sent(iird_metrics *m, double render_ms);
+/* Counts one sent frame of method `method` and its stats (render time, phases, counters). */
+void iird_metrics_frame_sent(iird_metrics *m, const char *method, const iir_frame_stats *st);
 void iird_metrics_error(iird_metrics *m, iird_err code);
 
 /* The /metrics text: malloc'd, NUL-terminated; NULL only when out of memory. Counts the cache

@@ -369,7 +369,7 @@ static bool write_frame(iird_session *s, struct lws *wsi, frame_slot *f)
         return false;
     }
     double now = iir_now_ms();
-    iird_metrics_frame_sent(s->env->metrics, f->stats.total_ms);
+    iird_metrics_frame_sent(s->env->metrics, f->method, &f->stats);
     pthread_mutex_lock(&s->lock);
     uint64_t dropped = s->dropped;
     pthread_mutex_unlock(&s->lock);

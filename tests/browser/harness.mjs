@@ -93,8 +93,12 @@ export function webArgs(IIRD, webDir) {
 }
 
 export class Daemon {
-    // args: everything after `serve` (port, scenes, web...).
+    // args: everything after `serve` (port, scenes, web...). Unless they say otherwise the daemon
+    // does not drain its sessions on SIGTERM (--drain-seconds 0): the page is still connected when
+    // a test stops it, and the default drain would wait its 10 s for the page to leave
+    // (tests/integration/test_serve_drain.py tests the drain).
     constructor(IIRD, args) {
+        if (!args.includes('--drain-seconds')) args = [...args, '--drain-seconds', '0'];
         fs.mkdirSync(process.env.IIR_TEST_TMP || os.tmpdir(), { recursive: true });
         this.dir = fs.mkdtempSync(path.join(process.env.IIR_TEST_TMP || os.tmpdir(), 'iird-browser-'));
         this.out = path.join(this.dir, 'stdout');

@@ -9,7 +9,8 @@
 //     a re-encoded frame (exposure changed) says "re-encoded" in the image's line and the stats, never
 //     "0.0 ms render" (issue 26, item 11e);
 //  4. pt: the domain says "pt has no VPL domain" at once and never "no domain from pt yet"; the stats
-//     say pt has no VPLs; ir: "ir has no disk domain", its VPL count is the set's size, a new set.
+//     say pt has no VPLs; ir: "ir has no disk domain", its VPL count is the set's size, a new set;
+//  5. a method's own counters and phases (issue 27): rsm's panel shows `recomputed`, its stats maps.
 // Screenshot: browser_stats.png in $IIR_TEST_TMP (harness shotPath).
 //
 // Usage (as ctest runs it): node tests/browser/test_stats.mjs IIRD SOURCE_DIR
@@ -193,6 +194,21 @@ async function main() {
     rows = await page.evaluate(() => window.iir.vplChart);
     const last = rows[rows.length - 1];
     check(last[1] === r.imageVpls && last[2] === null, `its chart row has the set's size and no "kept": ${JSON.stringify(last)}`);
+
+    // 5. rsm: the stats panel lists the counters it declares (recomputed, a share), and the phase
+    //    chart its phases (maps, not vpls); iir's panel had none
+    check(await page.evaluate(() => document.querySelector('#st-counters').hidden), 'ir declares no counters: none shown');
+    await page.selectOption('#param-method', 'rsm');
+    await H.waitFor(page, () => window.iir.state.params.method === 'rsm' && !window.iir.switching && window.iir.shownStats && window.iir.shownStats.method === 'rsm');
+    await H.waitFor(page, () => /%$/.test(document.querySelector('#st-counter-recomputed')?.textContent || ''));
+    const shown = await page.evaluate(() => ({
+        label: document.querySelector('#st-counters span')?.textContent,
+        value: document.querySelector('#st-counter-recomputed').textContent,
+        phases: Object.keys(window.iir.shownStats.phases),
+    }));
+    log(`rsm: ${JSON.stringify(shown)}`);
+    check(shown.label === 'recomputed' && Number(shown.value.slice(0, -1)) > 0, `rsm's counter in the panel: ${shown.label} ${shown.value}`);
+    check(shown.phases.join() === 'maps,gbuffer,direct,indirect', `rsm's phases: ${shown.phases.join(', ')}`);
 
     check(page.problems.length === 0, `no console errors${page.problems.length ? `:\n  ${page.problems.join('\n  ')}` : ''}`);
     await daemon.stop();

@@ -14,7 +14,7 @@ import tempfile
 from PIL import Image
 
 import iirserve
-from iirserve import NO_SEQ, Client, DaemonTest, Frame, finite, mean_abs_diff
+from iirserve import NO_SEQ, Client, DaemonTest, Frame, finite, mean_abs_diff, metric, metrics
 
 
 
@@ -23,7 +23,14 @@ def param_keys(welcome, method):
     all from the welcome's tables."""
     rows = next(m["params"] for m in welcome["methods"] if m["name"] == method)
     return {"method"} | {r["name"] for r in welcome["settings"]} | {r["name"] for r in rows}
-PHASES = {"trace", "vpls", "shadowmaps", "gbuffer", "direct", "indirect", "filter"}
+
+
+def declared(welcome, method):
+    """The phases (in order) and counters ({name: kind}) method `method` declares in the welcome."""
+    m = next(m for m in welcome["methods"] if m["name"] == method)
+    return m["phases"], {c["name"]: c["kind"] for c in m["counters"]}
+
+
 VPL_KEYS = {"count", "valid", "invalidated", "deleted", "inserted", "null", "regenerated", "shadowmaps",
             "descendants"}
 STATS_NUMBERS = ("frame", "pass", "total_ms", "encode_ms", "latency_ms", "fps", "bytes", "dropped", "memory_bytes")
@@ -61,7 +68,7 @@ class StreamTest(DaemonTest):
         self.assertIsInstance(params["refine"], bool)
         self.assertIsInstance(params["domain"], bool)
 
-    def check_stats(self, s, frames=()):
+    def check_stats(self, s, welcome, frames=()):
         for k in STATS_NUMBERS:
             self.assertTrue(finite(s.get(k)), f"stats.{k} = {s.get(k)!r} is not a finite number: {s}")
             self.assertGreaterEqual(s[k], 0, f"stats.{k}")
@@ -70,7 +77,13 @@ class StreamTest(DaemonTest):
         if "seq" not in s:  # the doc does not say; allowed only for a frame that answers no input yet
             f = [m for m in frames if m.id == s["frame"]]
             self.assertTrue(f and f[0].seq == NO_SEQ, f"stats without seq for a frame that has one: {s}")
-        self.assertEqual(set(s.get("phases", {})), PHASES, "stats.phases keys")
+        phases, counters = declared(welcome, s["method"])
+        self.assertEqual(list(s.get("phases", {})), phases, f"stats.phases: {s['method']}'s, in order")
+        self.assertEqual(set(s.get("counters", {})), set(counters), f"stats.counters: {s['method']}'s")
+        for k, kind in counters.items():
+            v = s["counters"][k]
+            self.assertTrue(finite(v) and v >= 0 and (kind != "share" or v <= 1), f"counters.{k} = {v!r}")
+            self.assertTrue(kind != "events" or isinstance(v, int), f"counters.{k} = {v!r} is a count")
         self.assertEqual(set(s.get("vpl", {})), VPL_KEYS, "stats.vpl keys")
         self.assertIsInstance(s.get("rays"), dict)
         self.assertGreater(len(s["rays"]), 0, "stats.rays is empty")
@@ -182,7 +195,7 @@ class StreamTest(DaemonTest):
             seq, f = await c.move_light(cone_angle=50)
             s = await c.wait_for(lambda m: isinstance(m, dict) and m.get("type") == "stats"
                                  and m.get("frame") == f.id, what="stats")
-            self.check_stats(s)
+            self.check_stats(s, c.welcome)
             self.assertEqual(s["method"], "iir")
             self.assertEqual(s["seq"], seq)
             self.assertEqual(s["pass"], f.pass_)
@@ -192,7 +205,40 @@ class StreamTest(DaemonTest):
             self.assertGreater(s["rays"].get("shadow", 0), 0, "direct light casts shadow rays")
             # every stats message of the session is well-formed
             for t in c.texts("stats"):
-                self.check_stats(t, c.frames())
+                self.check_stats(t, c.welcome, c.frames())
+        finally:
+            await c.close()
+
+    async def test_stats_declared(self):
+        """Each method's stats hold the phases and counters it declares (welcome.methods), and
+        /metrics sums them by method: rsm's maps and its share `recomputed`, whitted's trace and
+        its count `branches_cut`, radiosity's solve and display (not iir's vpls and indirect)."""
+        c = await Client.connect(self.daemon)
+        try:
+            await self.small(c)
+            want = {"rsm": ["maps", "gbuffer", "direct", "indirect"], "whitted": ["trace"],
+                    "radiosity": ["solve", "gbuffer", "direct", "display"]}
+            for method, phases in want.items():
+                self.assertEqual(declared(c.welcome, method)[0], phases, f"{method}'s phases")
+                seq, _ = await c.request({"type": "params", "method": method}, "state")
+                f = await c.wait_frame(min_seq=seq, timeout=120)
+                s = await c.wait_for(lambda m: isinstance(m, dict) and m.get("type") == "stats"
+                                     and m.get("frame") == f.id, what=f"{method}'s stats")
+                self.check_stats(s, c.welcome)
+                self.assertEqual(s["method"], method)
+                self.assertGreater(s["phases"][phases[0]], 0, f"{method}: {phases[0]} took no time")
+            self.assertIn("recomputed", declared(c.welcome, "rsm")[1])
+            self.assertEqual(declared(c.welcome, "whitted")[1], {"branches_cut": "events"})
+            samples = await asyncio.to_thread(metrics, self.daemon.port)
+            for method, phases in want.items():
+                for ph in phases:
+                    v = metric(samples, "iird_phase_seconds_total", f'method="{method}",phase="{ph}"')
+                    self.assertIsNotNone(v, f"/metrics has no {method} {ph}")
+                self.assertGreater(metric(samples, "iird_phase_seconds_total",
+                                          f'method="{method}",phase="{phases[0]}"'), 0)
+            self.assertIsNone(metric(samples, "iird_phase_seconds_total", 'method="rsm",phase="vpls"'))
+            self.assertIsNotNone(metric(samples, "iird_method_events_total",
+                                        'method="whitted",counter="branches_cut"'))
         finally:
             await c.close()
 

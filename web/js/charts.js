@@ -17,10 +17,14 @@ const PHASES = [
     ['trace', '#8c6bb1'],
     ['vpls', '#e7ba52'],
     ['shadowmaps', '#e6550d'],
+    ['maps', '#e6550d'],
+    ['solve', '#e7ba52'],
+    ['gather', '#bcbd22'],
     ['gbuffer', '#6b6ecf'],
     ['direct', '#3182bd'],
     ['indirect', '#31a354'],
     ['filter', '#9ecae1'],
+    ['display', '#31a354'],
 ];
 
 const AXIS = {

@@ -415,6 +415,28 @@ export class Panel {
         set('st-dropped', String(s.dropped || 0));
         set('st-memory', s.memory_bytes ? `${(s.memory_bytes / 1048576).toFixed(1)} MiB` : '–');
         if (!s.pass) set('st-ctl', describeController(s.ctl));
+        this.setCounters(s.method, s.counters || {});
         this.tickRecording();
+    }
+
+    // The counters the frame's method declares (the welcome's methods[].counters): a label and a
+    // value each, its help as the label's title; none for a method that declares none.
+    setCounters(method, values) {
+        const box = $('#st-counters', this.root);
+        const decl = (this.methods.find((m) => m.name === method) || {}).counters || [];
+        const key = `${method}:${decl.map((c) => c.name).join()}`;
+        if (box.dataset.key !== key) {
+            box.dataset.key = key;
+            box.replaceChildren(...decl.flatMap((c) => [
+                el('span', { text: c.name.replaceAll('_', ' '), title: c.help }),
+                el('b', { id: `st-counter-${c.name}`, text: '–' }),
+            ]));
+            box.hidden = decl.length === 0;
+        }
+        for (const c of decl) {
+            const v = values[c.name];
+            const text = v === undefined ? '–' : c.kind === 'share' ? `${(100 * v).toFixed(1)}%` : String(v);
+            $(`#st-counter-${c.name}`, box).textContent = text;
+        }
     }
 }

@@ -32,16 +32,42 @@ typedef struct iir_view {
     iir_camera camera;
 } iir_view;
 
+/* The phases a frame's time is split into. A method declares the ones it reports, in its
+ * pipeline's order (iir_method_phases); the others stay 0 in its stats. */
 typedef enum iir_phase {
-    IIR_PHASE_TRACE,      /* path tracing (pt) */
-    IIR_PHASE_VPLS,       /* choosing VPLs: the incremental step (iir) or light paths (ir) */
-    IIR_PHASE_SHADOWMAPS, /* rendering shadow maps of new VPLs */
+    IIR_PHASE_TRACE,      /* ray trees or paths per pixel (pt, whitted, hybrid) */
+    IIR_PHASE_VPLS,       /* choosing VPLs: the incremental step (iir) or light paths (ir, ism) */
+    IIR_PHASE_SHADOWMAPS, /* rendering shadow maps (or ISMs) of new VPLs */
+    IIR_PHASE_MAPS,       /* the lights' reflective shadow maps (rsm, hier: and hier's light
+                             points) */
+    IIR_PHASE_SOLVE,      /* the radiosity solution (radiosity, hybrid): direct light on the patches
+                             and the solve, or a refinement's shots */
+    IIR_PHASE_GATHER,     /* hybrid: the solution gathered to the display vertices */
     IIR_PHASE_GBUFFER,    /* camera rays (0 when the G-buffer was reused) */
-    IIR_PHASE_DIRECT,     /* direct light, one shadow ray per light per pixel */
-    IIR_PHASE_INDIRECT,   /* light from the VPLs */
+    IIR_PHASE_DIRECT,     /* direct light: shadow rays per light per pixel (hier: on its tree) */
+    IIR_PHASE_INDIRECT,   /* bounce light: from the VPLs (ir, iir, ism), the maps' gather (rsm) or
+                             the multires hierarchy (hier) */
     IIR_PHASE_FILTER,     /* geometry-aware filter of interleaved sampling */
+    IIR_PHASE_DISPLAY,    /* radiosity: the solution's Gouraud lookup through the G-buffer */
     IIR_PHASE_COUNT
 } iir_phase;
+
+/* A number a method reports per frame beyond the common stats, declared once in its operations
+ * (as its parameters are, in its tables): the protocol's stats message (`counters`), the bench CSV
+ * and summary, the render summary line and log, the browser's stats panel and /metrics list
+ * whatever the method declares. */
+typedef enum iir_counter_kind {
+    IIR_COUNTER_EVENTS, /* a count of things that happened this frame: summed (/metrics: a total) */
+    IIR_COUNTER_SHARE   /* a fraction of this frame, [0, 1]: averaged, not summed */
+} iir_counter_kind;
+
+typedef struct iir_counter {
+    const char *name; /* a key: lower case and underscores */
+    iir_counter_kind kind;
+    const char *help; /* one line: what it counts */
+} iir_counter;
+
+enum { IIR_MAX_COUNTERS = 4 }; /* a method declares at most this many */
 
 typedef struct iir_frame_stats {
     double total_ms;
@@ -53,20 +79,27 @@ typedef struct iir_frame_stats {
     bool whole_sweeps;          /* refinement: the passes so far give every interleaved VPL
                                    subset equal weight, so the image shows no subset pattern
                                    (always true for pt and for frames) */
-    iir_vpl_counts vpl;    /* VPL bookkeeping (vpl.h), zero for methods without VPLs; refinement:
-                              count = the size of the pass's VPL set */
-    uint64_t vpl_evals;    /* VPL evaluations: pixel-VPL pairs shaded (multires: texel-VPL pairs
-                              too; iir_render_timing), 0 for methods without VPLs */
-    double recomputed;     /* rsm with screen-space interpolation: the share of the frame's pixels
-                              that gathered their own light (their four nodes disagreed); 0 else */
-    uint64_t branches_cut; /* whitted: ray-tree branches the adaptive depth control stopped (each
-                              saves its ray and the tree under it); 0 else */
-    bool controlled;       /* target_fps set: ctl is the frame-time controller's state after the
-                              frame (its setting is the next frame's; controller.h) */
-    iir_ctl_report ctl;    /* zero when not controlled */
+    iir_vpl_counts vpl; /* VPL bookkeeping (vpl.h), zero for methods without VPLs; refinement:
+                           count = the size of the pass's VPL set */
+    uint64_t vpl_evals; /* VPL evaluations: pixel-VPL pairs shaded (multires: texel-VPL pairs
+                           too; iir_render_timing), 0 for methods without VPLs */
+    double counter[IIR_MAX_COUNTERS]; /* the method's own counters (iir_method_counters), in
+                                         the order it declares them */
+    bool controlled;    /* target_fps set: ctl is the frame-time controller's state after the
+                           frame (its setting is the next frame's; controller.h) */
+    iir_ctl_report ctl; /* zero when not controlled */
 } iir_frame_stats;
 
 const char *iir_phase_name(iir_phase phase);
+
+/* The phases method `name` reports, in its pipeline's order: *out gets them, the return value is
+ * how many (0 and *out NULL for an unknown name). */
+int iir_method_phases(const char *name, const iir_phase **out);
+/* The counters method `name` declares (frame stats' counter[i] is (*out)[i]): how many, 0 for
+ * none or an unknown name. */
+int iir_method_counters(const char *name, const iir_counter **out);
+/* Index of counter `counter` among method `name`'s, or -1. */
+int iir_method_counter_index(const char *name, const char *counter);
 
 typedef struct iir_method iir_method;
 

@@ -129,7 +129,8 @@ static uint64_t shade_pixels(hier_state *s, const iir_gbuffer *gb, const uint8_t
 }
 
 /* Fills s->E (bounce light) for every pixel -- the hierarchy's levels, then the level-0 pixels --
- * and s->tree.D (direct light) on the tree refined from that hierarchy where the light changes. */
+ * and s->tree.D (direct light) on the tree refined from that hierarchy where the light changes;
+ * times them as the indirect and direct phases. */
 static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *stats,
                         iir_error *err)
 {
@@ -140,15 +141,19 @@ static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *s
         s->E = E, s->E_cap = n;
     }
     uint64_t evals = 0;
+    double t0 = iir_now_ms();
     iir_status st = iir_multires_build(s->mr, gb, s->gb_serial, &s->o.mr, 1, err);
     if (st != IIR_OK) return st;
     if (iir_multires_shade(s->mr, shade_samples, s, 1u, s->E, s->stop, s->stop_ctx, &stats->rays,
                            &evals))
         return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     evals += shade_pixels(s, gb, iir_multires_levels(s->mr));
+    double t = iir_now_ms();
+    stats->phase_ms[IIR_PHASE_INDIRECT] = t - t0;
     const iir_stop stop = {s->stop, s->stop_ctx};
     hier_tree_input in = {gb, s->mr, &s->lights, s->o.mr.mr_levels, s->o.light_split};
     st = hier_tree_shade(&s->tree, &in, &stop, &evals, err);
+    stats->phase_ms[IIR_PHASE_DIRECT] = iir_now_ms() - t;
     stats->vpl_evals = evals;
     return st;
 }
@@ -209,7 +214,6 @@ static iir_status hier_render(void *state, const iir_view *view, iir_image *out,
     if (st != IIR_OK) return st;
     s->gb_serial += !rt.gbuffer_cached;
     const iir_gbuffer *gb = iir_renderer_gbuffer(s->renderer);
-    double t2 = iir_now_ms();
     st = shade(s, gb, stats, err);
     if (st != IIR_OK) return st;
     for (size_t p = 0; p < (size_t)gb->width * gb->height; p++)
@@ -217,11 +221,9 @@ static iir_status hier_render(void *state, const iir_view *view, iir_image *out,
             iir_madd(out->pixels[p], iir_mul(gb->albedo[p], iir_add(s->tree.D[p], s->E[p])),
                      1.f / (float)M_PI);
     add_seen_area_lights(view, gb, out);
-    uint64_t evals = stats->vpl_evals;
-    iir_render_timing_to_stats(&rt, stats);
-    stats->vpl_evals = evals;
-    stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
-    stats->phase_ms[IIR_PHASE_INDIRECT] = iir_now_ms() - t2; /* direct and indirect together */
+    stats->phase_ms[IIR_PHASE_GBUFFER] = rt.gbuffer_ms;
+    stats->phase_ms[IIR_PHASE_DIRECT] += rt.direct_ms; /* the emitters the camera sees */
+    stats->phase_ms[IIR_PHASE_MAPS] = t1 - t0;
     stats->total_ms = iir_now_ms() - t0;
     return IIR_OK;
 }
@@ -331,4 +333,6 @@ const iir_method_ops iir_method_hier = {
     .update = hier_update,
     .memory = hier_memory,
     .dropped = hier_dropped,
+    .phases = {IIR_PHASE_MAPS, IIR_PHASE_GBUFFER, IIR_PHASE_INDIRECT, IIR_PHASE_DIRECT,
+               IIR_PHASE_COUNT},
 };

@@ -63,7 +63,7 @@ static iir_status trace(hybrid_state *s, const iir_view *view, iir_image *out,
                        .stop = s->stop,
                        .stop_ctx = s->stop_ctx};
     st = whitted_tree_render(s->tree, &f, view, out, stats, err);
-    stats->phase_ms[IIR_PHASE_INDIRECT] = t1 - t0;
+    stats->phase_ms[IIR_PHASE_GATHER] = t1 - t0;
     stats->phase_ms[IIR_PHASE_TRACE] = iir_now_ms() - t1;
     return st;
 }
@@ -82,7 +82,7 @@ static iir_status hybrid_render(void *state, const iir_view *view, iir_image *ou
     if (st == IIR_OK) st = trace(s, view, out, stats, err);
     if (st != IIR_OK) return st;
     iir_raystats_add(&stats->rays, &shoot);
-    stats->phase_ms[IIR_PHASE_VPLS] = solve_ms;
+    stats->phase_ms[IIR_PHASE_SOLVE] = solve_ms;
     stats->total_ms = iir_now_ms() - t0;
     stats->samples_per_pixel = 1;
     stats->converged = s->sol.converged;
@@ -102,7 +102,7 @@ static iir_status hybrid_refine(void *state, iir_image *out, iir_frame_stats *st
     bool shot;
     iir_status rs = rad_solution_refine(&s->sol, &shot, err);
     if (rs != IIR_OK) return rs; /* its whole shots stand, uncounted: the next pass shows them */
-    stats->phase_ms[IIR_PHASE_VPLS] = iir_now_ms() - t0;
+    stats->phase_ms[IIR_PHASE_SOLVE] = iir_now_ms() - t0;
     if (shot) {
         s->passes++;
         iir_view view = {s->sol.lights, s->sol.num_lights, s->camera};
@@ -209,4 +209,6 @@ const iir_method_ops iir_method_hybrid = {
     .converged_at = hybrid_converged_at,
     /* measured against a multi-bounce pt: 8 bounces (the Cornell box's walls keep ~5% past) */
     .reference_bounces = 8,
+    .phases = {IIR_PHASE_SOLVE, IIR_PHASE_GATHER, IIR_PHASE_TRACE, IIR_PHASE_COUNT},
+    .counters = WHITTED_COUNTERS,
 };

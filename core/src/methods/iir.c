@@ -624,4 +624,5 @@ const iir_method_ops iir_method_iir = {
     .supports = iir_m_supports,
     .memory = iir_m_memory,
     .dropped = iir_m_dropped,
+    .phases = IIR_VPL_PHASES,
 };

@@ -373,4 +373,5 @@ const iir_method_ops iir_method_ir = {
     .update = ir_update,
     .memory = ir_memory,
     .dropped = ir_dropped,
+    .phases = IIR_VPL_PHASES,
 };

@@ -105,4 +105,5 @@ const iir_method_ops iir_method_ism = {
     .update = ism_update,
     .memory = ism_memory,
     .dropped = ism_dropped,
+    .phases = IIR_VPL_PHASES,
 };

@@ -407,4 +407,5 @@ const iir_method_ops iir_method_pt = {
     .memory = pt_memory,
     .converged_at = pt_converged_at,
     .dropped_by_params = pt_dropped_by_params,
+    .phases = {IIR_PHASE_TRACE, IIR_PHASE_COUNT},
 };

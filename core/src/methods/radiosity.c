@@ -177,8 +177,8 @@ static iir_status rad_render(void *state, const iir_view *view, iir_image *out,
     double t1 = iir_now_ms();
     st = shade(s, out, err);
     if (st != IIR_OK) return st;
-    stats->phase_ms[IIR_PHASE_VPLS] = solve_ms;
-    stats->phase_ms[IIR_PHASE_INDIRECT] = iir_now_ms() - t1;
+    stats->phase_ms[IIR_PHASE_SOLVE] = solve_ms;
+    stats->phase_ms[IIR_PHASE_DISPLAY] = iir_now_ms() - t1;
     stats->total_ms = iir_now_ms() - t0;
     stats->converged = s->sol.converged;
     stats->whole_sweeps = true;
@@ -203,8 +203,8 @@ static iir_status rad_refine(void *state, iir_image *out, iir_frame_stats *stats
     double t1 = iir_now_ms();
     st = shade(s, out, err);
     if (st != IIR_OK) return st;
-    stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
-    stats->phase_ms[IIR_PHASE_INDIRECT] = iir_now_ms() - t1;
+    stats->phase_ms[IIR_PHASE_SOLVE] = t1 - t0;
+    stats->phase_ms[IIR_PHASE_DISPLAY] = iir_now_ms() - t1;
     stats->total_ms = iir_now_ms() - t0;
     stats->samples_per_pixel = s->passes;
     stats->converged = s->sol.converged;
@@ -333,4 +333,6 @@ const iir_method_ops iir_method_radiosity = {
     .dropped = rad_dropped,
     /* measured against a multi-bounce pt: 8 bounces (the Cornell box's walls keep ~5% past) */
     .reference_bounces = 8,
+    .phases = {IIR_PHASE_SOLVE, IIR_PHASE_GBUFFER, IIR_PHASE_DIRECT, IIR_PHASE_DISPLAY,
+               IIR_PHASE_COUNT},
 };

@@ -21,7 +21,7 @@
  * its four surrounding nodes when all four see its surface (not background, normals within the
  * geometry-aware filter's cosine, the node's point within its relative depth of the pixel's
  * plane), and gathers itself otherwise. The share of pixels gathered again is reported
- * (iir_frame_stats.recomputed).
+ * (its counter `recomputed`).
  *
  * With shading = multires the gather runs on the G-buffer's multiresolution hierarchy instead
  * (multires.h: coarse texels where the surface is smooth, pixels at discontinuities; rsm_lowres is
@@ -41,6 +41,18 @@
 #include "iir/vplsets.h"
 #include "method_internal.h"
 #include "rsm_map.h"
+
+/* rsm's counters: frame stats' counter[RSM_RECOMPUTED]. */
+enum { RSM_RECOMPUTED };
+#define RSM_COUNTERS                                                                               \
+    {                                                                                              \
+        {                                                                                          \
+            "recomputed", IIR_COUNTER_SHARE,                                                       \
+                "the share of the frame's pixels that gathered their own light (lowres: their "    \
+                "four nodes "                                                                      \
+                "disagreed; multires: pixels at full resolution)"                                  \
+        }                                                                                          \
+    }
 
 /* ---- parameters ---- */
 
@@ -215,7 +227,7 @@ static iir_status shade_lowres(rsm_state *s, const iir_gbuffer *gb, iir_image *o
     uint64_t per_gather = (uint64_t)s->num_maps * (uint64_t)s->pattern.m;
     uint64_t nodes = L > 1 ? (uint64_t)nx * (uint64_t)ny : 0;
     stats->vpl_evals = ((uint64_t)gathered + nodes) * per_gather;
-    stats->recomputed = (double)gathered / ((double)W * H);
+    stats->counter[RSM_RECOMPUTED] = (double)gathered / ((double)W * H);
     return IIR_OK;
 }
 
@@ -260,7 +272,7 @@ static iir_status shade_multires(rsm_state *s, const iir_gbuffer *gb, iir_image 
             iir_madd(out->pixels[q], iir_mul(gb->albedo[q], s->E[q]), 1.f / (float)M_PI);
     }
     stats->vpl_evals = evals + (uint64_t)gathered * s->num_maps * (uint64_t)s->pattern.m;
-    stats->recomputed = (double)gathered / n;
+    stats->counter[RSM_RECOMPUTED] = (double)gathered / n;
     return IIR_OK;
 }
 
@@ -323,7 +335,7 @@ static iir_status rsm_render(void *state, const iir_view *view, iir_image *out,
     uint64_t evals = stats->vpl_evals;
     iir_render_timing_to_stats(&rt, stats);
     stats->vpl_evals = evals;
-    stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
+    stats->phase_ms[IIR_PHASE_MAPS] = t1 - t0;
     stats->phase_ms[IIR_PHASE_INDIRECT] = iir_now_ms() - t2;
     stats->total_ms = iir_now_ms() - t0;
     return IIR_OK;
@@ -424,4 +436,7 @@ const iir_method_ops iir_method_rsm = {
     .update = rsm_update,
     .memory = rsm_memory,
     .dropped = rsm_dropped,
+    .phases = {IIR_PHASE_MAPS, IIR_PHASE_GBUFFER, IIR_PHASE_DIRECT, IIR_PHASE_INDIRECT,
+               IIR_PHASE_COUNT},
+    .counters = RSM_COUNTERS,
 };

@@ -97,4 +97,6 @@ const iir_method_ops iir_method_whitted = {
     .memory = whitted_memory,
     /* measured against a multi-bounce pt: 8 bounces (the Cornell box's walls keep ~5% past) */
     .reference_bounces = 8,
+    .phases = {IIR_PHASE_TRACE, IIR_PHASE_COUNT},
+    .counters = WHITTED_COUNTERS,
 };

@@ -18,7 +18,7 @@
  * adaptive control, its weight's largest channel is at least min_weight. A branch cut by the
  * weight would add at most weight x (the radiance it would find), so the image changes by at most
  * min_weight times the scene's largest radiance per cut branch; every cut is counted
- * (iir_frame_stats.branches_cut: each saves its ray and the tree under it).
+ * (the methods' branches_cut counter: each saves its ray and the tree under it).
  *
  * Glass casts shadows (shadow rays stop at it): light through glass onto a diffuse surface, a
  * caustic, is not in Whitted's model. Frames are deterministic (area samples draw from a stream
@@ -246,7 +246,7 @@ static iir_status render_tiles(const whitted_tree *w, iir_image *out, iir_frame_
         }
     }
     stats->rays = total;
-    stats->branches_cut = cut_total;
+    stats->counter[WHITTED_BRANCHES_CUT] = (double)cut_total;
     if (stopped) return iir_fail(err, IIR_ERR_INTERRUPTED, "whitted: frame stopped early");
     return IIR_OK;
 }

@@ -41,11 +41,24 @@ typedef struct whitted_frame {
 
 typedef struct whitted_tree whitted_tree;
 
+/* The counters of the methods that render the tree (whitted, hybrid): frame stats' counter[0]. */
+enum { WHITTED_BRANCHES_CUT };
+#define WHITTED_COUNTERS                                                                           \
+    {                                                                                              \
+        {                                                                                          \
+            "branches_cut", IIR_COUNTER_EVENTS,                                                    \
+                "ray-tree branches the adaptive depth control (min_weight) stopped, each saving "  \
+                "its ray "                                                                         \
+                "and the tree under it"                                                            \
+        }                                                                                          \
+    }
+
 /* NULL when out of memory. The scene and rt must outlive it. */
 whitted_tree *whitted_tree_create(const iir_scene *scene, const iir_rt *rt);
 void whitted_tree_destroy(whitted_tree *w);
-/* One tree per pixel of out (OpenMP over tiles): stats->rays and branches_cut; the frame's
- * lights and camera from view (validated by the caller). IIR_ERR_INTERRUPTED when stop said so. */
+/* One tree per pixel of out (OpenMP over tiles): stats->rays and its branches_cut counter; the
+ * frame's lights and camera from view (validated by the caller). IIR_ERR_INTERRUPTED when stop said
+ * so. */
 iir_status whitted_tree_render(whitted_tree *w, const whitted_frame *f, const iir_view *view,
                                iir_image *out, iir_frame_stats *stats, iir_error *err);
 
