@@ -159,7 +159,12 @@ async function main() {
     await page.mouse.move(10, 10);
     await page.keyboard.press('='); // exposure up: a params change that leaves the notes as they were
     const changed = await H.waitFor(page, (g) => window.iir.generation > g, gen).then(() => true, () => false);
-    await H.sleep(300);
+    // everything the daemon sends for the change has arrived: its state (the notes come only in
+    // states), then the frame answering it, drawn
+    await H.waitFor(page, () => {
+        const f = window.iir.lastFrame;
+        return f && f.seq !== 0xffffffff && f.seq >= window.iir.inputSeq;
+    });
     check(changed && (await notice(page)) === null, `a dismissed notice stays away while the notes do not change (exposure now ${(await page.evaluate(() => window.iir.state.params.exposure))})`);
 
     await glassHint(page);

@@ -27,6 +27,24 @@ const DOMAIN_DRAG_MIN = 10;
 const frameRGB = (page) => canvasRGB(page, 'frame', 128, 96);
 const domainRGB = (page) => canvasRGB(page, 'domain', 96, 96);
 
+// Waits until the newest pick the page sent has its reply, and no pick followed it for two animation
+// frames (H.recordWire's log; waitForFunction polls once per animation frame). The page sends at
+// most one pick at a time, the newest position (controls.js flush(), once per animation frame):
+// with none in flight, the next frame sends a pending one, so two quiet frames after a reply mean
+// no pick is pending, and the light message that reply makes has gone out.
+async function lastPickAnswered(page) {
+    await H.waitFor(page, () => {
+        const w = window.__wire;
+        const out = w.filter((m) => m.dir === 'out' && m.type === 'pick').pop();
+        const answered = out && w.some((m) => m.dir === 'in' && m.seq === out.seq && (m.type === 'pick' || m.type === 'error'));
+        const q = (window.__pickQuiet ||= { seq: -1, frames: 0 });
+        if (!answered) q.seq = -1;
+        else if (q.seq !== out.seq) Object.assign(q, { seq: out.seq, frames: 0 });
+        else q.frames++;
+        return answered && q.frames >= 2;
+    });
+}
+
 async function main() {
     const chromium = await H.prerequisites(IIRD, SRC);
     const extra = ['--scenes', path.join(SRC, 'scenes'), ...H.webArgs(IIRD, path.join(SRC, 'web'))];
@@ -39,6 +57,7 @@ async function main() {
     const page = await H.newPage(browser);
 
     // 1. load, first frame
+    await H.recordWire(page); // the pick messages and their replies (lastPickAnswered)
     await page.goto(first.url, { waitUntil: 'load' });
     await page.waitForFunction(() => window.iir && window.iir.framesDrawn > 0, null, { timeout: WAIT_MS });
     const info = await page.evaluate(() => ({ f: window.iir.lastFrame, s: window.iir.state }));
@@ -47,20 +66,21 @@ async function main() {
     await page.waitForFunction(() => window.iir.lastDomain && window.iir.lastStats, null, { timeout: WAIT_MS });
     await settle(page);
     // the domain drawn is the newest interactive frame's (on a loaded machine it comes after the
-    // frames pause, and would otherwise arrive inside the idle window below)
-    await page.waitForFunction(() => {
+    // frames pause, and would otherwise arrive inside the idle window below); the daemon sends the
+    // newest rendered frame's domain once frames pause, so it comes unless something is broken
+    await H.waitFor(page, () => {
         const f = window.iir.drawn.filter((d) => d.pass === 0).pop();
         return f && window.iir.lastDomain && window.iir.lastDomain.frame >= f.frameId;
-    }, null, { timeout: WAIT_MS }).catch(() => {});
+    });
     // and a refinement pass of that frame drawn: the domain view draws a frame's new sites and
     // removed points, and a pass of it as unchanged, so on a loaded machine (ctest -j2 beside
     // another browser test) the first pass, arriving late, would change the drawing inside the idle
-    // window below (measured: 19.45)
-    await page.waitForFunction(() => {
+    // window below (measured: 19.45); the session refines iir's frames (refine is on by default)
+    await H.waitFor(page, () => {
         const d = window.iir.drawn;
         const i = d.map((x) => x.pass === 0).lastIndexOf(true);
         return i >= 0 && d.slice(i + 1).some((x) => x.pass > 0);
-    }, null, { timeout: WAIT_MS }).catch(() => {});
+    });
     await sleep(200);
 
     // 2. idle change (refinement) as the baseline
@@ -82,7 +102,9 @@ async function main() {
     await page.mouse.move(from.x, from.y);
     await page.mouse.down();
     await page.mouse.move(to.x, to.y, { steps: 12 });
-    await sleep(300); // let the last pick's reply arrive while the button is still down
+    // the last pick's reply arrives while the button is still down (and the light message it makes,
+    // which settle() below then waits for, is sent)
+    await lastPickAnswered(page);
     await page.mouse.up();
     await settle(page, 3);
     const after = await frameRGB(page);

@@ -220,6 +220,32 @@ def metrics(port):
     return parse_metrics(body.decode())
 
 
+def session_render_seconds(samples, session):
+    """Render time session `session` has used (iird_session_render_seconds_total: its turns on the
+    cores, counted while they last); None when the daemon lists no such session."""
+    return metric(samples, "iird_session_render_seconds_total", f'session="{session}"')
+
+
+async def wait_metrics(port, holds, what, timeout=FRAME_TIMEOUT, show=None):
+    """Polls /metrics (from a thread: the clients' readers go on meanwhile) until holds(samples) is
+    true; returns those samples. AssertionError "no `what` within timeout s" on timeout, with
+    show(samples) of the last poll when given."""
+    deadline = time.monotonic() + timeout
+    while True:
+        samples = await asyncio.to_thread(metrics, port)
+        if holds(samples):
+            return samples
+        if time.monotonic() >= deadline:
+            raise AssertionError(f"no {what} within {timeout:.1f} s" + (f"; {show(samples)}" if show else ""))
+        await asyncio.sleep(0.05)
+
+
+async def wait_metric(port, name, want, what, timeout=FRAME_TIMEOUT, labels=None):
+    """wait_metrics until metric `name` (with `labels`) equals want; its last value on timeout."""
+    return await wait_metrics(port, lambda s: metric(s, name, labels) == want, what, timeout,
+                              show=lambda s: f"{name}{labels or ''} is {metric(s, name, labels)}, not {want}")
+
+
 def healthz(port):
     status, ctype, body = http_get(port, "/healthz")
     assert status == 200, f"/healthz answered {status}: {body[:200]!r}"

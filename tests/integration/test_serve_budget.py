@@ -5,10 +5,8 @@ session, --max-memory. The attack message {"vpls":4096,"sm_res":2048} (64 GiB of
 refused naming the budget and the estimate, and leaves the session as it was; the estimate is checked
 against the daemon's measured RSS. Usage: test_serve_budget.py IIRD SOURCE_DIR"""
 
-import asyncio
-
 import iirserve
-from iirserve import Client, Daemon, DaemonTest, FAST_ARGS, metrics, rss_bytes
+from iirserve import Client, Daemon, DaemonTest, FAST_ARGS, metrics, rss_bytes, wait_metric
 
 ATTACK = {"type": "params", "vpls": 4096, "sm_res": 2048}
 # 1024 VPLs with 256^2 shadow maps: 256 MiB of maps, far above everything else the session holds.
@@ -17,6 +15,15 @@ BIG = {"type": "params", "method": "iir", "vpls": 1024, "kmax": 8, "sm_res": 256
 
 def session_bytes(port):
     return sum(v for n, _, v in metrics(port) if n == "iird_session_memory_bytes")
+
+
+async def refined(c, frame, timeout):
+    """Waits for the first refinement pass of `frame` (the next frame, with pass > 0): the session has
+    refined it, so what refinement allocates (iir's fresh VPL sets, counted in the estimate) is
+    allocated. Refinement starts once input has been idle IIRD_REFINE_IDLE_MS; RSS grows by ~4 MiB
+    (default session) and ~12 MiB (BIG) in its first pass."""
+    return await c.wait_for(lambda m: isinstance(m, iirserve.Frame) and m.kind == 1 and m.pass_ > 0,
+                            timeout, c.log.index(frame) + 1, what=f"refinement pass of frame {frame.id}")
 
 
 class BudgetTest(DaemonTest):
@@ -42,12 +49,10 @@ class BudgetTest(DaemonTest):
         d = Daemon(*FAST_ARGS, "--max-session-memory", "2G")
         try:
             c = await Client.connect(d)
-            await c.wait_frame()
-            await asyncio.sleep(0.5)
+            await refined(c, await c.wait_frame(), iirserve.FRAME_TIMEOUT)
             rss0, est0 = rss_bytes(d.proc.pid), session_bytes(d.port)
             seq, _ = await c.request(BIG, "state")
-            await c.wait_frame(min_seq=seq, timeout=120)
-            await asyncio.sleep(0.5)
+            await refined(c, await c.wait_frame(min_seq=seq, timeout=120), 120)
             rss1, est1 = rss_bytes(d.proc.pid), session_bytes(d.port)
             grew, est = rss1 - rss0, est1 - est0
             print(f"[RSS +{grew / 2**20:.0f} MiB, estimate +{est / 2**20:.0f} MiB] ", end="")
@@ -68,7 +73,9 @@ class BudgetTest(DaemonTest):
             self.assertEqual(e.get("code"), "busy", e)
             self.assertIn("--max-memory", e.get("message", ""))
             await a.close()
-            await asyncio.sleep(1.0)  # a's reservation returns when its session ends
+            # a's reservation returns when its session ends: iird_session_destroy releases it before
+            # the iird_sessions gauge counts the session out (server.c release_session)
+            await wait_metric(d.port, "iird_sessions", 1, "end of a's session after its client left")
             await b.request(big, "state")
             await b.close()
             d.stop_and_check(self)

@@ -19,7 +19,7 @@ import re
 import time
 
 import iirserve
-from iirserve import Client, DaemonTest, Frame, NO_SEQ, metrics
+from iirserve import Client, DaemonTest, Frame, NO_SEQ, metrics, wait_metrics
 
 LIGHT = {"method": "iir", "width": 256, "height": 192, "refine": False, "domain": False}
 HEAVY = {"method": "pt", "width": 1920, "height": 1080, "spp": 64, "bounces": 8, "domain": False}
@@ -27,6 +27,9 @@ HEAVY_SESSIONS = 7
 RATE_HZ = 30.0
 WARMUP_S = 1.0
 WINDOW_S = 5.0
+# Render time each heavy session has had of its heavy frame before the loaded window: ten slices
+# (IIRD_SCHED_SLICE_MS), beyond the tile with which a refinement of its first frame stops.
+HEAVY_STARTED_S = 0.1
 
 
 def target(t):
@@ -35,10 +38,14 @@ def target(t):
     return [round(0.5 * math.cos(a), 5), 0.0, round(0.5 * math.sin(a), 5)]
 
 
-def render_seconds(port):
-    """{session id: render seconds used} from /metrics."""
+def used_seconds(samples):
+    """{session id: render seconds used} from /metrics' samples."""
     return {int(re.search(r'session="(\d+)"', labels).group(1)): value
-            for name, labels, value in metrics(port) if name == "iird_session_render_seconds_total"}
+            for name, labels, value in samples if name == "iird_session_render_seconds_total"}
+
+
+def render_seconds(port):
+    return used_seconds(metrics(port))
 
 
 class Window:
@@ -83,10 +90,23 @@ class FairShareTest(DaemonTest):
             await light.request({"type": "params", **LIGHT}, "state")
             solo = await drag(self, light)
             for _ in range(HEAVY_SESSIONS):
-                h = await Client.connect(self.daemon)
-                heavy.append(h)
+                heavy.append(await Client.connect(self.daemon))
+            # their first frames (the defaults) done: what each renders after HEAVY's state is HEAVY
+            await asyncio.gather(*(h.wait_frame() for h in heavy))
+            since = {}
+            for h in heavy:
                 await h.request({"type": "params", **HEAVY}, "state")
-            await asyncio.sleep(1.0)  # every heavy session is rendering
+                since[h.welcome["session"]] = render_seconds(self.daemon.port)[h.welcome["session"]]
+
+            def started(samples):  # render seconds of each heavy session since its HEAVY state
+                used = used_seconds(samples)
+                return {k: used.get(k, 0.0) - v for k, v in since.items()}
+
+            # every heavy session is rendering its heavy frame: each has had its turns on the cores
+            await wait_metrics(self.daemon.port, lambda s: min(started(s).values()) >= HEAVY_STARTED_S,
+                               f"{HEAVY_STARTED_S} s of render time of every heavy session's frame",
+                               show=lambda s: "render seconds since: " + " ".join(
+                                   f"{x:.2f}" for x in started(s).values()))
             loaded = await drag(self, light)
             for h in heavy:
                 self.assertFalse(h.closed, f"a heavy session closed: {h.close_info()}")

@@ -154,9 +154,12 @@ static void step(iir_incr *inc, const iir_light *l)
  *   and those whose origin sees the surfaces better outlive the others, so right after motion the
  *   survivors' origins are not uniform over the emitter (measured right after a jump: +7%). Bound
  *   5%. After 150 frames of rest (k_min's churn replaces them): within 2.3% on every kind; bound
- * 3%. The disc lamp (its origins on the 32-gon) shows the same bias a little stronger: +4.3%
- * right after motion when measured first, +5.5% since 2026-11-25 (bisected to commit 134b0bc,
- * which changes no code this test runs: not explained yet); bound 7% for it. After rest +2.8%.
+ * 3%. The disc lamp (its origins on the 32-gon) shows the same bias a little stronger: +5.47%
+ * right after motion (green). The test is deterministic: the same digits on every run, in the
+ * Release and the sanitizer build, run alone (cmocka's filter) or after the others, and at
+ * 54874a9, the commit that added the disc (so the +4.3% once noted was never a committed state and
+ * 134b0bc moved nothing). Bound 6% for it, until the bias itself is fixed (issue 30). After rest
+ * +2.7%.
  * - Uniform weights after rest: within 1.2% on the point and area lights and the cosine spot, -3.1%
  *   on the sun and -7.3% on the glTF spot: the largest empty circle counts a whole circle at the
  *   disk's rim where half of it lies outside, so the rim gets more sites than its area, and the
@@ -218,7 +221,7 @@ static void conservation(const fixture *f, enum kind k)
         step(uni, &l);
     }
     iir_vec3 dense = dense_reflected(f, &l, 400000);
-    check_close("voronoi", k, set_flux(vor), dense, k == DISC ? 0.07 : 0.05);
+    check_close("voronoi", k, set_flux(vor), dense, k == DISC ? 0.06 : 0.05);
     /* uniform weights are exact only for a uniform set: right after motion the point light's set
      * is denser where surfaces moved into view than where nulls are (+28% here); k_min's churn
      * evens it out while the light rests */

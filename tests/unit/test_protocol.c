@@ -1089,9 +1089,16 @@ static void test_json_replies(void **state)
     assert_int_equal(num(o, "bytes"), 41234);
     assert_int_equal(num(o, "dropped"), 1);
     assert_int_equal(num(o, "memory_bytes"), 12582912);
+    /* iir's declared phases, in its order, and no counters */
     const cJSON *ph = cJSON_GetObjectItemCaseSensitive(o, "phases");
-    assert_int_equal(cJSON_GetArraySize(ph), IIR_PHASE_COUNT);
+    const iir_phase *declared;
+    int nph = iir_method_phases("iir", &declared);
+    assert_int_equal(cJSON_GetArraySize(ph), nph);
+    for (int i = 0; i < nph; i++)
+        assert_string_equal(cJSON_GetArrayItem(ph, i)->string, iir_phase_name(declared[i]));
     assert_true(num(ph, "indirect") == 13.9);
+    assert_null(cJSON_GetObjectItemCaseSensitive(ph, "trace"));
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(o, "counters")), 0);
     const cJSON *jv = cJSON_GetObjectItemCaseSensitive(o, "vpl");
     const char *vk[] = {"count", "valid",       "invalidated", "deleted",    "inserted",
                         "null",  "regenerated", "shadowmaps",  "descendants"};
@@ -1102,6 +1109,15 @@ static void test_json_replies(void **state)
     const cJSON *jr = cJSON_GetObjectItemCaseSensitive(o, "rays");
     assert_int_equal(cJSON_GetArraySize(jr), IIR_RAY_KIND_COUNT);
     assert_int_equal(num(jr, "shadow"), 196608);
+    cJSON_Delete(o);
+    /* rsm: its phases (maps, not vpls) and its counter, a share rounded to 1e-4 */
+    fs.counter[iir_method_counter_index("rsm", "recomputed")] = 0.123456;
+    fs.phase_ms[IIR_PHASE_MAPS] = 0.5;
+    sv.method = "rsm";
+    o = reply_ok(iird_json_stats(&sv), "stats");
+    ph = cJSON_GetObjectItemCaseSensitive(o, "phases");
+    assert_true(num(ph, "maps") == 0.5 && !cJSON_GetObjectItemCaseSensitive(ph, "vpls"));
+    assert_true(num(cJSON_GetObjectItemCaseSensitive(o, "counters"), "recomputed") == 0.1235);
     cJSON_Delete(o);
 
     /* pick, snapshot */
