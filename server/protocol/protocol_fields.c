@@ -87,62 +87,52 @@ void iird_path(char out[IIRD_PATH_BYTES], const char *prefix, const char *name)
 
 const char *iird_json_kind(const cJSON *v)
 {
-    if (!v) return "nothing";
-    if (cJSON_IsNumber(v)) return "a number";
-    if (cJSON_IsString(v)) return "a string";
-    if (cJSON_IsBool(v)) return "a boolean";
-    if (cJSON_IsNull(v)) return "null";
-    if (cJSON_IsArray(v)) return "an array";
-    if (cJSON_IsObject(v)) return "an object";
-    return "an unknown JSON value";
+    return iir_json_kind(v);
 }
 
-/* ======================== numbers ======================== */
+/* ======================== values (json_read.h) ======================== */
 
-static bool number_value(const iird_pctx *c, const char *path, const cJSON *v, const char *what,
-                         double *out)
+/* The protocol's code for a reader's fault. */
+static iird_err code_of(iir_json_fault f)
 {
-    if (!cJSON_IsNumber(v))
-        return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, path, "%s must be %s, got %s", path, what,
-                               iird_json_kind(v));
-    if (!isfinite(v->valuedouble))
-        return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, path,
-                               "%s must be a finite number (got one that overflows a double)",
-                               path);
-    *out = v->valuedouble;
-    return true;
+    switch (f) {
+    case IIR_JSON_BAD_TYPE:
+    case IIR_JSON_MISSING:
+        return IIRD_E_BAD_TYPE;
+    case IIR_JSON_UNKNOWN_FIELD:
+        return IIRD_E_UNKNOWN_FIELD;
+    default:
+        return IIRD_E_OUT_OF_RANGE;
+    }
+}
+
+static void to_proto(void *ctx, iir_json_fault f, const char *path, const char *msg)
+{
+    iird_proto_fail(ctx, code_of(f), path, "%s", msg);
+}
+
+/* A reader reporting into c's protocol error, and the field's path. */
+static iir_json_reader reader(const iird_pctx *c, const char *name, char path[IIRD_PATH_BYTES])
+{
+    iird_path(path, c->prefix, name);
+    iir_json_reader r = {to_proto, c->err};
+    return r;
 }
 
 bool iird_get_number(const iird_pctx *c, const cJSON *v, const char *name, iird_range r,
                      double *out)
 {
     char path[IIRD_PATH_BYTES];
-    iird_path(path, c->prefix, name);
-    if (!number_value(c, path, v, "a number", out)) return false;
-    bool ok = (r.open_lo ? *out > r.lo : *out >= r.lo) && (r.open_hi ? *out < r.hi : *out <= r.hi);
-    if (!ok)
-        return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, path,
-                               "%s must be in %c%.15g, %.15g%c%s%s, got %.15g", path,
-                               r.open_lo ? '(' : '[', r.lo, r.hi, r.open_hi ? ')' : ']',
-                               r.unit ? " " : "", r.unit ? r.unit : "", *out);
-    return true;
+    iir_json_reader rd = reader(c, name, path);
+    return iir_json_number(&rd, v, path, r, out);
 }
 
 bool iird_get_int(const iird_pctx *c, const cJSON *v, const char *name, double lo, double hi,
                   int64_t *out)
 {
     char path[IIRD_PATH_BYTES];
-    double d = 0.0;
-    iird_path(path, c->prefix, name);
-    if (!number_value(c, path, v, "an integer", &d)) return false;
-    if (d != floor(d))
-        return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, path, "%s must be an integer, got %.15g",
-                               path, d);
-    if (d < lo || d > hi)
-        return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, path,
-                               "%s must be in [%.17g, %.17g], got %.17g", path, lo, hi, d);
-    *out = (int64_t)d;
-    return true;
+    iir_json_reader rd = reader(c, name, path);
+    return iir_json_int(&rd, v, path, lo, hi, out);
 }
 
 bool iird_get_int32(const iird_pctx *c, const cJSON *v, const char *name, int lo, int hi, int *out)
@@ -156,40 +146,16 @@ bool iird_get_int32(const iird_pctx *c, const cJSON *v, const char *name, int lo
 bool iird_get_bool(const iird_pctx *c, const cJSON *v, const char *name, bool *out)
 {
     char path[IIRD_PATH_BYTES];
-    iird_path(path, c->prefix, name);
-    if (!cJSON_IsBool(v))
-        return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, path, "%s must be true or false, got %s",
-                               path, iird_json_kind(v));
-    *out = cJSON_IsTrue(v);
-    return true;
+    iir_json_reader rd = reader(c, name, path);
+    return iir_json_bool(&rd, v, path, out);
 }
 
 bool iird_get_vec3(const iird_pctx *c, const cJSON *v, const char *name, double lo, double hi,
                    iir_vec3 *out)
 {
-    char path[IIRD_PATH_BYTES], ep[IIRD_PATH_BYTES];
-    iird_path(path, c->prefix, name);
-    int n = cJSON_IsArray(v) ? cJSON_GetArraySize(v) : -1;
-    if (n != 3) {
-        if (n < 0)
-            return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, path,
-                                   "%s must be an array of 3 numbers, got %s", path,
-                                   iird_json_kind(v));
-        return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, path,
-                               "%s must be an array of 3 numbers, got %d elements", path, n);
-    }
-    double e[3];
-    int i = 0;
-    for (const cJSON *x = v->child; x; x = x->next, i++) {
-        if (snprintf(ep, sizeof ep, "%s[%d]", path, i) >= (int)sizeof ep) /* cut short */
-            iird_utf8_trim(ep);
-        if (!number_value(c, ep, x, "a number", &e[i])) return false;
-        if (e[i] < lo || e[i] > hi)
-            return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, ep,
-                                   "%s must be in [%.15g, %.15g], got %.15g", ep, lo, hi, e[i]);
-    }
-    *out = iir_v3((float)e[0], (float)e[1], (float)e[2]);
-    return true;
+    char path[IIRD_PATH_BYTES];
+    iir_json_reader rd = reader(c, name, path);
+    return iir_json_vec3(&rd, v, path, lo, hi, out);
 }
 
 /* ======================== strings ======================== */
@@ -206,38 +172,16 @@ bool iird_get_string(const iird_pctx *c, const cJSON *v, const char *name, size_
                      char *out)
 {
     char path[IIRD_PATH_BYTES];
-    iird_path(path, c->prefix, name);
-    if (!cJSON_IsString(v) || !v->valuestring)
-        return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, path, "%s must be a string, got %s", path,
-                               iird_json_kind(v));
-    if (!no_nul(c, path, v)) return false;
-    size_t len = strlen(v->valuestring);
-    if (len > max_bytes)
-        return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, path,
-                               "%s must be at most %zu bytes long, got %zu", path, max_bytes, len);
-    memcpy(out, v->valuestring, len + 1);
-    return true;
+    iir_json_reader rd = reader(c, name, path);
+    if (cJSON_IsString(v) && v->valuestring && !no_nul(c, path, v)) return false;
+    return iir_json_string(&rd, v, path, 0, max_bytes, out);
 }
 
 bool iird_get_enum(const iird_pctx *c, const cJSON *v, const char *name, const char *const *allowed,
                    int *index)
 {
-    char path[IIRD_PATH_BYTES], got[40], list[160] = "";
-    iird_path(path, c->prefix, name);
-    if (!cJSON_IsString(v) || !v->valuestring)
-        return iird_proto_fail(c->err, IIRD_E_BAD_TYPE, path, "%s must be a string, got %s", path,
-                               iird_json_kind(v));
-    if (!no_nul(c, path, v)) return false;
-    for (int i = 0; allowed[i]; i++) {
-        if (strcmp(v->valuestring, allowed[i]) == 0) {
-            *index = i;
-            return true;
-        }
-        size_t used = strlen(list);
-        snprintf(list + used, sizeof list - used, "%s\"%s\"", i ? ", " : "", allowed[i]);
-    }
-    snprintf(got, sizeof got, "%s", v->valuestring);
-    iird_utf8_trim(got);
-    return iird_proto_fail(c->err, IIRD_E_OUT_OF_RANGE, path, "%s must be one of %s, got \"%s\"",
-                           path, list, got);
+    char path[IIRD_PATH_BYTES];
+    iir_json_reader rd = reader(c, name, path);
+    if (cJSON_IsString(v) && v->valuestring && !no_nul(c, path, v)) return false;
+    return iir_json_enum(&rd, v, path, allowed, index);
 }

@@ -10,6 +10,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "iir/json_read.h"
 #include "protocol.h"
 
 /* Largest coordinate magnitude a client may send (docs/protocol.md, Conventions). */
@@ -42,7 +43,7 @@ bool iird_json_add_vec3(cJSON *obj, const char *name, iir_vec3 v);
  * float written to read back the same); false on out-of-memory. */
 bool iird_json_add_shape(cJSON *obj, const iir_area_shape *shape);
 
-/* ---- readers of one JSON value (protocol_fields.c) ----
+/* ---- readers of one JSON value (protocol_fields.c over json_read.h's) ----
  * Each checks the value's JSON type and range and returns true, or returns false with *c->err
  * filled: bad_type (wrong JSON type, vector length, a fraction for an integer), out_of_range
  * (outside the range, not finite, a string too long or not among the allowed ones), with the
@@ -55,11 +56,7 @@ typedef struct iird_pctx {
     iird_proto_error *err;
 } iird_pctx;
 
-typedef struct iird_range {
-    double lo, hi;
-    bool open_lo, open_hi;
-    const char *unit; /* NULL or "degrees", appended to messages */
-} iird_range;
+typedef iir_json_range iird_range; /* json_read.h: [lo, hi], open ends, a unit */
 
 void iird_path(char out[IIRD_PATH_BYTES], const char *prefix, const char *name);
 const char *iird_json_kind(const cJSON *v); /* "a string", "an array", ... */

@@ -2,11 +2,13 @@
  * arithmetic; not evaluating tracks (anim_eval.c) or checking them against a scene's lights
  * (anim_check.c). The format is docs/animation-format.md. */
 #include "anim_internal.h"
+#include "iir/json_read.h"
 #include "iir/image.h" /* IIR_IMAGE_MAX_DIM: a "size" side */
 
 #include <cjson/cJSON.h>
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -23,7 +25,9 @@ typedef struct iir_anim_ctx {
     const char *src; /* prefix of messages */
     iir_error *err;
     double duration;
-    anim_kind kind; /* the track being parsed */
+    anim_kind kind;    /* the track being parsed */
+    iir_json_reader r; /* json_read.h's faults into err (to_error) */
+    iir_status fault;  /* the status of the last one */
 } iir_anim_ctx;
 
 static iir_status anim_fail(const iir_anim_ctx *c, iir_status st, const char *path, const char *fmt,
@@ -48,44 +52,39 @@ static void path_join(char *out, const char *path, const char *name)
         out[IIR_ANIM_PATH - 1] = '\0';
 }
 
-/* ======================== fields ======================== */
+/* ======================== fields (json_read.h) ======================== */
 
-static bool name_in(const char *name, const char *const *allowed)
+/* A reader's fault as the script's error: IIR_ERR_INVALID for a value out of range, else
+ * IIR_ERR_FORMAT; the message names the field. */
+static void to_error(void *user, iir_json_fault f, const char *path, const char *msg)
 {
-    for (; *allowed; allowed++)
-        if (strcmp(name, *allowed) == 0) return true;
-    return false;
+    iir_anim_ctx *c = user;
+    (void)path;
+    c->fault = iir_fail(c->err, f == IIR_JSON_OUT_OF_RANGE ? IIR_ERR_INVALID : IIR_ERR_FORMAT,
+                        "%s: %s", c->src, msg);
 }
 
-/* IIR_ERR_FORMAT naming the first member of obj not in allowed (NULL-terminated). */
+static iir_status status_of(const iir_anim_ctx *c, bool ok)
+{
+    return ok ? IIR_OK : c->fault;
+}
+
+/* IIR_ERR_FORMAT naming the first member of obj not in allowed (NULL-terminated) or given twice,
+ * or obj when it is no object. */
 static iir_status check_fields(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                                const char *const *allowed)
 {
-    char p[IIR_ANIM_PATH];
-    if (!cJSON_IsObject(obj))
-        return anim_fail(c, IIR_ERR_FORMAT, *path ? path : "(top level)", "must be an object");
-    for (const cJSON *m = obj->child; m; m = m->next) {
-        if (name_in(m->string, allowed)) continue;
-        path_join(p, path, m->string);
-        return anim_fail(c, IIR_ERR_FORMAT, p, "unknown field");
-    }
-    return IIR_OK;
+    return status_of(c, iir_json_fields(&c->r, obj, path, allowed));
 }
 
-/* A finite number member; *present tells whether it was there. */
-static iir_status get_number(const iir_anim_ctx *c, const cJSON *obj, const char *path,
-                             const char *name, double *out, bool *present)
+/* Member `name` of obj and its path p; *present tells whether it is there. */
+static const cJSON *member(const cJSON *obj, const char *path, const char *name,
+                           char p[IIR_ANIM_PATH], bool *present)
 {
-    char p[IIR_ANIM_PATH];
     const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
     *present = m != NULL;
-    if (!m) return IIR_OK;
     path_join(p, path, name);
-    if (!cJSON_IsNumber(m)) return anim_fail(c, IIR_ERR_FORMAT, p, "must be a number");
-    if (!isfinite(m->valuedouble) || !isfinite((float)m->valuedouble))
-        return anim_fail(c, IIR_ERR_INVALID, p, "must be a finite number");
-    *out = m->valuedouble;
-    return IIR_OK;
+    return m;
 }
 
 /* A number member that must lie in [lo, hi] (lo excluded when open_lo). */
@@ -94,55 +93,35 @@ static iir_status get_ranged(const iir_anim_ctx *c, const cJSON *obj, const char
                              bool *present)
 {
     char p[IIR_ANIM_PATH];
-    iir_status st = get_number(c, obj, path, name, out, present);
-    if (st != IIR_OK || !*present) return st;
-    if (*out < lo || (open_lo && *out == lo) || *out > hi) {
-        path_join(p, path, name);
-        return anim_fail(c, IIR_ERR_INVALID, p, "%g is outside %s%g, %g]", *out,
-                         open_lo ? "(" : "[", lo, hi);
-    }
-    return IIR_OK;
+    const cJSON *m = member(obj, path, name, p, present);
+    if (!m) return IIR_OK;
+    iir_json_range range = {lo, hi, open_lo, false, NULL};
+    return status_of(c, iir_json_number(&c->r, m, p, range, out));
 }
 
 /* Bound of every vec3 element (coordinates, directions, intensities), as in the protocol and the
  * sidecar: a direction's or an aim's length, squared, must not overflow a float. */
 #define MAX_VEC3_ELEMENT 1e6
 
-/* A member [x, y, z] of finite numbers within +-MAX_VEC3_ELEMENT. A plain number is accepted as
+/* A member [x, y, z] of numbers within +-MAX_VEC3_ELEMENT. A plain number is accepted as
  * [v, v, v] when allow_scalar. */
 static iir_status get_vec3(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                            const char *name, bool allow_scalar, iir_vec3 *out, bool *present)
 {
     char p[IIR_ANIM_PATH];
-    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
-    *present = m != NULL;
+    const cJSON *m = member(obj, path, name, p, present);
     if (!m) return IIR_OK;
-    path_join(p, path, name);
-    if (allow_scalar && cJSON_IsNumber(m)) {
-        bool dummy;
+    if (allow_scalar && !cJSON_IsArray(m)) {
+        if (!cJSON_IsNumber(m))
+            return anim_fail(c, IIR_ERR_FORMAT, p,
+                             "must be a number or an array of 3 numbers, got %s", iir_json_kind(m));
         double v = 0.0;
-        iir_status st = get_number(c, obj, path, name, &v, &dummy);
-        if (st == IIR_OK && fabs(v) > MAX_VEC3_ELEMENT)
-            return anim_fail(c, IIR_ERR_INVALID, p, "%g is outside [-1e6, 1e6]", v);
+        iir_json_range range = {-MAX_VEC3_ELEMENT, MAX_VEC3_ELEMENT, false, false, NULL};
+        if (!iir_json_number(&c->r, m, p, range, &v)) return c->fault;
         *out = iir_v3s((float)v);
-        return st;
+        return IIR_OK;
     }
-    if (!cJSON_IsArray(m) || cJSON_GetArraySize(m) != 3)
-        return anim_fail(c, IIR_ERR_FORMAT, p, "must be an array of 3 numbers%s",
-                         allow_scalar ? " or a number" : "");
-    float v[3];
-    for (int i = 0; i < 3; i++) {
-        const cJSON *e = cJSON_GetArrayItem(m, i);
-        if (!cJSON_IsNumber(e)) return anim_fail(c, IIR_ERR_FORMAT, p, "must hold numbers");
-        v[i] = (float)e->valuedouble;
-        if (!isfinite(e->valuedouble) || !isfinite(v[i]))
-            return anim_fail(c, IIR_ERR_INVALID, p, "element %d is not a finite number", i);
-        if (fabs(e->valuedouble) > MAX_VEC3_ELEMENT)
-            return anim_fail(c, IIR_ERR_INVALID, p, "element %d (%g) is outside [-1e6, 1e6]", i,
-                             e->valuedouble);
-    }
-    *out = iir_v3(v[0], v[1], v[2]);
-    return IIR_OK;
+    return status_of(c, iir_json_vec3(&c->r, m, p, -MAX_VEC3_ELEMENT, MAX_VEC3_ELEMENT, out));
 }
 
 /* A member [w, h] of numbers in (0, 1e6] (an area light's size), kept in out->x, out->y. */
@@ -150,16 +129,12 @@ static iir_status get_size(const iir_anim_ctx *c, const cJSON *obj, const char *
                            const char *name, iir_vec3 *out, bool *present)
 {
     char p[IIR_ANIM_PATH];
-    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
-    *present = m != NULL;
+    const cJSON *m = member(obj, path, name, p, present);
     if (!m) return IIR_OK;
-    path_join(p, path, name);
-    if (!cJSON_IsArray(m) || cJSON_GetArraySize(m) != 2 || !cJSON_IsNumber(m->child) ||
-        !cJSON_IsNumber(m->child->next))
-        return anim_fail(c, IIR_ERR_FORMAT, p, "must be an array of 2 numbers [width, height]");
-    double v[2] = {m->child->valuedouble, m->child->next->valuedouble};
+    double v[2];
+    if (!iir_json_numbers(&c->r, m, p, 2, 0.0, MAX_VEC3_ELEMENT, v)) return c->fault;
     for (int i = 0; i < 2; i++)
-        if (!(v[i] > 0.0 && v[i] <= MAX_VEC3_ELEMENT))
+        if (!(v[i] > 0.0))
             return anim_fail(c, IIR_ERR_INVALID, p, "element %d (%g) is outside (0, 1e6]", i, v[i]);
     *out = iir_v3((float)v[0], (float)v[1], 0.f);
     return IIR_OK;
@@ -170,13 +145,9 @@ static iir_status get_bool(const iir_anim_ctx *c, const cJSON *obj, const char *
                            const char *name, bool *out, bool *present)
 {
     char p[IIR_ANIM_PATH];
-    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
-    *present = m != NULL;
+    const cJSON *m = member(obj, path, name, p, present);
     if (!m) return IIR_OK;
-    path_join(p, path, name);
-    if (!cJSON_IsBool(m)) return anim_fail(c, IIR_ERR_FORMAT, p, "must be true/false");
-    *out = cJSON_IsTrue(m);
-    return IIR_OK;
+    return status_of(c, iir_json_bool(&c->r, m, p, out));
 }
 
 /* ======================== keys ======================== */
@@ -406,7 +377,7 @@ static iir_status parse_orbit(const iir_anim_ctx *c, const cJSON *obj, const cha
                               iir_anim_track *tr)
 {
     char p[IIR_ANIM_PATH];
-    bool has;
+    bool has = false;
     double phase = 0.0;
     tr->path = IIR_ANIM_ORBIT;
     tr->turns = 1.0;
@@ -562,17 +533,13 @@ static iir_status parse_lights(iir_anim_ctx *c, const cJSON *arr, iir_anim *a)
     return st;
 }
 
-/* A string member of at most n - 1 bytes, copied into out (n bytes); what: its meaning, for the
- * message. */
+/* A string member of at most n - 1 bytes, copied into out (n bytes). */
 static iir_status get_string(const iir_anim_ctx *c, const cJSON *obj, const char *name, char *out,
-                             size_t n, const char *what)
+                             size_t n)
 {
     const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
     if (!m) return IIR_OK;
-    if (!cJSON_IsString(m) || strlen(m->valuestring) >= n)
-        return anim_fail(c, IIR_ERR_FORMAT, name, "must be %s of at most %zu bytes", what, n - 1);
-    snprintf(out, n, "%s", m->valuestring);
-    return IIR_OK;
+    return status_of(c, iir_json_string(&c->r, m, name, 0, n - 1, out));
 }
 
 /* "size": [width, height], whole numbers of pixels in [1, IIR_IMAGE_MAX_DIM]. */
@@ -600,9 +567,8 @@ static iir_status parse_origin(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
     const cJSON *desc = cJSON_GetObjectItemCaseSensitive(root, "description");
     if (desc && !cJSON_IsString(desc))
         return anim_fail(c, IIR_ERR_FORMAT, "description", "must be a string");
-    iir_status st = get_string(c, root, "scene", a->scene, sizeof a->scene, "a scene name");
-    if (st == IIR_OK)
-        st = get_string(c, root, "scenes", a->scenes, sizeof a->scenes, "a folder's path");
+    iir_status st = get_string(c, root, "scene", a->scene, sizeof a->scene);
+    if (st == IIR_OK) st = get_string(c, root, "scenes", a->scenes, sizeof a->scenes);
     return st == IIR_OK ? get_frame_size(c, root, a) : st;
 }
 
@@ -634,7 +600,9 @@ static iir_status parse_root(iir_anim_ctx *c, const cJSON *root, iir_anim *a)
 iir_status iir_anim_parse(const char *json_text, const char *source_name, iir_anim **out,
                           iir_error *err)
 {
-    iir_anim_ctx c = {source_name ? source_name : "animation", err, 0.0, KIND_LIGHT};
+    iir_anim_ctx c = {
+        source_name ? source_name : "animation", err, 0.0, KIND_LIGHT, {to_error, NULL}, IIR_OK};
+    c.r.ctx = &c;
     *out = NULL;
     const char *end = NULL;
     cJSON *root = json_text ? cJSON_ParseWithOpts(json_text, &end, true) : NULL;

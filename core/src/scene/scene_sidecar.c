@@ -15,6 +15,8 @@
  * shape. */
 #include "scene_build.h"
 
+#include "iir/json_read.h"
+
 #include <cjson/cJSON.h>
 
 #include <errno.h>
@@ -41,6 +43,8 @@ static material_name *light_material(iir_sidecar *sc, uint32_t i)
 typedef struct ctx {
     const char *path;
     iir_error *err;
+    iir_json_reader r; /* json_read.h's faults into err (to_error) */
+    iir_status fault;  /* the status of the last one */
 } ctx;
 
 static iir_status field_error(const ctx *c, iir_status st, const char *field, const char *fmt, ...)
@@ -56,79 +60,62 @@ static iir_status field_error(const ctx *c, iir_status st, const char *field, co
     return iir_fail(c->err, st, "%s: %s: %s", c->path, field, msg);
 }
 
-/* ======================== typed getters ======================== */
+/* A reader's fault as the sidecar's error: IIR_ERR_INVALID for a value out of range, else
+ * IIR_ERR_FORMAT; the message names the field. */
+static void to_error(void *user, iir_json_fault f, const char *field, const char *msg)
+{
+    ctx *c = user;
+    (void)field;
+    c->fault = iir_fail(c->err, f == IIR_JSON_OUT_OF_RANGE ? IIR_ERR_INVALID : IIR_ERR_FORMAT,
+                        "%s: %s", c->path, msg);
+}
+
+static iir_status status_of(const ctx *c, bool ok)
+{
+    return ok ? IIR_OK : c->fault;
+}
+
+/* ======================== typed getters (json_read.h) ======================== */
 
 /* A member of a JSON object and its path for messages; item is NULL when it is absent. */
 typedef struct member {
     const cJSON *item;
-    char field[192];
+    char field[IIR_JSON_PATH];
 } member;
 
 static member get_member(const cJSON *obj, const char *where, const char *name)
 {
     member m;
-    snprintf(m.field, sizeof m.field, "%s%s%s", where, *where ? "." : "", name);
+    iir_json_path(m.field, where, name);
     m.item = cJSON_GetObjectItemCaseSensitive(obj, name);
     return m;
 }
 
 static iir_status required(const ctx *c, const member *m, const char *what)
 {
-    return m->item ? IIR_OK : field_error(c, IIR_ERR_FORMAT, m->field, "is required%s", what);
+    if (m->item) return IIR_OK;
+    return iir_fail(c->err, IIR_ERR_FORMAT, "%s: %s is required%s", c->path, m->field, what);
 }
 
 /* Fails on a field of obj not named in `allowed` (NULL-terminated) or named twice. */
 static iir_status check_fields(const ctx *c, const cJSON *obj, const char *where,
                                const char *const *allowed)
 {
-    for (const cJSON *it = obj->child; it; it = it->next) {
-        char field[192];
-        snprintf(field, sizeof field, "%s%s%s", where, *where ? "." : "", it->string);
-        bool known = false;
-        for (const char *const *a = allowed; *a && !known; a++) known = strcmp(*a, it->string) == 0;
-        if (!known) {
-            char list[256] = "";
-            for (const char *const *a = allowed; *a; a++)
-                snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s",
-                         a == allowed ? "" : ", ", *a);
-            return field_error(c, IIR_ERR_FORMAT, field, "unknown field (known: %s)", list);
-        }
-        for (const cJSON *prev = obj->child; prev != it; prev = prev->next)
-            if (strcmp(prev->string, it->string) == 0)
-                return field_error(c, IIR_ERR_FORMAT, field, "field given twice");
-    }
-    return IIR_OK;
+    return status_of(c, iir_json_fields(&c->r, obj, where, allowed));
 }
 
 static iir_status get_number(const ctx *c, const cJSON *item, const char *field, double lo,
                              double hi, double *out)
 {
-    if (!cJSON_IsNumber(item)) return field_error(c, IIR_ERR_FORMAT, field, "must be a number");
-    double v = item->valuedouble;
-    if (!isfinite(v) || v < lo || v > hi)
-        return field_error(c, IIR_ERR_INVALID, field, "%g is outside [%g, %g]", v, lo, hi);
-    *out = v;
-    return IIR_OK;
+    iir_json_range range = {lo, hi, false, false, NULL};
+    return status_of(c, iir_json_number(&c->r, item, field, range, out));
 }
 
 /* An [x, y, z] array of numbers, each within [lo, hi]. */
 static iir_status get_vec3(const ctx *c, const cJSON *item, const char *field, double lo, double hi,
                            iir_vec3 *out)
 {
-    if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
-        return field_error(c, IIR_ERR_FORMAT, field, "must be an array of 3 numbers");
-    float v[3];
-    int i = 0;
-    for (const cJSON *e = item->child; e; e = e->next, i++) {
-        char sub[208];
-        snprintf(sub, sizeof sub, "%s[%d]", field, i);
-        double d = 0.0;
-        iir_status st = get_number(c, e, sub, lo, hi, &d);
-        if (st != IIR_OK) return st;
-        v[i] = (float)d;
-    }
-    *out = iir_v3(v[0], v[1], v[2]);
-    return IIR_OK;
+    return status_of(c, iir_json_vec3(&c->r, item, field, lo, hi, out));
 }
 
 /* A colour: one number (grey) or [r, g, b], each within [0, hi]. */
@@ -142,15 +129,11 @@ static iir_status get_color(const ctx *c, const cJSON *item, const char *field, 
     return st;
 }
 
+/* A non-empty string that fits out's n bytes. */
 static iir_status get_string(const ctx *c, const cJSON *item, const char *field, char *out,
                              size_t n)
 {
-    if (!cJSON_IsString(item) || !item->valuestring[0])
-        return field_error(c, IIR_ERR_FORMAT, field, "must be a non-empty string");
-    if (strlen(item->valuestring) >= n)
-        return field_error(c, IIR_ERR_INVALID, field, "is longer than %zu characters", n - 1);
-    iir_scene_strcpy(out, n, item->valuestring);
-    return IIR_OK;
+    return status_of(c, iir_json_string(&c->r, item, field, 1, n - 1, out));
 }
 
 static iir_status get_position(const ctx *c, const cJSON *item, const char *field, iir_vec3 *out)
@@ -815,7 +798,8 @@ iir_status iir_sidecar_parse_text(const char *path, const char *text, size_t len
     cJSON *root;
     iir_status st = parse_json(path, text, len, &root, err);
     if (st == IIR_OK) {
-        ctx c = {path, err};
+        ctx c = {path, err, {to_error, NULL}, IIR_OK};
+        c.r.ctx = &c;
         st = parse_root(&c, root, sc);
         cJSON_Delete(root);
     }
