@@ -992,7 +992,8 @@ static void test_sidecar_bad_values(void **state)
         {"\"camera\": {\"target\": [0, 1, 0]}", "camera.position", "required"},
         {"\"unit_scale\": 0", "unit_scale", "positive"},
         {"\"unit_scale\": \"mm\"", "unit_scale", "number"},
-        {"\"unit_scale\": 1e999", "unit_scale", "must be a finite number (got one that overflows a double)"},
+        {"\"unit_scale\": 1e999", "unit_scale",
+         "must be a finite number (got one that overflows a double)"},
         {"\"materials\": {\"glow\": {\"albedo\": [1.5, 0, 0]}}", "materials.glow.albedo[0]",
          "must be in [0, 1]"},
         {"\"paths\": [1, 2]", "paths", "object"},
@@ -1234,7 +1235,8 @@ static void test_sidecar_area_shape_field(void **state)
     static const struct {
         const char *shape, *field, *problem;
     } cases[] = {
-        {"[[[-0.5, -0.5], [0.6, -0.5], [0.5, 0.5]]]", "lights[0].shape[0][1][0]", "must be in [-0.5, 0.5], got 0.6"},
+        {"[[[-0.5, -0.5], [0.6, -0.5], [0.5, 0.5]]]", "lights[0].shape[0][1][0]",
+         "must be in [-0.5, 0.5], got 0.6"},
         {"[[[0, 0], [0.5, 0.5], [0.25, 0.25]]]", "lights[0].shape", "degenerate"},
         {"[[[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5]], [[-0.5, -0.5], [0.5, 0.5], [0.5, -0.4]]]",
          "lights[0].shape", "overlapping"},
