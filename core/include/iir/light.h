@@ -130,6 +130,8 @@ uint64_t iir_light_hash(uint64_t h, const iir_light *light);
  * squared, name "spot"). Writes it to *out; returns its index in scene->lights, or
  * scene->num_lights for the made-up spot. */
 uint32_t iir_scene_moved_light(const struct iir_scene *scene, iir_light *out);
+/* The same rule over n lights (n > 0): the index of the first spot, else 0. */
+uint32_t iir_lights_moved(const iir_light *lights, uint32_t n);
 
 /* Gives a sun the disk that covers the scene: position = the centre of the scene's bounds,
  * radius = half their diagonal (times 1.001, at least 1e-3). Other lights are left as they are.
@@ -144,6 +146,19 @@ const char *iir_light_kind(const iir_light *light);
 /* Total emitted flux (W, RGB); a sun's is what crosses its disk, E pi radius^2; an area light's
  * pi L A (A = iir_area_light_area). */
 iir_vec3 iir_light_flux(const iir_light *light);
+
+/* True for a light with no extent (point, spot, sun): one direction and distance reach a point,
+ * no MIS; false for an area light, which methods sample over its emitter. */
+bool iir_light_is_delta(const iir_light *light);
+/* True when `position` is where the light is (not a sun, whose position is only its disk's
+ * centre). */
+bool iir_light_has_position(const iir_light *light);
+/* What a VPL born at the light's emission point q scales its flux by (its domain's flux per unit
+ * area is this times the profile): an area light's radiance at light-local q (its emission map),
+ * any other light's intensity. */
+iir_vec3 iir_light_emission_at(const iir_light *light, iir_vec2 q);
+/* The same averaged over the light's emitter: an area light's mean radiance, else intensity. */
+iir_vec3 iir_light_mean_emission(const iir_light *light);
 
 /* Radiant intensity (W/sr) emitted towards the unit world direction w (pointing away from the
  * light). A sun has none (0): use its irradiance, `intensity`, along `direction`. An area light's

@@ -174,6 +174,26 @@ iir_vec3 iir_light_flux(const iir_light *l)
     }
 }
 
+bool iir_light_is_delta(const iir_light *l)
+{
+    return l->type != IIR_LIGHT_AREA;
+}
+
+bool iir_light_has_position(const iir_light *l)
+{
+    return l->type != IIR_LIGHT_SUN;
+}
+
+iir_vec3 iir_light_emission_at(const iir_light *l, iir_vec2 q)
+{
+    return l->type == IIR_LIGHT_AREA ? iir_area_light_radiance(l, q) : l->intensity;
+}
+
+iir_vec3 iir_light_mean_emission(const iir_light *l)
+{
+    return l->type == IIR_LIGHT_AREA ? iir_area_light_mean_radiance(l) : l->intensity;
+}
+
 iir_light_eval iir_light_prepare(const iir_light *l)
 {
     iir_light_eval e = {.light = l};
@@ -296,11 +316,19 @@ iir_light_ray iir_light_sample_emission_from(const iir_light *l, iir_vec2 u, iir
 
 /* ======================== the light a user moves ======================== */
 
+uint32_t iir_lights_moved(const iir_light *lights, uint32_t n)
+{
+    for (uint32_t i = 0; i < n; i++)
+        if (lights[i].type == IIR_LIGHT_SPOT) return i;
+    return 0;
+}
+
 uint32_t iir_scene_moved_light(const iir_scene *scene, iir_light *out)
 {
-    for (uint32_t i = 0; i < scene->num_lights; i++)
-        if (scene->lights[i].type == IIR_LIGHT_SPOT) return *out = scene->lights[i], i;
-    if (scene->num_lights > 0) return *out = scene->lights[0], 0;
+    if (scene->num_lights > 0) {
+        uint32_t i = iir_lights_moved(scene->lights, scene->num_lights);
+        return *out = scene->lights[i], i;
+    }
     iir_vec3 lo = scene->bounds_min, ext = iir_sub(scene->bounds_max, lo);
     float diag = iir_length(ext);
     *out = (iir_light){.type = IIR_LIGHT_SPOT,

@@ -176,7 +176,7 @@ static void add_seen_area_lights(const iir_view *view, const iir_gbuffer *gb, ii
     iir_camera_frame cf = iir_camera_setup(&view->camera, gb->width, gb->height);
     for (uint32_t i = 0; i < view->num_lights; i++) {
         const iir_light *l = &view->lights[i];
-        if (l->type != IIR_LIGHT_AREA) continue;
+        if (iir_light_is_delta(l)) continue;
         iir_frame fr = iir_spot_frame(l);
 #pragma omp parallel for schedule(dynamic, 4)
         for (int y = 0; y < gb->height; y++)

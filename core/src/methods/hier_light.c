@@ -54,7 +54,7 @@ bool hier_lights_prepare(hier_lights *hl, const iir_light *lights, uint32_t num_
     hl->num_pts = 0;
     uint32_t need = 0;
     for (uint32_t i = 0; i < num_lights; i++)
-        need += lights[i].type == IIR_LIGHT_AREA ? (uint32_t)samples : 1u;
+        need += iir_light_is_delta(&lights[i]) ? 1u : (uint32_t)samples;
     if (!grow_points(hl, need)) return false;
     if (num_lights > hl->eval_cap) {
         iir_light_eval *e = realloc(hl->eval, sizeof *e * num_lights);
@@ -65,7 +65,7 @@ bool hier_lights_prepare(hier_lights *hl, const iir_light *lights, uint32_t num_
     for (uint32_t i = 0; i < num_lights; i++) {
         const iir_light *l = &lights[i];
         hl->eval[i] = iir_light_prepare(l);
-        if (l->type == IIR_LIGHT_AREA) {
+        if (!iir_light_is_delta(l)) {
             area_points(hl, l, i, samples);
             continue;
         }

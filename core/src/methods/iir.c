@@ -303,13 +303,10 @@ static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const v
     return IIR_OK;
 }
 
-/* The light whose domain is drawn: the first spot, else the first light (iir_scene_moved_light's
- * rule: the one a user moves). */
+/* The light whose domain is drawn: the one a user moves (iir_lights_moved). */
 static uint32_t drawn_light(const iir_light *lights, uint32_t n)
 {
-    for (uint32_t i = 0; i < n; i++)
-        if (lights[i].type == IIR_LIGHT_SPOT) return i;
-    return 0;
+    return n > 0 ? iir_lights_moved(lights, n) : 0;
 }
 
 static iir_status iir_m_supports(const iir_light *lights, uint32_t num_lights, iir_error *err)

@@ -323,7 +323,7 @@ static iir_status pt_render(void *state, const iir_view *view, iir_image *out,
     pt->has_area_lights = iir_lightset_has_area_lights(pt->lights);
     pt->has_area_light = false;
     for (uint32_t i = 0; i < view->num_lights; i++)
-        pt->has_area_light |= view->lights[i].type == IIR_LIGHT_AREA;
+        pt->has_area_light |= !iir_light_is_delta(&view->lights[i]);
     pt->cam = iir_camera_setup(&view->camera, out->width, out->height);
     iir_image_clear(pt->sum);
     pt->spp_done = 0;

@@ -51,8 +51,8 @@ static void domain_point(const rsm_map *m, iir_vec2 t, double s[3])
 static iir_vec3 emitter_radiance(const rsm_map *m, uint32_t k)
 {
     const iir_light *l = &m->light;
-    if (l->type != IIR_LIGHT_AREA) return l->intensity;
-    return iir_area_light_radiance(l, iir_domain_emitter_stratum(&m->dom, k));
+    if (iir_light_is_delta(l)) return l->intensity;
+    return iir_light_emission_at(l, iir_domain_emitter_stratum(&m->dom, k));
 }
 
 /* Texel k at map coordinates t: the surface the light's ray meets there, with its reflected flux.

@@ -103,7 +103,7 @@ static iir_vec3 arriving(const tracer *t, const iir_surface *sf, const iir_light
 static iir_vec3 light_at(tracer *t, const iir_surface *sf, const iir_light_eval *e)
 {
     iir_light_ctx ctx = iir_surface_light_ctx(sf, t->w->eps);
-    if (e && e->light->type != IIR_LIGHT_AREA) {
+    if (e && iir_light_is_delta(e->light)) {
         iir_light_sample ls = iir_light_sample_li(e, &ctx, iir_v2(0.f, 0.f));
         return arriving(t, sf, &ls);
     }
@@ -140,7 +140,7 @@ static iir_vec3 area_lights_seen(const whitted_tree *w, const iir_ray *ray, floa
     iir_vec3 L = iir_v3s(0.f);
     for (uint32_t i = 0; i < w->num_lights; i++) {
         const iir_light *l = &w->lights[i];
-        if (l->type != IIR_LIGHT_AREA) continue;
+        if (iir_light_is_delta(l)) continue;
         float t = iir_area_light_hit(l, ray->org, ray->dir, t_max);
         if (isinf(t)) continue;
         iir_light_eval e = light_eval(w, i);

@@ -215,7 +215,7 @@ static void area_light_seen(const direct_ctx *c, const iir_light_eval *e, block 
 static void shade_light(const direct_ctx *c, uint32_t li, block *b, iir_raystats *st)
 {
     iir_light_eval e = iir_light_prepare(&c->lights[li]);
-    if (e.light->type == IIR_LIGHT_AREA) {
+    if (!iir_light_is_delta(e.light)) {
         light_samples(c, &e, 1u + (uint64_t)li, b, st);
         area_light_seen(c, &e, b);
         return;

@@ -91,7 +91,7 @@ static int light_points(const iir_scene *s, const iir_rt *rt, const iir_light *l
 {
     int n = 0;
     for (uint32_t i = 0; i < num_lights && n < max; i++)
-        if (!iir_is_black(lights[i].intensity) && lights[i].type != IIR_LIGHT_SUN)
+        if (!iir_is_black(lights[i].intensity) && iir_light_has_position(&lights[i]))
             out[n++] = lights[i].position; /* a sun's position is only its disk's centre */
     iir_vec3 em[MAX_EMITTERS];
     int m = emitter_points(s, rt, em);

@@ -498,7 +498,7 @@ static iir_vec3 cell_flux(const pose *ps, const iir_vpl *v, double A, const doub
     if (v->null_sample) return iir_v3s(0.f);
     float k = (float)A * iir_domain_profile(ps, s);
     const iir_light *l = ps->light;
-    iir_vec3 I = l->type == IIR_LIGHT_AREA ? iir_area_light_radiance(l, v->emit) : l->intensity;
+    iir_vec3 I = iir_light_emission_at(l, v->emit);
     return iir_scale(iir_mul(I, v->albedo), k);
 }
 
@@ -603,8 +603,7 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *light, iir_incr_stats
 
     /* 6. weigh */
     if (status == IIR_OK) status = phase_weigh(inc, &ps, &st.flux_in, err);
-    st.flux_in *= iir_luminance(light->type == IIR_LIGHT_AREA ? iir_area_light_mean_radiance(light)
-                                                              : light->intensity);
+    st.flux_in *= iir_luminance(iir_light_mean_emission(light));
     lap(&st, IIR_INCR_WEIGH, &t);
 
     c->count = inc->count;
