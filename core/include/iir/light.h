@@ -174,6 +174,7 @@ typedef struct iir_light_eval {
     iir_frame frame;
     float R, R_in; /* cosine spot: disk radius sin(alpha), where the smooth edge starts */
     float cos_outer, t_scale; /* glTF spot: cos(outer), 1 / max(1e-3, cos(inner) - cos(outer)) */
+    float area;               /* area light: its emitter's area (iir_area_light_area) */
 } iir_light_eval;
 
 iir_light_eval iir_light_prepare(const iir_light *light);

@@ -197,7 +197,7 @@ iir_vec3 iir_light_mean_emission(const iir_light *l)
 iir_light_eval iir_light_prepare(const iir_light *l)
 {
     iir_light_eval e = {.light = l};
-    if (l->type == IIR_LIGHT_AREA) e.frame = iir_spot_frame(l);
+    if (l->type == IIR_LIGHT_AREA) e.frame = iir_spot_frame(l), e.area = iir_area_light_area(l);
     if (l->type != IIR_LIGHT_SPOT) return e;
     e.frame = iir_spot_frame(l);
     if (l->profile == IIR_SPOT_GLTF) {

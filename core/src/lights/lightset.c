@@ -89,7 +89,7 @@ static iir_light_sample sample_area(const iir_light_eval *e, iir_vec3 x, iir_vec
     float cos_l = -iir_dot(e->frame.f, ls.wi);
     if (cos_l <= 0.f) return ls;
     ls.Li = iir_area_light_radiance(l, q);
-    ls.pdf = dist2 / (cos_l * iir_area_light_area(l));
+    ls.pdf = dist2 / (cos_l * e->area);
     ls.n_light = e->frame.f;
     return ls;
 }
