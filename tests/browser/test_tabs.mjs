@@ -40,9 +40,13 @@ async function main() {
         const page = tabs[i];
         await page.bringToFront();
         const n0 = await page.evaluate(() => window.iir.framesDrawn);
+        const s0 = await page.evaluate(() => window.iir.inputSeq);
         await page.focus('#frame');
         await page.keyboard.press('ArrowLeft');
-        await H.settle(page, 1);
+        // the frame that answers the move: a refinement pass of the old view would not do (a
+        // session still refining draws those anyway)
+        await H.waitFor(page, (s) => window.iir.inputSeq > s && window.iir.lastFrame.seq !== 0xffffffff &&
+            window.iir.lastFrame.seq >= window.iir.inputSeq, s0);
         const n1 = await page.evaluate(() => window.iir.framesDrawn);
         check(n1 > n0, `tab ${i + 1}: a light move is answered by its own frames (${n0} -> ${n1})`);
         await inColour(page, `tab ${i + 1}`, H.shotPath(`tabs_${i + 1}.png`));
