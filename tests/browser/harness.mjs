@@ -99,6 +99,10 @@ export class Daemon {
     // (tests/integration/test_serve_drain.py tests the drain).
     constructor(IIRD, args) {
         if (!args.includes('--drain-seconds')) args = [...args, '--drain-seconds', '0'];
+        // small frames unless a test asks for its own: the sanitizer build renders 512x384 four
+        // times slower, and what the tests check (the page, the protocol, what changes) does not
+        // depend on the size
+        if (!args.includes('--size')) args = [...args, '--size', '256x192'];
         fs.mkdirSync(process.env.IIR_TEST_TMP || os.tmpdir(), { recursive: true });
         this.dir = fs.mkdtempSync(path.join(process.env.IIR_TEST_TMP || os.tmpdir(), 'iird-browser-'));
         this.out = path.join(this.dir, 'stdout');

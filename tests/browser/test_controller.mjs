@@ -80,10 +80,15 @@ async function climbs(page) {
         log(`after drag ${round + 1}: controller ${text}`);
     }
     check(new RegExp(`^\\d+/2 fps · N 64 · n 2 · \\d+² · ${FLOOR}$`).test(text), `the controller holds its target with N 64 and interleave 2: ${text}`);
-    const count = await page.evaluate(() => window.iir.vplChart.filter((r) => r[1] !== null).at(-1)[1]);
-    // the set follows the controller's N (not vpls' 256); a frame of the drag may end a few VPLs
-    // short of it, the ones the moving spot killed that frame beyond what it refilled
-    check(count <= 64 && count >= 0.9 * 64, `the VPL set holds the controller's N, 64: ${count}`);
+    // the set follows the controller's N (not vpls' 256): no frame of the last drag holds more than
+    // 64, and the set is refilled to it. A single frame may end short of it by the VPLs the moving
+    // spot killed that frame beyond what kmax refilled -- how many depends on how far the spot
+    // jumped between two frames, which a loaded machine makes longer (seen: 55 and 56 beside
+    // browser_arrow_tilt) -- so the refill is judged over the last frames, not the last one.
+    const all = await page.evaluate(() => window.iir.vplChart.filter((r) => r[1] !== null).map((r) => r[1]));
+    const since = all.slice(all.findLastIndex((n) => n > 64) + 1); /* since the set shrank to N */
+    const most = Math.max(...since);
+    check(since.length >= 5 && most >= 0.9 * 64, `the VPL set holds the controller's N, 64, over ${since.length} frames since it left ${all.find((n) => n > 64) ?? 'vpls'}: ${since.slice(-12).join(', ')}`);
     await page.screenshot({ path: H.shotPath('browser_controller.png') });
 }
 
