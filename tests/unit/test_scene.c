@@ -436,11 +436,11 @@ static const char *const GLTF =
     "{\"asset\": {\"version\": \"2.0\"},\n"
     " \"extensionsUsed\": [\"KHR_lights_punctual\"],\n"
     " \"extensions\": {\"KHR_lights_punctual\": {\"lights\": [\n"
-    "   {\"type\": \"spot\", \"name\": \"key\", \"color\": [1, 0.5, 0.25], \"intensity\": 10,\n"
+    "   {\"type\": \"spot\", \"name\": \"key\", \"color\": [1, 0.5, 0.25], \"intensity\": 6830,\n"
     "    \"spot\": {\"innerConeAngle\": 0.4, \"outerConeAngle\": 0.6}},\n"
-    "   {\"type\": \"point\", \"name\": \"fill\", \"color\": [1, 1, 1], \"intensity\": 2},\n"
+    "   {\"type\": \"point\", \"name\": \"fill\", \"color\": [1, 1, 1], \"intensity\": 1366},\n"
     "   {\"type\": \"directional\", \"name\": \"sky\", \"color\": [1, 0.9, 0.8], \"intensity\": "
-    "3}]}},\n"
+    "2049}]}},\n"
     " \"scene\": 0, \"scenes\": [{\"nodes\": [0, 1, 3, 4, 5]}],\n"
     " \"nodes\": [\n"
     "   {\"mesh\": 0, \"name\": \"floor\"},\n"
@@ -503,6 +503,7 @@ static void test_gltf_lights_and_camera(void **state)
     assert_true(near(spot->cone_angle, 0.6f, 1e-6f));
     assert_true(near(spot->inner_angle, 0.4f, 1e-6f));
     assert_true(spot->smooth == 0.f);
+    /* KHR_lights_punctual's candela (lux for the sun) at 683 lm/W: the file's 6830 cd is 10 W/sr */
     assert_vec_near(spot->intensity, iir_v3(10.f, 5.f, 2.5f), 1e-5f);
     assert_int_equal(point->type, IIR_LIGHT_POINT);
     assert_vec_near(point->position, iir_v3(0.f, 1.5f, 0.5f), 1e-6f);

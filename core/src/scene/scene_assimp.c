@@ -15,11 +15,13 @@
  * Conventions (docs/scene-format.md): a glTF light or camera sits at its node's origin looking
  * down its node's -z with +y up (the spec's rule; assimp's own pose fields are ignored for glTF).
  * KHR_lights_punctual intensity (candela for point/spot, lux for directional) times colour is
- * taken as I0 in W/sr (a directional light's: as its irradiance E in W/m^2), without a
- * photometric conversion; a spot keeps glTF's own profile (IIR_SPOT_GLTF: outer and inner cone
- * angles), a directional light becomes a sun. Area and ambient lights are ignored, and so are
- * colour textures, transparency and rough metal; each such light and material is noted by name in
- * the scene (iir_scene.dropped) for the commands' warnings. Mirrors and glass: convert_kind.
+ * photometric: divided by 683 lm/W it is I0 in W/sr (a directional light's: its irradiance E in
+ * W/m^2), as Blender's importer reads it, so a Blender user's lamps keep their balance with the
+ * scene's emissive surfaces (a sidecar's lights are radiometric and replace them); a spot keeps
+ * glTF's own profile (IIR_SPOT_GLTF: outer and inner cone angles), a directional light becomes a
+ * sun. Area and ambient lights are ignored, and so are colour textures, transparency and rough
+ * metal; each such light and material is noted by name in the scene (iir_scene.dropped) for the
+ * commands' warnings. Mirrors and glass: convert_kind.
  *
  * assimp's C API keeps the last error message in one process-wide string, so imports run under a
  * mutex (the only shared state here; it guards the library, not ours). */
@@ -424,6 +426,10 @@ static iir_light_type light_type(enum aiLightSourceType t)
 /* A spot with glTF's profile: assimp gives glTF's half-angles as they are (outerConeAngle,
  * default pi/4; innerConeAngle, default 0). A sun gets a placeholder disk that
  * iir_builder_finish refits to the scene's bounds (iir_light_fit_sun). */
+/* The luminous efficacy glTF's photometric light units are converted with (KHR_lights_punctual:
+ * candela, lux), Blender's figure for its lamps' watts. */
+#define IIR_LUMENS_PER_WATT 683.f
+
 static iir_light convert_light(const loader *L, const struct aiLight *al, const mat4 *M)
 {
     iir_light l;
@@ -433,7 +439,10 @@ static iir_light convert_light(const loader *L, const struct aiLight *al, const 
     iir_vec3 p, d, u;
     light_local_pose(L, al, &p, &d, &u);
     l.position = l.type == IIR_LIGHT_SUN ? iir_v3s(0.f) : mat4_point(M, p);
-    l.intensity = iir_v3(al->mColorDiffuse.r, al->mColorDiffuse.g, al->mColorDiffuse.b);
+    /* assimp gives colour times the file's intensity: in glTF candela (lux for a sun) */
+    float to_watts = is_gltf(L->path) ? 1.f / IIR_LUMENS_PER_WATT : 1.f;
+    l.intensity =
+        iir_scale(iir_v3(al->mColorDiffuse.r, al->mColorDiffuse.g, al->mColorDiffuse.b), to_watts);
     if (l.type != IIR_LIGHT_POINT) {
         l.direction = iir_normalize(mat4_vector(M, d));
         l.up = iir_normalize(mat4_vector(M, u));
