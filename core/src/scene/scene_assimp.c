@@ -26,6 +26,7 @@
  * assimp's C API keeps the last error message in one process-wide string, so imports run under a
  * mutex (the only shared state here; it guards the library, not ours). */
 #include "scene_build.h"
+#include "scene_gltf_ext.h"
 #include "scene_objtext.h"
 
 #include <assimp/cimport.h>
@@ -326,6 +327,7 @@ typedef struct loader {
     const struct aiScene *s;
     iir_scene_builder *b;
     uint32_t *material_map; /* assimp material -> builder material, UINT32_MAX until used */
+    iir_gltf_ext gltf;      /* a glTF's own JSON: what assimp drops (empty for other formats) */
 } loader;
 
 /* Builder index of assimp material i, adding it on first use (unused materials are dropped). */
@@ -336,6 +338,8 @@ static iir_status use_material(loader *L, unsigned i, uint32_t *out, iir_error *
                         L->s->mNumMaterials);
     if (L->material_map[i] == UINT32_MAX) {
         iir_material m = convert_material(L->s->mMaterials[i], i);
+        /* KHR_materials_emissive_strength, which assimp 5.2 drops */
+        m.emission = iir_scale(m.emission, iir_gltf_ext_emissive_strength(&L->gltf, i, m.name));
         iir_status st = iir_builder_add_material(L->b, &m, &L->material_map[i], err);
         if (st != IIR_OK) return st;
         note_material(L->b, L->s->mMaterials[i], &m);
@@ -560,13 +564,15 @@ iir_status iir_assimp_load(const char *path, iir_scene_builder *b, iir_error *er
     const struct aiScene *s;
     st = import_scene(path, &s, err);
     if (st != IIR_OK) return st;
-    loader L = {path, s, b, malloc(sizeof(uint32_t) * (s->mNumMaterials + 1))};
+    loader L = {path, s, b, malloc(sizeof(uint32_t) * (s->mNumMaterials + 1)), {0}};
     if (!L.material_map) {
         st = iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", path);
     } else {
         for (unsigned i = 0; i < s->mNumMaterials; i++) L.material_map[i] = UINT32_MAX;
-        st = load_scene(&L, err);
+        if (is_gltf(path)) st = iir_gltf_ext_read(path, b, &L.gltf, err);
+        if (st == IIR_OK) st = load_scene(&L, err);
     }
+    iir_gltf_ext_free(&L.gltf);
     free(L.material_map);
     aiReleaseImport(s);
     return st;

@@ -1,0 +1,159 @@
+/* scene_gltf_ext.c -- the glTF file's own JSON beside assimp (scene_gltf_ext.h): the extensions it
+ * uses or requires, checked against what iir reads, and KHR_materials_emissive_strength, which
+ * assimp 5.2 drops (Blender's exporter writes emissiveFactor normalised to 1 and the rest there).
+ * Not the meshes, materials and lights assimp reads (scene_assimp.c). */
+#include "scene_gltf_ext.h"
+
+#include <cjson/cJSON.h>
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* The extensions iir reads (assimp or this file): a file may require these. */
+static const char *const KNOWN[] = {"KHR_lights_punctual",
+                                    "KHR_materials_emissive_strength",
+                                    "KHR_materials_transmission",
+                                    "KHR_materials_ior",
+                                    "KHR_materials_specular",
+                                    "KHR_mesh_quantization",
+                                    "KHR_texture_transform",
+                                    "KHR_materials_unlit",
+                                    NULL};
+
+enum { MAX_JSON = 1 << 30 };
+
+static bool ends_with_glb(const char *path)
+{
+    size_t n = strlen(path);
+    return n >= 4 && strcasecmp(path + n - 4, ".glb") == 0;
+}
+
+static uint32_t le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* The JSON text of a .glb (its first chunk, type JSON) or a .gltf (the whole file), NUL-ended. */
+static iir_status read_json(const char *path, char **out, iir_error *err)
+{
+    *out = NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) return iir_fail(err, IIR_ERR_IO, "cannot read %s: %s", path, strerror(errno));
+    bool ok = fseek(f, 0, SEEK_END) == 0;
+    long size = ok ? ftell(f) : -1;
+    ok = size >= 0 && fseek(f, 0, SEEK_SET) == 0;
+    size_t len = ok ? (size_t)size : 0;
+    if (ok && ends_with_glb(path)) { /* its first chunk, which must be JSON and in the file */
+        unsigned char h[20];
+        ok = fread(h, 1, 20, f) == 20 && memcmp(h, "glTF", 4) == 0 && le32(h + 16) == 0x4E4F534Au &&
+             le32(h + 12) <= len - 20;
+        len = ok ? le32(h + 12) : 0;
+    }
+    char *buf = ok && len <= MAX_JSON ? malloc(len + 1) : NULL;
+    ok = buf && fread(buf, 1, len, f) == len;
+    fclose(f);
+    if (!ok) {
+        free(buf);
+        return iir_fail(err, IIR_ERR_FORMAT, "%s: cannot read its glTF JSON", path);
+    }
+    buf[len] = '\0';
+    *out = buf;
+    return IIR_OK;
+}
+
+static bool known(const char *name)
+{
+    for (const char *const *k = KNOWN; *k; k++)
+        if (strcmp(*k, name) == 0) return true;
+    return false;
+}
+
+/* extensionsRequired: every one iir reads; extensionsUsed: a note for each it does not. */
+static iir_status check_extensions(const char *path, const cJSON *root, iir_scene_builder *b,
+                                   iir_error *err)
+{
+    const cJSON *e;
+    cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(root, "extensionsRequired")) if (
+        cJSON_IsString(e) &&
+        !known(e->valuestring)) return iir_fail(err, IIR_ERR_UNSUPPORTED,
+                                                "%s requires the glTF extension %s, which iir does "
+                                                "not read",
+                                                path, e->valuestring);
+    cJSON_ArrayForEach(
+        e, cJSON_GetObjectItemCaseSensitive(root, "extensionsUsed")) if (cJSON_IsString(e) &&
+                                                                         !known(e->valuestring))
+        iir_builder_drop(b, "extension", e->valuestring,
+                         "not read: what it adds to the scene is not rendered");
+    return IIR_OK;
+}
+
+static float emissive_strength(const cJSON *mat)
+{
+    const cJSON *ext = cJSON_GetObjectItemCaseSensitive(mat, "extensions");
+    const cJSON *es = cJSON_GetObjectItemCaseSensitive(ext, "KHR_materials_emissive_strength");
+    const cJSON *s = cJSON_GetObjectItemCaseSensitive(es, "emissiveStrength");
+    return cJSON_IsNumber(s) && s->valuedouble >= 0.0 && s->valuedouble <= 1e9
+               ? (float)s->valuedouble
+               : 1.f;
+}
+
+static iir_status read_materials(const char *path, const cJSON *root, iir_gltf_ext *e,
+                                 iir_error *err)
+{
+    const cJSON *mats = cJSON_GetObjectItemCaseSensitive(root, "materials");
+    int n = cJSON_IsArray(mats) ? cJSON_GetArraySize(mats) : 0;
+    e->emissive_strength = calloc((size_t)n + 1, sizeof *e->emissive_strength);
+    e->material_names = calloc((size_t)n + 1, sizeof *e->material_names);
+    if (!e->emissive_strength || !e->material_names)
+        return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", path);
+    const cJSON *m;
+    cJSON_ArrayForEach(m, mats)
+    {
+        const cJSON *name = cJSON_GetObjectItemCaseSensitive(m, "name");
+        e->material_names[e->num_materials] =
+            strdup(cJSON_IsString(name) && name->valuestring ? name->valuestring : "");
+        if (!e->material_names[e->num_materials])
+            return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", path);
+        e->emissive_strength[e->num_materials++] = emissive_strength(m);
+    }
+    return IIR_OK;
+}
+
+iir_status iir_gltf_ext_read(const char *path, iir_scene_builder *b, iir_gltf_ext *out,
+                             iir_error *err)
+{
+    memset(out, 0, sizeof *out);
+    char *text;
+    iir_status st = read_json(path, &text, err);
+    if (st != IIR_OK) return st;
+    cJSON *root = cJSON_Parse(text);
+    free(text);
+    if (!root) return iir_fail(err, IIR_ERR_FORMAT, "%s: its glTF JSON does not parse", path);
+    st = check_extensions(path, root, b, err);
+    if (st == IIR_OK) st = read_materials(path, root, out, err);
+    cJSON_Delete(root);
+    if (st != IIR_OK) iir_gltf_ext_free(out);
+    return st;
+}
+
+void iir_gltf_ext_free(iir_gltf_ext *e)
+{
+    for (uint32_t i = 0; e->material_names && i < e->num_materials; i++) free(e->material_names[i]);
+    free(e->material_names);
+    free(e->emissive_strength);
+    memset(e, 0, sizeof *e);
+}
+
+float iir_gltf_ext_emissive_strength(const iir_gltf_ext *e, uint32_t index, const char *name)
+{
+    if (index < e->num_materials &&
+        (!e->material_names[index][0] || strcmp(e->material_names[index], name) == 0))
+        return e->emissive_strength[index];
+    for (uint32_t i = 0; i < e->num_materials; i++)
+        if (e->material_names[i][0] && strcmp(e->material_names[i], name) == 0)
+            return e->emissive_strength[i];
+    return 1.f;
+}
