@@ -24,6 +24,26 @@ static bool fault(const iir_json_reader *r, iir_json_fault f, const char *path, 
     return false;
 }
 
+/* ---- a file's errors ---- */
+
+static void file_fail(void *ctx, iir_json_fault f, const char *path, const char *msg)
+{
+    iir_json_file *jf = ctx;
+    (void)path;
+    jf->status = iir_fail(jf->err, f == IIR_JSON_OUT_OF_RANGE ? IIR_ERR_INVALID : IIR_ERR_FORMAT,
+                          "%s: %s", jf->source, msg);
+}
+
+void iir_json_file_init(iir_json_file *f, const char *source, iir_error *err)
+{
+    *f = (iir_json_file){{file_fail, f}, source, err, IIR_OK};
+}
+
+iir_status iir_json_file_status(const iir_json_file *f, bool ok)
+{
+    return ok ? IIR_OK : f->status;
+}
+
 /* ---- paths ---- */
 
 void iir_json_path(char out[IIR_JSON_PATH], const char *prefix, const char *name)

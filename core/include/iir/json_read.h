@@ -14,6 +14,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "iir/status.h"
 #include "iir/vecmath.h"
 
 #ifdef __cplusplus
@@ -32,6 +33,19 @@ typedef struct iir_json_reader {
     void (*fail)(void *ctx, iir_json_fault fault, const char *path, const char *msg);
     void *ctx;
 } iir_json_reader;
+
+/* A file's reader (the scene sidecar's, the animation scripts'): a fault becomes the iir_error
+ * "SOURCE: message", IIR_ERR_INVALID for a value out of range, else IIR_ERR_FORMAT; status keeps
+ * it. Initialise with iir_json_file_init (r points back at it: do not copy it afterwards). */
+typedef struct iir_json_file {
+    iir_json_reader r;
+    const char *source;
+    iir_error *err;
+    iir_status status;
+} iir_json_file;
+void iir_json_file_init(iir_json_file *f, const char *source, iir_error *err);
+/* IIR_OK when ok, else the status of the fault f's reader reported. */
+iir_status iir_json_file_status(const iir_json_file *f, bool ok);
 
 /* A number's range: [lo, hi], either end open; unit (NULL or "degrees") follows it in messages. */
 typedef struct iir_json_range {

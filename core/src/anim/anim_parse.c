@@ -25,9 +25,8 @@ typedef struct iir_anim_ctx {
     const char *src; /* prefix of messages */
     iir_error *err;
     double duration;
-    anim_kind kind;    /* the track being parsed */
-    iir_json_reader r; /* json_read.h's faults into err (to_error) */
-    iir_status fault;  /* the status of the last one */
+    anim_kind kind;   /* the track being parsed */
+    iir_json_file jf; /* json_read.h's readers, their faults into err */
 } iir_anim_ctx;
 
 static iir_status anim_fail(const iir_anim_ctx *c, iir_status st, const char *path, const char *fmt,
@@ -54,27 +53,12 @@ static void path_join(char *out, const char *path, const char *name)
 
 /* ======================== fields (json_read.h) ======================== */
 
-/* A reader's fault as the script's error: IIR_ERR_INVALID for a value out of range, else
- * IIR_ERR_FORMAT; the message names the field. */
-static void to_error(void *user, iir_json_fault f, const char *path, const char *msg)
-{
-    iir_anim_ctx *c = user;
-    (void)path;
-    c->fault = iir_fail(c->err, f == IIR_JSON_OUT_OF_RANGE ? IIR_ERR_INVALID : IIR_ERR_FORMAT,
-                        "%s: %s", c->src, msg);
-}
-
-static iir_status status_of(const iir_anim_ctx *c, bool ok)
-{
-    return ok ? IIR_OK : c->fault;
-}
-
 /* IIR_ERR_FORMAT naming the first member of obj not in allowed (NULL-terminated) or given twice,
  * or obj when it is no object. */
 static iir_status check_fields(const iir_anim_ctx *c, const cJSON *obj, const char *path,
                                const char *const *allowed)
 {
-    return status_of(c, iir_json_fields(&c->r, obj, path, allowed));
+    return iir_json_file_status(&c->jf, iir_json_fields(&c->jf.r, obj, path, allowed));
 }
 
 /* Member `name` of obj and its path p; *present tells whether it is there. */
@@ -96,7 +80,7 @@ static iir_status get_ranged(const iir_anim_ctx *c, const cJSON *obj, const char
     const cJSON *m = member(obj, path, name, p, present);
     if (!m) return IIR_OK;
     iir_json_range range = {lo, hi, open_lo, false, NULL};
-    return status_of(c, iir_json_number(&c->r, m, p, range, out));
+    return iir_json_file_status(&c->jf, iir_json_number(&c->jf.r, m, p, range, out));
 }
 
 /* Bound of every vec3 element (coordinates, directions, intensities), as in the protocol and the
@@ -117,11 +101,12 @@ static iir_status get_vec3(const iir_anim_ctx *c, const cJSON *obj, const char *
                              "must be a number or an array of 3 numbers, got %s", iir_json_kind(m));
         double v = 0.0;
         iir_json_range range = {-MAX_VEC3_ELEMENT, MAX_VEC3_ELEMENT, false, false, NULL};
-        if (!iir_json_number(&c->r, m, p, range, &v)) return c->fault;
+        if (!iir_json_number(&c->jf.r, m, p, range, &v)) return c->jf.status;
         *out = iir_v3s((float)v);
         return IIR_OK;
     }
-    return status_of(c, iir_json_vec3(&c->r, m, p, -MAX_VEC3_ELEMENT, MAX_VEC3_ELEMENT, out));
+    return iir_json_file_status(
+        &c->jf, iir_json_vec3(&c->jf.r, m, p, -MAX_VEC3_ELEMENT, MAX_VEC3_ELEMENT, out));
 }
 
 /* A member [w, h] of numbers in (0, 1e6] (an area light's size), kept in out->x, out->y. */
@@ -132,7 +117,7 @@ static iir_status get_size(const iir_anim_ctx *c, const cJSON *obj, const char *
     const cJSON *m = member(obj, path, name, p, present);
     if (!m) return IIR_OK;
     double v[2];
-    if (!iir_json_numbers(&c->r, m, p, 2, 0.0, MAX_VEC3_ELEMENT, v)) return c->fault;
+    if (!iir_json_numbers(&c->jf.r, m, p, 2, 0.0, MAX_VEC3_ELEMENT, v)) return c->jf.status;
     for (int i = 0; i < 2; i++)
         if (!(v[i] > 0.0))
             return anim_fail(c, IIR_ERR_INVALID, p, "element %d (%g) is outside (0, 1e6]", i, v[i]);
@@ -147,7 +132,7 @@ static iir_status get_bool(const iir_anim_ctx *c, const cJSON *obj, const char *
     char p[IIR_ANIM_PATH];
     const cJSON *m = member(obj, path, name, p, present);
     if (!m) return IIR_OK;
-    return status_of(c, iir_json_bool(&c->r, m, p, out));
+    return iir_json_file_status(&c->jf, iir_json_bool(&c->jf.r, m, p, out));
 }
 
 /* ======================== keys ======================== */
@@ -539,7 +524,7 @@ static iir_status get_string(const iir_anim_ctx *c, const cJSON *obj, const char
 {
     const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, name);
     if (!m) return IIR_OK;
-    return status_of(c, iir_json_string(&c->r, m, name, 0, n - 1, out));
+    return iir_json_file_status(&c->jf, iir_json_string(&c->jf.r, m, name, 0, n - 1, out));
 }
 
 /* "size": [width, height], whole numbers of pixels in [1, IIR_IMAGE_MAX_DIM]. */
@@ -601,8 +586,8 @@ iir_status iir_anim_parse(const char *json_text, const char *source_name, iir_an
                           iir_error *err)
 {
     iir_anim_ctx c = {
-        source_name ? source_name : "animation", err, 0.0, KIND_LIGHT, {to_error, NULL}, IIR_OK};
-    c.r.ctx = &c;
+        source_name ? source_name : "animation", err, 0.0, KIND_LIGHT, {{0}, NULL, NULL, IIR_OK}};
+    iir_json_file_init(&c.jf, c.src, err);
     *out = NULL;
     const char *end = NULL;
     cJSON *root = json_text ? cJSON_ParseWithOpts(json_text, &end, true) : NULL;

@@ -43,8 +43,7 @@ static material_name *light_material(iir_sidecar *sc, uint32_t i)
 typedef struct ctx {
     const char *path;
     iir_error *err;
-    iir_json_reader r; /* json_read.h's faults into err (to_error) */
-    iir_status fault;  /* the status of the last one */
+    iir_json_file jf; /* json_read.h's readers, their faults into err */
 } ctx;
 
 static iir_status field_error(const ctx *c, iir_status st, const char *field, const char *fmt, ...)
@@ -58,21 +57,6 @@ static iir_status field_error(const ctx *c, iir_status st, const char *field, co
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
     return iir_fail(c->err, st, "%s: %s: %s", c->path, field, msg);
-}
-
-/* A reader's fault as the sidecar's error: IIR_ERR_INVALID for a value out of range, else
- * IIR_ERR_FORMAT; the message names the field. */
-static void to_error(void *user, iir_json_fault f, const char *field, const char *msg)
-{
-    ctx *c = user;
-    (void)field;
-    c->fault = iir_fail(c->err, f == IIR_JSON_OUT_OF_RANGE ? IIR_ERR_INVALID : IIR_ERR_FORMAT,
-                        "%s: %s", c->path, msg);
-}
-
-static iir_status status_of(const ctx *c, bool ok)
-{
-    return ok ? IIR_OK : c->fault;
 }
 
 /* ======================== typed getters (json_read.h) ======================== */
@@ -101,21 +85,21 @@ static iir_status required(const ctx *c, const member *m, const char *what)
 static iir_status check_fields(const ctx *c, const cJSON *obj, const char *where,
                                const char *const *allowed)
 {
-    return status_of(c, iir_json_fields(&c->r, obj, where, allowed));
+    return iir_json_file_status(&c->jf, iir_json_fields(&c->jf.r, obj, where, allowed));
 }
 
 static iir_status get_number(const ctx *c, const cJSON *item, const char *field, double lo,
                              double hi, double *out)
 {
     iir_json_range range = {lo, hi, false, false, NULL};
-    return status_of(c, iir_json_number(&c->r, item, field, range, out));
+    return iir_json_file_status(&c->jf, iir_json_number(&c->jf.r, item, field, range, out));
 }
 
 /* An [x, y, z] array of numbers, each within [lo, hi]. */
 static iir_status get_vec3(const ctx *c, const cJSON *item, const char *field, double lo, double hi,
                            iir_vec3 *out)
 {
-    return status_of(c, iir_json_vec3(&c->r, item, field, lo, hi, out));
+    return iir_json_file_status(&c->jf, iir_json_vec3(&c->jf.r, item, field, lo, hi, out));
 }
 
 /* A colour: one number (grey) or [r, g, b], each within [0, hi]. */
@@ -133,7 +117,7 @@ static iir_status get_color(const ctx *c, const cJSON *item, const char *field, 
 static iir_status get_string(const ctx *c, const cJSON *item, const char *field, char *out,
                              size_t n)
 {
-    return status_of(c, iir_json_string(&c->r, item, field, 1, n - 1, out));
+    return iir_json_file_status(&c->jf, iir_json_string(&c->jf.r, item, field, 1, n - 1, out));
 }
 
 static iir_status get_position(const ctx *c, const cJSON *item, const char *field, iir_vec3 *out)
@@ -798,8 +782,8 @@ iir_status iir_sidecar_parse_text(const char *path, const char *text, size_t len
     cJSON *root;
     iir_status st = parse_json(path, text, len, &root, err);
     if (st == IIR_OK) {
-        ctx c = {path, err, {to_error, NULL}, IIR_OK};
-        c.r.ctx = &c;
+        ctx c = {path, err, {{0}, NULL, NULL, IIR_OK}};
+        iir_json_file_init(&c.jf, path, err);
         st = parse_root(&c, root, sc);
         cJSON_Delete(root);
     }
