@@ -101,7 +101,7 @@ bench: build
 	    out/bench/cornell-multires-1024 out/bench/conference-multires-1024 \
 	    $(foreach p,teleport occluder $(STRESS),out/bench/cornell-$(p)) \
 	    out/bench/cornell-classics out/bench/cornell-spheres out/bench/cornell-bounces \
-	    out/bench/cornell-compensation out/bench/cornell-controller
+	    out/bench/cornell-compensation out/bench/cornell-controller out/bench/material-room
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods $(PEERS),pt \
@@ -119,6 +119,8 @@ bench: build
 	    --ref-spp 0 --out out/bench/cornell-multires-1024
 	$(BENCH) conference --anim orbit --frames 0:60 --size 1024x768 --methods iir \
 	    --sweep shading=full,multires --ref-spp 0 --out out/bench/conference-multires-1024
+	$(BENCH) material_room --anim orbit --frames 0:60 --size 512x384 --methods $(PEERS) \
+	    --ref-spp 256 --ref-every 30 --out out/bench/material-room
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods radiosity,ir,iir --bounces 8 \
 	    --sweep patch_area=0.008,0.002,0.0005 --sweep direct=pixels,patches --ref-spp 512 \
 	    --ref-every 25 --out out/bench/cornell-classics

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "iir/scene.h"
+#include "surface.h"
 
 struct iir_rt {
     RTCDevice device;
@@ -32,6 +33,31 @@ static void fill_buffers(RTCGeometry geom, const iir_scene *s)
                                            3 * sizeof(unsigned), s->num_triangles);
     if (v) memcpy(v, s->positions, sizeof(float) * 3 * s->num_vertices);
     if (ix) memcpy(ix, s->indices, sizeof(unsigned) * 3 * s->num_triangles);
+}
+
+/* Alpha cut-outs (iir_surface_covers): a candidate hit on a hole is rejected, for closest hits
+ * and occlusion alike, single rays and packets. Installed only on scenes that have cut-outs. */
+static void cutout_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    const iir_scene *s = args->geometryUserPtr;
+    const unsigned N = args->N;
+    /* RTCHitN in C: SoA blocks of N (Ng x, y, z, u, v, primID, ...), as rtcore_ray.h lays out */
+    const float *hf = (const float *)args->hit;
+    const unsigned *hu = (const unsigned *)args->hit;
+    for (unsigned i = 0; i < N; i++) {
+        if (!args->valid[i]) continue;
+        unsigned prim = hu[5 * N + i];
+        float u = hf[3 * N + i], v = hf[4 * N + i];
+        if (!iir_surface_covers(s, prim, u, v)) args->valid[i] = 0;
+    }
+}
+
+static void set_cutouts(RTCGeometry geom, const iir_scene *s)
+{
+    if (!iir_scene_has_cutouts(s)) return;
+    rtcSetGeometryUserData(geom, (void *)s);
+    rtcSetGeometryIntersectFilterFunction(geom, cutout_filter);
+    rtcSetGeometryOccludedFilterFunction(geom, cutout_filter);
 }
 
 static float scene_epsilon(const iir_scene *s)
@@ -62,6 +88,7 @@ iir_status iir_rt_create(const iir_scene *s, iir_rt **out, iir_error *err)
     rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_HIGH);
     RTCGeometry geom = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     fill_buffers(geom, s);
+    set_cutouts(geom, s);
     rtcCommitGeometry(geom);
     rtcAttachGeometry(rt->scene, geom);
     rtcReleaseGeometry(geom);

@@ -236,7 +236,7 @@ static void section_ffcache(FILE *f, iird_metrics *m)
 
 char *iird_metrics_prometheus(iird_metrics *m, const iird_metrics_session *sessions,
                               size_t num_sessions, const iird_sched_stats *sched,
-                              size_t scenes_loaded)
+                              size_t scenes_loaded, uint64_t scene_bytes)
 {
     char *text = NULL;
     size_t size = 0;
@@ -249,6 +249,9 @@ char *iird_metrics_prometheus(iird_metrics *m, const iird_metrics_session *sessi
     section_traffic(f, m);
     metric_head(f, "iird_scenes_loaded", "gauge", "Scenes in memory.");
     fprintf(f, "iird_scenes_loaded %zu\n", scenes_loaded);
+    metric_head(f, "iird_scene_bytes", "gauge",
+                "Bytes the scenes in memory hold: geometry, materials, decoded textures.");
+    fprintf(f, "iird_scene_bytes %llu\n", (unsigned long long)scene_bytes);
     section_ffcache(f, m);
     metric_head(f, "iird_uptime_seconds", "gauge", "Seconds since start.");
     fprintf(f, "iird_uptime_seconds %.3f\n", (iir_now_ms() - m->start_ms) / 1e3);

@@ -59,7 +59,7 @@ void iird_metrics_error(iird_metrics *m, iird_err code);
  * folder's deletions since the last call first (service thread). */
 char *iird_metrics_prometheus(iird_metrics *m, const iird_metrics_session *sessions,
                               size_t num_sessions, const iird_sched_stats *sched,
-                              size_t scenes_loaded);
+                              size_t scenes_loaded, uint64_t scene_bytes);
 
 /* The /healthz and /livez JSON: {"status":STATUS,"sessions":N,"uptime_s":S} (STATUS "ok", "full",
  * "draining" or "alive"); malloc'd, NULL when out of memory. */

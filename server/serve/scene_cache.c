@@ -464,11 +464,13 @@ void iird_scene_cache_add_name(iird_scene_cache *c, const char *name)
     pthread_mutex_unlock(&c->lock);
 }
 
-size_t iird_scene_cache_loaded(iird_scene_cache *c)
+size_t iird_scene_cache_loaded(iird_scene_cache *c, uint64_t *bytes)
 {
     size_t n = 0;
+    *bytes = 0;
     pthread_mutex_lock(&c->lock);
-    for (cache_slot *s = c->slots; s; s = s->next) n += s->rt != NULL;
+    for (cache_slot *s = c->slots; s; s = s->next)
+        if (s->rt) n++, *bytes += iir_scene_bytes(s->scene);
     pthread_mutex_unlock(&c->lock);
     return n;
 }

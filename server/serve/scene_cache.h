@@ -12,6 +12,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "iir/rt.h"
 #include "iir/scene.h"
@@ -73,7 +74,8 @@ void iird_scene_cache_pin(iird_scene_cache *c, const iird_scene_entry *e);
  * the directory with the same name). Before any session exists. */
 void iird_scene_cache_set_startup(iird_scene_cache *c, const iird_scene_entry *e);
 
-/* Scenes in memory now. */
-size_t iird_scene_cache_loaded(iird_scene_cache *c);
+/* Scenes in memory now, and the bytes they hold (iir_scene_bytes: geometry, materials and
+ * decoded textures; not the ray tracers' BVHs, which Embree does not report). */
+size_t iird_scene_cache_loaded(iird_scene_cache *c, uint64_t *bytes);
 
 #endif

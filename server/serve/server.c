@@ -485,8 +485,9 @@ static char *metrics_text(server *srv)
     for (closing *z = srv->closing; z && n < sizeof mem / sizeof *mem; z = z->next)
         mem[n++] = session_metrics(z->session);
     iird_sched_stats sched = iird_sched_get_stats(srv->sched);
-    return iird_metrics_prometheus(&srv->metrics, mem, n, &sched,
-                                   iird_scene_cache_loaded(srv->scenes));
+    uint64_t scene_bytes;
+    size_t loaded = iird_scene_cache_loaded(srv->scenes, &scene_bytes);
+    return iird_metrics_prometheus(&srv->metrics, mem, n, &sched, loaded, scene_bytes);
 }
 
 /* What /healthz says to a balancer: "draining" after SIGTERM and "full" at --max-sessions (503:

@@ -13,6 +13,7 @@
 #include "iir/light.h"
 #include "iir/rt.h"
 #include "iir/status.h"
+#include "iir/texture.h"
 #include "iir/vecmath.h"
 
 #ifdef __cplusplus
@@ -23,9 +24,27 @@ extern "C" {
 typedef enum iir_material_kind {
     IIR_MATERIAL_DIFFUSE = 0, /* Lambertian: albedo */
     IIR_MATERIAL_MIRROR,      /* perfect mirror: reflects `specular` along R = V - 2 (V.N) N */
-    IIR_MATERIAL_GLASS        /* smooth dielectric of index `ior`: Fresnel-weighted reflection and
+    IIR_MATERIAL_GLASS,       /* smooth dielectric of index `ior`: Fresnel-weighted reflection and
                                  refraction (Snell), transmission tinted by `specular` */
+    IIR_MATERIAL_METAL_ROUGH  /* glTF 2.0's metallic-roughness model: base colour (albedo x
+                                 base_tex), metallic, roughness; Lambert + GGX (bsdf.h) */
 } iir_material_kind;
+
+/* How a material's alpha (base colour alpha x texture alpha) covers its surface (glTF alphaMode).
+ */
+typedef enum iir_alpha_mode {
+    IIR_ALPHA_OPAQUE = 0, /* alpha ignored */
+    IIR_ALPHA_MASK,       /* a hole where alpha < alpha_cutoff: for every ray */
+    IIR_ALPHA_BLEND       /* rendered as a cut-out at 0.5, with a note */
+} iir_alpha_mode;
+
+/* A texture a material samples: the scene's texture `texture - 1` (0: none), with its glTF sampler
+ * and KHR_texture_transform. Zero is "no texture". */
+typedef struct iir_texref {
+    uint32_t texture; /* 1 + index into iir_scene.textures; 0 = none */
+    iir_tex_sampler sampler;
+    iir_tex_transform transform; /* KHR_texture_transform; the loaders set identity without one */
+} iir_texref;
 
 /* A two-sided material. Emissive materials are static emitting triangles, or, when a scene's
  * sidecar gives no "lights" array and their triangles are one-sided and planar, movable area
@@ -33,11 +52,23 @@ typedef enum iir_material_kind {
  * see to it), so every diffuse-only method renders it black (docs/scene-format.md, section 3). */
 typedef struct iir_material {
     char name[64];
-    iir_vec3 albedo;        /* diffuse reflectance rho, each channel in [0, 1]; 0 unless diffuse */
-    iir_vec3 emission;      /* emitted radiance Le (W/sr/m^2), >= 0 */
+    iir_vec3 albedo;        /* diffuse reflectance rho (metal_rough: the base colour factor), each
+                               channel in [0, 1]; 0 for a mirror or glass */
+    iir_vec3 emission;      /* emitted radiance Le (W/sr/m^2), >= 0 (x emission_tex) */
     iir_material_kind kind; /* IIR_MATERIAL_DIFFUSE unless a file or sidecar says otherwise */
     iir_vec3 specular;      /* mirror: reflectance; glass: transmission tint; each in [0, 1] */
     float ior;              /* glass: index of refraction, in [1, 3]; 0 otherwise */
+    float metallic;         /* metal_rough: in [0, 1] (x the mr texture's B) */
+    float roughness;        /* metal_rough: in [0, 1] (x the mr texture's G); alpha = roughness^2 */
+    float opacity;          /* the base colour factor's alpha, in [0, 1] (1 - opacity is unused
+                               when alpha_mode is OPAQUE) */
+    iir_alpha_mode alpha_mode;
+    float alpha_cutoff;      /* MASK: alpha below it is a hole (glTF default 0.5) */
+    float normal_scale;      /* normal_tex: the tangent-space xy scale (glTF normalTexture.scale) */
+    iir_texref base_tex;     /* sRGB base colour (diffuse albedo) and alpha */
+    iir_texref mr_tex;       /* linear: G roughness, B metallic */
+    iir_texref normal_tex;   /* linear tangent-space normal map */
+    iir_texref emission_tex; /* sRGB emission colour */
 } iir_material;
 
 /* "diffuse", "mirror" or "glass" (the sidecar's "kind"). */
@@ -46,6 +77,11 @@ const char *iir_material_kind_name(iir_material_kind kind);
 /* The bounces a camera path spends on the material before it reaches a rough surface behind it: 0
  * for a diffuse one, 1 for a mirror (off it), 2 for glass (in and out of a closed body). */
 int iir_material_specular_depth(const iir_material *m);
+
+/* Whether a metal_rough material's specular lobe carries a share of its light that a diffuse-only
+ * method visibly misses: any metal, or a dielectric smoother than roughness 0.6 (a rough
+ * dielectric's 4% lobe is spread like its diffuse one). */
+bool iir_material_is_glossy(const iir_material *m);
 
 /* h extended by every field of the material that changes an image (not its name). */
 uint64_t iir_material_hash(uint64_t h, const iir_material *m);
@@ -87,6 +123,13 @@ typedef struct iir_scene {
     uint32_t *materials; /* per triangle, into material_list */
     iir_vec3 *normals;   /* per triangle, unit geometric normal (winding order) */
     float *areas;        /* per triangle, world units^2 */
+    /* Per vertex, each NULL when no mesh of the file gives it (zero where one mesh lacks it): */
+    iir_vec3 *vertex_normals; /* unit shading normals, interpolated at a hit (smooth shading) */
+    iir_vec2 *texcoords;      /* TEXCOORD_0 / vt, glTF convention: (0, 0) the image's top left */
+    float *tangents;          /* 4 per vertex: unit tangent xyz and handedness w = +-1 (glTF) */
+
+    uint32_t num_textures; /* decoded once, shared by every session (materials point at them) */
+    iir_texture **textures;
 
     uint32_t num_materials;
     iir_material *material_list;
@@ -130,6 +173,9 @@ iir_status iir_scene_resolve(const char *name_or_path, const char *scenes_dir, c
 iir_scene *iir_scene_create_cornell_box(void);
 
 void iir_scene_destroy(iir_scene *scene);
+
+/* Bytes the scene holds: its arrays, materials, lights and decoded textures (mip chains). */
+uint64_t iir_scene_bytes(const iir_scene *scene);
 
 /* Opens a scene for rendering: NULL or "builtin" is the built-in Cornell box; anything else is
  * resolved as iir_scene_resolve does (a file or folder, else a bare name in scenes_dir) and loaded

@@ -6,6 +6,7 @@
  * ray that meets one. Not the lights' own radiometry (light.c) nor the ray-rectangle test
  * (area_hit.c) or the shape (area_shape.c). */
 #include "iir/light.h"
+#include "surface.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -131,6 +132,7 @@ struct iir_lightset {
     uint32_t *entry_of;   /* triangle -> entry, UINT32_MAX if not emissive */
 };
 
+/* Triangle t's power for picking it (its emission factor: an emission texture scales it down). */
 static float triangle_power(const iir_scene *s, uint32_t t)
 {
     iir_vec3 Le = s->material_list[s->materials[t]].emission;
@@ -275,7 +277,7 @@ static iir_light_sample sample_triangle(const iir_scene *s, uint32_t t, iir_vec3
     ls.wi = iir_scale(d, 1.f / ls.dist);
     float cos_l = -iir_dot(s->normals[t], ls.wi); /* one-sided emission along the normal */
     if (cos_l <= 0.f) return ls;
-    ls.Li = s->material_list[s->materials[t]].emission;
+    ls.Li = iir_surface_emission_at(s, t, b.y, 1.f - b.x - b.y);
     ls.pdf = pmf * dist2 / (cos_l * s->areas[t]);
     ls.n_light = s->normals[t];
     return ls;

@@ -34,7 +34,13 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
     uint32_t n = 0;
     for (uint32_t i = 0; i < scene->num_materials; i++) {
         const iir_material *m = &scene->material_list[i];
-        if (m->kind != IIR_MATERIAL_DIFFUSE)
+        if (iir_material_is_glossy(m))
+            iir_dropped_add(out, max, &n, method, "material", m->name,
+                            "is glossy (metallic %g, roughness %g): %s shades it by its diffuse "
+                            "albedo only (base colour x (1 - metallic)), its specular reflection "
+                            "is left out; use pt, whitted or hybrid",
+                            (double)m->metallic, (double)m->roughness, method);
+        else if (m->kind == IIR_MATERIAL_MIRROR || m->kind == IIR_MATERIAL_GLASS)
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is a %s: %s renders it black (its VPLs and shading are diffuse "
                             "only); use pt, whitted or hybrid",

@@ -39,11 +39,11 @@ typedef struct hybrid_state {
 } hybrid_state;
 
 /* The diffuse hook: rho_x H(x) / pi from the radiosity solution. */
-static iir_vec3 radiosity_at(const void *ctx, const iir_hit *hit, const iir_material *mat)
+static iir_vec3 radiosity_at(const void *ctx, const iir_hit *hit, iir_vec3 albedo)
 {
     const rad_solution *sol = ctx;
     iir_vec3 H = rad_solution_H(sol, hit->prim, hit->u, hit->v);
-    return iir_scale(iir_mul(mat->albedo, H), IIR_INV_PI);
+    return iir_scale(iir_mul(albedo, H), IIR_INV_PI);
 }
 
 /* Gathers the solution for display and traces the frame's trees. */

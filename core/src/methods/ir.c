@@ -136,11 +136,11 @@ static bool trace_path(ir_state *ir, vpl_list *l, const iir_light *light, iir_ve
         iir_hit hit;
         if (iir_is_black(beta) || !iir_rt_intersect(ir->rt, &ray, &hit, st, IIR_RAYS_VPL)) break;
         iir_surface sf = iir_surface_at(ir->scene, &hit, iir_neg(ray.dir));
-        if (!iir_is_black(sf.mat->emission)) break; /* emitters absorb light paths */
+        if (!iir_is_black(sf.Le)) break; /* emitters absorb light paths */
         iir_vpl v = {.id = l->next_id++,
                      .position = sf.p,
-                     .albedo = sf.mat->albedo,
-                     .flux = iir_mul(beta, sf.mat->albedo),
+                     .albedo = sf.albedo,
+                     .flux = iir_mul(beta, sf.albedo),
                      .birth = ir->frame,
                      .generation = (uint8_t)(vertex - 1 < 255 ? vertex - 1 : 255)};
         iir_vpl_set_normal(&v, sf.ns);

@@ -55,6 +55,7 @@ typedef struct pt_state {
     bool has_area_lights; /* emissive triangles or area lights: BSDF rays can find light */
     bool has_area_light;  /* a rectangular area light among the view's lights */
     iir_camera_frame cam;
+    float spread;   /* a camera ray's cone angle: the pixel's height over the focal length */
     iir_image *sum; /* sum of samples; the frame is sum / spp_done */
     uint64_t spp_done;
     iir_stop_fn stop; /* a live session's: polled per tile */
@@ -82,23 +83,24 @@ static float power_heuristic(float pdf_a, float pdf_b)
 
 /* ---- the estimator ---- */
 
-/* Direct light at sf by sampling one light: f * Li * cos / pdf, MIS-weighted against the BSDF. */
-static iir_vec3 estimate_direct(const pt_state *pt, const iir_surface *sf, iir_rng *rng,
-                                iir_raystats *st)
+/* Direct light at sf by sampling one light: f Li |cos| / pdf, MIS-weighted against the BSDF.
+ * Light arriving from below the geometric surface counts for nothing, whatever the shading normal
+ * says (no light leaks through a normal-mapped or smooth-shaded surface). */
+static iir_vec3 estimate_direct(const pt_state *pt, const iir_surface *sf, const iir_bsdf *bsdf,
+                                iir_vec3 wo, iir_rng *rng, iir_raystats *st)
 {
     float u_pick = iir_rng_uniform(rng);
     iir_light_ctx ctx = iir_surface_light_ctx(sf, iir_rt_epsilon(pt->rt));
     iir_light_sample ls = iir_lightset_sample_li(pt->lights, &ctx, u_pick, iir_rng_uniform2(rng));
     if (ls.pdf <= 0.f || iir_is_black(ls.Li)) return iir_v3s(0.f);
-    float cos_theta = iir_dot(sf->ns, ls.wi);
-    if (cos_theta <= 0.f) return iir_v3s(0.f);
+    iir_vec3 f_cos = iir_surface_f_cos(sf, bsdf, wo, ls.wi);
+    if (iir_is_black(f_cos)) return iir_v3s(0.f);
 
     iir_ray shadow = iir_segment_ray(&ls.shadow);
     if (iir_rt_occluded(pt->rt, &shadow, st, IIR_RAYS_SHADOW)) return iir_v3s(0.f);
 
-    iir_vec3 f = iir_scale(sf->mat->albedo, IIR_INV_PI);
-    float w = ls.is_delta ? 1.f : power_heuristic(ls.pdf, iir_cosine_hemisphere_pdf(cos_theta));
-    return iir_scale(iir_mul(f, ls.Li), cos_theta * w / ls.pdf);
+    float w = ls.is_delta ? 1.f : power_heuristic(ls.pdf, iir_bsdf_pdf(bsdf, wo, ls.wi));
+    return iir_scale(iir_mul(f_cos, ls.Li), w / ls.pdf);
 }
 
 /* The emission of the area lights that the ray meets from the front before t_max, times beta,
@@ -135,15 +137,14 @@ static bool russian_roulette(int vertex, iir_vec3 *beta, iir_rng *rng)
  * reflection with probability F, so its weight is 1 reflected and the tint refracted). */
 static iir_vec3 sample_specular(const iir_surface *sf, iir_vec3 V, float u, iir_vec3 *wi)
 {
-    const iir_material *m = sf->mat;
-    if (m->kind == IIR_MATERIAL_MIRROR) {
+    if (sf->kind == IIR_MATERIAL_MIRROR) {
         *wi = iir_reflect(V, sf->n);
-        return m->specular;
+        return sf->specular;
     }
-    iir_glass_split g = iir_glass_at(V, sf->n, m->ior);
+    iir_glass_split g = iir_glass_at(V, sf->n, sf->ior);
     bool reflect = !g.has_t || u < g.F;
     *wi = reflect ? g.wr : g.wt;
-    return reflect ? iir_v3s(1.f) : m->specular;
+    return reflect ? iir_v3s(1.f) : sf->specular;
 }
 
 /* A ray leaving sf along wi, lifted off the surface on wi's side (refraction leaves through the
@@ -167,7 +168,10 @@ static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *
         L = iir_add(L, area_lights_seen(pt, &ray, found ? hit.t : INFINITY, pdf_bsdf, beta));
         if (!found) break;
         iir_vec3 wo = iir_neg(ray.dir);
-        iir_surface sf = iir_surface_at(pt->scene, &hit, wo);
+        /* the camera ray reads textures over its pixel's footprint, later ones their finest level
+         */
+        iir_surface sf = vertex == 1 ? iir_surface_at_cone(pt->scene, &hit, wo, pt->spread * hit.t)
+                                     : iir_surface_at(pt->scene, &hit, wo);
 
         /* Emission found by BSDF sampling, MIS-weighted against light sampling. */
         iir_vec3 Le = iir_surface_Le(&sf, wo);
@@ -182,7 +186,7 @@ static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *
 
         /* A mirror or glass: no next-event estimation (a delta BSDF never meets a sampled light);
            what the bounce finds counts fully (pdf_bsdf 0: no MIS). */
-        if (sf.mat->kind != IIR_MATERIAL_DIFFUSE) {
+        if (!iir_surface_is_rough(&sf)) {
             iir_vec3 wi;
             beta = iir_mul(beta, sample_specular(&sf, ray.dir, iir_rng_uniform(rng), &wi));
             pdf_bsdf = 0.f;
@@ -192,19 +196,22 @@ static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *
         }
 
         /* Next-event estimation: a light path with `vertex` reflections. */
-        L = iir_add(L, iir_mul(beta, estimate_direct(pt, &sf, rng, st)));
+        iir_bsdf bsdf = iir_surface_bsdf(&sf);
+        L = iir_add(L, iir_mul(beta, estimate_direct(pt, &sf, &bsdf, wo, rng, st)));
         if (vertex == max_bounces && !pt->has_area_lights) break;
 
-        /* Continue with a cosine-sampled direction: f cos / pdf = albedo. */
-        iir_frame fr = iir_frame_from_normal(sf.ns);
-        iir_vec3 wi = iir_frame_to_world(&fr, iir_sample_cosine_hemisphere(iir_rng_uniform2(rng)));
-        float cos_theta = iir_dot(wi, sf.ns);
-        pdf_bsdf = iir_cosine_hemisphere_pdf(cos_theta);
-        if (pdf_bsdf <= 0.f) break;
-        beta = iir_mul(beta, sf.mat->albedo);
+        /* Continue in a direction sampled from the BSDF (the lobe picked by uc when it has two),
+           above the geometric surface only. */
+        float uc = sf.kind == IIR_MATERIAL_METAL_ROUGH ? iir_rng_uniform(rng) : 0.f;
+        iir_bsdf_sample bs;
+        if (!iir_bsdf_sample_f(&bsdf, wo, uc, iir_rng_uniform2(rng), &bs)) break;
+        iir_vec3 f_cos = iir_surface_f_cos_sampled(&sf, &bs);
+        if (iir_is_black(f_cos) || !(bs.pdf > 0.f)) break;
+        beta = iir_mul(beta, iir_scale(f_cos, 1.f / bs.pdf));
+        pdf_bsdf = bs.flags & IIR_BSDF_SPECULAR ? 0.f : bs.pdf;
 
         if (!russian_roulette(vertex, &beta, rng)) break;
-        ray = iir_make_ray(iir_surface_offset(&sf, iir_rt_epsilon(pt->rt)), wi, 0.f, INFINITY);
+        ray = iir_make_ray(iir_surface_offset(&sf, iir_rt_epsilon(pt->rt)), bs.wi, 0.f, INFINITY);
     }
     return L;
 }
@@ -325,6 +332,7 @@ static iir_status pt_render(void *state, const iir_view *view, iir_image *out,
     for (uint32_t i = 0; i < view->num_lights; i++)
         pt->has_area_light |= !iir_light_is_delta(&view->lights[i]);
     pt->cam = iir_camera_setup(&view->camera, out->width, out->height);
+    pt->spread = 2.f * pt->cam.tan_half_y / (float)pt->cam.height;
     iir_image_clear(pt->sum);
     pt->spp_done = 0;
     st = accumulate(pt, pt->params.spp, stats, err);

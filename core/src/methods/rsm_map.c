@@ -71,13 +71,13 @@ static iir_vpl texel_at(const rsm_map *m, uint32_t k, iir_vec2 t, const iir_scen
     iir_hit hit;
     if (!iir_rt_intersect(rt, &ray, &hit, st, IIR_RAYS_VPL)) return v;
     iir_surface sf = iir_surface_at(scene, &hit, iir_neg(w));
-    if (!iir_is_black(sf.mat->emission)) return v;
+    if (!iir_is_black(sf.Le)) return v;
     float A = iir_sqr(2.f * m->half / (float)m->res);
     float emitted = iir_domain_profile(&m->dom, s) * A;
     v.null_sample = false;
     v.position = sf.p;
-    v.albedo = sf.mat->albedo;
-    v.flux = iir_scale(iir_mul(emitter_radiance(m, k), sf.mat->albedo), emitted);
+    v.albedo = sf.albedo;
+    v.flux = iir_scale(iir_mul(emitter_radiance(m, k), sf.albedo), emitted);
     iir_vpl_set_normal(&v, sf.ns);
     return v;
 }

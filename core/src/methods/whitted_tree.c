@@ -57,6 +57,9 @@ static const iir_param ROWS[] = {
 const iir_param_table whitted_param_table = {"whitted: ray tree", ROWS,
                                              sizeof ROWS / sizeof ROWS[0], NULL};
 
+/* Below this roughness a metal_rough surface is followed as a mirror too (smooth_reflection). */
+#define WHITTED_MIRROR_ROUGHNESS 0.1f
+
 /* ---- state ---- */
 
 struct whitted_tree {
@@ -88,24 +91,33 @@ static iir_light_eval light_eval(const whitted_tree *w, uint32_t i)
     return i < 64 ? w->eval[i] : iir_light_prepare(&w->lights[i]);
 }
 
-/* Li cos / pdf of sample ls at sf, or 0 when it faces away or its shadow segment is blocked. */
-static iir_vec3 arriving(const tracer *t, const iir_surface *sf, const iir_light_sample *ls)
+/* The light a surface point is shaded with, towards wo. */
+typedef struct shading {
+    const iir_surface *sf;
+    iir_bsdf bsdf;
+    iir_vec3 wo;
+} shading;
+
+/* f Li |cos| / pdf of sample ls at the point, or 0 when it arrives from below the surface or its
+ * shadow segment is blocked. */
+static iir_vec3 arriving(const tracer *t, const shading *sh, const iir_light_sample *ls)
 {
-    float cos_theta = iir_dot(sf->ns, ls->wi);
-    if (ls->pdf <= 0.f || cos_theta <= 0.f || iir_is_black(ls->Li)) return iir_v3s(0.f);
+    if (ls->pdf <= 0.f || iir_is_black(ls->Li)) return iir_v3s(0.f);
+    iir_vec3 f_cos = iir_surface_f_cos(sh->sf, &sh->bsdf, sh->wo, ls->wi);
+    if (iir_is_black(f_cos)) return iir_v3s(0.f);
     iir_ray r = iir_segment_ray(&ls->shadow);
     if (r.tfar > 0.f && iir_rt_occluded(t->w->rt, &r, t->st, IIR_RAYS_SHADOW)) return iir_v3s(0.f);
-    return iir_scale(ls->Li, cos_theta / ls->pdf);
+    return iir_scale(iir_mul(f_cos, ls->Li), 1.f / ls->pdf);
 }
 
-/* Mean of Li cos / pdf over the samples of light e (area_samples points of an area light, or of
+/* Mean of f Li cos / pdf over the samples of light e (area_samples points of an area light, or of
  * the scene's emissive triangles when e is NULL; a delta light's one), a shadow ray each. */
-static iir_vec3 light_at(tracer *t, const iir_surface *sf, const iir_light_eval *e)
+static iir_vec3 light_at(tracer *t, const shading *sh, const iir_light_eval *e)
 {
-    iir_light_ctx ctx = iir_surface_light_ctx(sf, t->w->eps);
+    iir_light_ctx ctx = iir_surface_light_ctx(sh->sf, t->w->eps);
     if (e && iir_light_is_delta(e->light)) {
         iir_light_sample ls = iir_light_sample_li(e, &ctx, iir_v2(0.f, 0.f));
-        return arriving(t, sf, &ls);
+        return arriving(t, sh, &ls);
     }
     int n = t->w->f->p->area_samples;
     iir_vec3 sum = iir_v3s(0.f);
@@ -114,24 +126,25 @@ static iir_vec3 light_at(tracer *t, const iir_surface *sf, const iir_light_eval 
         iir_light_sample ls =
             e ? iir_light_sample_li(e, &ctx, u)
               : iir_lightset_sample_li(t->w->emitters, &ctx, iir_rng_uniform(&t->rng), u);
-        sum = iir_add(sum, arriving(t, sf, &ls));
+        sum = iir_add(sum, arriving(t, sh, &ls));
     }
     return iir_scale(sum, 1.f / (float)n);
 }
 
-/* Direct light reflected by diffuse sf towards the viewer, plus the ambient term and the
- * caller's diffuse hook. */
-static iir_vec3 diffuse(tracer *t, const iir_surface *sf, const iir_hit *hit)
+/* Direct light reflected by rough sf towards wo by its full BSDF (the classic local model), plus
+ * the ambient term on its diffuse albedo and the caller's diffuse hook. */
+static iir_vec3 diffuse(tracer *t, const iir_surface *sf, const iir_hit *hit, iir_vec3 wo)
 {
     const whitted_tree *w = t->w;
-    iir_vec3 extra = w->f->extra ? w->f->extra(w->f->extra_ctx, hit, sf->mat) : iir_v3s(0.f);
-    iir_vec3 E = iir_v3s(w->f->p->ambient * IIR_PI);
+    shading sh = {sf, iir_surface_bsdf(sf), wo};
+    iir_vec3 L = w->f->extra ? w->f->extra(w->f->extra_ctx, hit, sf->albedo) : iir_v3s(0.f);
+    L = iir_madd(L, sf->albedo, w->f->p->ambient);
     for (uint32_t i = 0; w->f->local_direct && i < w->num_lights; i++) {
         iir_light_eval e = light_eval(w, i);
-        E = iir_add(E, light_at(t, sf, &e));
+        L = iir_add(L, light_at(t, &sh, &e));
     }
-    if (w->f->local_direct && w->has_emitters) E = iir_add(E, light_at(t, sf, NULL));
-    return iir_madd(extra, iir_mul(sf->mat->albedo, E), IIR_INV_PI);
+    if (w->f->local_direct && w->has_emitters) L = iir_add(L, light_at(t, &sh, NULL));
+    return L;
 }
 
 /* The radiance of the view's area lights that the ray meets from the front before t_max. */
@@ -170,15 +183,32 @@ static iir_vec3 branch(tracer *t, const iir_surface *sf, iir_vec3 wi, int depth,
 /* What a specular surface passes on: the mirror's reflection, glass's two Fresnel branches. */
 static iir_vec3 specular(tracer *t, const iir_surface *sf, iir_vec3 V, int depth, iir_vec3 weight)
 {
-    const iir_material *m = sf->mat;
-    if (m->kind == IIR_MATERIAL_MIRROR)
-        return iir_mul(m->specular,
-                       branch(t, sf, iir_reflect(V, sf->n), depth, iir_mul(weight, m->specular)));
-    iir_glass_split g = iir_glass_at(V, sf->n, m->ior);
+    if (sf->kind == IIR_MATERIAL_MIRROR)
+        return iir_mul(sf->specular,
+                       branch(t, sf, iir_reflect(V, sf->n), depth, iir_mul(weight, sf->specular)));
+    iir_glass_split g = iir_glass_at(V, sf->n, sf->ior);
     iir_vec3 L = iir_scale(branch(t, sf, g.wr, depth, iir_scale(weight, g.F)), g.F);
     if (!g.has_t) return L;
-    iir_vec3 kt = iir_scale(m->specular, 1.f - g.F);
+    iir_vec3 kt = iir_scale(sf->specular, 1.f - g.F);
     return iir_add(L, iir_mul(kt, branch(t, sf, g.wt, depth, iir_mul(weight, kt))));
+}
+
+/* A metal_rough surface smoother than WHITTED_MIRROR_ROUGHNESS also reflects like a mirror of
+ * reflectance F(n.wo) (Schlick, the BSDF's f0) besides its local shading: Whitted's recursion for
+ * the near-mirrors (a chrome ball of roughness 0.05) that the local model alone would show as a
+ * highlight on black. */
+static iir_vec3 smooth_reflection(tracer *t, const iir_surface *sf, iir_vec3 V, int depth,
+                                  iir_vec3 weight)
+{
+    if (sf->kind != IIR_MATERIAL_METAL_ROUGH || !(sf->roughness < WHITTED_MIRROR_ROUGHNESS))
+        return iir_v3s(0.f);
+    iir_bsdf b = iir_surface_bsdf(sf);
+    float c = 1.f - fabsf(iir_dot(V, sf->sn));
+    float c5 = c * c * c * c * c;
+    iir_vec3 F = iir_add(b.f0, iir_scale(iir_sub(iir_v3s(1.f), b.f0), c5));
+    iir_vec3 wi = iir_reflect(V, sf->sn);
+    if (iir_dot(wi, sf->ns) <= 0.f) return iir_v3s(0.f);
+    return iir_mul(F, branch(t, sf, wi, depth, iir_mul(weight, F)));
 }
 
 /* Radiance along ray, a branch `depth` specular bounces from the camera with weight `weight`. */
@@ -191,9 +221,15 @@ static iir_vec3 trace(tracer *t, iir_ray ray, int depth, iir_vec3 weight)
     iir_vec3 L = area_lights_seen(w, &ray, found ? hit.t : INFINITY);
     if (!found) return L;
     iir_vec3 wo = iir_neg(ray.dir);
-    iir_surface sf = iir_surface_at(w->scene, &hit, wo);
+    /* a camera ray reads textures over its pixel's footprint (a ray cone) */
+    float spread = 2.f * w->cam.tan_half_y / (float)w->cam.height;
+    iir_surface sf = depth == 0 ? iir_surface_at_cone(w->scene, &hit, wo, spread * hit.t)
+                                : iir_surface_at(w->scene, &hit, wo);
     L = iir_add(L, iir_surface_Le(&sf, wo));
-    if (sf.mat->kind == IIR_MATERIAL_DIFFUSE) return iir_add(L, diffuse(t, &sf, &hit));
+    if (iir_surface_is_rough(&sf)) {
+        L = iir_add(L, diffuse(t, &sf, &hit, wo));
+        return iir_add(L, smooth_reflection(t, &sf, ray.dir, depth, weight));
+    }
     return iir_add(L, specular(t, &sf, ray.dir, depth, weight));
 }
 

@@ -23,10 +23,10 @@ typedef struct whitted_params {
 } whitted_params;
 extern const iir_param_table whitted_param_table;
 
-/* Radiance leaving a diffuse hit towards the viewer beyond the tree's local shading (hit: the
- * scene triangle and its Embree barycentrics). Called from several threads at once. */
-typedef iir_vec3 (*whitted_diffuse_fn)(const void *ctx, const iir_hit *hit,
-                                       const iir_material *mat);
+/* Radiance leaving a rough hit towards the viewer beyond the tree's local shading (hit: the
+ * scene triangle and its Embree barycentrics; albedo: the diffuse reflectance there, textured).
+ * Called from several threads at once. */
+typedef iir_vec3 (*whitted_diffuse_fn)(const void *ctx, const iir_hit *hit, iir_vec3 albedo);
 
 /* A frame's settings. */
 typedef struct whitted_frame {

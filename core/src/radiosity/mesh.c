@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "radiosity.h"
+#include "surface.h"
 
 /* ---- the regular grid of one triangle ----
  * Grid point (i, j), i + j <= n, has barycentrics (u, v) = (i / n, j / n). Row j holds the "up"
@@ -117,6 +118,29 @@ static bool alloc_patches(rad_mesh *m, uint32_t n)
     return m->centre && m->normal && m->rho && m->emit && m->area && m->tri && m->vert;
 }
 
+/* A patch's reflectance: its material's albedo, or with a texture the mean of the diffuse albedo
+ * at 16 points spread over the patch (sub-triangle of grid corners gi, gj of an n-grid). */
+static iir_vec3 patch_albedo(const iir_scene *s, uint32_t t, uint32_t n, const int *gi,
+                             const int *gj, const iir_material *mat)
+{
+    if (!s->texcoords || !mat->base_tex.texture)
+        return iir_surface_albedo_at(s, t, 1.f / 3.f, 1.f / 3.f);
+    enum { K = 4 };
+    iir_vec3 sum = iir_v3s(0.f);
+    int count = 0;
+    for (int a = 0; a < K; a++)
+        for (int b = 0; a + b < K; b++) {
+            /* barycentrics within the patch, then on the triangle's grid */
+            float wa = ((float)a + 1.f / 3.f) / (float)K, wb = ((float)b + 1.f / 3.f) / (float)K;
+            float wc = 1.f - wa - wb;
+            float i = wa * (float)gi[0] + wb * (float)gi[1] + wc * (float)gi[2];
+            float j = wa * (float)gj[0] + wb * (float)gj[1] + wc * (float)gj[2];
+            sum = iir_add(sum, iir_surface_albedo_at(s, t, i / (float)n, j / (float)n));
+            count++;
+        }
+    return iir_scale(sum, 1.f / (float)count);
+}
+
 /* Fills triangle t's patches and its raw grid vertices (from base), with their normals. */
 static void mesh_triangle(rad_mesh *m, const iir_scene *s, uint32_t t, uint32_t base, iir_vec3 *pos,
                           iir_vec3 *nrm)
@@ -142,7 +166,7 @@ static void mesh_triangle(rad_mesh *m, const iir_scene *s, uint32_t t, uint32_t 
         m->centre[first + k] = iir_scale(c, 1.f / 3.f);
         m->normal[first + k] = s->normals[t];
         m->area[first + k] = s->areas[t] / (float)(n * n);
-        m->rho[first + k] = mat->albedo;
+        m->rho[first + k] = patch_albedo(s, t, n, gi, gj, mat);
         m->emit[first + k] = iir_scale(mat->emission, (float)M_PI);
         m->tri[first + k] = t;
     }

@@ -77,8 +77,8 @@ static iir_vec3 residual(const comp_ctx *c, uint32_t k, iir_vec3 x, iir_vec3 n, 
         iir_vec3 d = iir_sub(sf.p, x);
         float d2 = iir_length_sq(d), cos_x = iir_dot(n, w), cos_y = -iir_dot(sf.ns, w);
         float G = d2 > 0.f ? cos_x * cos_y / d2 : 0.f;
-        if (!(G > c->g_max) || iir_is_black(sf.mat->albedo)) break;
-        beta = iir_scale(iir_mul(beta, sf.mat->albedo), 1.f - c->g_max / G);
+        if (!(G > c->g_max) || iir_is_black(sf.albedo)) break;
+        beta = iir_scale(iir_mul(beta, sf.albedo), 1.f - c->g_max / G);
         iir_vec3 Ey = direct_at(c, &sf, rng, st);
         Ey = iir_add(
             Ey, iir_render_vpl_light_at(c->r, c->p, k, sf.p, sf.ns, c->max_bounce - 1 - depth, st));

@@ -43,7 +43,7 @@ iir_status iir_gbuffer_resize(iir_gbuffer *gb, int width, int height, iir_error 
 
 /* Writes pixel i from its camera ray's hit (or background). */
 static void store(iir_gbuffer *gb, size_t i, const iir_scene *scene, const iir_hit *hit,
-                  iir_vec3 dir)
+                  iir_vec3 dir, float spread)
 {
     iir_vec3 zero = iir_v3s(0.f);
     gb->prim[i] = hit->prim;
@@ -56,10 +56,11 @@ static void store(iir_gbuffer *gb, size_t i, const iir_scene *scene, const iir_h
         return;
     }
     iir_vec3 wo = iir_neg(dir);
-    iir_surface sf = iir_surface_at(scene, hit, wo);
+    /* textures filtered over the pixel's footprint: a ray cone of the pixel's spread angle */
+    iir_surface sf = iir_surface_at_cone(scene, hit, wo, spread * hit->t * iir_length(dir));
     gb->position[i] = sf.p;
-    gb->normal[i] = sf.ns;
-    gb->albedo[i] = sf.mat->albedo;
+    gb->normal[i] = sf.sn;
+    gb->albedo[i] = sf.albedo;
     gb->emission[i] = iir_surface_Le(&sf, wo);
     gb->depth[i] = hit->t;
 }
@@ -85,7 +86,8 @@ static void render_block(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *
     for (int k = 0; k < 8; k++) {
         if (!rays.valid[k]) continue;
         int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
-        store(gb, (size_t)y * (size_t)gb->width + (size_t)x, scene, &hits[k], dirs[k]);
+        store(gb, (size_t)y * (size_t)gb->width + (size_t)x, scene, &hits[k], dirs[k],
+              2.f * cf->tan_half_y / (float)cf->height);
     }
 }
 

@@ -23,6 +23,11 @@ void iir_scene_destroy(iir_scene *scene)
 {
     if (!scene) return;
     free(scene->positions);
+    free(scene->vertex_normals);
+    free(scene->texcoords);
+    free(scene->tangents);
+    for (uint32_t i = 0; i < scene->num_textures; i++) iir_texture_destroy(scene->textures[i]);
+    free(scene->textures);
     free(scene->indices);
     free(scene->materials);
     free(scene->normals);
@@ -34,6 +39,20 @@ void iir_scene_destroy(iir_scene *scene)
     for (uint32_t i = 0; i < scene->num_maps; i++) iir_emission_map_free(scene->maps[i]);
     free(scene->maps);
     free(scene);
+}
+
+uint64_t iir_scene_bytes(const iir_scene *s)
+{
+    uint64_t v = s->num_vertices, t = s->num_triangles;
+    uint64_t b = sizeof *s + v * sizeof(iir_vec3) +
+                 t * (3 * sizeof(uint32_t) + sizeof(uint32_t) + sizeof(iir_vec3) + sizeof(float));
+    if (s->vertex_normals) b += v * sizeof(iir_vec3);
+    if (s->texcoords) b += v * sizeof(iir_vec2);
+    if (s->tangents) b += v * 4 * sizeof(float);
+    b += (uint64_t)s->num_materials * sizeof(iir_material) +
+         (uint64_t)s->num_lights * sizeof(iir_light);
+    for (uint32_t i = 0; i < s->num_textures; i++) b += iir_texture_bytes(s->textures[i]);
+    return b;
 }
 
 static const char *plural(uint32_t n)
@@ -342,6 +361,7 @@ static iir_status load_on_base(const char *path, iir_sidecar *sc, int depth, iir
     iir_builder_init(&b, name, path);
     st = iir_builder_add_scene(&b, base, err);
     if (st == IIR_OK) st = iir_builder_take_maps(&b, base, err);
+    if (st == IIR_OK) st = iir_builder_take_textures(&b, base, err);
     if (st == IIR_OK) st = iir_sidecar_apply(sc, &b, err);
     if (st == IIR_OK) st = iir_builder_finish(&b, out, err);
     iir_builder_free(&b);

@@ -335,6 +335,10 @@ static iir_status convert_emitter(iir_scene_builder *b, uint32_t i, iir_error *e
     iir_area_fit fit;
     iir_status st = iir_builder_fit_area_light(b, name, &l, &fit);
     if (st == IIR_ERR_NOMEM) return iir_fail(err, st, "%s: out of memory", b->source);
+    if (b->materials[i].emission_tex.texture) {
+        st = IIR_ERR_UNSUPPORTED; /* an area light's radiance is uniform or an emission_map */
+        snprintf(fit.why, sizeof fit.why, "has an emission texture");
+    }
     if (st != IIR_OK || !light_ok(b, &l, n, fit.why, sizeof fit.why)) {
         iir_builder_note(b, "material", name,
                          "emits light: stays static emissive triangles, not a movable area "

@@ -96,6 +96,23 @@ static double mat4_det3(const mat4 *M)
            m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
 }
 
+/* The inverse transpose of M's 3x3 part (normals), up to a positive scale: its cofactor matrix
+ * times the sign of the determinant. */
+static mat4 normal_matrix(const mat4 *M)
+{
+    const double(*m)[4] = M->m;
+    mat4 C = {{{0}}};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            C.m[i][j] = m[i1][j1] * m[i2][j2] - m[i1][j2] * m[i2][j1];
+        }
+    double sign = mat4_det3(M) < 0.0 ? -1.0 : 1.0;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) C.m[i][j] *= sign;
+    return C;
+}
+
 static iir_vec3 v3_from_ai(struct aiVector3D v)
 {
     return iir_v3(v.x, v.y, v.z);
@@ -185,10 +202,8 @@ static iir_status import_scene(const char *path, const struct aiScene **out, iir
 {
     struct aiPropertyStore *props = aiCreatePropertyStore();
     aiSetImportPropertyInteger(props, AI_CONFIG_PP_RVC_FLAGS,
-                               aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS |
-                                   aiComponent_COLORS | aiComponent_TEXCOORDS |
-                                   aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
-                                   aiComponent_TEXTURES);
+                               aiComponent_COLORS | aiComponent_BONEWEIGHTS |
+                                   aiComponent_ANIMATIONS | aiComponent_TEXTURES);
     iir_status st = iir_objtext_check(path, err);
     if (st != IIR_OK) {
         aiReleasePropertyStore(props);
@@ -303,10 +318,12 @@ static void note_material(iir_scene_builder *b, const struct aiMaterial *mat, co
 {
     const char *name = m->name;
     float f = 0.f;
-    if (aiGetMaterialTextureCount(mat, aiTextureType_DIFFUSE) +
-        aiGetMaterialTextureCount(mat, aiTextureType_BASE_COLOR))
-        iir_builder_drop(b, "material", name, "a colour texture: ignored; its flat colour is used");
-    if (m->kind != IIR_MATERIAL_GLASS &&
+    if (aiGetMaterialTextureCount(mat, aiTextureType_HEIGHT))
+        iir_builder_drop(b, "material", name, "a bump map (map_Bump): not rendered");
+    if (aiGetMaterialTextureCount(mat, aiTextureType_OPACITY) && !m->alpha_mode)
+        iir_builder_drop(b, "material", name,
+                         "an opacity map (map_d) apart from map_Kd: not rendered, opaque");
+    if (m->kind != IIR_MATERIAL_GLASS && !m->alpha_mode &&
         aiGetMaterialFloat(mat, AI_MATKEY_OPACITY, &f) == aiReturn_SUCCESS && f < 0.999f)
         iir_builder_drop(b, "material", name, "transparency (opacity %g): rendered opaque",
                          (double)f);
@@ -330,6 +347,61 @@ typedef struct loader {
     iir_gltf_ext gltf;      /* a glTF's own JSON: what assimp drops (empty for other formats) */
 } loader;
 
+/* One of an OBJ/MTL material's texture maps (assimp's type) as a texture of the builder, read
+ * relative to the file's folder; 0 when it has none, a warning naming it when it cannot be read. */
+static iir_status obj_map(loader *L, const struct aiMaterial *am, enum aiTextureType type,
+                          bool srgb, const char *material, iir_texref *ref, iir_error *err)
+{
+    memset(ref, 0, sizeof *ref);
+    ref->transform = iir_tex_transform_identity();
+    struct aiString file;
+    if (aiGetMaterialTextureCount(am, type) == 0 ||
+        aiGetMaterialTexture(am, type, 0, &file, NULL, NULL, NULL, NULL, NULL, NULL) !=
+            aiReturn_SUCCESS)
+        return IIR_OK;
+    char path[2048];
+    const char *slash = strrchr(L->path, '/');
+    int dir = slash ? (int)(slash - L->path + 1) : 0;
+    for (char *c = file.data; *c; c++)
+        if (*c == '\\') *c = '/';
+    if (file.data[0] == '/' || strstr(file.data, "..")) {
+        iir_builder_drop(L->b, "material", material, "texture %s: not beside the file, not read",
+                         file.data);
+        return IIR_OK;
+    }
+    snprintf(path, sizeof path, "%.*s%s", dir, L->path, file.data);
+    iir_texture *tex = NULL;
+    iir_error why = {0};
+    iir_status st = iir_texture_read(path, srgb, &tex, &why);
+    if (st == IIR_ERR_NOMEM) return iir_fail(err, st, "%s", why.msg);
+    if (st != IIR_OK) {
+        iir_builder_drop(L->b, "material", material,
+                         "a texture cannot be read (%s): its flat colour is used", why.msg);
+        return IIR_OK;
+    }
+    return iir_builder_add_texture(L->b, tex, &ref->texture, err);
+}
+
+/* map_Kd (its alpha, or map_d naming the same file, is the cut-out), norm and map_Ke. */
+static iir_status obj_textures(loader *L, const struct aiMaterial *am, iir_material *m,
+                               iir_error *err)
+{
+    if (m->kind != IIR_MATERIAL_DIFFUSE) return IIR_OK;
+    iir_status st = obj_map(L, am, aiTextureType_DIFFUSE, true, m->name, &m->base_tex, err);
+    if (st == IIR_OK)
+        st = obj_map(L, am, aiTextureType_NORMALS, false, m->name, &m->normal_tex, err);
+    if (st == IIR_OK)
+        st = obj_map(L, am, aiTextureType_EMISSIVE, true, m->name, &m->emission_tex, err);
+    m->normal_scale = 1.f;
+    m->opacity = 1.f;
+    m->alpha_cutoff = 0.5f;
+    if (st == IIR_OK && m->base_tex.texture &&
+        iir_texture_has_alpha(L->b->textures[m->base_tex.texture - 1]))
+        m->alpha_mode = IIR_ALPHA_MASK;
+    /* a texture colour is multiplied by Kd, which exporters often leave at 0.8: MTL's rule */
+    return st;
+}
+
 /* Builder index of assimp material i, adding it on first use (unused materials are dropped). */
 static iir_status use_material(loader *L, unsigned i, uint32_t *out, iir_error *err)
 {
@@ -337,12 +409,21 @@ static iir_status use_material(loader *L, unsigned i, uint32_t *out, iir_error *
         return iir_fail(err, IIR_ERR_FORMAT, "%s: a mesh refers to material %u of %u", L->path, i,
                         L->s->mNumMaterials);
     if (L->material_map[i] == UINT32_MAX) {
-        iir_material m = convert_material(L->s->mMaterials[i], i);
-        /* KHR_materials_emissive_strength, which assimp 5.2 drops */
-        m.emission = iir_scale(m.emission, iir_gltf_ext_emissive_strength(&L->gltf, i, m.name));
-        iir_status st = iir_builder_add_material(L->b, &m, &L->material_map[i], err);
+        const struct aiMaterial *am = L->s->mMaterials[i];
+        iir_material m = convert_material(am, i);
+        /* a glTF's own material, as the spec writes it (assimp 5.2 drops much of it) */
+        int g = L->gltf.root ? iir_gltf_ext_material_index(&L->gltf, i, m.name) : -1;
+        iir_status st = IIR_OK;
+        if (g >= 0) {
+            memset(&m, 0, sizeof m);
+            snprintf(m.name, sizeof m.name, "material%u", i);
+            st = iir_gltf_ext_material(&L->gltf, g, L->b, &m, err);
+        } else {
+            st = obj_textures(L, am, &m, err);
+            if (st == IIR_OK) note_material(L->b, am, &m);
+        }
+        if (st == IIR_OK) st = iir_builder_add_material(L->b, &m, &L->material_map[i], err);
         if (st != IIR_OK) return st;
-        note_material(L->b, L->s->mMaterials[i], &m);
     }
     *out = L->material_map[i];
     return IIR_OK;
@@ -377,8 +458,36 @@ static iir_status add_mesh(loader *L, const struct aiMesh *mesh, const mat4 *M, 
     uint32_t mat = 0, first = L->b->num_vertices;
     iir_status st = use_material(L, mesh->mMaterialIndex, &mat, err);
     if (st == IIR_OK) st = iir_builder_reserve(L->b, mesh->mNumVertices, mesh->mNumFaces, err);
-    for (unsigned v = 0; st == IIR_OK && v < mesh->mNumVertices; v++)
-        st = iir_builder_add_vertex(L->b, mat4_point(M, v3_from_ai(mesh->mVertices[v])), NULL, err);
+    mat4 N = normal_matrix(M);
+    float hand = mat4_det3(M) < 0.0 ? -1.f : 1.f;
+    for (unsigned v = 0; st == IIR_OK && v < mesh->mNumVertices; v++) {
+        iir_vec3 n, t;
+        iir_vec2 uv;
+        float tan4[4];
+        iir_vertex_attr a = {NULL, NULL, NULL};
+        if (mesh->mNormals) {
+            n = mat4_vector(&N, v3_from_ai(mesh->mNormals[v]));
+            if (iir_length_sq(n) > 0.f && isfinite(iir_length_sq(n))) a.normal = &n;
+            if (a.normal) n = iir_normalize(n);
+        }
+        if (mesh->mTextureCoords[0]) {
+            /* assimp gives v up (OpenGL); iir keeps glTF's: (0, 0) the image's top left */
+            uv = iir_v2(mesh->mTextureCoords[0][v].x, 1.f - mesh->mTextureCoords[0][v].y);
+            a.uv = &uv;
+        }
+        if (mesh->mTangents && mesh->mBitangents && mesh->mNormals) {
+            iir_vec3 tl = v3_from_ai(mesh->mTangents[v]), bl = v3_from_ai(mesh->mBitangents[v]);
+            float w = iir_dot(iir_cross(v3_from_ai(mesh->mNormals[v]), tl), bl) < 0.f ? -1.f : 1.f;
+            t = mat4_vector(M, tl);
+            if (iir_length_sq(t) > 0.f && isfinite(iir_length_sq(t))) {
+                t = iir_normalize(t);
+                tan4[0] = t.x, tan4[1] = t.y, tan4[2] = t.z, tan4[3] = w * hand;
+                a.tangent = tan4;
+            }
+        }
+        st = iir_builder_add_vertex_attr(L->b, mat4_point(M, v3_from_ai(mesh->mVertices[v])), &a,
+                                         NULL, err);
+    }
     if (st != IIR_OK) return st;
     return add_faces(L, mesh, first, mat, mat4_det3(M) < 0.0, err);
 }

@@ -61,6 +61,16 @@ void iir_builder_init(iir_scene_builder *b, const char *name, const char *source
 void iir_builder_free(iir_scene_builder *b)
 {
     free(b->positions);
+    free(b->vertex_normals);
+    free(b->texcoords);
+    free(b->tangents);
+    b->vertex_normals = NULL;
+    b->texcoords = NULL;
+    b->tangents = NULL;
+    for (uint32_t i = 0; i < b->num_textures; i++) iir_texture_destroy(b->textures[i]);
+    free(b->textures);
+    b->textures = NULL;
+    b->num_textures = 0;
     free(b->indices);
     free(b->tri_materials);
     free(b->materials);
@@ -84,11 +94,31 @@ void iir_builder_free(iir_scene_builder *b)
     b->num_lights = b->cap_lights = 0;
 }
 
+/* Resizes an attribute array (if it exists) from old to cap vertices of elem bytes, zeroing the
+ * new part. */
+static bool resize_attr(void **p, uint32_t old, uint32_t cap, size_t elem)
+{
+    if (!*p) return true;
+    void *q = realloc(*p, (size_t)cap * elem);
+    if (!q) return false;
+    if (cap > old) memset((char *)q + (size_t)old * elem, 0, (size_t)(cap - old) * elem);
+    *p = q;
+    return true;
+}
+
+static bool grow_vertices(iir_scene_builder *b, uint64_t need)
+{
+    uint32_t old = b->cap_vertices;
+    if (!grow((void **)&b->positions, &b->cap_vertices, need, sizeof(iir_vec3))) return false;
+    return resize_attr((void **)&b->vertex_normals, old, b->cap_vertices, sizeof(iir_vec3)) &&
+           resize_attr((void **)&b->texcoords, old, b->cap_vertices, sizeof(iir_vec2)) &&
+           resize_attr((void **)&b->tangents, old, b->cap_vertices, 4 * sizeof(float));
+}
+
 iir_status iir_builder_reserve(iir_scene_builder *b, uint32_t more_vertices,
                                uint32_t more_triangles, iir_error *err)
 {
-    if (!grow((void **)&b->positions, &b->cap_vertices, (uint64_t)b->num_vertices + more_vertices,
-              sizeof(iir_vec3)) ||
+    if (!grow_vertices(b, (uint64_t)b->num_vertices + more_vertices) ||
         !grow_triangles(b, (uint64_t)b->num_triangles + more_triangles))
         return no_memory(b, err);
     return IIR_OK;
@@ -96,15 +126,84 @@ iir_status iir_builder_reserve(iir_scene_builder *b, uint32_t more_vertices,
 
 iir_status iir_builder_add_vertex(iir_scene_builder *b, iir_vec3 p, uint32_t *index, iir_error *err)
 {
+    return iir_builder_add_vertex_attr(b, p, NULL, index, err);
+}
+
+/* *p as a zeroed array of cap_vertices elements, created on first use. */
+static bool ensure_attr(const iir_scene_builder *b, void **p, size_t elem)
+{
+    if (!*p) *p = calloc(b->cap_vertices ? b->cap_vertices : 1, elem);
+    return *p != NULL;
+}
+
+static bool finite_n(const float *v, int n)
+{
+    for (int i = 0; i < n; i++)
+        if (!isfinite(v[i])) return false;
+    return true;
+}
+
+static iir_status store_attr(iir_scene_builder *b, uint32_t v, const iir_vertex_attr *a,
+                             iir_error *err)
+{
+    if ((a->normal && !finite_n(&a->normal->x, 3)) || (a->uv && !finite_n(&a->uv->x, 2)) ||
+        (a->tangent && !finite_n(a->tangent, 4)))
+        return iir_fail(err, IIR_ERR_FORMAT,
+                        "%s: vertex %u has a non-finite normal, texture "
+                        "coordinate or tangent",
+                        b->source, v);
+    if ((a->normal && !ensure_attr(b, (void **)&b->vertex_normals, sizeof(iir_vec3))) ||
+        (a->uv && !ensure_attr(b, (void **)&b->texcoords, sizeof(iir_vec2))) ||
+        (a->tangent && !ensure_attr(b, (void **)&b->tangents, 4 * sizeof(float))))
+        return no_memory(b, err);
+    if (a->normal) b->vertex_normals[v] = *a->normal;
+    if (a->uv) b->texcoords[v] = *a->uv;
+    if (a->tangent) memcpy(b->tangents + 4 * (size_t)v, a->tangent, 4 * sizeof(float));
+    return IIR_OK;
+}
+
+iir_status iir_builder_add_vertex_attr(iir_scene_builder *b, iir_vec3 p,
+                                       const iir_vertex_attr *attr, uint32_t *index, iir_error *err)
+{
     if (!iir_is_finite3(p))
         return iir_fail(err, IIR_ERR_FORMAT, "%s: vertex %u is not finite (%g, %g, %g)", b->source,
                         b->num_vertices, (double)p.x, (double)p.y, (double)p.z);
-    if (!grow((void **)&b->positions, &b->cap_vertices, (uint64_t)b->num_vertices + 1,
-              sizeof(iir_vec3)))
-        return no_memory(b, err);
+    if (!grow_vertices(b, (uint64_t)b->num_vertices + 1)) return no_memory(b, err);
+    if (attr) {
+        iir_status st = store_attr(b, b->num_vertices, attr, err);
+        if (st != IIR_OK) return st;
+    }
     if (index) *index = b->num_vertices;
     b->positions[b->num_vertices++] = p;
     return IIR_OK;
+}
+
+iir_status iir_builder_add_texture(iir_scene_builder *b, iir_texture *tex, uint32_t *ref,
+                                   iir_error *err)
+{
+    iir_texture **grown = realloc(b->textures, sizeof *grown * (b->num_textures + 1));
+    if (!grown) {
+        iir_texture_destroy(tex);
+        return no_memory(b, err);
+    }
+    b->textures = grown;
+    b->textures[b->num_textures++] = tex;
+    *ref = b->num_textures;
+    return IIR_OK;
+}
+
+iir_status iir_builder_take_textures(iir_scene_builder *b, iir_scene *scene, iir_error *err)
+{
+    iir_status st = IIR_OK;
+    for (uint32_t i = 0; i < scene->num_textures; i++) {
+        uint32_t ref;
+        iir_status s = iir_builder_add_texture(b, scene->textures[i], &ref, err);
+        if (st == IIR_OK) st = s;
+    }
+    free(scene->textures);
+    scene->textures = NULL;
+    scene->num_textures = 0;
+    return st;
 }
 
 iir_status iir_builder_add_triangle(iir_scene_builder *b, uint32_t i0, uint32_t i1, uint32_t i2,
@@ -179,14 +278,30 @@ iir_status iir_builder_add_light(iir_scene_builder *b, const iir_light *light, i
     return IIR_OK;
 }
 
+/* A copied material's texture references, shifted past the builder's t0 textures (the scene's
+ * textures are taken over after them: iir_builder_take_textures). */
+static void shift_textures(iir_material *m, uint32_t t0)
+{
+    iir_texref *refs[] = {&m->base_tex, &m->mr_tex, &m->normal_tex, &m->emission_tex};
+    for (size_t k = 0; k < sizeof refs / sizeof *refs; k++)
+        if (refs[k]->texture) refs[k]->texture += t0;
+}
+
 iir_status iir_builder_add_scene(iir_scene_builder *b, const iir_scene *scene, iir_error *err)
 {
     uint32_t v0 = b->num_vertices, m0 = b->num_materials;
     iir_status st = iir_builder_reserve(b, scene->num_vertices, scene->num_triangles, err);
     for (uint32_t i = 0; st == IIR_OK && i < scene->num_materials; i++)
         st = iir_builder_add_material(b, &scene->material_list[i], NULL, err);
-    for (uint32_t i = 0; st == IIR_OK && i < scene->num_vertices; i++)
-        st = iir_builder_add_vertex(b, scene->positions[i], NULL, err);
+    uint32_t t0 = b->num_textures;
+    for (uint32_t i = 0; st == IIR_OK && i < scene->num_materials; i++)
+        shift_textures(&b->materials[m0 + i], t0);
+    for (uint32_t i = 0; st == IIR_OK && i < scene->num_vertices; i++) {
+        iir_vertex_attr a = {scene->vertex_normals ? &scene->vertex_normals[i] : NULL,
+                             scene->texcoords ? &scene->texcoords[i] : NULL,
+                             scene->tangents ? &scene->tangents[4 * (size_t)i] : NULL};
+        st = iir_builder_add_vertex_attr(b, scene->positions[i], &a, NULL, err);
+    }
     for (uint32_t i = 0; st == IIR_OK && i < scene->num_triangles; i++) {
         const uint32_t *t = scene->indices + 3 * (size_t)i;
         st = iir_builder_add_triangle(b, v0 + t[0], v0 + t[1], v0 + t[2], m0 + scene->materials[i],
@@ -437,6 +552,16 @@ static void move_into_scene(iir_scene_builder *b, iir_scene *s)
     iir_scene_strcpy(s->source, sizeof s->source, b->source);
     s->num_vertices = b->num_vertices;
     s->positions = b->positions;
+    s->vertex_normals = b->vertex_normals;
+    s->texcoords = b->texcoords;
+    s->tangents = b->tangents;
+    s->textures = b->textures;
+    s->num_textures = b->num_textures;
+    b->vertex_normals = NULL;
+    b->texcoords = NULL;
+    b->tangents = NULL;
+    b->textures = NULL;
+    b->num_textures = 0;
     s->num_triangles = b->num_triangles;
     s->indices = b->indices;
     s->materials = b->tri_materials;

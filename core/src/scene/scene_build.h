@@ -34,6 +34,10 @@ typedef struct iir_scene_builder {
 
     iir_vec3 *positions;
     uint32_t num_vertices, cap_vertices;
+    /* per-vertex attributes, allocated (zero-filled) when the first vertex gives one */
+    iir_vec3 *vertex_normals;
+    iir_vec2 *texcoords;
+    float *tangents; /* 4 per vertex */
 
     uint32_t *indices;       /* 3 per triangle */
     uint32_t *tri_materials; /* 1 per triangle */
@@ -57,7 +61,17 @@ typedef struct iir_scene_builder {
 
     iir_emission_map **maps; /* owned; moved into the scene (lights point at them) */
     uint32_t num_maps;
+
+    iir_texture **textures; /* owned; moved into the scene (materials point at them) */
+    uint32_t num_textures;
 } iir_scene_builder;
+
+/* What a vertex may carry besides its position; a NULL member is "not given". */
+typedef struct iir_vertex_attr {
+    const iir_vec3 *normal; /* unit shading normal */
+    const iir_vec2 *uv;     /* TEXCOORD_0 */
+    const float *tangent;   /* xyz unit tangent, w handedness +-1 */
+} iir_vertex_attr;
 
 /* An empty builder; name and source are copied (truncated to fit). */
 void iir_builder_init(iir_scene_builder *b, const char *name, const char *source);
@@ -79,6 +93,19 @@ iir_status iir_builder_reserve(iir_scene_builder *b, uint32_t more_vertices,
  * infinite coordinate, naming the source and the vertex. */
 iir_status iir_builder_add_vertex(iir_scene_builder *b, iir_vec3 p, uint32_t *index,
                                   iir_error *err);
+
+/* The same with a vertex's attributes (attr may be NULL). An attribute's array is created at the
+ * first vertex that gives it, zero for the vertices before; a non-finite one is IIR_ERR_FORMAT. */
+iir_status iir_builder_add_vertex_attr(iir_scene_builder *b, iir_vec3 p,
+                                       const iir_vertex_attr *attr, uint32_t *index,
+                                       iir_error *err);
+
+/* Takes tex over and writes the iir_texref.texture value that names it (1 + its index) to *ref.
+ * IIR_ERR_NOMEM (tex then freed). */
+iir_status iir_builder_add_texture(iir_scene_builder *b, iir_texture *tex, uint32_t *ref,
+                                   iir_error *err);
+/* Takes every texture of scene over (scene keeps none), as iir_builder_take_maps. */
+iir_status iir_builder_take_textures(iir_scene_builder *b, iir_scene *scene, iir_error *err);
 
 /* Appends a triangle (vertex indices in winding order) with a material index. Indices must
  * refer to vertices and materials already added (IIR_ERR_FORMAT otherwise). Degenerate

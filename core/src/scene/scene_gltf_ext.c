@@ -1,7 +1,7 @@
-/* scene_gltf_ext.c -- the glTF file's own JSON beside assimp (scene_gltf_ext.h): the extensions it
- * uses or requires, checked against what iir reads, and KHR_materials_emissive_strength, which
- * assimp 5.2 drops (Blender's exporter writes emissiveFactor normalised to 1 and the rest there).
- * Not the meshes, materials and lights assimp reads (scene_assimp.c). */
+/* scene_gltf_ext.c -- the glTF file's own JSON beside assimp (scene_gltf_ext.h): reading it, the
+ * extensions it uses or requires, checked against what iir reads, and which of its materials an
+ * assimp material is. Not the materials' fields (scene_gltf_material.c), not the meshes and lights
+ * assimp reads (scene_assimp.c). */
 #include "scene_gltf_ext.h"
 
 #include <cjson/cJSON.h>
@@ -17,10 +17,8 @@ static const char *const KNOWN[] = {"KHR_lights_punctual",
                                     "KHR_materials_emissive_strength",
                                     "KHR_materials_transmission",
                                     "KHR_materials_ior",
-                                    "KHR_materials_specular",
                                     "KHR_mesh_quantization",
                                     "KHR_texture_transform",
-                                    "KHR_materials_unlit",
                                     NULL};
 
 enum { MAX_JSON = 1 << 30 };
@@ -90,38 +88,6 @@ static iir_status check_extensions(const char *path, const cJSON *root, iir_scen
     return IIR_OK;
 }
 
-static float emissive_strength(const cJSON *mat)
-{
-    const cJSON *ext = cJSON_GetObjectItemCaseSensitive(mat, "extensions");
-    const cJSON *es = cJSON_GetObjectItemCaseSensitive(ext, "KHR_materials_emissive_strength");
-    const cJSON *s = cJSON_GetObjectItemCaseSensitive(es, "emissiveStrength");
-    return cJSON_IsNumber(s) && s->valuedouble >= 0.0 && s->valuedouble <= 1e9
-               ? (float)s->valuedouble
-               : 1.f;
-}
-
-static iir_status read_materials(const char *path, const cJSON *root, iir_gltf_ext *e,
-                                 iir_error *err)
-{
-    const cJSON *mats = cJSON_GetObjectItemCaseSensitive(root, "materials");
-    int n = cJSON_IsArray(mats) ? cJSON_GetArraySize(mats) : 0;
-    e->emissive_strength = calloc((size_t)n + 1, sizeof *e->emissive_strength);
-    e->material_names = calloc((size_t)n + 1, sizeof *e->material_names);
-    if (!e->emissive_strength || !e->material_names)
-        return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", path);
-    const cJSON *m;
-    cJSON_ArrayForEach(m, mats)
-    {
-        const cJSON *name = cJSON_GetObjectItemCaseSensitive(m, "name");
-        e->material_names[e->num_materials] =
-            strdup(cJSON_IsString(name) && name->valuestring ? name->valuestring : "");
-        if (!e->material_names[e->num_materials])
-            return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", path);
-        e->emissive_strength[e->num_materials++] = emissive_strength(m);
-    }
-    return IIR_OK;
-}
-
 iir_status iir_gltf_ext_read(const char *path, iir_scene_builder *b, iir_gltf_ext *out,
                              iir_error *err)
 {
@@ -133,27 +99,47 @@ iir_status iir_gltf_ext_read(const char *path, iir_scene_builder *b, iir_gltf_ex
     free(text);
     if (!root) return iir_fail(err, IIR_ERR_FORMAT, "%s: its glTF JSON does not parse", path);
     st = check_extensions(path, root, b, err);
-    if (st == IIR_OK) st = read_materials(path, root, out, err);
-    cJSON_Delete(root);
-    if (st != IIR_OK) iir_gltf_ext_free(out);
-    return st;
+    if (st != IIR_OK) {
+        cJSON_Delete(root);
+        return st;
+    }
+    out->path = path;
+    out->root = root;
+    const cJSON *images = cJSON_GetObjectItemCaseSensitive(root, "images");
+    out->num_images = cJSON_IsArray(images) ? (uint32_t)cJSON_GetArraySize(images) : 0;
+    out->image_refs = calloc(2 * (size_t)out->num_images + 1, sizeof *out->image_refs);
+    if (!out->image_refs) {
+        iir_gltf_ext_free(out);
+        return iir_fail(err, IIR_ERR_NOMEM, "%s: out of memory", path);
+    }
+    return IIR_OK;
 }
 
 void iir_gltf_ext_free(iir_gltf_ext *e)
 {
-    for (uint32_t i = 0; e->material_names && i < e->num_materials; i++) free(e->material_names[i]);
-    free(e->material_names);
-    free(e->emissive_strength);
+    cJSON_Delete(e->root);
+    free(e->bin);
+    free(e->image_refs);
     memset(e, 0, sizeof *e);
 }
 
-float iir_gltf_ext_emissive_strength(const iir_gltf_ext *e, uint32_t index, const char *name)
+static const char *material_name(const cJSON *m)
 {
-    if (index < e->num_materials &&
-        (!e->material_names[index][0] || strcmp(e->material_names[index], name) == 0))
-        return e->emissive_strength[index];
-    for (uint32_t i = 0; i < e->num_materials; i++)
-        if (e->material_names[i][0] && strcmp(e->material_names[i], name) == 0)
-            return e->emissive_strength[i];
-    return 1.f;
+    const cJSON *name = cJSON_GetObjectItemCaseSensitive(m, "name");
+    return cJSON_IsString(name) && name->valuestring ? name->valuestring : "";
+}
+
+int iir_gltf_ext_material_index(const iir_gltf_ext *e, uint32_t index, const char *name)
+{
+    const cJSON *mats = e->root ? cJSON_GetObjectItemCaseSensitive(e->root, "materials") : NULL;
+    int n = cJSON_IsArray(mats) ? cJSON_GetArraySize(mats) : 0;
+    if ((int)index < n) {
+        const char *own = material_name(cJSON_GetArrayItem(mats, (int)index));
+        if (!own[0] || strcmp(own, name) == 0) return (int)index;
+    }
+    for (int i = 0; i < n; i++) {
+        const char *own = material_name(cJSON_GetArrayItem(mats, i));
+        if (own[0] && strcmp(own, name) == 0) return i;
+    }
+    return -1;
 }

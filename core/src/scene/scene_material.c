@@ -16,6 +16,8 @@ const char *iir_material_kind_name(iir_material_kind kind)
         return "mirror";
     case IIR_MATERIAL_GLASS:
         return "glass";
+    case IIR_MATERIAL_METAL_ROUGH:
+        return "metal_rough";
     }
     return "unknown";
 }
@@ -25,6 +27,11 @@ int iir_material_specular_depth(const iir_material *m)
     return m->kind == IIR_MATERIAL_GLASS ? 2 : m->kind == IIR_MATERIAL_MIRROR ? 1 : 0;
 }
 
+bool iir_material_is_glossy(const iir_material *m)
+{
+    return m->kind == IIR_MATERIAL_METAL_ROUGH && (m->metallic > 0.f || m->roughness < 0.6f);
+}
+
 uint64_t iir_material_hash(uint64_t h, const iir_material *m)
 {
     int32_t kind = (int32_t)m->kind;
@@ -32,7 +39,21 @@ uint64_t iir_material_hash(uint64_t h, const iir_material *m)
     h = IIR_HASH(h, m->albedo);
     h = IIR_HASH(h, m->emission);
     h = IIR_HASH(h, m->specular);
-    return IIR_HASH(h, m->ior);
+    h = IIR_HASH(h, m->ior);
+    h = IIR_HASH(h, m->metallic);
+    h = IIR_HASH(h, m->roughness);
+    h = IIR_HASH(h, m->opacity);
+    int32_t mode = (int32_t)m->alpha_mode;
+    h = IIR_HASH(h, mode);
+    h = IIR_HASH(h, m->alpha_cutoff);
+    h = IIR_HASH(h, m->normal_scale);
+    const iir_texref *refs[] = {&m->base_tex, &m->mr_tex, &m->normal_tex, &m->emission_tex};
+    for (size_t k = 0; k < sizeof refs / sizeof *refs; k++) {
+        h = IIR_HASH(h, refs[k]->texture);
+        h = IIR_HASH(h, refs[k]->sampler);
+        h = IIR_HASH(h, refs[k]->transform);
+    }
+    return h;
 }
 
 static bool unit_range(iir_vec3 c)
@@ -43,9 +64,20 @@ static bool unit_range(iir_vec3 c)
 const char *iir_material_check(const iir_material *m, char *why, size_t n)
 {
     if (m->kind != IIR_MATERIAL_DIFFUSE && m->kind != IIR_MATERIAL_MIRROR &&
-        m->kind != IIR_MATERIAL_GLASS)
-        return snprintf(why, n, "kind %d is not diffuse, mirror or glass", (int)m->kind), why;
-    if (m->kind == IIR_MATERIAL_DIFFUSE) return NULL;
+        m->kind != IIR_MATERIAL_GLASS && m->kind != IIR_MATERIAL_METAL_ROUGH)
+        return snprintf(why, n, "kind %d is not diffuse, mirror, glass or metal_rough",
+                        (int)m->kind),
+               why;
+    if (!(m->metallic >= 0.f && m->metallic <= 1.f && m->roughness >= 0.f && m->roughness <= 1.f))
+        return snprintf(why, n, "metallic %g and roughness %g must be in [0, 1]",
+                        (double)m->metallic, (double)m->roughness),
+               why;
+    if (m->alpha_mode && !(m->opacity >= 0.f && m->opacity <= 1.f && m->alpha_cutoff >= 0.f &&
+                           m->alpha_cutoff <= 1.f))
+        return snprintf(why, n, "alpha %g and its cutoff %g must be in [0, 1]", (double)m->opacity,
+                        (double)m->alpha_cutoff),
+               why;
+    if (m->kind == IIR_MATERIAL_DIFFUSE || m->kind == IIR_MATERIAL_METAL_ROUGH) return NULL;
     if (!unit_range(m->specular))
         return snprintf(why, n, "specular (%g, %g, %g) must be in [0, 1]", (double)m->specular.x,
                         (double)m->specular.y, (double)m->specular.z),

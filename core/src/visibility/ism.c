@@ -6,6 +6,7 @@
  * scratch once per call, and each iteration writes only its own VPL's map. The point set is
  * read-only while maps are built. */
 #include "iir/ism.h"
+#include "surface.h"
 
 #include <assert.h>
 #include <stdlib.h>
@@ -84,10 +85,18 @@ iir_status iir_ism_points_create(const iir_scene *scene, uint32_t n, uint64_t se
     }
     iir_rng rng = iir_rng_make(seed, 0x15a9);
     uint32_t t = 0;
-    for (uint32_t k = 0; k < n; k++) pts->sample[k] = stratified_sample(cdf, nt, &t, k, n, &rng);
+    uint32_t kept = 0;
+    bool cutouts = scene->materials && iir_scene_has_cutouts(scene);
+    for (uint32_t k = 0; k < n; k++) {
+        iir_ism_sample smp = stratified_sample(cdf, nt, &t, k, n, &rng);
+        /* no points on a cut-out's holes (the last one stays, so a set is never empty) */
+        if (!cutouts || iir_surface_covers(scene, smp.tri, smp.b1, smp.b2) ||
+            (kept == 0 && k + 1 == n))
+            pts->sample[kept++] = smp;
+    }
     free(cdf);
-    shuffle(pts->sample, n, &rng);
-    pts->n = n;
+    shuffle(pts->sample, kept, &rng);
+    pts->n = kept;
     iir_ism_points_update(pts, scene);
     *out = pts;
     return IIR_OK;

@@ -2,6 +2,7 @@
  * triangle-box test per candidate cell, and 3DDA traversal of segments through it. One bit per
  * cell. */
 #include "iir/voxels.h"
+#include "surface.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -88,6 +89,50 @@ static bool mark_triangle(iir_voxels *v, const iir_vec3 t[3], const iir_stop *st
     return true;
 }
 
+/* A sample of a cut-out triangle: its cell and whether the material covers it there. */
+typedef struct cell_sample {
+    uint64_t cell;
+    bool covered;
+} cell_sample;
+
+static int cmp_cell(const void *a, const void *b)
+{
+    uint64_t x = ((const cell_sample *)a)->cell, y = ((const cell_sample *)b)->cell;
+    return x < y ? -1 : x > y;
+}
+
+/* A triangle with an alpha cut-out: a cell is solid where at least half of the triangle's part in
+ * it is covered, judged from a barycentric grid of points a quarter cell apart (false on no
+ * memory: then marked whole, conservatively). */
+static bool mark_cutout(iir_voxels *v, const iir_scene *s, uint32_t prim, const iir_vec3 t[3])
+{
+    float edge = fmaxf(iir_length(iir_sub(t[1], t[0])),
+                       fmaxf(iir_length(iir_sub(t[2], t[1])), iir_length(iir_sub(t[0], t[2]))));
+    int m = (int)ceilf(4.f * edge / v->h);
+    m = m < 1 ? 1 : m > 2048 ? 2048 : m;
+    cell_sample *smp = malloc(sizeof *smp * (size_t)m * (size_t)(m + 1) / 2);
+    if (!smp) return false;
+    size_t n = 0;
+    for (int i = 0; i < m; i++)
+        for (int j = 0; i + j < m; j++) {
+            float b1 = ((float)i + 1.f / 3.f) / (float)m, b2 = ((float)j + 1.f / 3.f) / (float)m;
+            iir_vec3 p = iir_add(iir_scale(t[0], 1.f - b1 - b2),
+                                 iir_add(iir_scale(t[1], b1), iir_scale(t[2], b2)));
+            smp[n].cell = cell_index(v, cell_of(v, p.x, 0), cell_of(v, p.y, 1), cell_of(v, p.z, 2));
+            smp[n++].covered = iir_surface_covers(s, prim, b1, b2);
+        }
+    qsort(smp, n, sizeof *smp, cmp_cell);
+    for (size_t a = 0, b; a < n; a = b) {
+        size_t covered = 0;
+        for (b = a; b < n && smp[b].cell == smp[a].cell; b++) covered += smp[b].covered;
+        uint64_t i = smp[a].cell;
+        if (2 * covered >= b - a)
+            __atomic_fetch_or(&v->bits[i >> 6], 1ull << (i & 63), __ATOMIC_RELAXED);
+    }
+    free(smp);
+    return true;
+}
+
 /* Cells of side h covering the extent, res along its longest side. */
 static void grid_dims(iir_vec3 extent, int res, int n[3], float *h)
 {
@@ -139,6 +184,9 @@ iir_status iir_voxels_build(const iir_scene *scene, int res, const iir_stop *sto
         const uint32_t *idx = &scene->indices[3 * i];
         const iir_vec3 t[3] = {scene->positions[idx[0]], scene->positions[idx[1]],
                                scene->positions[idx[2]]};
+        bool cutout = !quit && scene->materials &&
+                      iir_material_has_cutout(&scene->material_list[scene->materials[i]]);
+        if (cutout && mark_cutout(v, scene, (uint32_t)i, t)) continue;
         if (quit || !mark_triangle(v, t, stop)) {
 #pragma omp atomic write
             stopped = true;

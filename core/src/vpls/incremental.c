@@ -225,11 +225,11 @@ static sample trace_sample(const iir_incr *inc, const pose *ps, iir_vec3 o, iir_
     iir_hit hit;
     if (!iir_rt_intersect(inc->rt, &ray, &hit, rays, IIR_RAYS_VPL)) return sm;
     iir_surface sf = iir_surface_at(inc->scene, &hit, iir_neg(w));
-    if (!iir_is_black(sf.mat->emission) || !iir_domain_faces(ps, sf.p, sf.ns)) return sm;
+    if (!iir_is_black(sf.Le) || !iir_domain_faces(ps, sf.p, sf.ns)) return sm;
     sm.null_sample = false;
     sm.x = sf.p;
     sm.n = sf.ns;
-    sm.albedo = sf.mat->albedo;
+    sm.albedo = sf.albedo;
     return sm;
 }
 

@@ -59,11 +59,11 @@ static uint32_t trace(const iir_scene *scene, const iir_rt *rt, const iir_vpl *p
         iir_hit hit;
         if (!iir_rt_intersect(rt, &ray, &hit, rays, IIR_RAYS_VPL)) break;
         iir_surface sf = iir_surface_at(scene, &hit, iir_neg(ray.dir));
-        if (!iir_is_black(sf.mat->emission) || iir_is_black(sf.mat->albedo)) break;
-        throughput = iir_scale(iir_mul(throughput, sf.mat->albedo), 1.f / q);
+        if (!iir_is_black(sf.Le) || iir_is_black(sf.albedo)) break;
+        throughput = iir_scale(iir_mul(throughput, sf.albedo), 1.f / q);
         iir_vpl v = {.id = descendant_id(parent->id, gen),
                      .position = sf.p,
-                     .albedo = sf.mat->albedo,
+                     .albedo = sf.albedo,
                      .disk = parent->disk,
                      .emit = parent->emit,
                      .birth = birth,
