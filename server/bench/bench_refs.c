@@ -13,18 +13,43 @@
 #include "iir/timer.h"
 
 /* Bump when pt or the reference settings change what a cached file would hold. */
-static const char CACHE_TAG[] = "iir-bench-ref-v3";
+static const char CACHE_TAG[] = "iir-bench-ref-v4";
 
 /* ---- hashing ---- */
 
+/* A texture's finest level, texel by texel (its mips follow from it). */
+static uint64_t texture_hash(uint64_t h, const iir_texture *t)
+{
+    int w = iir_texture_width(t), ht = iir_texture_height(t);
+    h = IIR_HASH(h, w);
+    h = IIR_HASH(h, ht);
+    for (int y = 0; y < ht; y++)
+        for (int x = 0; x < w; x++) {
+            iir_rgba c = iir_texture_texel(t, 0, x, y);
+            h = IIR_HASH(h, c);
+        }
+    return h;
+}
+
+/* Everything of the scene a reference image depends on: the triangles and their materials, the
+ * vertices' shading normals, texture coordinates and tangents, the textures' texels. */
 uint64_t iird_bench_scene_hash(const iir_scene *s)
 {
     uint64_t h = IIR_HASH_BASIS;
     h = IIR_HASH(h, s->num_triangles);
+    h = IIR_HASH(h, s->num_materials);
+    for (uint32_t m = 0; m < s->num_materials; m++) h = iir_material_hash(h, &s->material_list[m]);
     for (uint32_t t = 0; t < s->num_triangles; t++) {
         for (int k = 0; k < 3; k++) h = IIR_HASH(h, s->positions[s->indices[3 * t + k]]);
-        h = iir_material_hash(h, &s->material_list[s->materials[t]]);
+        h = IIR_HASH(h, s->materials[t]);
     }
+    size_t nv = s->num_vertices;
+    bool has[3] = {s->vertex_normals != NULL, s->texcoords != NULL, s->tangents != NULL};
+    h = IIR_HASH(h, has);
+    if (s->vertex_normals) h = iir_hash_bytes(h, s->vertex_normals, nv * sizeof(iir_vec3));
+    if (s->texcoords) h = iir_hash_bytes(h, s->texcoords, nv * sizeof(iir_vec2));
+    if (s->tangents) h = iir_hash_bytes(h, s->tangents, nv * 4 * sizeof(float));
+    for (uint32_t i = 0; i < s->num_textures; i++) h = texture_hash(h, s->textures[i]);
     return h;
 }
 

@@ -21,13 +21,13 @@ static tri_verts tri_at(const iir_scene *s, const iir_hit *hit)
     return t;
 }
 
-static iir_vec3 lerp3(const iir_vec3 *a, const tri_verts *t)
+static inline iir_vec3 lerp3(const iir_vec3 *a, const tri_verts *t)
 {
     return iir_add(iir_add(iir_scale(a[t->i[0]], t->w[0]), iir_scale(a[t->i[1]], t->w[1])),
                    iir_scale(a[t->i[2]], t->w[2]));
 }
 
-static iir_vec2 lerp2(const iir_vec2 *a, const tri_verts *t)
+static inline iir_vec2 lerp2(const iir_vec2 *a, const tri_verts *t)
 {
     iir_vec2 r = {0.f, 0.f};
     for (int k = 0; k < 3; k++) {
@@ -157,7 +157,8 @@ static void eval_material(const iir_scene *s, iir_surface *sf, float width)
         sf->Le = iir_mul(sf->Le, rgb(tex_at(s, &m->emission_tex, sf->uv, width)));
 }
 
-static iir_surface surface_at(const iir_scene *s, const iir_hit *hit, iir_vec3 wo, float width)
+static inline iir_surface surface_at(const iir_scene *s, const iir_hit *hit, iir_vec3 wo,
+                                     float width)
 {
     tri_verts t = tri_at(s, hit);
     iir_surface sf;
