@@ -640,8 +640,10 @@ static void write_plane(const char *name, const ggx_mat *m, const char *light)
 
 enum { PW = 24, PH = 24 };
 
-/* Renders tmp/name.scene.json with pt (direct light only, pixel centres). */
-static iir_image *render_plane(const char *name, const ggx_mat *m, int spp, iir_scene **scene)
+/* Renders tmp/name.scene.json with method (pt: direct light only; every method at pixel
+ * centres). A single plane reflects no light onto itself: a VPL method's indirect light is 0. */
+static iir_image *render_plane(const char *method, const char *name, const ggx_mat *m, int spp,
+                               iir_scene **scene)
 {
     char path[1200];
     snprintf(path, sizeof path, "%s/%s.scene.json", tmp, name);
@@ -653,11 +655,13 @@ static iir_image *render_plane(const char *name, const ggx_mat *m, int spp, iir_
     assert_int_equal(mat->kind, IIR_MATERIAL_METAL_ROUGH);
     assert_true(near(mat->metallic, m->metallic, 1e-6) && near(mat->roughness, m->roughness, 1e-6));
     iir_params p = iir_params_default();
-    iir_test_set(&p, "spp", spp);
-    iir_test_set(&p, "bounces", 1);
+    if (!strcmp(method, "pt")) {
+        iir_test_set(&p, "spp", spp);
+        iir_test_set(&p, "bounces", 1);
+    }
     iir_test_set(&p, "jitter", 0);
     iir_test_set(&p, "seed", 7);
-    iir_image *img = render("pt", s, rt, &p, PW, PH, NULL);
+    iir_image *img = render(method, s, rt, &p, PW, PH, NULL);
     iir_rt_destroy(rt);
     *scene = s;
     return img;
@@ -706,12 +710,12 @@ static double area_lamp(const ggx_mat *m, const double x[3], const double wo[3])
 /* pt against the lamp's expected radiance within 2%: every pixel (a deterministic estimate for a
  * point light or sun, whose light is one shadow ray) and the mean over the image (for an area
  * light only the mean: MIS of light and BSDF samples is noisy per pixel). */
-static void check_plane(const char *name, const ggx_mat *m, const char *light_json, lamp_fn lamp,
-                        int spp, bool per_pixel)
+static void check_plane(const char *method, const char *name, const ggx_mat *m,
+                        const char *light_json, lamp_fn lamp, int spp, bool per_pixel)
 {
     write_plane(name, m, light_json);
     iir_scene *s = NULL;
-    iir_image *img = render_plane(name, m, spp, &s);
+    iir_image *img = render_plane(method, name, m, spp, &s);
     iir_camera_frame cf = iir_camera_setup(&s->camera, PW, PH);
     double worst = 0, sum_got = 0, sum_want = 0, peak = 0;
     for (int py = 0; py < PH; py++)
@@ -730,18 +734,18 @@ static void check_plane(const char *name, const ggx_mat *m, const char *light_js
             double rel = fabs(got - want) / fmax(want, 1e-12);
             if (per_pixel && rel > worst) worst = rel;
             if (per_pixel && rel > 0.02)
-                fail_msg("%s: pixel (%d, %d): pt %.6g, appendix B %.6g (%.2f%%)", name, px, py, got,
-                         want, 100 * rel);
+                fail_msg("%s %s: pixel (%d, %d): %.6g, appendix B %.6g (%.2f%%)", method, name, px,
+                         py, got, want, 100 * rel);
         }
     double rel_mean = fabs(sum_got - sum_want) / sum_want;
     char worst_text[64] = "";
     if (per_pixel) snprintf(worst_text, sizeof worst_text, ", worst pixel %.4f%%", 100 * worst);
-    print_message("  %-12s metallic %g base %g roughness %g: mean pt %.6f, expected %.6f "
+    print_message("  %-7s %-12s metallic %g base %g roughness %g: mean %.6f, expected %.6f "
                   "(%.3f%%), peak %.4f%s\n",
-                  name, m->metallic, m->base, m->roughness, sum_got / (PW * PH),
+                  method, name, m->metallic, m->base, m->roughness, sum_got / (PW * PH),
                   sum_want / (PW * PH), 100 * rel_mean, peak, worst_text);
     if (rel_mean > 0.02)
-        fail_msg("%s: mean pt %.6f, expected %.6f", name, sum_got / (PW * PH),
+        fail_msg("%s %s: mean %.6f, expected %.6f", method, name, sum_got / (PW * PH),
                  sum_want / (PW * PH));
     iir_image_destroy(img);
     iir_scene_destroy(s);
@@ -755,12 +759,18 @@ static void test_ggx_plane(void **state)
     const char *sun = "{\"type\": \"sun\", \"direction\": [0.3, -1, 0.4], \"intensity\": 2}";
     const char *area = "{\"type\": \"area\", \"position\": [0.2, 1, -0.8], \"direction\": [0, -1, "
                        "0], \"up\": [0, 0, 1], \"size\": [0.6, 0.6], \"intensity\": 4}";
-    check_plane("metal_point", &metal, point, point_lamp, 1, true);
-    check_plane("plastic_point", &plastic, point, point_lamp, 1, true);
-    check_plane("metal_sun", &metal, sun, sun_lamp, 1, true);
-    check_plane("plastic_sun", &plastic, sun, sun_lamp, 1, true);
-    check_plane("metal_area", &metal, area, area_lamp, 512, false);
-    check_plane("plastic_area", &plastic, area, area_lamp, 512, false);
+    check_plane("pt", "metal_point", &metal, point, point_lamp, 1, true);
+    check_plane("pt", "plastic_point", &plastic, point, point_lamp, 1, true);
+    check_plane("pt", "metal_sun", &metal, sun, sun_lamp, 1, true);
+    check_plane("pt", "plastic_sun", &plastic, sun, sun_lamp, 1, true);
+    check_plane("pt", "metal_area", &metal, area, area_lamp, 512, false);
+    check_plane("pt", "plastic_area", &plastic, area, area_lamp, 512, false);
+    /* the classic and VPL methods' direct light by the full BSDF (glossy highlights included) */
+    static const char *const direct[] = {"whitted", "hybrid", "ir", "iir", "ism", "rsm"};
+    for (size_t k = 0; k < sizeof direct / sizeof *direct; k++) {
+        check_plane(direct[k], "metal_point", &metal, point, point_lamp, 1, true);
+        check_plane(direct[k], "plastic_sun", &plastic, sun, sun_lamp, 1, true);
+    }
 }
 
 int main(void)

@@ -58,7 +58,16 @@ static void make_synthetic(synthetic *s)
             s->depth[i] = y == H - 1 ? INFINITY : 10.f - z;
             s->prim[i] = y == H - 1 ? IIR_NO_HIT : 0;
         }
-    s->gb = (iir_gbuffer){W, H, s->pos, s->nrm, s->alb, s->emi, s->depth, s->prim};
+    s->gb = (iir_gbuffer){.width = W,
+                          .height = H,
+                          .position = s->pos,
+                          .normal = s->nrm,
+                          .albedo = s->alb,
+                          .base = s->alb,
+                          .mr = NULL, /* multires reads none of the BSDF's fields */
+                          .emission = s->emi,
+                          .depth = s->depth,
+                          .prim = s->prim};
 }
 
 /* The marks the definition gives, for the three threshold settings of the test. The step is a

@@ -211,7 +211,9 @@ iir_vec3 iir_surface_emission_at(const iir_scene *s, uint32_t prim, float u, flo
 {
     const iir_material *m = &s->material_list[s->materials[prim]];
     if (!m->emission_tex.texture || !s->texcoords) return m->emission;
-    return front_at(s, prim, u, v).Le;
+    iir_hit hit = {0.f, prim, u, v};
+    tri_verts t = tri_at(s, &hit);
+    return iir_mul(m->emission, rgb(tex_at(s, &m->emission_tex, lerp2(s->texcoords, &t), 0.f)));
 }
 
 /* ======================== the BSDF ======================== */

@@ -34,7 +34,15 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
     uint32_t n = 0;
     for (uint32_t i = 0; i < scene->num_materials; i++) {
         const iir_material *m = &scene->material_list[i];
-        if (iir_material_is_glossy(m))
+        bool glossy_direct = strcmp(method, "hier") != 0; /* hier shades its own tree */
+        if (iir_material_is_glossy(m) && glossy_direct)
+            iir_dropped_add(out, max, &n, method, "material", m->name,
+                            "is glossy (metallic %g, roughness %g): %s renders its direct light "
+                            "by the full BSDF, but the light it reflects from VPLs and the VPLs "
+                            "born on it by its diffuse albedo only (base colour x (1 - metallic)); "
+                            "use pt for its glossy indirect light",
+                            (double)m->metallic, (double)m->roughness, method);
+        else if (iir_material_is_glossy(m))
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is glossy (metallic %g, roughness %g): %s shades it by its diffuse "
                             "albedo only (base colour x (1 - metallic)), its specular reflection "

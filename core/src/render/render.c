@@ -110,7 +110,7 @@ static iir_status check_inputs(const iir_camera *cam, const iir_light *lights, u
 uint64_t iir_renderer_memory(int width, int height)
 {
     const iir_gbuffer *g = NULL;
-    uint64_t gbuffer = 4 * sizeof *g->position + sizeof *g->depth + sizeof *g->prim;
+    uint64_t gbuffer = 5 * sizeof *g->position + sizeof *g->mr + sizeof *g->depth + sizeof *g->prim;
     uint64_t scratch = sizeof(iir_vec3) + sizeof(iir_filter_row);
     uint64_t px = (uint64_t)width * (uint64_t)height;
     return px * (gbuffer + scratch) + (uint64_t)iir_tile_count(width, height, IIR_RENDER_TILE);

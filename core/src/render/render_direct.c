@@ -15,6 +15,7 @@
 #include <omp.h>
 
 #include "iir/rng.h"
+#include "iir/bsdf.h"
 #include "render_internal.h"
 
 enum { BLOCK_W = 4, BLOCK_H = 2 }; /* one packet; divides IIR_RENDER_TILE */
@@ -98,8 +99,11 @@ static float strat_pick(const strat *s, uint32_t i)
 typedef struct block {
     int x0, y0;
     size_t index[8];
-    bool shaded[8];      /* geometry with non-zero albedo */
-    iir_vec3 f[8];       /* BRDF rho / pi */
+    bool shaded[8]; /* geometry that reflects: non-zero albedo, or glossy */
+    bool glossy[8]; /* a metal_rough pixel: f is the full BSDF (bsdf, wo) */
+    iir_vec3 f[8];  /* a Lambertian pixel's BRDF rho / pi */
+    iir_bsdf bsdf[8];
+    iir_vec3 wo[8];
     iir_vec3 L[8];       /* radiance so far */
     iir_vec3 pending[8]; /* a light's contribution, kept if its shadow ray is unoccluded */
     iir_ray8 rays;
@@ -146,7 +150,8 @@ static void sample_lane(const iir_renderer *r, block *b, int k, const iir_light_
     if (ls->pdf <= 0.f || iir_is_black(ls->Li)) return;
     float cos_theta = iir_dot(n, ls->wi);
     if (cos_theta <= 0.f) return;
-    b->pending[k] = iir_scale(iir_mul(b->f[k], ls->Li), cos_theta * w / ls->pdf);
+    iir_vec3 f = b->glossy[k] ? iir_bsdf_f(&b->bsdf[k], b->wo[k], ls->wi) : b->f[k];
+    b->pending[k] = iir_scale(iir_mul(f, ls->Li), cos_theta * w / ls->pdf);
     const iir_light_segment *seg = &ls->shadow;
     if (seg->tmax > 0.f)
         set_lane(&b->rays, k, seg->org, seg->dir, seg->tmax);
@@ -231,24 +236,30 @@ static void shade_light(const direct_ctx *c, uint32_t li, block *b, iir_raystats
 }
 
 /* Reads the block's pixels: emission, and which of them direct light can reach. */
-static void load_block(const iir_gbuffer *gb, int x0, int y0, block *b)
+static void load_block(const iir_gbuffer *gb, iir_vec3 eye, int x0, int y0, block *b)
 {
     b->x0 = x0, b->y0 = y0;
     for (int k = 0; k < 8; k++) {
         int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
         bool inside = x < gb->width && y < gb->height;
         size_t i = inside ? (size_t)y * (size_t)gb->width + (size_t)x : 0;
+        bool hit = inside && gb->prim[i] != IIR_NO_HIT;
         b->index[k] = i;
-        b->shaded[k] = inside && gb->prim[i] != IIR_NO_HIT && !iir_is_black(gb->albedo[i]);
+        b->glossy[k] = hit && gb->mr[i].y >= 0.f;
+        b->shaded[k] = hit && (b->glossy[k] || !iir_is_black(gb->albedo[i]));
         b->L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
         b->f[k] = b->shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
+        if (!b->glossy[k]) continue;
+        /* glossy direct light by the full BSDF, seen from the camera (wo) */
+        b->wo[k] = iir_normalize(iir_sub(eye, gb->position[i]));
+        b->bsdf[k] = iir_bsdf_make(gb->normal[i], gb->base[i], gb->mr[i].x, gb->mr[i].y);
     }
 }
 
 static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir_raystats *st)
 {
     block b;
-    load_block(&c->r->gb, x0, y0, &b);
+    load_block(&c->r->gb, c->cam.origin, x0, y0, &b);
     for (uint32_t l = 0; l < c->num_lights; l++) shade_light(c, l, &b, st);
     if (c->r->area_lights) light_samples(c, NULL, 0, &b, st);
     for (int k = 0; k < 8; k++) {

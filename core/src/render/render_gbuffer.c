@@ -14,6 +14,8 @@ void iir_gbuffer_free(iir_gbuffer *gb)
     free(gb->position);
     free(gb->normal);
     free(gb->albedo);
+    free(gb->base);
+    free(gb->mr);
     free(gb->emission);
     free(gb->depth);
     free(gb->prim);
@@ -29,10 +31,13 @@ iir_status iir_gbuffer_resize(iir_gbuffer *gb, int width, int height, iir_error 
     gb->position = malloc(sizeof(iir_vec3) * n);
     gb->normal = malloc(sizeof(iir_vec3) * n);
     gb->albedo = malloc(sizeof(iir_vec3) * n);
+    gb->base = malloc(sizeof(iir_vec3) * n);
+    gb->mr = malloc(sizeof(iir_vec2) * n);
     gb->emission = malloc(sizeof(iir_vec3) * n);
     gb->depth = malloc(sizeof(float) * n);
     gb->prim = malloc(sizeof(uint32_t) * n);
-    if (!gb->position || !gb->normal || !gb->albedo || !gb->emission || !gb->depth || !gb->prim) {
+    if (!gb->position || !gb->normal || !gb->albedo || !gb->base || !gb->mr || !gb->emission ||
+        !gb->depth || !gb->prim) {
         iir_gbuffer_free(gb);
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %dx%d G-buffer", width, height);
     }
@@ -51,6 +56,8 @@ static void store(iir_gbuffer *gb, size_t i, const iir_scene *scene, const iir_h
         gb->position[i] = zero;
         gb->normal[i] = zero;
         gb->albedo[i] = zero;
+        gb->base[i] = zero;
+        gb->mr[i] = iir_v2(0.f, -1.f);
         gb->emission[i] = zero;
         gb->depth[i] = INFINITY;
         return;
@@ -61,6 +68,9 @@ static void store(iir_gbuffer *gb, size_t i, const iir_scene *scene, const iir_h
     gb->position[i] = sf.p;
     gb->normal[i] = sf.sn;
     gb->albedo[i] = sf.albedo;
+    bool pbr = sf.kind == IIR_MATERIAL_METAL_ROUGH;
+    gb->base[i] = pbr ? sf.base : sf.albedo;
+    gb->mr[i] = pbr ? iir_v2(sf.metallic, sf.roughness) : iir_v2(0.f, -1.f);
     gb->emission[i] = iir_surface_Le(&sf, wo);
     gb->depth[i] = hit->t;
 }
