@@ -170,8 +170,22 @@ float iir_bsdf_pdf(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
     return pdf_local(b, iir_frame_to_local(&b->frame, wo), iir_frame_to_local(&b->frame, wi));
 }
 
+/* Lambert: a cosine-weighted direction about the normal, f = c_diff / pi, pdf = cos / pi. */
+static bool sample_lambert(const iir_bsdf *b, iir_vec3 wo, iir_vec2 u, iir_bsdf_sample *out)
+{
+    if (iir_dot(wo, b->frame.f) <= 0.f) return false;
+    iir_vec3 wl = iir_sample_cosine_hemisphere(u);
+    if (wl.z <= 0.f) return false;
+    out->wi = iir_frame_to_world(&b->frame, wl);
+    out->f = iir_scale(b->c_diff, IIR_INV_PI);
+    out->pdf = iir_cosine_hemisphere_pdf(wl.z);
+    out->flags = IIR_BSDF_DIFFUSE;
+    return true;
+}
+
 bool iir_bsdf_sample_f(const iir_bsdf *b, iir_vec3 wo, float uc, iir_vec2 u, iir_bsdf_sample *out)
 {
+    if (b->lambert) return sample_lambert(b, wo, u, out);
     iir_bsdf_sample s;
     if (!sample_local(b, iir_frame_to_local(&b->frame, wo), uc, u, &s)) return false;
     assert(iir_is_finite3(s.f) && s.f.x >= 0.f && s.f.y >= 0.f && s.f.z >= 0.f);

@@ -167,7 +167,7 @@ static inline iir_surface surface_at(const iir_scene *s, const iir_hit *hit, iir
     sf.ns = iir_dot(sf.n, wo) < 0.f ? iir_neg(sf.n) : sf.n;
     sf.mat = &s->material_list[s->materials[hit->prim]];
     sf.kind = sf.mat->kind;
-    sf.specular_depth = iir_material_specular_depth(sf.mat);
+    sf.specular_depth = sf.kind == IIR_MATERIAL_GLASS ? 2 : sf.kind == IIR_MATERIAL_MIRROR;
     sf.uv = s->texcoords ? lerp2(s->texcoords, &t) : iir_v2(0.f, 0.f);
     float uv_width = width > 0.f && s->texcoords ? width * uv_per_world(s, &t, hit->prim) /
                                                        fmaxf(fabsf(iir_dot(sf.n, wo)), 0.05f)
