@@ -31,7 +31,37 @@ def parse_args():
     p.add_argument("--size", default="320x240")
     p.add_argument("--samples", type=int, default=256)
     p.add_argument("--bounces", type=int, default=1)
+    p.add_argument("--only-light", default="",
+                   help="delete every light but this one (by its glTF name)")
+    p.add_argument("--lambert", action="store_true",
+                   help="replace every opaque, non-emissive Principled BSDF by a Diffuse BSDF of "
+                        "its base colour (texture and normal map kept): a diagnostic that leaves "
+                        "out the two renderers' BSDF models (iir: a sidecar giving those "
+                        "materials \"kind\": \"diffuse\")")
     return p.parse_args(argv)
+
+
+def make_lambert(mat):
+    """The material's Principled BSDF replaced by a Diffuse BSDF (roughness 0: Lambert) of the
+    same base colour and normal; materials with alpha or emission are left as they are."""
+    if not mat.use_nodes:
+        return
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    for pr in [n for n in nodes if n.type == "BSDF_PRINCIPLED"]:
+        emissive = pr.inputs["Emission"].is_linked or pr.inputs["Emission Strength"].default_value * \
+            max(pr.inputs["Emission"].default_value[:3]) > 0
+        if pr.inputs["Alpha"].is_linked or emissive:
+            continue
+        d = nodes.new("ShaderNodeBsdfDiffuse")
+        d.inputs["Roughness"].default_value = 0.0
+        for name in ("Color", "Normal"):
+            src = pr.inputs["Base Color" if name == "Color" else "Normal"]
+            if src.is_linked:
+                links.new(src.links[0].from_socket, d.inputs[name])
+            elif name == "Color":
+                d.inputs["Color"].default_value = src.default_value
+        for link in list(pr.outputs["BSDF"].links):
+            links.new(d.outputs["BSDF"], link.to_socket)
 
 
 def clear():
@@ -87,6 +117,13 @@ def main():
             o.data.shadow_soft_size = 0.0
         if o.type == "LIGHT" and o.data.type == "SUN":
             o.data.angle = 0.0
+    if args.only_light:
+        for o in list(bpy.context.scene.objects):
+            if o.type == "LIGHT" and o.data.name != args.only_light and o.name != args.only_light:
+                bpy.data.objects.remove(o, do_unlink=True)
+    if args.lambert:
+        for mat in bpy.data.materials:
+            make_lambert(mat)
     setup_render(args)
     bpy.context.scene.render.filepath = args.out
     bpy.ops.render.render(write_still=True)
