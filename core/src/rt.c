@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "iir/rng.h"
 #include "iir/scene.h"
 #include "surface.h"
 
@@ -35,11 +36,31 @@ static void fill_buffers(RTCGeometry geom, const iir_scene *s)
     if (ix) memcpy(ix, s->indices, sizeof(unsigned) * 3 * s->num_triangles);
 }
 
+/* A query's context: Embree's, and for the stochastic queries (iir_rt_intersect_blend) the key of
+ * the ray's coin flips. The filter reads it back from args->context (its first member). */
+typedef struct query_ctx {
+    struct RTCIntersectContext rtc;
+    uint64_t key;
+    bool stochastic;
+} query_ctx;
+
+static query_ctx plain_ctx(void)
+{
+    query_ctx c;
+    rtcInitIntersectContext(&c.rtc);
+    c.key = 0;
+    c.stochastic = false;
+    return c;
+}
+
 /* Alpha cut-outs (iir_surface_covers): a candidate hit on a hole is rejected, for closest hits
- * and occlusion alike, single rays and packets. Installed only on scenes that have cut-outs. */
+ * and occlusion alike, single rays and packets; under a stochastic query a BLEND surface lets the
+ * ray through with probability 1 - alpha, one coin per ray and triangle (iir_surface_alpha).
+ * Installed only on scenes that have cut-outs. */
 static void cutout_filter(const struct RTCFilterFunctionNArguments *args)
 {
     const iir_scene *s = args->geometryUserPtr;
+    const query_ctx *q = (const query_ctx *)args->context;
     const unsigned N = args->N;
     /* RTCHitN in C: SoA blocks of N (Ng x, y, z, u, v, primID, ...), as rtcore_ray.h lays out */
     const float *hf = (const float *)args->hit;
@@ -48,7 +69,12 @@ static void cutout_filter(const struct RTCFilterFunctionNArguments *args)
         if (!args->valid[i]) continue;
         unsigned prim = hu[5 * N + i];
         float u = hf[3 * N + i], v = hf[4 * N + i];
-        if (!iir_surface_covers(s, prim, u, v)) args->valid[i] = 0;
+        if (q->stochastic && iir_surface_blends(s, prim)) {
+            float coin = (float)(iir_hash3(q->key, prim, 0xb1e4d) >> 40) * 0x1p-24f;
+            if (coin >= iir_surface_alpha(s, prim, u, v)) args->valid[i] = 0;
+        } else if (!iir_surface_covers(s, prim, u, v)) {
+            args->valid[i] = 0;
+        }
     }
 }
 
@@ -140,16 +166,14 @@ static inline void count(iir_raystats *st, iir_ray_kind kind, uint64_t n)
     if (st) st->n[kind] += n;
 }
 
-bool iir_rt_intersect(const iir_rt *rt, const iir_ray *ray, iir_hit *hit, iir_raystats *st,
-                      iir_ray_kind kind)
+static bool intersect(const iir_rt *rt, query_ctx *ctx, const iir_ray *ray, iir_hit *hit,
+                      iir_raystats *st, iir_ray_kind kind)
 {
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
     struct RTCRayHit rh;
     set_ray(&rh.ray, ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(rt->scene, &ctx, &rh);
+    rtcIntersect1(rt->scene, &ctx->rtc, &rh);
     count(st, kind, 1);
     bool found = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
     hit->t = found ? rh.ray.tfar : INFINITY;
@@ -159,15 +183,43 @@ bool iir_rt_intersect(const iir_rt *rt, const iir_ray *ray, iir_hit *hit, iir_ra
     return found;
 }
 
-bool iir_rt_occluded(const iir_rt *rt, const iir_ray *ray, iir_raystats *st, iir_ray_kind kind)
+static bool occluded(const iir_rt *rt, query_ctx *ctx, const iir_ray *ray, iir_raystats *st,
+                     iir_ray_kind kind)
 {
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
     struct RTCRay r;
     set_ray(&r, ray);
-    rtcOccluded1(rt->scene, &ctx, &r);
+    rtcOccluded1(rt->scene, &ctx->rtc, &r);
     count(st, kind, 1);
     return r.tfar < 0.f; /* Embree sets tfar to -inf on a hit */
+}
+
+bool iir_rt_intersect(const iir_rt *rt, const iir_ray *ray, iir_hit *hit, iir_raystats *st,
+                      iir_ray_kind kind)
+{
+    query_ctx c = plain_ctx();
+    return intersect(rt, &c, ray, hit, st, kind);
+}
+
+bool iir_rt_occluded(const iir_rt *rt, const iir_ray *ray, iir_raystats *st, iir_ray_kind kind)
+{
+    query_ctx c = plain_ctx();
+    return occluded(rt, &c, ray, st, kind);
+}
+
+bool iir_rt_intersect_blend(const iir_rt *rt, const iir_ray *ray, uint64_t key, iir_hit *hit,
+                            iir_raystats *st, iir_ray_kind kind)
+{
+    query_ctx c = plain_ctx();
+    c.key = key, c.stochastic = true;
+    return intersect(rt, &c, ray, hit, st, kind);
+}
+
+bool iir_rt_occluded_blend(const iir_rt *rt, const iir_ray *ray, uint64_t key, iir_raystats *st,
+                           iir_ray_kind kind)
+{
+    query_ctx c = plain_ctx();
+    c.key = key, c.stochastic = true;
+    return occluded(rt, &c, ray, st, kind);
 }
 
 /* ---- packets of 8 ---- */
@@ -201,14 +253,13 @@ static uint64_t count_valid(const int valid[8])
 void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], iir_raystats *st,
                        iir_ray_kind kind)
 {
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    query_ctx ctx = plain_ctx(); /* the filter reads the whole of it */
+    ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     struct RTCRayHit8 rh;
     int valid[8];
     set_ray8(&rh.ray, rays, valid);
     for (int i = 0; i < 8; i++) rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect8(valid, rt->scene, &ctx, &rh);
+    rtcIntersect8(valid, rt->scene, &ctx.rtc, &rh);
     count(st, kind, count_valid(valid));
     for (int i = 0; i < 8; i++) {
         bool found = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
@@ -222,13 +273,12 @@ void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], 
 void iir_rt_occluded8(const iir_rt *rt, const iir_ray8 *rays, bool occluded[8], iir_raystats *st,
                       iir_ray_kind kind)
 {
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    query_ctx ctx = plain_ctx(); /* the filter reads the whole of it */
+    ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     struct RTCRay8 r;
     int valid[8];
     set_ray8(&r, rays, valid);
-    rtcOccluded8(valid, rt->scene, &ctx, &r);
+    rtcOccluded8(valid, rt->scene, &ctx.rtc, &r);
     count(st, kind, count_valid(valid));
     for (int i = 0; i < 8; i++) occluded[i] = valid[i] && r.tfar[i] < 0.f;
 }

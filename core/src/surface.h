@@ -73,6 +73,14 @@ static inline bool iir_material_has_cutout(const iir_material *m)
     return m->alpha_mode != IIR_ALPHA_OPAQUE;
 }
 
+/* Whether triangle prim's material is alphaMode BLEND, and its alpha at (u, v) (base colour
+ * alpha x texture alpha): pt's stochastic transparency (iir_rt_intersect_blend). */
+bool iir_surface_blends(const iir_scene *s, uint32_t prim);
+float iir_surface_alpha(const iir_scene *s, uint32_t prim, float u, float v);
+
+/* Whether any material of the scene is alphaMode BLEND. */
+bool iir_scene_has_blend(const iir_scene *s);
+
 /* Whether any material of the scene has cut-outs (the ray tracer filters hits only then). */
 bool iir_scene_has_cutouts(const iir_scene *s);
 

@@ -773,6 +773,80 @@ static void test_ggx_plane(void **state)
     }
 }
 
+/* A floor and, 1 above it, a BLEND veil of alpha `alpha` (no texture). */
+static void write_veil(const char *name, double alpha)
+{
+    char text[4096], file[128];
+    snprintf(text, sizeof text,
+             "{\"asset\": {\"version\": \"2.0\"},\n"
+             " \"scene\": 0, \"scenes\": [{\"nodes\": [0, 1]}],\n"
+             " \"nodes\": [{\"mesh\": 0, \"name\": \"floor\", \"scale\": [10, 1, 10]},\n"
+             "   {\"mesh\": 1, \"name\": \"veil\", \"translation\": [0, 1, 0]}],\n"
+             " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, "
+             "\"indices\": 1, \"material\": 0}]},\n"
+             "   {\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"indices\": 1, "
+             "\"material\": 1}]}],\n"
+             " \"materials\": [{\"name\": \"floor\"},\n"
+             "   {\"name\": \"veil\", \"alphaMode\": \"BLEND\", \"doubleSided\": true,\n"
+             "    \"pbrMetallicRoughness\": {\"baseColorFactor\": [1, 1, 1, %g]}}],\n"
+             " \"buffers\": [{\"byteLength\": 60, \"uri\": \"data:application/octet-stream;base64,"
+             "AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/"
+             "AAACAAEAAAADAAIA\"}],\n"
+             " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
+             "   {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 12}],\n"
+             " \"accessors\": [\n"
+             "   {\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\",\n"
+             "    \"min\": [-1, 0, -1], \"max\": [1, 0, 1]},\n"
+             "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": "
+             "\"SCALAR\"}]}\n",
+             alpha);
+    snprintf(file, sizeof file, "%s.gltf", name);
+    iir_test_write_file(tmp, file, text);
+}
+
+/* alphaMode BLEND: pt's queries (iir_rt_occluded_blend) let a ray through with probability
+ * 1 - alpha; the other queries treat it as a cut-out at 0.5. */
+static void test_blend_veil(void **state)
+{
+    (void)state;
+    static const double alphas[] = {0.3, 0.7};
+    for (int a = 0; a < 2; a++) {
+        char name[32], path[1200];
+        snprintf(name, sizeof name, "veil%d", a);
+        write_veil(name, alphas[a]);
+        snprintf(path, sizeof path, "%s/%s.gltf", tmp, name);
+        iir_scene *s = NULL;
+        iir_rt *rt = NULL;
+        iir_error err = {0};
+        if (iir_scene_open(path, NULL, &s, &rt, &err) != IIR_OK) fail_msg("%s", err.msg);
+        assert_int_equal(material_named(s, "veil")->alpha_mode, IIR_ALPHA_BLEND);
+        iir_ray up = iir_make_ray(iir_v3(0.1f, 0.01f, 0.2f), iir_v3(0, 1, 0), 0.f, 5.f);
+        enum { N = 20000 };
+        int blocked = 0;
+        for (uint64_t k = 0; k < N; k++)
+            blocked += iir_rt_occluded_blend(rt, &up, k, NULL, IIR_RAYS_SHADOW);
+        double frac = (double)blocked / N, sigma = sqrt(alphas[a] * (1 - alphas[a]) / N);
+        print_message(
+            "  BLEND alpha %.1f: %.4f of %d stochastic shadow rays blocked (4 sigma %.4f); "
+            "the cut-out query: %s\n",
+            alphas[a], frac, N, 4 * sigma,
+            iir_rt_occluded(rt, &up, NULL, IIR_RAYS_SHADOW) ? "blocked" : "through");
+        assert_true(fabs(frac - alphas[a]) < 4 * sigma);
+        assert_int_equal(iir_rt_occluded(rt, &up, NULL, IIR_RAYS_SHADOW), alphas[a] >= 0.5);
+        /* closest hits alike: the veil or the floor */
+        int veil = 0;
+        iir_ray down = iir_make_ray(iir_v3(0.1f, 2.f, 0.2f), iir_v3(0, -1, 0), 0.f, 5.f);
+        for (uint64_t k = 0; k < N; k++) {
+            iir_hit hit;
+            assert_true(iir_rt_intersect_blend(rt, &down, k, &hit, NULL, IIR_RAYS_CAMERA));
+            veil += fabsf(hit.t - 1.f) < 1e-3f;
+        }
+        assert_true(fabs((double)veil / N - alphas[a]) < 4 * sigma);
+        iir_rt_destroy(rt);
+        iir_scene_destroy(s);
+    }
+}
+
 int main(void)
 {
     snprintf(tmp, sizeof tmp, "%s", iir_test_tmpdir("materials"));
@@ -780,10 +854,9 @@ int main(void)
     snprintf(cache, sizeof cache, "%s/ffcache", tmp);
     setenv("IIR_CACHE_DIR", cache, 1); /* radiosity's form factors stay in the scratch folder */
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_gltf_material_room),
-        cmocka_unit_test(test_obj_map_kd),
-        cmocka_unit_test(test_cutout_shadows),
-        cmocka_unit_test(test_ggx_plane),
+        cmocka_unit_test(test_gltf_material_room), cmocka_unit_test(test_obj_map_kd),
+        cmocka_unit_test(test_cutout_shadows),     cmocka_unit_test(test_ggx_plane),
+        cmocka_unit_test(test_blend_veil),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -77,6 +77,14 @@ bool iir_rt_intersect(const iir_rt *rt, const iir_ray *ray, iir_hit *hit, iir_ra
 /* Any hit in (tnear, tfar). */
 bool iir_rt_occluded(const iir_rt *rt, const iir_ray *ray, iir_raystats *st, iir_ray_kind kind);
 
+/* The same with alphaMode BLEND surfaces as stochastic transparency (pt): such a surface lets the
+ * ray through with probability 1 - alpha, one coin per (key, triangle) -- a path's rays draw their
+ * keys from its random stream. The queries above treat BLEND as a cut-out at alpha 0.5. */
+bool iir_rt_intersect_blend(const iir_rt *rt, const iir_ray *ray, uint64_t key, iir_hit *hit,
+                            iir_raystats *st, iir_ray_kind kind);
+bool iir_rt_occluded_blend(const iir_rt *rt, const iir_ray *ray, uint64_t key, iir_raystats *st,
+                           iir_ray_kind kind);
+
 /* Packets: coherent rays (camera tiles, shadow-map texels). hits[i].prim = IIR_NO_HIT for misses
  * and invalid lanes; occluded[i] = false for invalid lanes. */
 void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], iir_raystats *st,

@@ -246,6 +246,13 @@ iir_vec3 iir_surface_f_cos_sampled(const iir_surface *sf, const iir_bsdf_sample 
 
 /* ======================== coverage ======================== */
 
+bool iir_scene_has_blend(const iir_scene *s)
+{
+    for (uint32_t i = 0; i < s->num_materials; i++)
+        if (s->material_list[i].alpha_mode == IIR_ALPHA_BLEND) return true;
+    return false;
+}
+
 bool iir_scene_has_cutouts(const iir_scene *s)
 {
     for (uint32_t i = 0; i < s->num_materials; i++)
@@ -253,16 +260,27 @@ bool iir_scene_has_cutouts(const iir_scene *s)
     return false;
 }
 
-bool iir_surface_covers(const iir_scene *s, uint32_t prim, float u, float v)
+float iir_surface_alpha(const iir_scene *s, uint32_t prim, float u, float v)
 {
     const iir_material *m = &s->material_list[s->materials[prim]];
-    if (!iir_material_has_cutout(m)) return true;
     float alpha = m->opacity;
     if (s->texcoords && has_tex(&m->base_tex)) {
         iir_hit hit = {0.f, prim, u, v};
         tri_verts t = tri_at(s, &hit);
         alpha *= tex_at(s, &m->base_tex, lerp2(s->texcoords, &t), 0.f).a;
     }
+    return alpha;
+}
+
+bool iir_surface_blends(const iir_scene *s, uint32_t prim)
+{
+    return s->material_list[s->materials[prim]].alpha_mode == IIR_ALPHA_BLEND;
+}
+
+bool iir_surface_covers(const iir_scene *s, uint32_t prim, float u, float v)
+{
+    const iir_material *m = &s->material_list[s->materials[prim]];
+    if (!iir_material_has_cutout(m)) return true;
     float cutoff = m->alpha_mode == IIR_ALPHA_MASK ? m->alpha_cutoff : 0.5f;
-    return alpha >= cutoff;
+    return iir_surface_alpha(s, prim, u, v) >= cutoff;
 }

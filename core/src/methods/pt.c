@@ -54,6 +54,7 @@ typedef struct pt_state {
     iir_lightset *lights;
     bool has_area_lights; /* emissive triangles or area lights: BSDF rays can find light */
     bool has_area_light;  /* a rectangular area light among the view's lights */
+    bool has_blend;       /* a material with alphaMode BLEND: stochastic transparency */
     iir_camera_frame cam;
     float spread;   /* a camera ray's cone angle: the pixel's height over the focal length */
     iir_image *sum; /* sum of samples; the frame is sum / spp_done */
@@ -97,7 +98,10 @@ static iir_vec3 estimate_direct(const pt_state *pt, const iir_surface *sf, const
     if (iir_is_black(f_cos)) return iir_v3s(0.f);
 
     iir_ray shadow = iir_segment_ray(&ls.shadow);
-    if (iir_rt_occluded(pt->rt, &shadow, st, IIR_RAYS_SHADOW)) return iir_v3s(0.f);
+    bool blocked = pt->has_blend ? iir_rt_occluded_blend(pt->rt, &shadow, iir_rng_u32(rng), st,
+                                                         IIR_RAYS_SHADOW)
+                                 : iir_rt_occluded(pt->rt, &shadow, st, IIR_RAYS_SHADOW);
+    if (blocked) return iir_v3s(0.f);
 
     float w = ls.is_delta ? 1.f : power_heuristic(ls.pdf, iir_bsdf_pdf(bsdf, wo, ls.wi));
     return iir_scale(iir_mul(f_cos, ls.Li), w / ls.pdf);
@@ -164,7 +168,9 @@ static iir_vec3 Li(const pt_state *pt, iir_ray ray, iir_rng *rng, iir_raystats *
     for (int vertex = 1;; vertex++) {
         iir_hit hit;
         iir_ray_kind kind = vertex == 1 ? IIR_RAYS_CAMERA : IIR_RAYS_BOUNCE;
-        bool found = iir_rt_intersect(pt->rt, &ray, &hit, st, kind);
+        bool found = pt->has_blend
+                         ? iir_rt_intersect_blend(pt->rt, &ray, iir_rng_u32(rng), &hit, st, kind)
+                         : iir_rt_intersect(pt->rt, &ray, &hit, st, kind);
         L = iir_add(L, area_lights_seen(pt, &ray, found ? hit.t : INFINITY, pdf_bsdf, beta));
         if (!found) break;
         iir_vec3 wo = iir_neg(ray.dir);
@@ -299,6 +305,7 @@ static iir_status pt_create(const iir_scene *scene, const iir_rt *rt, const void
     pt_state *pt = calloc(1, sizeof *pt);
     if (!pt) return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating the path tracer");
     pt->scene = scene;
+    pt->has_blend = iir_scene_has_blend(scene);
     pt->rt = rt;
     pt->params = *(const pt_options *)opts;
     *state = pt;

@@ -347,7 +347,8 @@ static void read_alpha(mat_reader *R, const cJSON *mat, iir_material *m)
     m->alpha_cutoff = number(R, mat, R->path, "alphaCutoff", 0.0, 1.0, 0.5f);
     if (m->alpha_mode == IIR_ALPHA_BLEND)
         iir_builder_drop(R->b, "material", R->name,
-                         "alphaMode BLEND: rendered as a cut-out at alpha 0.5");
+                         "alphaMode BLEND: pt renders it as stochastic transparency, the other "
+                         "methods as a cut-out at alpha 0.5");
 }
 
 /* transmission > 0: today's smooth glass of index ior (1.5), tinted by the base colour. */
