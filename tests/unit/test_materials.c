@@ -266,7 +266,9 @@ static void test_obj_map_kd(void **state)
     copy_file(LEAF_PNG, tmp, "leaf_basecolor.png");
     iir_test_write_file(tmp, "cards.mtl",
                         "newmtl leaf\nKd 1 1 1\nmap_Kd leaf_basecolor.png\n"
-                        "newmtl missing\nKd 0.5 0.5 0.5\nmap_Kd missing.png\n");
+                        "newmtl missing\nKd 0.5 0.5 0.5\nmap_Kd missing.png\n"
+                        "newmtl brass\nKd 0.9 0.7 0.3\nPr 0.35\nPm 1\n"
+                        "newmtl phong\nKd 0.5 0.5 0.5\nKs 0.2 0.2 0.2\nNs 40\n");
     const iir_vec3 c = iir_v3(0, 0, 0), a = iir_v3(0, 0, 0.5f), b = iir_v3(0.5f, 0, 0);
     char path[1200];
     snprintf(path, sizeof path, "%s/cards.obj", tmp);
@@ -275,6 +277,8 @@ static void test_obj_map_kd(void **state)
     fprintf(f, "mtllib cards.mtl\n");
     write_uv_quad(f, "leaf", c, a, b);
     write_uv_quad(f, "missing", iir_v3(2, 0, 0), a, b);
+    write_uv_quad(f, "brass", iir_v3(4, 0, 0), a, b);
+    write_uv_quad(f, "phong", iir_v3(6, 0, 0), a, b);
     fclose(f);
     iir_test_cornell l = iir_test_load(tmp, "cards");
     const iir_scene *s = l.scene;
@@ -287,6 +291,14 @@ static void test_obj_map_kd(void **state)
     const iir_texture *tex = tex_of(s, &leaf->base_tex);
     assert_true(iir_texture_has_alpha(tex));
     assert_true(is_srgb(tex));
+
+    /* MTL's PBR extension (Pr, Pm) is glTF's model with base colour Kd; plain Phong stays Lambert
+     */
+    const iir_material *brass = material_named(s, "brass");
+    assert_int_equal(brass->kind, IIR_MATERIAL_METAL_ROUGH);
+    assert_true(near(brass->roughness, 0.35, 1e-6) && near(brass->metallic, 1, 1e-6));
+    assert_true(near3(brass->albedo, 0.9, 0.7, 0.3, 1e-6));
+    assert_int_equal(material_named(s, "phong")->kind, IIR_MATERIAL_DIFFUSE);
 
     const iir_material *missing = material_named(s, "missing");
     assert_int_equal(missing->base_tex.texture, 0);

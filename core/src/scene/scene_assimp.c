@@ -266,6 +266,19 @@ static int mtl_illum(const struct aiMaterial *mat)
  * above 0 (KHR_materials_transmission) is glass of index KHR_materials_ior (1.5 without it) tinted
  * by the base colour; metallic 1 with roughness 0 is a mirror of the base colour. The colours are
  * clamped to [0, 1]; the ior is checked by the builder. */
+/* An MTL material with the PBR extension's Pr (roughness) or Pm (metallic): glTF's model of base
+ * colour Kd (metallic 0 and roughness 1 unless given); Ks and Ns are not converted. */
+static void pbr_kind(const struct aiMaterial *mat, iir_material *m)
+{
+    float f;
+    bool pr = aiGetMaterialFloat(mat, AI_MATKEY_ROUGHNESS_FACTOR, &f) == aiReturn_SUCCESS;
+    bool pm = aiGetMaterialFloat(mat, AI_MATKEY_METALLIC_FACTOR, &f) == aiReturn_SUCCESS;
+    if (!pr && !pm) return;
+    m->kind = IIR_MATERIAL_METAL_ROUGH;
+    m->roughness = iir_clampf(float_key(mat, AI_MATKEY_ROUGHNESS_FACTOR, 1.f), 0.f, 1.f);
+    m->metallic = iir_clampf(float_key(mat, AI_MATKEY_METALLIC_FACTOR, 0.f), 0.f, 1.f);
+}
+
 static void convert_kind(const struct aiMaterial *mat, iir_vec3 base, iir_material *m)
 {
     int illum = mtl_illum(mat);
@@ -283,6 +296,7 @@ static void convert_kind(const struct aiMaterial *mat, iir_vec3 base, iir_materi
         m->kind = IIR_MATERIAL_MIRROR;
         m->specular = base;
     } else {
+        pbr_kind(mat, m);
         return;
     }
     m->specular = clamp01(m->specular);
@@ -331,7 +345,13 @@ static void note_material(iir_scene_builder *b, const struct aiMaterial *mat, co
         f < 1.f)
         iir_builder_drop(b, "material", name, "transmission %g: rendered as clear glass",
                          (double)f);
-    if (aiGetMaterialFloat(mat, AI_MATKEY_METALLIC_FACTOR, &f) == aiReturn_SUCCESS && f > 0.f &&
+    if (aiGetMaterialTextureCount(mat, aiTextureType_DIFFUSE_ROUGHNESS) +
+        aiGetMaterialTextureCount(mat, aiTextureType_METALNESS))
+        iir_builder_drop(b, "material", name,
+                         "a roughness or metallic map (map_Pr, map_Pm): not read, its factors are "
+                         "used");
+    if (m->kind != IIR_MATERIAL_METAL_ROUGH &&
+        aiGetMaterialFloat(mat, AI_MATKEY_METALLIC_FACTOR, &f) == aiReturn_SUCCESS && f > 0.f &&
         !(f >= 1.f && float_key(mat, AI_MATKEY_ROUGHNESS_FACTOR, 1.f) <= 0.f) &&
         float_key(mat, AI_MATKEY_TRANSMISSION_FACTOR, 0.f) <= 0.f)
         iir_builder_drop(b, "material", name,
@@ -386,7 +406,7 @@ static iir_status obj_map(loader *L, const struct aiMaterial *am, enum aiTexture
 static iir_status obj_textures(loader *L, const struct aiMaterial *am, iir_material *m,
                                iir_error *err)
 {
-    if (m->kind != IIR_MATERIAL_DIFFUSE) return IIR_OK;
+    if (m->kind != IIR_MATERIAL_DIFFUSE && m->kind != IIR_MATERIAL_METAL_ROUGH) return IIR_OK;
     iir_status st = obj_map(L, am, aiTextureType_DIFFUSE, true, m->name, &m->base_tex, err);
     if (st == IIR_OK)
         st = obj_map(L, am, aiTextureType_NORMALS, false, m->name, &m->normal_tex, err);
