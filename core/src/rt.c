@@ -256,7 +256,7 @@ void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], 
     query_ctx ctx = plain_ctx(); /* the filter reads the whole of it */
     ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     struct RTCRayHit8 rh;
-    int valid[8];
+    _Alignas(32) int valid[8]; /* rtcIntersect8 wants its mask 32-byte aligned */
     set_ray8(&rh.ray, rays, valid);
     for (int i = 0; i < 8; i++) rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect8(valid, rt->scene, &ctx.rtc, &rh);
@@ -276,7 +276,7 @@ void iir_rt_occluded8(const iir_rt *rt, const iir_ray8 *rays, bool occluded[8], 
     query_ctx ctx = plain_ctx(); /* the filter reads the whole of it */
     ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     struct RTCRay8 r;
-    int valid[8];
+    _Alignas(32) int valid[8]; /* as rtcOccluded8 wants it */
     set_ray8(&r, rays, valid);
     rtcOccluded8(valid, rt->scene, &ctx.rtc, &r);
     count(st, kind, count_valid(valid));
