@@ -264,11 +264,14 @@ static void test_obj_map_kd(void **state)
 {
     (void)state;
     copy_file(LEAF_PNG, tmp, "leaf_basecolor.png");
+    copy_file(IIR_SOURCE_DIR "/scenes/material_room/textures/brick_normal.png", tmp,
+              "brick_normal.png");
     iir_test_write_file(tmp, "cards.mtl",
                         "newmtl leaf\nKd 1 1 1\nmap_Kd leaf_basecolor.png\n"
                         "newmtl missing\nKd 0.5 0.5 0.5\nmap_Kd missing.png\n"
                         "newmtl brass\nKd 0.9 0.7 0.3\nPr 0.35\nPm 1\n"
-                        "newmtl phong\nKd 0.5 0.5 0.5\nKs 0.2 0.2 0.2\nNs 40\n");
+                        "newmtl phong\nKd 0.5 0.5 0.5\nKs 0.2 0.2 0.2\nNs 40\n"
+                        "newmtl bumpy\nKd 0.7 0.7 0.7\nmap_Bump -bm 0.5 brick_normal.png\n");
     const iir_vec3 c = iir_v3(0, 0, 0), a = iir_v3(0, 0, 0.5f), b = iir_v3(0.5f, 0, 0);
     char path[1200];
     snprintf(path, sizeof path, "%s/cards.obj", tmp);
@@ -279,6 +282,7 @@ static void test_obj_map_kd(void **state)
     write_uv_quad(f, "missing", iir_v3(2, 0, 0), a, b);
     write_uv_quad(f, "brass", iir_v3(4, 0, 0), a, b);
     write_uv_quad(f, "phong", iir_v3(6, 0, 0), a, b);
+    write_uv_quad(f, "bumpy", iir_v3(8, 0, 0), a, b);
     fclose(f);
     iir_test_cornell l = iir_test_load(tmp, "cards");
     const iir_scene *s = l.scene;
@@ -299,6 +303,11 @@ static void test_obj_map_kd(void **state)
     assert_true(near(brass->roughness, 0.35, 1e-6) && near(brass->metallic, 1, 1e-6));
     assert_true(near3(brass->albedo, 0.9, 0.7, 0.3, 1e-6));
     assert_int_equal(material_named(s, "phong")->kind, IIR_MATERIAL_DIFFUSE);
+    /* map_Bump as Blender writes it: a tangent-space normal map (linear) of strength -bm */
+    const iir_material *bumpy = material_named(s, "bumpy");
+    assert_true(bumpy->normal_tex.texture != 0);
+    assert_false(is_srgb(tex_of(s, &bumpy->normal_tex)));
+    assert_true(near(bumpy->normal_scale, 0.5, 1e-6));
 
     const iir_material *missing = material_named(s, "missing");
     assert_int_equal(missing->base_tex.texture, 0);

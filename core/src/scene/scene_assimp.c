@@ -332,8 +332,9 @@ static void note_material(iir_scene_builder *b, const struct aiMaterial *mat, co
 {
     const char *name = m->name;
     float f = 0.f;
-    if (aiGetMaterialTextureCount(mat, aiTextureType_HEIGHT))
-        iir_builder_drop(b, "material", name, "a bump map (map_Bump): not rendered");
+    if (aiGetMaterialTextureCount(mat, aiTextureType_HEIGHT) &&
+        aiGetMaterialTextureCount(mat, aiTextureType_NORMALS))
+        iir_builder_drop(b, "material", name, "map_Bump beside norm: norm is the normal map");
     if (aiGetMaterialTextureCount(mat, aiTextureType_OPACITY) && !m->alpha_mode)
         iir_builder_drop(b, "material", name,
                          "an opacity map (map_d) apart from map_Kd: not rendered, opaque");
@@ -402,17 +403,23 @@ static iir_status obj_map(loader *L, const struct aiMaterial *am, enum aiTexture
     return iir_builder_add_texture(L->b, tex, &ref->texture, err);
 }
 
-/* map_Kd (its alpha, or map_d naming the same file, is the cut-out), norm and map_Ke. */
+/* map_Kd (its alpha, or map_d naming the same file, is the cut-out), the normal map and map_Ke.
+ * The normal map is `norm`, else `map_Bump`/`bump` as Blender's exporter writes and its importer
+ * reads it: a tangent-space normal map of strength -bm (assimp's "$tex.bumpmult"; 1 without one).
+ */
 static iir_status obj_textures(loader *L, const struct aiMaterial *am, iir_material *m,
                                iir_error *err)
 {
     if (m->kind != IIR_MATERIAL_DIFFUSE && m->kind != IIR_MATERIAL_METAL_ROUGH) return IIR_OK;
     iir_status st = obj_map(L, am, aiTextureType_DIFFUSE, true, m->name, &m->base_tex, err);
+    bool norm = aiGetMaterialTextureCount(am, aiTextureType_NORMALS) > 0;
     if (st == IIR_OK)
-        st = obj_map(L, am, aiTextureType_NORMALS, false, m->name, &m->normal_tex, err);
+        st = obj_map(L, am, norm ? aiTextureType_NORMALS : aiTextureType_HEIGHT, false, m->name,
+                     &m->normal_tex, err);
     if (st == IIR_OK)
         st = obj_map(L, am, aiTextureType_EMISSIVE, true, m->name, &m->emission_tex, err);
-    m->normal_scale = 1.f;
+    m->normal_scale = norm ? 1.f : float_key(am, "$tex.bumpmult", aiTextureType_HEIGHT, 0, 1.f);
+    if (!isfinite(m->normal_scale)) m->normal_scale = 1.f;
     m->opacity = 1.f;
     m->alpha_cutoff = 0.5f;
     if (st == IIR_OK && m->base_tex.texture &&
