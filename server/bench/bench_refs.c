@@ -17,20 +17,6 @@ static const char CACHE_TAG[] = "iir-bench-ref-v4";
 
 /* ---- hashing ---- */
 
-/* A texture's finest level, texel by texel (its mips follow from it). */
-static uint64_t texture_hash(uint64_t h, const iir_texture *t)
-{
-    int w = iir_texture_width(t), ht = iir_texture_height(t);
-    h = IIR_HASH(h, w);
-    h = IIR_HASH(h, ht);
-    for (int y = 0; y < ht; y++)
-        for (int x = 0; x < w; x++) {
-            iir_rgba c = iir_texture_texel(t, 0, x, y);
-            h = IIR_HASH(h, c);
-        }
-    return h;
-}
-
 /* Everything of the scene a reference image depends on: the triangles and their materials, the
  * vertices' shading normals, texture coordinates and tangents, the textures' texels. */
 uint64_t iird_bench_scene_hash(const iir_scene *s)
@@ -49,7 +35,7 @@ uint64_t iird_bench_scene_hash(const iir_scene *s)
     if (s->vertex_normals) h = iir_hash_bytes(h, s->vertex_normals, nv * sizeof(iir_vec3));
     if (s->texcoords) h = iir_hash_bytes(h, s->texcoords, nv * sizeof(iir_vec2));
     if (s->tangents) h = iir_hash_bytes(h, s->tangents, nv * 4 * sizeof(float));
-    for (uint32_t i = 0; i < s->num_textures; i++) h = texture_hash(h, s->textures[i]);
+    for (uint32_t i = 0; i < s->num_textures; i++) h = iir_texture_hash(h, s->textures[i]);
     return h;
 }
 

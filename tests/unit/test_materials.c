@@ -19,6 +19,7 @@
 #include "iir/method.h"
 #include "iir/scene.h"
 #include "iir/texture.h"
+#include "radiosity/radiosity.h"
 #include "surface.h"
 #include "testutil.h"
 
@@ -529,6 +530,22 @@ static void test_cutout_shadows(void **state)
     iir_test_cornell lc = iir_test_load(tmp, "leafcard"), sc = iir_test_load(tmp, "solidcard");
     assert_int_equal(material_named(lc.scene, "leaf")->alpha_mode, IIR_ALPHA_MASK);
     assert_int_equal(material_named(sc.scene, "solid")->alpha_mode, IIR_ALPHA_OPAQUE);
+    /* radiosity's cached form factors are keyed by what they see through: the cut-out's cutoff
+       and texture; the same geometry without cut-outs keeps its geometry-only key */
+    {
+        iir_material *leafm = (iir_material *)material_named(lc.scene, "leaf");
+        uint64_t k0 = rad_ff_key(lc.scene, 0.01f, 16);
+        leafm->alpha_cutoff = 0.25f;
+        uint64_t k1 = rad_ff_key(lc.scene, 0.01f, 16);
+        leafm->alpha_cutoff = 0.5f;
+        assert_true(k0 != k1);
+        assert_true(rad_ff_key(lc.scene, 0.01f, 16) == k0);
+        leafm->alpha_mode = IIR_ALPHA_OPAQUE;
+        uint64_t opaque = rad_ff_key(lc.scene, 0.01f, 16);
+        leafm->alpha_mode = IIR_ALPHA_MASK;
+        assert_true(opaque != k0);
+        assert_true(opaque == rad_ff_key(sc.scene, 0.01f, 16)); /* positions alike, no cut-out */
+    }
     enum { W = 96, H = 96 };
     shadow_geo g = shadow_geometry(lc.scene, leaf, W, H);
     /* The expected lit fraction: the card's area where the texture's alpha is below 0.5, over the

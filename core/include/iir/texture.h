@@ -125,6 +125,10 @@ int iir_texture_level_width(const iir_texture *t, int level);
 int iir_texture_level_height(const iir_texture *t, int level);
 /* Memory held: the struct (with its decode tables) and every level's texels. */
 size_t iir_texture_bytes(const iir_texture *t);
+/* h extended by the texture's size and its finest level's texels (its mips follow from them): a
+ * content key for caches that depend on a texture (reference images, radiosity's form factors
+ * through a cut-out). */
+uint64_t iir_texture_hash(uint64_t h, const iir_texture *t);
 /* Whether any texel of level 0 has alpha < 1. */
 bool iir_texture_has_alpha(const iir_texture *t);
 /* A line for logs, e.g. "512x256 RGBA8 sRGB, 10 levels, 701372 bytes, alpha", in buf (cap bytes,

@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "iir/hash.h"
+#include "surface.h"
 #include "iir/ffcache.h"
 #include "radiosity.h"
 
@@ -32,6 +33,23 @@ typedef struct ff_header {
 
 /* ---- hashing ---- */
 
+/* What the form factors see through: each cut-out triangle's material (alpha mode, cutoff,
+ * opacity, texture) and texture coordinates, and the textures' texels. A scene without cut-outs
+ * keeps the key it had before cut-outs existed. */
+static uint64_t cutout_key(uint64_t h, const iir_scene *s)
+{
+    for (uint32_t t = 0; t < s->num_triangles; t++) {
+        const iir_material *m = &s->material_list[s->materials[t]];
+        if (!iir_material_has_cutout(m)) continue;
+        h = IIR_HASH(h, t);
+        h = iir_material_hash(h, m);
+        for (int k = 0; s->texcoords && k < 3; k++)
+            h = IIR_HASH(h, s->texcoords[s->indices[3 * t + k]]);
+    }
+    for (uint32_t i = 0; i < s->num_textures; i++) h = iir_texture_hash(h, s->textures[i]);
+    return h;
+}
+
 uint64_t rad_ff_key(const iir_scene *s, float target_area, int res)
 {
     uint64_t h = IIR_HASH_BASIS, version = FF_VERSION;
@@ -41,7 +59,7 @@ uint64_t rad_ff_key(const iir_scene *s, float target_area, int res)
     h = iir_hash_bytes(h, &s->num_triangles, sizeof s->num_triangles);
     for (uint32_t k = 0; k < 3 * s->num_triangles; k++)
         h = iir_hash_bytes(h, &s->positions[s->indices[k]], sizeof(iir_vec3));
-    return h;
+    return iir_scene_has_cutouts(s) ? cutout_key(h, s) : h;
 }
 
 static uint64_t payload_checksum(const rad_ff *ff)

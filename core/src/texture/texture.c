@@ -1,6 +1,7 @@
 /* texture.c -- a texture's storage, its mip chain and every lookup (texel, bilinear, trilinear),
  * glTF samplers and KHR_texture_transform; not reading files (texture_decode.c). */
 #include "iir/texture.h"
+#include "iir/hash.h"
 #include "texture_internal.h"
 
 #include <assert.h>
@@ -478,4 +479,17 @@ iir_rgba iir_texture_sample(const iir_texture *t, const iir_tex_sampler *s, iir_
     iir_rgba c0 = filter_at(t, s, uv, l0, s->min_nearest);
     if (f <= 0.f || l0 + 1 >= t->levels) return c0;
     return lerp(c0, filter_at(t, s, uv, l0 + 1, s->min_nearest), f);
+}
+
+uint64_t iir_texture_hash(uint64_t h, const iir_texture *t)
+{
+    int w = iir_texture_width(t), ht = iir_texture_height(t);
+    h = IIR_HASH(h, w);
+    h = IIR_HASH(h, ht);
+    for (int y = 0; y < ht; y++)
+        for (int x = 0; x < w; x++) {
+            iir_rgba c = iir_texture_texel(t, 0, x, y);
+            h = IIR_HASH(h, c);
+        }
+    return h;
 }
