@@ -118,13 +118,15 @@ static bool alloc_patches(rad_mesh *m, uint32_t n)
     return m->centre && m->normal && m->rho && m->emit && m->area && m->tri && m->vert;
 }
 
-/* A patch's reflectance: its material's albedo, or with a texture the mean of the diffuse albedo
- * at 16 points spread over the patch (sub-triangle of grid corners gi, gj of an n-grid). */
-static iir_vec3 patch_albedo(const iir_scene *s, uint32_t t, uint32_t n, const int *gi,
-                             const int *gj, const iir_material *mat)
+typedef iir_vec3 (*surface_value_fn)(const iir_scene *s, uint32_t prim, float u, float v);
+
+/* The mean of a surface value (the diffuse albedo, the emission) over a patch, the sub-triangle of
+ * grid corners gi, gj of triangle t's n-grid: at 10 points spread over it, or at its centre when
+ * the value has no texture to vary by (textured false). */
+static iir_vec3 patch_mean(const iir_scene *s, uint32_t t, uint32_t n, const int *gi, const int *gj,
+                           bool textured, surface_value_fn value)
 {
-    if (!s->texcoords || !mat->base_tex.texture)
-        return iir_surface_albedo_at(s, t, 1.f / 3.f, 1.f / 3.f);
+    if (!s->texcoords || !textured) return value(s, t, 1.f / 3.f, 1.f / 3.f);
     enum { K = 4 };
     iir_vec3 sum = iir_v3s(0.f);
     int count = 0;
@@ -135,7 +137,7 @@ static iir_vec3 patch_albedo(const iir_scene *s, uint32_t t, uint32_t n, const i
             float wc = 1.f - wa - wb;
             float i = wa * (float)gi[0] + wb * (float)gi[1] + wc * (float)gi[2];
             float j = wa * (float)gj[0] + wb * (float)gj[1] + wc * (float)gj[2];
-            sum = iir_add(sum, iir_surface_albedo_at(s, t, i / (float)n, j / (float)n));
+            sum = iir_add(sum, value(s, t, i / (float)n, j / (float)n));
             count++;
         }
     return iir_scale(sum, 1.f / (float)count);
@@ -166,8 +168,11 @@ static void mesh_triangle(rad_mesh *m, const iir_scene *s, uint32_t t, uint32_t 
         m->centre[first + k] = iir_scale(c, 1.f / 3.f);
         m->normal[first + k] = s->normals[t];
         m->area[first + k] = s->areas[t] / (float)(n * n);
-        m->rho[first + k] = patch_albedo(s, t, n, gi, gj, mat);
-        m->emit[first + k] = iir_scale(mat->emission, (float)M_PI);
+        m->rho[first + k] =
+            patch_mean(s, t, n, gi, gj, mat->base_tex.texture != 0, iir_surface_albedo_at);
+        m->emit[first + k] = iir_scale(
+            patch_mean(s, t, n, gi, gj, mat->emission_tex.texture != 0, iir_surface_emission_at),
+            (float)M_PI);
         m->tri[first + k] = t;
     }
 }
