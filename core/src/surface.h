@@ -6,6 +6,8 @@
 #ifndef IIR_SURFACE_H
 #define IIR_SURFACE_H
 
+#include <math.h>
+
 #include "iir/bsdf.h"
 #include "iir/light.h"
 #include "iir/rt.h"
@@ -46,10 +48,19 @@ iir_bsdf iir_surface_bsdf(const iir_surface *sf);
 /* Reflected radiance factor f(wo, wi) |cos| for a diffuse-only method's direct light: the full BSDF
  * (glossy part included), zero below the geometric surface on wi's side (no light leaks through).
  */
-iir_vec3 iir_surface_f_cos(const iir_surface *sf, const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi);
+static inline iir_vec3 iir_surface_f_cos(const iir_surface *sf, const iir_bsdf *b, iir_vec3 wo,
+                                         iir_vec3 wi)
+{
+    if (iir_dot(wi, sf->ns) <= 0.f) return iir_v3s(0.f);
+    return iir_scale(iir_bsdf_f(b, wo, wi), fabsf(iir_dot(wi, sf->sn)));
+}
 
 /* The same for a direction the BSDF sampled (its f, delta lobes included). */
-iir_vec3 iir_surface_f_cos_sampled(const iir_surface *sf, const iir_bsdf_sample *bs);
+static inline iir_vec3 iir_surface_f_cos_sampled(const iir_surface *sf, const iir_bsdf_sample *bs)
+{
+    if (iir_dot(bs->wi, sf->ns) <= 0.f) return iir_v3s(0.f);
+    return iir_scale(bs->f, fabsf(iir_dot(bs->wi, sf->sn)));
+}
 
 /* Whether sf scatters light diffusely or glossily (a rough surface a gather can stop at). */
 static inline bool iir_surface_is_rough(const iir_surface *sf)

@@ -78,7 +78,7 @@ unsigned iir_bsdf_flags(const iir_bsdf *b);
 
 /* f(wo, wi), RGB, without the cosine; the delta lobe excluded (a delta BSDF returns its diffuse
  * part only). Symmetric in wo and wi. 0 when either direction is at or below the horizon. */
-iir_vec3 iir_bsdf_f(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi);
+static inline iir_vec3 iir_bsdf_f(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi);
 
 /* The solid-angle density with which iir_bsdf_sample_f(b, wo, ...) returns a non-delta wi: the
  * one-sample mixture p_spec pdf_spec + (1 - p_spec) pdf_diff, with p_spec as
@@ -86,7 +86,7 @@ iir_vec3 iir_bsdf_f(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi);
  * for a delta BSDF) and pdf_diff = cos(theta_i) / pi. 0 when either direction is at or below the
  * horizon. Integrates over the upper hemisphere to the probability that sampling succeeds (the
  * GGX samples that reflect below the horizon fail and are not counted). Not symmetric. */
-float iir_bsdf_pdf(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi);
+static inline float iir_bsdf_pdf(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi);
 
 /* One sampled direction. For a non-delta sample (flags DIFFUSE or GLOSSY), f and pdf are the FULL
  * BSDF's iir_bsdf_f and iir_bsdf_pdf at wi (both lobes: what MIS with light sampling needs), and
@@ -124,6 +124,30 @@ iir_vec3 iir_bsdf_albedo(const iir_bsdf *b);
 /* Writes a one-line description of b for logs ("bsdf{base=(..) metallic=.. alpha=.. ...}") into
  * buf of size n (always terminated when n > 0, truncated to fit). */
 void iir_bsdf_describe(const iir_bsdf *b, char *buf, size_t n);
+
+/* ---- inline: a Lambertian BSDF's f and pdf without a call or a change of frame (the diffuse
+ * scenes' hot path); the rest in bsdf.c ---- */
+
+iir_vec3 iir_bsdf_f_general(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi);
+float iir_bsdf_pdf_general(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi);
+
+static inline bool iir_bsdf_lambert_sides(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
+{
+    return iir_dot(wo, b->frame.f) > 0.f && iir_dot(wi, b->frame.f) > 0.f;
+}
+
+static inline iir_vec3 iir_bsdf_f(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
+{
+    if (!b->lambert) return iir_bsdf_f_general(b, wo, wi);
+    return iir_bsdf_lambert_sides(b, wo, wi) ? iir_scale(b->c_diff, IIR_INV_PI) : iir_v3s(0.f);
+}
+
+static inline float iir_bsdf_pdf(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
+{
+    if (!b->lambert) return iir_bsdf_pdf_general(b, wo, wi);
+    float c = iir_dot(wi, b->frame.f);
+    return iir_bsdf_lambert_sides(b, wo, wi) ? c * IIR_INV_PI : 0.f;
+}
 
 #ifdef __cplusplus
 }

@@ -51,11 +51,11 @@ typedef struct iir_texref {
  * lights (iir_scene_load). A mirror or glass has no diffuse part: its albedo is 0 (the loaders
  * see to it), so every diffuse-only method renders it black (docs/scene-format.md, section 3). */
 typedef struct iir_material {
-    char name[64];
+    /* what every hit reads first, together (a cache line): */
+    iir_material_kind kind; /* IIR_MATERIAL_DIFFUSE unless a file or sidecar says otherwise */
     iir_vec3 albedo;        /* diffuse reflectance rho (metal_rough: the base colour factor), each
                                channel in [0, 1]; 0 for a mirror or glass */
     iir_vec3 emission;      /* emitted radiance Le (W/sr/m^2), >= 0 (x emission_tex) */
-    iir_material_kind kind; /* IIR_MATERIAL_DIFFUSE unless a file or sidecar says otherwise */
     iir_vec3 specular;      /* mirror: reflectance; glass: transmission tint; each in [0, 1] */
     float ior;              /* glass: index of refraction, in [1, 3]; 0 otherwise */
     float metallic;         /* metal_rough: in [0, 1] (x the mr texture's B) */
@@ -63,12 +63,14 @@ typedef struct iir_material {
     float opacity;          /* the base colour factor's alpha, in [0, 1] (1 - opacity is unused
                                when alpha_mode is OPAQUE) */
     iir_alpha_mode alpha_mode;
-    float alpha_cutoff;      /* MASK: alpha below it is a hole (glTF default 0.5) */
-    float normal_scale;      /* normal_tex: the tangent-space xy scale (glTF normalTexture.scale) */
+    float alpha_cutoff; /* MASK: alpha below it is a hole (glTF default 0.5) */
+    float normal_scale; /* normal_tex: the tangent-space xy scale (glTF normalTexture.scale) */
+    /* the textures, read only when one is set: */
     iir_texref base_tex;     /* sRGB base colour (diffuse albedo) and alpha */
     iir_texref mr_tex;       /* linear: G roughness, B metallic */
     iir_texref normal_tex;   /* linear tangent-space normal map */
     iir_texref emission_tex; /* sRGB emission colour */
+    char name[64];
 } iir_material;
 
 /* "diffuse", "mirror" or "glass" (the sidecar's "kind"). */

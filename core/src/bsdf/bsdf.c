@@ -150,23 +150,13 @@ unsigned iir_bsdf_flags(const iir_bsdf *b)
     return iir_is_black(b->c_diff) ? flags : flags | IIR_BSDF_DIFFUSE;
 }
 
-/* Lambert in world space: no change of frame (the diffuse scenes' hot path). */
-static bool lambert_sides(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
+iir_vec3 iir_bsdf_f_general(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
 {
-    return iir_dot(wo, b->frame.f) > 0.f && iir_dot(wi, b->frame.f) > 0.f;
-}
-
-iir_vec3 iir_bsdf_f(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
-{
-    if (b->lambert)
-        return lambert_sides(b, wo, wi) ? iir_scale(b->c_diff, IIR_INV_PI) : iir_v3s(0.f);
     return f_local(b, iir_frame_to_local(&b->frame, wo), iir_frame_to_local(&b->frame, wi));
 }
 
-float iir_bsdf_pdf(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
+float iir_bsdf_pdf_general(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
 {
-    if (b->lambert)
-        return lambert_sides(b, wo, wi) ? iir_cosine_hemisphere_pdf(iir_dot(wi, b->frame.f)) : 0.f;
     return pdf_local(b, iir_frame_to_local(&b->frame, wo), iir_frame_to_local(&b->frame, wi));
 }
 

@@ -232,18 +232,6 @@ iir_bsdf iir_surface_bsdf(const iir_surface *sf)
     return iir_bsdf_make_lambert(sf->sn, iir_v3s(0.f));
 }
 
-iir_vec3 iir_surface_f_cos(const iir_surface *sf, const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
-{
-    if (iir_dot(wi, sf->ns) <= 0.f) return iir_v3s(0.f);
-    return iir_scale(iir_bsdf_f(b, wo, wi), fabsf(iir_dot(wi, sf->sn)));
-}
-
-iir_vec3 iir_surface_f_cos_sampled(const iir_surface *sf, const iir_bsdf_sample *bs)
-{
-    if (iir_dot(bs->wi, sf->ns) <= 0.f) return iir_v3s(0.f);
-    return iir_scale(bs->f, fabsf(iir_dot(bs->wi, sf->sn)));
-}
-
 /* ======================== coverage ======================== */
 
 bool iir_scene_has_blend(const iir_scene *s)
