@@ -2,8 +2,9 @@
  * reads) into the scene builder: triangles, used materials, punctual lights, the first camera;
  * not the sidecar, not degenerate triangles (the builder counts those).
  *
- * Design. assimp imports with Triangulate and RemoveComponent (normals, UVs, colours, ... are not
- * used, and dropping them lets JoinIdenticalVertices weld on position alone). Vertices are checked
+ * Design. assimp imports with Triangulate and RemoveComponent (colours, bones, animations and
+ * embedded textures are not used; vertex normals, the first UV set and tangents are kept, so
+ * JoinIdenticalVertices welds on all of them). Vertices are checked
  * for NaN/Inf *before* JoinIdenticalVertices runs (aiApplyPostProcessing), because that step
  * silently welds a NaN vertex onto another one. FindDegenerates is not used: the builder counts
  * degenerate triangles itself. PreTransformVertices is not used either: in assimp 5.2 it applies a
@@ -19,9 +20,10 @@
  * W/m^2), as Blender's importer reads it, so a Blender user's lamps keep their balance with the
  * scene's emissive surfaces (a sidecar's lights are radiometric and replace them); a spot keeps
  * glTF's own profile (IIR_SPOT_GLTF: outer and inner cone angles), a directional light becomes a
- * sun. Area and ambient lights are ignored, and so are colour textures, transparency and rough
- * metal; each such light and material is noted by name in the scene (iir_scene.dropped) for the
- * commands' warnings. Mirrors and glass: convert_kind.
+ * sun. Area and ambient lights are ignored, noted by name in the scene (iir_scene.dropped) for the
+ * commands' warnings. A glTF's materials come from its own JSON (scene_gltf_material.c); an OBJ's
+ * from assimp's keys: Kd/map_Kd, norm or map_Bump, Ke/map_Ke, Pr/Pm, mirrors and glass
+ * (convert_kind), and what is not read is noted.
  *
  * assimp's C API keeps the last error message in one process-wide string, so imports run under a
  * mutex (the only shared state here; it guards the library, not ours). */
