@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -37,6 +38,25 @@ bool iird_budget_reserve(iird_budget *b, uint64_t *held, uint64_t want, iird_pro
                                    "together, over its memory budget of %.0f MiB (--max-memory); "
                                    "try again when other sessions have left, or ask for less",
                                    mib(next), mib(b->total_max));
+        if (atomic_compare_exchange_weak(&b->reserved, &now, next)) break;
+    }
+    *held = want;
+    return true;
+}
+
+bool iird_budget_reserve_scene(iird_budget *b, uint64_t *held, uint64_t want, char *why, size_t n)
+{
+    if (!b) return *held = want, true;
+    uint64_t now = atomic_load(&b->reserved);
+    for (;;) {
+        uint64_t next = now - *held + want;
+        if (want > *held && next > b->total_max) {
+            snprintf(why, n,
+                     "its geometry and textures (%.0f MiB) with the sessions' reservations would "
+                     "pass the daemon's memory budget of %.0f MiB (--max-memory)",
+                     mib(want), mib(b->total_max));
+            return false;
+        }
         if (atomic_compare_exchange_weak(&b->reserved, &now, next)) break;
     }
     *held = want;

@@ -30,6 +30,11 @@ uint64_t iird_budget_default_total(void);
  * nothing changed. b NULL: no budget, always true. */
 bool iird_budget_reserve(iird_budget *b, uint64_t *held, uint64_t want, iird_proto_error *err);
 
+/* Reserves a loaded scene's bytes (its geometry and decoded textures: iir_scene_bytes) under the
+ * daemon's limit alone, shared by every session on it: true, *held = want, when it fits with every
+ * other reservation; else false with why (size n) naming both figures. b NULL: always true. */
+bool iird_budget_reserve_scene(iird_budget *b, uint64_t *held, uint64_t want, char *why, size_t n);
+
 /* Gives *held back (a session that ended); *held becomes 0. */
 void iird_budget_release(iird_budget *b, uint64_t *held);
 

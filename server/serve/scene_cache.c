@@ -2,6 +2,8 @@
  * the list of scene names clients may ask for. Not sessions. */
 #include "scene_cache.h"
 
+#include "budget.h"
+
 #include <assert.h>
 #include <dirent.h>
 #include <limits.h>
@@ -22,6 +24,7 @@ typedef struct cache_slot {
     iir_rt *rt;
     int refs;
     bool loading, pinned;
+    uint64_t held; /* bytes reserved in the budget for it */
     struct cache_slot *next;
 } cache_slot;
 
@@ -36,6 +39,7 @@ struct iird_scene_cache {
     cache_slot *slots;         /* guarded by lock */
     const cache_slot *startup; /* pinned before any session exists; its name may come from a path
                                   outside dir */
+    iird_budget *budget;       /* where loaded scenes are counted; NULL: nowhere */
 };
 
 static int cmp_names(const void *a, const void *b)
@@ -148,8 +152,9 @@ iird_scene_cache *iird_scene_cache_create(const char *scenes_dir, bool follow_li
     return c;
 }
 
-static void slot_free(cache_slot *s)
+static void slot_free(iird_scene_cache *c, cache_slot *s)
 {
+    iird_budget_release(c->budget, &s->held);
     iir_rt_destroy(s->rt);
     iir_scene_destroy(s->scene);
     free(s);
@@ -161,7 +166,7 @@ void iird_scene_cache_destroy(iird_scene_cache *c)
     for (cache_slot *s = c->slots, *next; s; s = next) {
         next = s->next;
         assert(s->refs == 0 && !s->loading);
-        slot_free(s);
+        slot_free(c, s);
     }
     for (char **n = c->names; n && *n; n++) free(*n);
     free(c->names);
@@ -297,6 +302,14 @@ static iir_status load_slot(iird_scene_cache *c, cache_slot *s, iir_error *err)
     iir_rt *rt = NULL;
     pthread_mutex_unlock(&c->lock);
     iir_status st = iir_scene_open(s->key, NULL, &scene, &rt, err);
+    char why[256];
+    if (st == IIR_OK &&
+        !iird_budget_reserve_scene(c->budget, &s->held, iir_scene_bytes(scene), why, sizeof why)) {
+        st = iir_fail(err, IIR_ERR_UNSUPPORTED, "scene %s: %s", s->entry.name, why);
+        iir_rt_destroy(rt);
+        iir_scene_destroy(scene);
+        scene = NULL, rt = NULL;
+    }
     if (st == IIR_OK) {
         log_camera(s->entry.name, scene);
         char who[160];
@@ -324,7 +337,7 @@ static cache_slot *find_loaded_locked(iird_scene_cache *c, const char *key)
         s->refs--;
         if (!s->rt && s->refs == 0 && !s->loading) {
             unlink_slot(c, s);
-            slot_free(s);
+            slot_free(c, s);
         }
         s = find(c, key);
     }
@@ -346,7 +359,7 @@ static iir_status add_slot_locked(iird_scene_cache *c, const char *key, const ch
     iir_status st = load_slot(c, s, err);
     if (st != IIR_OK && --s->refs == 0) {
         unlink_slot(c, s);
-        slot_free(s);
+        slot_free(c, s);
     }
     *out = st == IIR_OK ? s : NULL;
     return st;
@@ -421,7 +434,7 @@ void iird_scene_cache_release(iird_scene_cache *c, const iird_scene_entry *e)
         dead = s;
     }
     pthread_mutex_unlock(&c->lock);
-    if (dead) slot_free(dead);
+    if (dead) slot_free(c, dead);
 }
 
 /* Adds name to the list (after "builtin", in order) unless it is there (the lock is held). */
@@ -462,6 +475,11 @@ void iird_scene_cache_add_name(iird_scene_cache *c, const char *name)
     pthread_mutex_lock(&c->lock);
     list_name(c, name);
     pthread_mutex_unlock(&c->lock);
+}
+
+void iird_scene_cache_set_budget(iird_scene_cache *c, iird_budget *b)
+{
+    c->budget = b;
 }
 
 size_t iird_scene_cache_loaded(iird_scene_cache *c, uint64_t *bytes)

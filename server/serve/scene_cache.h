@@ -74,6 +74,11 @@ void iird_scene_cache_pin(iird_scene_cache *c, const iird_scene_entry *e);
  * the directory with the same name). Before any session exists. */
 void iird_scene_cache_set_startup(iird_scene_cache *c, const iird_scene_entry *e);
 
+/* Counts each scene loaded from now on in b (its bytes, while it is in memory): a scene that does
+ * not fit is refused. Before any acquire; b NULL: no budget. */
+struct iird_budget;
+void iird_scene_cache_set_budget(iird_scene_cache *c, struct iird_budget *b);
+
 /* Scenes in memory now, and the bytes they hold (iir_scene_bytes: geometry, materials and
  * decoded textures; not the ray tracers' BVHs, which Embree does not report). */
 size_t iird_scene_cache_loaded(iird_scene_cache *c, uint64_t *bytes);

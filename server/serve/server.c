@@ -667,6 +667,7 @@ static int start(server *srv, iir_error *err)
 {
     srv->scenes = iird_scene_cache_create(srv->cfg->scenes_dir, srv->cfg->scenes_follow_links);
     if (!srv->scenes) return iir_fail(err, IIR_ERR_NOMEM, "out of memory"), 1;
+    iird_scene_cache_set_budget(srv->scenes, srv->cfg->budget);
     iir_status st = iird_scene_cache_acquire(srv->scenes, srv->cfg->scene, &srv->startup, err);
     if (st != IIR_OK) { /* its whole reason, paths and all, is logged already */
         snprintf(err->msg, sizeof err->msg, "the startup scene cannot be loaded (above)");

@@ -6,7 +6,7 @@ refused naming the budget and the estimate, and leaves the session as it was; th
 against the daemon's measured RSS. Usage: test_serve_budget.py IIRD SOURCE_DIR"""
 
 import iirserve
-from iirserve import Client, Daemon, DaemonTest, FAST_ARGS, metrics, rss_bytes, wait_metric
+from iirserve import Client, Daemon, DaemonTest, FAST_ARGS, metric, metrics, rss_bytes, wait_metric
 
 ATTACK = {"type": "params", "vpls": 4096, "sm_res": 2048}
 # 1024 VPLs with 256^2 shadow maps: 256 MiB of maps, far above everything else the session holds.
@@ -78,6 +78,45 @@ class BudgetTest(DaemonTest):
             await wait_metric(d.port, "iird_sessions", 1, "end of a's session after its client left")
             await b.request(big, "state")
             await b.close()
+            d.stop_and_check(self)
+        finally:
+            d.close()
+
+
+class SceneBudgetTest(DaemonTest):
+    """Issue 28: a scene in memory counts in --max-memory by its geometry and decoded textures
+    (iird_scene_bytes): a scene that would pass the budget is refused naming it, one that fits loads."""
+
+    async def test_scenes_count_in_the_budget(self):
+        # what BIG reserves and what the two scenes hold, measured on a daemon without a tight budget
+        d = Daemon(*FAST_ARGS, "--scene", "material_room")
+        try:
+            c = await Client.connect(d)
+            await c.wait_frame()
+            base = int(session_bytes(d.port))
+            seq, _ = await c.request(BIG, "state")
+            await c.wait_frame(min_seq=seq, timeout=120)
+            big = int(session_bytes(d.port))
+            room = int(metric(metrics(d.port), "iird_scene_bytes"))
+            await c.close()
+            d.stop_and_check(self)
+        finally:
+            d.close()
+        self.assertGreater(room, 1 << 20, "the material room's textures are counted")
+        # room for BIG and the material room (with 2 MiB to spare), not for the conference room too
+        cap = big + room + (2 << 20)
+        d = Daemon(*FAST_ARGS, "--scene", "material_room", "--max-memory", str(cap),
+                   "--max-session-memory", str(cap))
+        try:
+            c = await Client.connect(d)
+            await c.request(BIG, "state")
+            seq, e = await c.request({"type": "scene", "name": "conference"}, "error")
+            self.assertIn("--max-memory", e.get("message", ""), e)
+            self.assertIn("conference", e.get("message", ""), e)
+            print(f"[BIG {big >> 20} MiB (base {base >> 20}), material room {room / 2**20:.1f} MiB; "
+                  f"conference refused: {e.get('code')}] ", end="")
+            await self.still_streaming(c, "the refused scene")
+            await c.close()
             d.stop_and_check(self)
         finally:
             d.close()
