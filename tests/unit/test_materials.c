@@ -16,6 +16,7 @@
 
 #include <cmocka.h>
 
+#include "iir/image.h"
 #include "iir/method.h"
 #include "iir/scene.h"
 #include "iir/texture.h"
@@ -811,6 +812,104 @@ static void test_ggx_plane(void **state)
     }
 }
 
+/* A 4 x 4 PNG of one colour whose bytes are rgb (written through the sRGB encoder: the linear
+ * values are the bytes decoded, so the file holds the bytes exactly). */
+static void write_flat_png(const char *name, const int rgb[3])
+{
+    iir_image *img = iir_image_create(4, 4);
+    assert_non_null(img);
+    float lin[3];
+    for (int k = 0; k < 3; k++) {
+        double c = rgb[k] / 255.0;
+        lin[k] = (float)(c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4));
+    }
+    for (int i = 0; i < 16; i++) img->pixels[i] = iir_v3(lin[0], lin[1], lin[2]);
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s", tmp, name);
+    iir_error err = {0};
+    assert_int_equal(iir_image_write_png(img, path, 0.f, &err), IIR_OK);
+    iir_image_destroy(img);
+}
+
+/* The normal map's frame: a texel (x, y, z) tilts the shading normal towards +x along the
+ * texture's u (dp/du) and +y up the image (glTF's convention: the bitangent points to decreasing
+ * v), scaled by the map's strength; here on a quad lying in y = 0, u along +x, up the image -z. */
+static void test_normal_map_frame(void **state)
+{
+    (void)state;
+    const int tilt_u[3] = {191, 128, 255}, tilt_up[3] = {128, 191, 255};
+    write_flat_png("tilt_u.png", tilt_u);
+    write_flat_png("tilt_up.png", tilt_up);
+    iir_test_write_file(tmp, "tilt.mtl",
+                        "newmtl u\nKd 0.5 0.5 0.5\nnorm tilt_u.png\n"
+                        "newmtl up\nKd 0.5 0.5 0.5\nnorm tilt_up.png\n"
+                        "newmtl half\nKd 0.5 0.5 0.5\nmap_Bump -bm 0.5 tilt_u.png\n");
+    char path[1200];
+    snprintf(path, sizeof path, "%s/tilt.obj", tmp);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib tilt.mtl\n");
+    const iir_vec3 a = iir_v3(0.5f, 0, 0), b = iir_v3(0, 0, -0.5f); /* normal a x b = +y */
+    write_uv_quad(f, "u", iir_v3(0, 0, 0), a, b);
+    write_uv_quad(f, "up", iir_v3(2, 0, 0), a, b);
+    write_uv_quad(f, "half", iir_v3(4, 0, 0), a, b);
+    fclose(f);
+    iir_test_cornell l = iir_test_load(tmp, "tilt");
+    const iir_scene *s = l.scene;
+    /* the texel (191, 128, 255): tangent-space (0.498, 0.004, 1) */
+    const double x = 2 * 191 / 255.0 - 1, y0 = 2 * 128 / 255.0 - 1;
+    struct {
+        const char *mtl;
+        double tx, ty; /* expected tangent-space x, y */
+    } cases[] = {{"u", x, y0}, {"up", y0, x}, {"half", 0.5 * x, 0.5 * y0}};
+    for (int c = 0; c < 3; c++) {
+        uint32_t m = material_index(s, cases[c].mtl), prim = UINT32_MAX;
+        for (uint32_t t = 0; t < s->num_triangles && prim == UINT32_MAX; t++)
+            if (s->materials[t] == m) prim = t;
+        assert_true(prim != UINT32_MAX);
+        iir_hit hit = {1.f, prim, 1.f / 3.f, 1.f / 3.f};
+        iir_surface sf = iir_surface_at(s, &hit, iir_v3(0, 1, 0));
+        /* tangent space to world: x along +x (u), y along -z (up the image), z along +y */
+        double len = sqrt(cases[c].tx * cases[c].tx + cases[c].ty * cases[c].ty + 1);
+        iir_vec3 want =
+            iir_v3((float)(cases[c].tx / len), (float)(1 / len), (float)(-cases[c].ty / len));
+        print_message(
+            "  normal map '%s': shading normal (%.4f, %.4f, %.4f), expected (%.4f, %.4f, %.4f)\n",
+            cases[c].mtl, sf.sn.x, sf.sn.y, sf.sn.z, want.x, want.y, want.z);
+        assert_true(near3(sf.sn, want.x, want.y, want.z, 2e-3));
+        assert_true(near3(sf.ns, 0, 1, 0, 1e-6)); /* the geometric normal is untouched */
+    }
+    iir_test_unload(&l);
+
+    /* a glTF's TANGENT (w = handedness, through assimp's bitangent) gives the frame its texture
+       coordinates give: the material room's brick wall shaded with the file's tangents and with
+       tangents from its uvs agrees */
+    iir_scene *room = NULL;
+    iir_error err = {0};
+    if (iir_scene_load(IIR_SOURCE_DIR "/scenes/material_room", &room, &err) != IIR_OK)
+        fail_msg("%s", err.msg);
+    assert_non_null(room->tangents);
+    uint32_t brick = material_index(room, "brick_wall"), checked = 0, bent = 0;
+    static const float at[4][2] = {{0.3f, 0.3f}, {0.1f, 0.7f}, {0.6f, 0.2f}, {0.45f, 0.45f}};
+    for (uint32_t t = 0; t < room->num_triangles; t++) {
+        if (room->materials[t] != brick) continue;
+        for (int k = 0; k < 4; k++) {
+            iir_hit hit = {1.f, t, at[k][0], at[k][1]};
+            iir_vec3 wo = room->normals[t];
+            iir_surface with = iir_surface_at(room, &hit, wo);
+            float *tangents = room->tangents;
+            room->tangents = NULL;
+            iir_surface without = iir_surface_at(room, &hit, wo);
+            room->tangents = tangents;
+            assert_true(near3(with.sn, without.sn.x, without.sn.y, without.sn.z, 1e-3));
+            bent += iir_dot(with.sn, with.ns) < 0.9999f; /* the map does bend it somewhere */
+            checked++;
+        }
+    }
+    assert_true(checked >= 8 && bent > 0);
+    iir_scene_destroy(room);
+}
+
 /* A floor and, 1 above it, a BLEND veil of alpha `alpha` (no texture). */
 static void write_veil(const char *name, double alpha)
 {
@@ -894,7 +993,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gltf_material_room), cmocka_unit_test(test_obj_map_kd),
         cmocka_unit_test(test_cutout_shadows),     cmocka_unit_test(test_ggx_plane),
-        cmocka_unit_test(test_blend_veil),
+        cmocka_unit_test(test_blend_veil),         cmocka_unit_test(test_normal_map_frame),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
