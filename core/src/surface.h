@@ -23,6 +23,7 @@ typedef struct iir_surface {
     iir_vec3 base;     /* base colour: the material's albedo x its base colour texture */
     float metallic;    /* metal_rough: metallic x texture (0 otherwise) */
     float roughness;   /* metal_rough: roughness x texture (1 otherwise) */
+    float specular_f0; /* metal_rough: a dielectric's reflectance at normal incidence */
     iir_vec3 albedo;   /* the diffuse reflectance a diffuse-only method uses (base (1 - metallic));
                           0 for a mirror or glass */
     iir_vec3 Le;       /* emitted radiance on the winding side (emission x its texture) */

@@ -304,7 +304,14 @@ static void test_obj_map_kd(void **state)
     assert_int_equal(brass->kind, IIR_MATERIAL_METAL_ROUGH);
     assert_true(near(brass->roughness, 0.35, 1e-6) && near(brass->metallic, 1, 1e-6));
     assert_true(near3(brass->albedo, 0.9, 0.7, 0.3, 1e-6));
-    assert_int_equal(material_named(s, "phong")->kind, IIR_MATERIAL_DIFFUSE);
+    /* a Phong highlight as Blender's importer reads it: Ks 0.2, Ns 40 -> reflectance 0.08 x 0.2
+       at normal incidence, roughness 1 - sqrt(40 / 1000) = 0.8 */
+    const iir_material *phong = material_named(s, "phong");
+    assert_int_equal(phong->kind, IIR_MATERIAL_METAL_ROUGH);
+    assert_true(near(phong->specular_f0, 0.016, 1e-6) && near(phong->metallic, 0, 0));
+    assert_true(near(phong->roughness, 0.8, 1e-6));
+    assert_true(near3(phong->albedo, 0.5, 0.5, 0.5, 1e-6));
+    assert_true(near(brass->specular_f0, 0.04, 1e-6)); /* Pr/Pm: glTF's dielectric */
     /* map_Bump as Blender writes it: a tangent-space normal map (linear) of strength -bm */
     const iir_material *bumpy = material_named(s, "bumpy");
     assert_true(bumpy->normal_tex.texture != 0);

@@ -297,7 +297,9 @@ static void test_obj_colours_clamped(void **state)
 }
 
 /* MTL illum 3 is a mirror of colour Ks; illum 5 and 7 are glass of index Ni (tinted by Tf); other
- * models stay diffuse, whatever their Ni and Ks say (docs/scene-format.md, section 3). */
+ * models with a highlight Ks are glTF's dielectric as Blender reads them (reflectance 0.08
+ * mean(Ks), roughness 1 - sqrt(Ns / 1000): 1 without Ns), whatever their Ni says
+ * (docs/scene-format.md). */
 static void test_obj_specular_materials(void **state)
 {
     (void)state;
@@ -316,8 +318,11 @@ static void test_obj_specular_materials(void **state)
     iir_scene *s = load_ok(path);
     const iir_material *wall = find_material(s, "wall"), *silver = find_material(s, "silver");
     const iir_material *window = find_material(s, "window"), *bottle = find_material(s, "bottle");
-    assert_int_equal(wall->kind, IIR_MATERIAL_DIFFUSE);
+    assert_int_equal(wall->kind, IIR_MATERIAL_METAL_ROUGH);
     assert_vec_near(wall->albedo, iir_v3s(0.5f), 1e-6f);
+    assert_float_equal(wall->specular_f0, 0.08f, 1e-6);
+    assert_float_equal(wall->roughness, 1.f, 1e-6);
+    assert_float_equal(wall->metallic, 0.f, 0);
     assert_int_equal(silver->kind, IIR_MATERIAL_MIRROR);
     assert_vec_near(silver->specular, iir_v3(0.9f, 0.8f, 0.7f), 1e-6f);
     assert_vec_near(silver->albedo, iir_v3s(0.f), 0.f); /* no diffuse part */

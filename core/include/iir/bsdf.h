@@ -66,6 +66,10 @@ typedef struct iir_bsdf {
  * metallic are clamped to [0, 1], base_color's components likewise. Asserts (in the test build)
  * that n is unit and the parameters are not NaN. */
 iir_bsdf iir_bsdf_make(iir_vec3 n, iir_vec3 base_color, float metallic, float roughness);
+/* The same with a dielectric's reflectance at normal incidence other than glTF's 0.04 (an MTL's
+ * specular colour, as Blender reads it: 0.08 mean(Ks)); f0 = mix(dielectric_f0, base, metallic). */
+iir_bsdf iir_bsdf_make_f0(iir_vec3 n, iir_vec3 base_color, float metallic, float roughness,
+                          float dielectric_f0);
 
 /* A Lambertian BSDF, f = albedo / pi, sampled by the cosine (an OBJ's or sidecar's diffuse
  * material: no specular lobe at all). */

@@ -71,7 +71,8 @@ typedef struct iir_gbuffer {
     iir_vec3 *normal;   /* unit shading normal (vertex normals, normal map), facing the camera */
     iir_vec3 *albedo;   /* rho (the diffuse albedo, textured); 0 for background */
     iir_vec3 *base;     /* metal_rough: the base colour; else rho */
-    iir_vec2 *mr;       /* metal_rough: (metallic, roughness); (0, -1) for a Lambertian pixel */
+    iir_vec3 *mr;       /* metal_rough: (metallic, roughness, dielectric f0); (0, -1, 0) for a
+                           Lambertian pixel */
     iir_vec3 *emission; /* Le seen directly (one-sided emitters); 0 for background */
     float *depth;       /* distance along the camera ray; INFINITY = background */
     uint32_t *prim;     /* triangle index; IIR_NO_HIT = background */

@@ -60,6 +60,8 @@ typedef struct iir_material {
     float ior;              /* glass: index of refraction, in [1, 3]; 0 otherwise */
     float metallic;         /* metal_rough: in [0, 1] (x the mr texture's B) */
     float roughness;        /* metal_rough: in [0, 1] (x the mr texture's G); alpha = roughness^2 */
+    float specular_f0;      /* metal_rough: a dielectric's reflectance at normal incidence, in
+                               [0, 1]: glTF's 0.04; an MTL's 0.08 mean(Ks), as Blender reads it */
     float opacity;          /* the base colour factor's alpha, in [0, 1] (1 - opacity is unused
                                when alpha_mode is OPAQUE) */
     iir_alpha_mode alpha_mode;

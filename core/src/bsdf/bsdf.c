@@ -115,6 +115,12 @@ static bool sample_local(const iir_bsdf *b, iir_vec3 wo, float uc, iir_vec2 u, i
 
 iir_bsdf iir_bsdf_make(iir_vec3 n, iir_vec3 base_color, float metallic, float roughness)
 {
+    return iir_bsdf_make_f0(n, base_color, metallic, roughness, 0.04f);
+}
+
+iir_bsdf iir_bsdf_make_f0(iir_vec3 n, iir_vec3 base_color, float metallic, float roughness,
+                          float dielectric_f0)
+{
     assert(fabsf(iir_length(n) - 1.f) < 1e-3f);
     assert(!isnan(base_color.x + base_color.y + base_color.z + metallic + roughness));
     iir_bsdf b;
@@ -122,7 +128,7 @@ iir_bsdf iir_bsdf_make(iir_vec3 n, iir_vec3 base_color, float metallic, float ro
     b.base_color = clamp01(base_color);
     b.metallic = iir_clampf(metallic, 0.f, 1.f);
     b.alpha = iir_sqr(iir_clampf(roughness, 0.f, 1.f));
-    b.f0 = mix3(iir_v3s(0.04f), b.base_color, b.metallic);
+    b.f0 = mix3(iir_v3s(iir_clampf(dielectric_f0, 0.f, 1.f)), b.base_color, b.metallic);
     b.c_diff = mix3(b.base_color, iir_v3s(0.f), b.metallic);
     b.lambert = false;
     return b;

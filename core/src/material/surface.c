@@ -142,6 +142,7 @@ static void eval_material(const iir_scene *s, iir_surface *sf, float width)
     sf->base = m->albedo;
     sf->metallic = m->kind == IIR_MATERIAL_METAL_ROUGH ? m->metallic : 0.f;
     sf->roughness = m->kind == IIR_MATERIAL_METAL_ROUGH ? m->roughness : 1.f;
+    sf->specular_f0 = m->specular_f0;
     sf->Le = m->emission;
     sf->specular = m->specular;
     sf->ior = m->ior;
@@ -222,7 +223,7 @@ iir_bsdf iir_surface_bsdf(const iir_surface *sf)
 {
     switch (sf->kind) {
     case IIR_MATERIAL_METAL_ROUGH:
-        return iir_bsdf_make(sf->sn, sf->base, sf->metallic, sf->roughness);
+        return iir_bsdf_make_f0(sf->sn, sf->base, sf->metallic, sf->roughness, sf->specular_f0);
     case IIR_MATERIAL_DIFFUSE:
         return iir_bsdf_make_lambert(sf->sn, sf->albedo);
     case IIR_MATERIAL_MIRROR:

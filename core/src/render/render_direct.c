@@ -252,7 +252,8 @@ static void load_block(const iir_gbuffer *gb, iir_vec3 eye, int x0, int y0, bloc
         if (!b->glossy[k]) continue;
         /* glossy direct light by the full BSDF, seen from the camera (wo) */
         b->wo[k] = iir_normalize(iir_sub(eye, gb->position[i]));
-        b->bsdf[k] = iir_bsdf_make(gb->normal[i], gb->base[i], gb->mr[i].x, gb->mr[i].y);
+        b->bsdf[k] =
+            iir_bsdf_make_f0(gb->normal[i], gb->base[i], gb->mr[i].x, gb->mr[i].y, gb->mr[i].z);
     }
 }
 

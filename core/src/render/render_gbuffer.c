@@ -32,7 +32,7 @@ iir_status iir_gbuffer_resize(iir_gbuffer *gb, int width, int height, iir_error 
     gb->normal = malloc(sizeof(iir_vec3) * n);
     gb->albedo = malloc(sizeof(iir_vec3) * n);
     gb->base = malloc(sizeof(iir_vec3) * n);
-    gb->mr = malloc(sizeof(iir_vec2) * n);
+    gb->mr = malloc(sizeof(iir_vec3) * n);
     gb->emission = malloc(sizeof(iir_vec3) * n);
     gb->depth = malloc(sizeof(float) * n);
     gb->prim = malloc(sizeof(uint32_t) * n);
@@ -57,7 +57,7 @@ static void store(iir_gbuffer *gb, size_t i, const iir_scene *scene, const iir_h
         gb->normal[i] = zero;
         gb->albedo[i] = zero;
         gb->base[i] = zero;
-        gb->mr[i] = iir_v2(0.f, -1.f);
+        gb->mr[i] = iir_v3(0.f, -1.f, 0.f);
         gb->emission[i] = zero;
         gb->depth[i] = INFINITY;
         return;
@@ -70,7 +70,7 @@ static void store(iir_gbuffer *gb, size_t i, const iir_scene *scene, const iir_h
     gb->albedo[i] = sf.albedo;
     bool pbr = sf.kind == IIR_MATERIAL_METAL_ROUGH;
     gb->base[i] = pbr ? sf.base : sf.albedo;
-    gb->mr[i] = pbr ? iir_v2(sf.metallic, sf.roughness) : iir_v2(0.f, -1.f);
+    gb->mr[i] = pbr ? iir_v3(sf.metallic, sf.roughness, sf.specular_f0) : iir_v3(0.f, -1.f, 0.f);
     gb->emission[i] = iir_surface_Le(&sf, wo);
     gb->depth[i] = hit->t;
 }

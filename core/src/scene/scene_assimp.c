@@ -268,17 +268,30 @@ static int mtl_illum(const struct aiMaterial *mat)
  * above 0 (KHR_materials_transmission) is glass of index KHR_materials_ior (1.5 without it) tinted
  * by the base colour; metallic 1 with roughness 0 is a mirror of the base colour. The colours are
  * clamped to [0, 1]; the ior is checked by the builder. */
-/* An MTL material with the PBR extension's Pr (roughness) or Pm (metallic): glTF's model of base
- * colour Kd (metallic 0 and roughness 1 unless given); Ks and Ns are not converted. */
+/* glTF's model for an MTL material that asks for more than Lambert: with the PBR extension's Pr
+ * (roughness) or Pm (metallic), base colour Kd (metallic 0 and roughness 1 unless given); else a
+ * Phong highlight, Ks with exponent Ns, as Blender's OBJ importer reads it: a dielectric of
+ * reflectance 0.08 mean(Ks) at normal incidence (Principled's specular = mean(Ks)) and roughness
+ * 1 - sqrt(Ns / 1000). Ks 0 stays Lambertian. */
 static void pbr_kind(const struct aiMaterial *mat, iir_material *m)
 {
     float f;
     bool pr = aiGetMaterialFloat(mat, AI_MATKEY_ROUGHNESS_FACTOR, &f) == aiReturn_SUCCESS;
     bool pm = aiGetMaterialFloat(mat, AI_MATKEY_METALLIC_FACTOR, &f) == aiReturn_SUCCESS;
-    if (!pr && !pm) return;
+    iir_vec3 ks = color3(mat, AI_MATKEY_COLOR_SPECULAR, iir_v3s(0.f));
+    float spec = (ks.x + ks.y + ks.z) / 3.f;
+    if (!pr && !pm && !(spec > 0.f)) return;
     m->kind = IIR_MATERIAL_METAL_ROUGH;
-    m->roughness = iir_clampf(float_key(mat, AI_MATKEY_ROUGHNESS_FACTOR, 1.f), 0.f, 1.f);
-    m->metallic = iir_clampf(float_key(mat, AI_MATKEY_METALLIC_FACTOR, 0.f), 0.f, 1.f);
+    m->specular_f0 = 0.04f;
+    if (pr || pm) {
+        m->roughness = iir_clampf(float_key(mat, AI_MATKEY_ROUGHNESS_FACTOR, 1.f), 0.f, 1.f);
+        m->metallic = iir_clampf(float_key(mat, AI_MATKEY_METALLIC_FACTOR, 0.f), 0.f, 1.f);
+        return;
+    }
+    float ns = iir_clampf(float_key(mat, AI_MATKEY_SHININESS, 0.f), 0.f, 1000.f);
+    m->roughness = 1.f - sqrtf(ns / 1000.f);
+    m->metallic = 0.f;
+    m->specular_f0 = iir_clampf(0.08f * spec, 0.f, 1.f);
 }
 
 static void convert_kind(const struct aiMaterial *mat, iir_vec3 base, iir_material *m)

@@ -389,6 +389,7 @@ static iir_status read_pbr(mat_reader *R, const cJSON *mat, iir_material *m, iir
 static iir_status read_material(mat_reader *R, const cJSON *mat, iir_material *m, iir_error *err)
 {
     m->kind = IIR_MATERIAL_METAL_ROUGH;
+    m->specular_f0 = 0.04f; /* the spec's dielectric */
     m->opacity = 1.f;
     iir_status st = read_pbr(R, mat, m, err);
     const cJSON *nt = member(mat, "normalTexture");

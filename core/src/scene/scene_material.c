@@ -42,6 +42,7 @@ uint64_t iir_material_hash(uint64_t h, const iir_material *m)
     h = IIR_HASH(h, m->ior);
     h = IIR_HASH(h, m->metallic);
     h = IIR_HASH(h, m->roughness);
+    h = IIR_HASH(h, m->specular_f0);
     h = IIR_HASH(h, m->opacity);
     int32_t mode = (int32_t)m->alpha_mode;
     h = IIR_HASH(h, mode);
@@ -68,6 +69,8 @@ const char *iir_material_check(const iir_material *m, char *why, size_t n)
         return snprintf(why, n, "kind %d is not diffuse, mirror, glass or metal_rough",
                         (int)m->kind),
                why;
+    if (!(m->specular_f0 >= 0.f && m->specular_f0 <= 1.f))
+        return snprintf(why, n, "specular f0 %g must be in [0, 1]", (double)m->specular_f0), why;
     if (!(m->metallic >= 0.f && m->metallic <= 1.f && m->roughness >= 0.f && m->roughness <= 1.f))
         return snprintf(why, n, "metallic %g and roughness %g must be in [0, 1]",
                         (double)m->metallic, (double)m->roughness),
