@@ -97,6 +97,19 @@ static void write_uv_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_
     fprintf(f, "f -4/-4 -3/-3 -2/-2 -1/-1\n");
 }
 
+/* Writes tmp/name.obj: mtllib name.mtl and one quad (c, a, b) per material, the k-th centred at
+ * (2k, 0, 0). */
+static void write_quad_row(const char *name, const char *const *mtls, int n, iir_vec3 a, iir_vec3 b)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s.obj", tmp, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib %s.mtl\n", name);
+    for (int k = 0; k < n; k++) write_uv_quad(f, mtls[k], iir_v3(2.f * (float)k, 0, 0), a, b);
+    fclose(f);
+}
+
 /* glTF uv of point p on the quad (c, a, b) of write_uv_quad, a and b orthogonal. */
 static iir_vec2 quad_uv(iir_vec3 p, iir_vec3 c, iir_vec3 a, iir_vec3 b)
 {
@@ -275,17 +288,8 @@ static void test_obj_map_kd(void **state)
                         "newmtl phong\nKd 0.5 0.5 0.5\nKs 0.2 0.2 0.2\nNs 40\n"
                         "newmtl bumpy\nKd 0.7 0.7 0.7\nmap_Bump -bm 0.5 brick_normal.png\n");
     const iir_vec3 c = iir_v3(0, 0, 0), a = iir_v3(0, 0, 0.5f), b = iir_v3(0.5f, 0, 0);
-    char path[1200];
-    snprintf(path, sizeof path, "%s/cards.obj", tmp);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib cards.mtl\n");
-    write_uv_quad(f, "leaf", c, a, b);
-    write_uv_quad(f, "missing", iir_v3(2, 0, 0), a, b);
-    write_uv_quad(f, "brass", iir_v3(4, 0, 0), a, b);
-    write_uv_quad(f, "phong", iir_v3(6, 0, 0), a, b);
-    write_uv_quad(f, "bumpy", iir_v3(8, 0, 0), a, b);
-    fclose(f);
+    static const char *const mtls[] = {"leaf", "missing", "brass", "phong", "bumpy"};
+    write_quad_row("cards", mtls, 5, a, b);
     iir_test_cornell l = iir_test_load(tmp, "cards");
     const iir_scene *s = l.scene;
 
@@ -663,15 +667,7 @@ static void write_plane(const char *name, const ggx_mat *m, const char *light)
         "   \"material\": 0}]}],\n"
         " \"materials\": [{\"name\": \"ggx\", \"pbrMetallicRoughness\": {\n"
         "   \"baseColorFactor\": [%g, %g, %g, 1], \"metallicFactor\": %g, \"roughnessFactor\": "
-        "%g}}],\n"
-        " \"buffers\": [{\"byteLength\": 60, \"uri\": \"data:application/octet-stream;base64,"
-        "AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/AAACAAEAAAADAAIA\"}],\n"
-        " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
-        "   {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 12}],\n"
-        " \"accessors\": [\n"
-        "   {\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\",\n"
-        "    \"min\": [-1, 0, -1], \"max\": [1, 0, 1]},\n"
-        "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": \"SCALAR\"}]}\n",
+        "%g}}],\n" IIR_TEST_GLTF_QUAD_DATA,
         m->base, m->base, m->base, m->metallic, m->roughness);
     snprintf(file, sizeof file, "%s.gltf", name);
     iir_test_write_file(tmp, file, text);
@@ -851,16 +847,9 @@ static void test_normal_map_frame(void **state)
                         "newmtl u\nKd 0.5 0.5 0.5\nnorm tilt_u.png\n"
                         "newmtl up\nKd 0.5 0.5 0.5\nnorm tilt_up.png\n"
                         "newmtl half\nKd 0.5 0.5 0.5\nmap_Bump -bm 0.5 tilt_u.png\n");
-    char path[1200];
-    snprintf(path, sizeof path, "%s/tilt.obj", tmp);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib tilt.mtl\n");
     const iir_vec3 a = iir_v3(0.5f, 0, 0), b = iir_v3(0, 0, -0.5f); /* normal a x b = +y */
-    write_uv_quad(f, "u", iir_v3(0, 0, 0), a, b);
-    write_uv_quad(f, "up", iir_v3(2, 0, 0), a, b);
-    write_uv_quad(f, "half", iir_v3(4, 0, 0), a, b);
-    fclose(f);
+    static const char *const mtls[] = {"u", "up", "half"};
+    write_quad_row("tilt", mtls, 3, a, b);
     iir_test_cornell l = iir_test_load(tmp, "tilt");
     const iir_scene *s = l.scene;
     /* the texel (191, 128, 255): tangent-space (0.498, 0.004, 1) */
@@ -932,17 +921,8 @@ static void write_veil(const char *name, double alpha)
              "\"material\": 1}]}],\n"
              " \"materials\": [{\"name\": \"floor\"},\n"
              "   {\"name\": \"veil\", \"alphaMode\": \"BLEND\", \"doubleSided\": true,\n"
-             "    \"pbrMetallicRoughness\": {\"baseColorFactor\": [1, 1, 1, %g]}}],\n"
-             " \"buffers\": [{\"byteLength\": 60, \"uri\": \"data:application/octet-stream;base64,"
-             "AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/"
-             "AAACAAEAAAADAAIA\"}],\n"
-             " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
-             "   {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 12}],\n"
-             " \"accessors\": [\n"
-             "   {\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\",\n"
-             "    \"min\": [-1, 0, -1], \"max\": [1, 0, 1]},\n"
-             "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": "
-             "\"SCALAR\"}]}\n",
+             "    \"pbrMetallicRoughness\": {\"baseColorFactor\": [1, 1, 1, "
+             "%g]}}],\n" IIR_TEST_GLTF_QUAD_DATA,
              alpha);
     snprintf(file, sizeof file, "%s.gltf", name);
     iir_test_write_file(tmp, file, text);

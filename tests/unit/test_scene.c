@@ -465,15 +465,7 @@ static const char *const GLTF =
     "   \"material\": 0}]}],\n"
     " \"materials\": [{\"name\": \"glow\",\n"
     "   \"pbrMetallicRoughness\": {\"baseColorFactor\": [0.8, 0.2, 0.1, 1]},\n"
-    "   \"emissiveFactor\": [1, 2, 3]}],\n"
-    " \"buffers\": [{\"byteLength\": 60, \"uri\": \"data:application/octet-stream;base64,"
-    "AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/AAACAAEAAAADAAIA\"}],\n"
-    " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
-    "   {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 12}],\n"
-    " \"accessors\": [\n"
-    "   {\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\",\n"
-    "    \"min\": [-1, 0, -1], \"max\": [1, 0, 1]},\n"
-    "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": \"SCALAR\"}]}\n";
+    "   \"emissiveFactor\": [1, 2, 3]}],\n" IIR_TEST_GLTF_QUAD_DATA;
 
 static const iir_light *find_light(const iir_scene *s, const char *name)
 {

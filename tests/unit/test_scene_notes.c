@@ -242,15 +242,8 @@ static const char *const GLTF =
     "   \"baseColorFactor\": [0.8, 0.8, 0.8, 1], \"baseColorTexture\": {\"index\": 0}}},\n"
     "   {\"name\": \"steel\", \"pbrMetallicRoughness\": {\"metallicFactor\": 1,\n"
     "   \"baseColorFactor\": [0.5, 0.5, 0.5, 1]}}],\n"
-    " \"textures\": [{\"source\": 0}], \"images\": [{\"uri\": \"paint.png\"}],\n"
-    " \"buffers\": [{\"byteLength\": 60, \"uri\": \"data:application/octet-stream;base64,"
-    "AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/AAACAAEAAAADAAIA\"}],\n"
-    " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
-    "   {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 12}],\n"
-    " \"accessors\": [\n"
-    "   {\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\",\n"
-    "    \"min\": [-1, 0, -1], \"max\": [1, 0, 1]},\n"
-    "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": \"SCALAR\"}]}\n";
+    " \"textures\": [{\"source\": 0}], \"images\": [{\"uri\": "
+    "\"paint.png\"}],\n" IIR_TEST_GLTF_QUAD_DATA;
 
 /* Index of the entry about `name` whose text holds `needle` (and, unless NULL, of method m). */
 static int find(const iir_dropped *d, uint32_t n, const char *m, const char *name,

@@ -12,6 +12,19 @@
 #include "iir/scene.h"
 #include "iir/vecmath.h"
 
+/* The end of a glTF's JSON (its buffers, views and accessors, closing the top object): a quad
+ * [-1, 1] x {0} x [-1, 1] facing +y as accessor 0 (POSITION) and 1 (indices), for glTF test files
+ * written as string literals. */
+#define IIR_TEST_GLTF_QUAD_DATA                                                                    \
+    " \"buffers\": [{\"byteLength\": 60, \"uri\": \"data:application/octet-stream;base64,"         \
+    "AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/AAACAAEAAAADAAIA\"}],\n"      \
+    " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"                 \
+    "   {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 12}],\n"                               \
+    " \"accessors\": [\n"                                                                          \
+    "   {\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": \"VEC3\",\n"          \
+    "    \"min\": [-1, 0, -1], \"max\": [1, 0, 1]},\n"                                             \
+    "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": \"SCALAR\"}]}\n"
+
 /* A fresh directory for this test executable (under $IIR_TEST_TMP or /tmp); returns its path. */
 const char *iir_test_tmpdir(const char *test_name);
 

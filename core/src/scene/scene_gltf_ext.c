@@ -29,11 +29,6 @@ static bool ends_with_glb(const char *path)
     return n >= 4 && strcasecmp(path + n - 4, ".glb") == 0;
 }
 
-static uint32_t le32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
 /* The JSON text of a .glb (its first chunk, type JSON) or a .gltf (the whole file), NUL-ended. */
 static iir_status read_json(const char *path, char **out, iir_error *err)
 {
@@ -46,9 +41,9 @@ static iir_status read_json(const char *path, char **out, iir_error *err)
     size_t len = ok ? (size_t)size : 0;
     if (ok && ends_with_glb(path)) { /* its first chunk, which must be JSON and in the file */
         unsigned char h[20];
-        ok = fread(h, 1, 20, f) == 20 && memcmp(h, "glTF", 4) == 0 && le32(h + 16) == 0x4E4F534Au &&
-             le32(h + 12) <= len - 20;
-        len = ok ? le32(h + 12) : 0;
+        ok = fread(h, 1, 20, f) == 20 && memcmp(h, "glTF", 4) == 0 &&
+             iir_glb_le32(h + 16) == 0x4E4F534Au && iir_glb_le32(h + 12) <= len - 20;
+        len = ok ? iir_glb_le32(h + 12) : 0;
     }
     char *buf = ok && len <= MAX_JSON ? malloc(len + 1) : NULL;
     ok = buf && fread(buf, 1, len, f) == len;

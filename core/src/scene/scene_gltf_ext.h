@@ -12,6 +12,12 @@
 
 typedef struct cJSON cJSON;
 
+/* A little-endian 32-bit word of a .glb's header or chunk header. */
+static inline uint32_t iir_glb_le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
 typedef struct iir_gltf_ext {
     const char *path;   /* the file */
     cJSON *root;        /* its JSON; NULL for other formats */

@@ -20,11 +20,6 @@
 
 /* ======================== images ======================== */
 
-static uint32_t le32(const unsigned char *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
 /* The whole of a file, or NULL (errno says why). */
 static unsigned char *slurp(const char *path, size_t *size)
 {
@@ -76,12 +71,13 @@ static const unsigned char *glb_bin(iir_gltf_ext *e, size_t *size)
             free(f);
             return NULL;
         }
-        size_t at = 20 + (size_t)((le32(f + 12) + 3u) & ~3u);
-        if (at + 8 > n || le32(f + at + 4) != 0x004E4942u || le32(f + at) > n - at - 8) {
+        size_t at = 20 + (size_t)((iir_glb_le32(f + 12) + 3u) & ~3u);
+        if (at + 8 > n || iir_glb_le32(f + at + 4) != 0x004E4942u ||
+            iir_glb_le32(f + at) > n - at - 8) {
             free(f);
             return NULL;
         }
-        e->bin_size = le32(f + at);
+        e->bin_size = iir_glb_le32(f + at);
         memmove(f, f + at + 8, e->bin_size);
         e->bin = f;
     }
