@@ -287,7 +287,7 @@ static void test_gltf_aspect_and_dropped(void **state)
     uint32_t k = iir_method_dropped("iir", s, s->lights, s->num_lights, d, 16);
     assert_int_equal(k, n + 1);
     assert_true(find(d, k, "iir", "fillnode", "") < 0);
-    assert_true(find(d, k, "iir", "steel", "metallic 1") >= 0);
+    assert_true(find(d, k, "iir", "steel", "is glossy (a metal") >= 0);
     /* ir renders every punctual light's indirect light */
     assert_int_equal(iir_method_dropped("ir", s, s->lights, s->num_lights, d, 16), n + 1);
     /* a short buffer gets what fits, the count says how many there are */

@@ -423,10 +423,24 @@ function settled(msg) {
 // light...): one notice, shown again only when the list changes (a dismissed one stays away). Only
 // warnings (what is not rendered) go in it; notes (what was made of the scene: a lamp material that
 // became the movable area light) are rendered, and are not news.
+// Notes with the same kind and text are one line naming them all (as the commands print them:
+// server/scene_notes.c), the first eight by name.
+function groupNotes(notes) {
+    const groups = new Map();
+    for (const n of notes) {
+        const key = `${n.kind}\u0000${n.what}`;
+        if (!groups.has(key)) groups.set(key, { kind: n.kind, what: n.what, names: [] });
+        groups.get(key).names.push(`'${n.name}'`);
+    }
+    return [...groups.values()].map((g) => {
+        const shown = g.names.slice(0, 8).join(', ');
+        const more = g.names.length > 8 ? ` and ${g.names.length - 8} more` : '';
+        return `${g.kind}${g.names.length > 1 ? 's' : ''} ${shown}${more}: ${g.what}`;
+    });
+}
+
 function showNotes(notes) {
-    const text = (notes || [])
-        .filter((n) => n.severity !== 'note')
-        .map((n) => `${n.kind} '${n.name}': ${n.what}`).join(' · ');
+    const text = groupNotes((notes || []).filter((n) => n.severity !== 'note')).join(' · ');
     if (text === app.notesText) return;
     app.notesText = text;
     if (text) errors.show('notes', text, 0, true);

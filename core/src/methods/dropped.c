@@ -35,19 +35,19 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
     for (uint32_t i = 0; i < scene->num_materials; i++) {
         const iir_material *m = &scene->material_list[i];
         bool glossy_direct = strcmp(method, "hier") != 0; /* hier shades its own tree */
+        /* one text for every glossy material (no per-material figures), so the commands and the
+           page say it once, naming them all; short enough for iir_dropped.what */
         if (iir_material_is_glossy(m) && glossy_direct)
             iir_dropped_add(out, max, &n, method, "material", m->name,
-                            "is glossy (metallic %g, roughness %g): %s renders its direct light "
-                            "by the full BSDF, but the light it reflects from VPLs and the VPLs "
-                            "born on it by its diffuse albedo only (base colour x (1 - metallic)); "
-                            "use pt for its glossy indirect light",
-                            (double)m->metallic, (double)m->roughness, method);
+                            "is glossy (a metal, or roughness below 0.6): %s renders its direct "
+                            "light by the full BSDF, its bounce light as diffuse only; pt renders "
+                            "both",
+                            method);
         else if (iir_material_is_glossy(m))
             iir_dropped_add(out, max, &n, method, "material", m->name,
-                            "is glossy (metallic %g, roughness %g): %s shades it by its diffuse "
-                            "albedo only (base colour x (1 - metallic)), its specular reflection "
-                            "is left out; use pt, whitted or hybrid",
-                            (double)m->metallic, (double)m->roughness, method);
+                            "is glossy (a metal, or roughness below 0.6): %s shades it as diffuse "
+                            "only, its highlights left out; pt, whitted and hybrid render them",
+                            method);
         else if (m->kind == IIR_MATERIAL_MIRROR || m->kind == IIR_MATERIAL_GLASS)
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is a %s: %s renders it black (its VPLs and shading are diffuse "

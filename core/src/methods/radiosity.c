@@ -299,10 +299,9 @@ static uint32_t rad_dropped(const iir_scene *scene, const iir_light *lights, uin
         const iir_material *m = &scene->material_list[i];
         if (iir_material_is_glossy(m))
             iir_dropped_add(out, max, &n, "radiosity", "material", m->name,
-                            "is glossy (metallic %g, roughness %g): radiosity's patches are "
-                            "diffuse only (its mean texel albedo), its specular reflection is left "
-                            "out; use hybrid, pt or whitted",
-                            (double)m->metallic, (double)m->roughness);
+                            "is glossy (a metal, or roughness below 0.6): radiosity's patches are "
+                            "diffuse only, its highlights left out; hybrid, pt and whitted render "
+                            "them");
         else if (m->kind == IIR_MATERIAL_MIRROR || m->kind == IIR_MATERIAL_GLASS)
             iir_dropped_add(out, max, &n, "radiosity", "material", m->name,
                             "is a %s: radiosity's patches are diffuse only, so it is black; use "
