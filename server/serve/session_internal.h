@@ -139,6 +139,8 @@ struct iird_session {
     bool scene_pending;
     char scene_name[130];
     int64_t scene_seq;
+    uint64_t scene_version; /* `version` when it was asked: a frame after the switch answers the
+                               newest input, which is the switch's only if none came since */
     bool snapshot_pending, snapshot_exr;
     bool snapshot_busy;     /* one requested and not yet written out (at most one per session) */
     uint64_t snapshot_held; /* its bytes, reserved in env->budget while queued */

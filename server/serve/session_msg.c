@@ -301,6 +301,7 @@ static bool on_scene(iird_session *s, const iird_msg *m, iird_proto_error *err)
     s->scene_pending = true;
     snprintf(s->scene_name, sizeof s->scene_name, "%s", name);
     s->scene_seq = m->seq;
+    s->scene_version = s->version;
     pthread_cond_broadcast(&s->wake);
     pthread_mutex_unlock(&s->lock);
     free(json);

@@ -726,9 +726,11 @@ static const iird_scene_entry *swap_scene_locked(iird_session *s, const iird_sce
     *L = gone;
     record_scene_switch_locked(s);
     s->camera = e->scene->camera;
-    s->version++;
     s->generation++;
-    if (seq != IIRD_NO_SEQ) s->seq = seq;
+    /* a light or camera message that came after the switch was asked (it moved the old scene's)
+       is still the newest input: frames answer its seq */
+    if (seq != IIRD_NO_SEQ && s->version == s->scene_version) s->seq = seq;
+    s->version++;
     s->input_ms = iir_now_ms();
     iird_state_view v = iird_state_view_locked(s);
     char *json = iird_json_state(&v, seq);

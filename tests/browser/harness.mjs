@@ -249,6 +249,7 @@ export async function newPage(browser, { expected = null, width = 1280, height =
         if (m.type() === 'error') page.problems.push(text);
     });
     page.on('pageerror', (e) => page.problems.push(`uncaught: ${e.message}`));
+    await recordWire(page); // every page: a failure message ends with the wire's last messages
     page.on('requestfailed', (r) => {
         if (!page.daemonDown) page.problems.push(`request failed: ${r.url()} ${r.failure() && r.failure().errorText}`);
     });
@@ -300,12 +301,13 @@ export async function setParam(page, name, value) {
     await waitFor(page, ([n, v]) => window.iir.state.params[n] === v, [name, value]);
 }
 
-// Waits until every input the page sent is answered by a drawn frame, and then for `more` frames
-// or until no frame came for `quietMs` (the session has converged and idles).
+// Waits until every input the page has (a key's move goes out on the next animation frame) is sent
+// and answered by a drawn frame, and then for `more` frames or until no frame came for `quietMs`
+// (the session has converged and idles).
 export async function settle(page, more = 2, quietMs = 2000) {
     await page.waitForFunction(() => {
         const f = window.iir.lastFrame;
-        return f && !window.iir.switching && (window.iir.inputSeq > 0 ? f.seq !== 0xffffffff && f.seq >= window.iir.inputSeq : true);
+        return f && !window.iir.switching && !window.iir.inputPending && (window.iir.inputSeq > 0 ? f.seq !== 0xffffffff && f.seq >= window.iir.inputSeq : true);
     }, null, { timeout: WAIT_MS }).catch(async (e) => {
         throw new Error(`${e.message}\npage: ${JSON.stringify(await pageState(page))}`);
     });
@@ -321,9 +323,9 @@ export function pageState(page) {
         const f = i.lastFrame;
         return {
             scene: i.state && i.state.scene, method: i.state && i.state.params.method, generation: i.generation,
-            switching: i.switching, greyed: i.greyed, curtain: i.curtain, errors: i.errors, inputSeq: i.inputSeq,
+            switching: i.switching, greyed: i.greyed, curtain: i.curtain, errors: i.errors, inputSeq: i.inputSeq, inputPending: i.inputPending,
             lastFrame: f && { id: f.frameId, seq: f.seq, generation: f.generation, pass: f.pass }, held: i.framesHeld,
-            wire: (window.__wire || []).slice(-12).map((m) => `${m.dir} ${m.type} seq=${m.seq} gen=${m.generation} frame=${m.frame}`),
+            wire: (window.__wire || []).slice(-24).map((m) => `${(m.t / 1000).toFixed(2)} s ${m.dir} ${m.type} seq=${m.seq} gen=${m.generation} frame=${m.frame}${m.code ? ` code=${m.code}` : ""}`),
         };
     });
 }
@@ -467,8 +469,10 @@ export function tone(rgb) {
 // Records, in the page, every message on the client's WebSocket with performance.now(): window.__wire
 // holds {t, socket (1, 2, ... per WebSocket the page opened), dir: 'out'|'in', type, seq, generation,
 // frame, position (a state's light), name (a message's: the light a `light` message moves)}. Call
-// before loading the page.
+// before loading the page (newPage does, for every page; again is harmless).
 export async function recordWire(page) {
+    if (page.wireRecorded) return;
+    page.wireRecorded = true;
     await page.addInitScript(() => {
         const log = (window.__wire = []);
         const Native = window.WebSocket;

@@ -5,6 +5,8 @@
 // ↓ moves it down the screen and ↑ up, each press by a similar step (no flip between two aims);
 // from a tilted aim ← → ↑ ↓ move it left, right, up, down. The moved light is the session's (its
 // `state` after the frames settle), not only the page's model.
+// Keys pressed faster than the page sends (in one task): a reset after a move wins in the page and
+// the session alike.
 // Screenshots: arrow_tilt_down.png (after ↓ ×4 from the reset view) in $IIR_TEST_TMP (harness
 // shotPath).
 //
@@ -64,6 +66,22 @@ async function reset(page) {
     await H.waitFor(page, () => !window.iir.switching && Math.abs(window.iir.state.light.direction[1] + 1) < 1e-6);
 }
 
+// Keys pressed in one task (no animation frame between them: a key's light move is sent on the
+// next one), then the session settles: a reset pressed after a move wins over it, and a move pressed
+// during a reset (before its reply) is not taken. Either way the page's spot is the session's, which
+// is the reset's `state` reply's light, no light message going out after the reset's scene message.
+async function keysInOneTask(page, keys, label) {
+    const n = await page.evaluate(() => window.__wire.length);
+    await page.evaluate((keys) => {
+        for (const key of keys) window.dispatchEvent(new KeyboardEvent('keydown', { key, bubbles: true, cancelable: true }));
+    }, keys);
+    await H.settle(page, 1, 800);
+    const { wire, d } = await page.evaluate((n) => ({ wire: window.__wire.slice(n).filter((m) => m.dir === 'out').map((m) => m.type), d: window.iir.state.light.direction }), n);
+    const after = wire.slice(wire.lastIndexOf('scene') + 1);
+    check(wire.includes('scene') && !after.includes('light') && Math.abs(d[1] + 1) < 1e-6,
+        `${label}: the reset wins in the page and the session (sent ${wire.join(', ')}; the page's spot points [${d.map((x) => x.toFixed(3))}])`);
+}
+
 async function main() {
     const { daemon, page } = await H.openSmallSession(IIRD, SRC);
     await page.click('#frame', { position: { x: 2, y: 2 }, button: 'right' }).catch(() => {});
@@ -93,6 +111,10 @@ async function main() {
     await run(page, 'ArrowRight', [1, 0], 'tilted aim, →');
     await run(page, 'ArrowDown', [0, 1], 'tilted aim, ↓');
     await run(page, 'ArrowLeft', [-1, 0], 'tilted aim, ←');
+
+    await keysInOneTask(page, ['ArrowUp', '0'], '↑ then 0 in one task');
+    await keysInOneTask(page, ['0', 'ArrowUp'], '0 then ↑ in one task');
+    await keysInOneTask(page, ['ArrowLeft', 'ArrowLeft', '0', 'ArrowDown'], '← ← 0 ↓ in one task');
 
     check(page.problems.length === 0, `no console errors${page.problems.length ? `:\n  ${page.problems.join('\n  ')}` : ''}`);
     await daemon.stop();

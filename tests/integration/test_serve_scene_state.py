@@ -3,7 +3,8 @@ through the Cornell box's red wall or ceiling stays inside, and the `state` repl
 orbited behind its walls stays in the room, in front of the wall, still looking at its target, and the
 `state` reply says where (issue 26, item 11c); one looking at the box from anywhere before its opening
 is kept as asked; every frame
-carries the generation of the state it shows, so a client can drop frames of the previous method or
+carries the generation of the state it shows, and answers the newest input (a move sent right after a
+scene switch too), so a client can drop frames of the previous method or
 scene; a startup scene given as a path outside the scenes directory is in `welcome.scenes` and can be
 picked again after switching away; a scene without lights says its spot is made up; the notes name what
 the method leaves out (iir: an emissive material's indirect light).
@@ -95,6 +96,25 @@ class LightBoundsTest(DaemonTest):
             self.assertEqual(st["generation"], g0 + 2, "a scene switch bumps the generation")
             f = await c.wait_frame(since=c.mark(), min_seq=st["seq"])
             self.assertEqual(f.generation, g0 + 2, "the frame of the new scene")
+        finally:
+            await c.close()
+
+    async def test_a_move_sent_right_after_a_scene_switch_is_answered(self):
+        """A light message that arrives while a switch loads moves the old scene's light (the switch
+        resets it): the frames after the switch still answer it, the newest input, not the switch
+        asked before it (a client waiting for its seq would wait for ever)."""
+        c = await Client.connect(self.daemon)
+        try:
+            await c.wait_frame()
+            for name in ("cornell_box", "builtin"):
+                at = c.mark()
+                a, b = c.next_seq(), c.next_seq()
+                await c.send({"type": "scene", "seq": a, "name": name})
+                await c.send({"type": "light", "seq": b, "position": [0.2, 1.5, 0.1]})
+                st = await c.wait_text("state", since=at, seq=a, timeout=60)
+                self.assertEqual(st["scene"], name)
+                f = await c.wait_frame(since=at, min_seq=b)
+                self.assertGreaterEqual(f.generation, st["generation"], "the frame shows the new scene")
         finally:
             await c.close()
 

@@ -347,12 +347,23 @@ export class Controls {
             if (seq >= 0) this.pickInFlight = { seq, t: now };
             this.pendingPick = null;
         }
+        this.flushInput();
+        if (this.pendingPick) this.schedule();
+    }
+
+    // The light and camera moves waiting for the next animation frame go now: a scene or params
+    // message sent after them must not overtake them (the wire keeps the order the user acted in).
+    flushInput() {
         this.flushLight();
         if (this.pendingCamera) {
             this.send.camera(roundFields(this.pendingCamera));
             this.pendingCamera = null;
         }
-        if (this.pendingPick) this.schedule();
+    }
+
+    // Whether a light or camera move waits for the next animation frame (window.iir.inputPending).
+    get inputPending() {
+        return !!(this.pendingLight || this.pendingCamera);
     }
 
     flushLight() {

@@ -5,7 +5,8 @@
 //   newest drawn frame), drawn (the last drawn frames: frameId, generation, pass, t), shownStats (the
 //   stats of the frame on screen), lastDomain, lastStats, methods (welcome.methods), connected,
 //   state (the page's model), generation (newest state's), switching (a switch awaits its state),
-//   inputSeq (newest input sent), latencyMs, errors (kind -> banner text), fieldErrors (params field ->
+//   inputSeq (newest input sent), inputPending (a light or camera move waits for the next animation
+//   frame to be sent), latencyMs, errors (kind -> banner text), fieldErrors (params field ->
 //   why the value typed there was refused, shown next to it), curtain ({mode, title,
 //   text}), greyed, gizmo (where the selected light is drawn, frame pixels), gizmos (where each light
 //   is drawn: {name, x, y, visible, offscreen}), selected (index of the selected light in
@@ -14,7 +15,7 @@
 
 const clone = (x) => JSON.parse(JSON.stringify(x));
 
-export function inspector({ app, gate, errors, curtain, view, charts, domainView, panel }) {
+export function inspector({ app, gate, controls, errors, curtain, view, charts, domainView, panel }) {
     return Object.freeze({
         get methods() {
             return app.methods;
@@ -45,6 +46,9 @@ export function inspector({ app, gate, errors, curtain, view, charts, domainView
         },
         get inputSeq() {
             return app.inputSeq;
+        },
+        get inputPending() {
+            return controls.inputPending;
         },
         get latencyMs() {
             return app.latencyMs;

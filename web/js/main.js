@@ -88,6 +88,7 @@ const conn = new Connection(defaultUrl(), {
 
 // Every message goes out here and is remembered with its kind (details: kept with it).
 function send(msg, details = {}) {
+    if (msg.type === 'scene' || msg.type === 'params') controls.flushInput(); // after the moves before it
     const seq = conn.send(msg);
     if (seq > 0 && P.INPUT_TYPES.has(msg.type)) app.inputSeq = seq;
     if (seq > 0) requests.sent(seq, msg.type, details);
@@ -274,9 +275,11 @@ function listScenes(list, more) {
     if (more) send({ type: 'scenes' });
 }
 
-// Light and camera input needs a session, and no scene on its way (the switch resets both).
+// Light and camera input needs a session, and no scene switch waiting for its reply, a reset view
+// included (the switch resets both: a move sent meanwhile would move the old scene's light, and the
+// page would show it moved while the image shows the scene's own).
 function updateEnabled() {
-    controls.enabled = app.connected && !!app.state && !switcher.sceneLoading;
+    controls.enabled = app.connected && !!app.state && !switcher.sceneLoading && switcher.pendingScene() === null;
 }
 
 // ---- connection events ----
@@ -666,6 +669,6 @@ $('#help').addEventListener('click', () => actions.help(false));
 $('#show-vpls').addEventListener('change', (e) => actions.toggleVpls(e.target.checked));
 $('#retry-now').addEventListener('click', () => conn.retryNow());
 
-window.iir = inspector({ app, gate, errors, curtain, view, charts, domainView, panel });
+window.iir = inspector({ app, gate, controls, errors, curtain, view, charts, domainView, panel });
 
 conn.start();

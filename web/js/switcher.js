@@ -12,8 +12,8 @@ import { alternatives } from './curtain.js';
 
 export class Switcher {
     // parts: {gate, view, curtain, panel, send(msg, details) -> seq, state() -> the page's model,
-    // methods() -> welcome.methods, busy(on): a scene is loading (main.js disables the light and
-    // camera controls meanwhile)}
+    // methods() -> welcome.methods, busy(): a scene is loading or a reset view awaits its reply
+    // (main.js disables the light and camera controls meanwhile)}
     constructor(parts) {
         Object.assign(this, parts);
         this.sceneLoading = false;
@@ -30,8 +30,11 @@ export class Switcher {
         if (seq < 0) return this.panel.setState(s); // not sent: the picker shows the scene shown
         this.gate.asked({ seq, kind: 'scene', name });
         // "reset view": the same scene, its own light and camera (back to it while another loads:
-        // the curtain says so)
-        if (name === shown && !this.sceneLoading) return seq;
+        // the curtain says so); no curtain, but no moves until its reply either
+        if (name === shown && !this.sceneLoading) {
+            this.busy(true);
+            return seq;
+        }
         this.begin(`loading ${name}…`, name === shown ? `${name} again, with ${s.params.method}`
             : `${shown} goes; ${name} is shown with ${s.params.method} once it has loaded`);
         this.sceneLoading = true;
@@ -176,8 +179,8 @@ export class Switcher {
         if (!this.gate.switching) this.done();
     }
 
+    // No switch waits for its reply: light and camera moves are taken again.
     done() {
-        if (!this.sceneLoading) return;
         this.sceneLoading = false;
         this.busy(false);
     }
