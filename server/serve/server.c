@@ -248,9 +248,24 @@ static void client_address(const server *srv, struct lws *wsi, char addr[ADDR_BY
 
 static void start_sweep(server *srv);
 
+/* Messages go out in one send of up to this many bytes (the protocol's tx_packet_size), into a
+ * socket send buffer that takes them whole (a new TCP socket starts at 16 KB, tcp_wmem; setting it
+ * fixes it, doubled by the kernel, giving up autotuning past that). With the default (the rx
+ * buffer's 16 KB) a welcome (~33 KB: every method's parameter table) went out in three sends, the
+ * rest buffered by libwebsockets, which then closed a connection that failed the protocol (RSV
+ * bits, a reserved opcode) without its close frame (1002): test_serve_hostile2's FramingTest. */
+enum { SEND_BUFFER_BYTES = 1 << 20 };
+
+static void size_send_buffer(struct lws *wsi)
+{
+    int fd = (int)lws_get_socket_fd(wsi), bytes = SEND_BUFFER_BYTES;
+    if (fd >= 0) (void)setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &bytes, sizeof bytes); /* a hint */
+}
+
 static void on_established(server *srv, conn *c, struct lws *wsi)
 {
     link_conn(srv, c, wsi);
+    size_send_buffer(wsi);
     start_sweep(srv);
     client_address(srv, wsi, c->addr, &c->local);
     if (atomic_load(&srv->draining)) return refuse_busy(c, BUSY_DRAINING);
@@ -566,7 +581,7 @@ static int http_callback(struct lws *wsi, enum lws_callback_reasons reason, void
 
 /* The first protocol is the one lws gives WebSocket clients that name no subprotocol. */
 static const struct lws_protocols protocols[] = {
-    {"iird", ws_callback, sizeof(conn), 16384, 0, NULL, 0},
+    {"iird", ws_callback, sizeof(conn), 16384, 0, NULL, SEND_BUFFER_BYTES},
     {"http", http_callback, sizeof(http_req), 0, 0, NULL, 0},
     {NULL, NULL, 0, 0, 0, NULL, 0}};
 
