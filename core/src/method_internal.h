@@ -116,6 +116,8 @@ typedef struct iir_method_ops {
     /* pt's bounce count for this method's references (iir_method_reference_bounces): 0 = the
      * method's `bounces` parameter, or 2 (one bounce) without one. */
     int reference_bounces;
+    /* Its VPL sum reflects by a glossy pixel's full BSDF (render_indirect.c, full shading). */
+    bool glossy_gather;
     /* The phases the method reports, in pipeline order, ending with IIR_PHASE_COUNT. */
     iir_phase phases[IIR_PHASE_COUNT + 1];
     /* Its own counters (frame stats' counter[i] is counters[i]), up to the first NULL name. */

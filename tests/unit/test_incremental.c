@@ -942,6 +942,62 @@ static void test_memory_steady(void **state)
     iir_incr_destroy(inc);
 }
 
+/* ---- a glossy floor: kept VPLs' lobes follow the light ----------------------------------------
+ */
+
+/* A 4 x 4 metal floor (MTL PBR: base 0.8, metallic 1, roughness 0.3) under a spot: every VPL is
+ * glossy with albedo c_diff + F0 = 0.8 and its light arriving from the spot (wi), and a VPL kept
+ * when the spot moves has its wi turned toward the new position. */
+static void test_glossy_lobes_follow_the_light(void **state)
+{
+    (void)state;
+    const char *dir = iir_test_tmpdir("incr-glossy");
+    iir_test_write_file(dir, "floor.mtl", "newmtl metal\nKd 0.8 0.8 0.8\nPm 1\nPr 0.3\n");
+    char path[1200];
+    snprintf(path, sizeof path, "%s/floor.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib floor.mtl\n");
+    iir_test_write_quad(f, "metal", iir_v3(0, 0, 0), iir_v3(0, 0, 2), iir_v3(2, 0, 0));
+    fclose(f);
+    iir_test_write_file(dir, "floor.scene.json",
+                        "{\"camera\": {\"position\": [0, 2, 3], \"target\": [0, 0, 0]},"
+                        " \"lights\": []}");
+    env e = {0};
+    iir_error err = {0};
+    if (iir_test_load_obj(dir, "floor", &e.scene, &e.rt, &err) != IIR_OK) fail_msg("%s", err.msg);
+    iir_incr *inc = make_incr(&e, 64, IIR_WEIGHTS_VORONOI, 5);
+    iir_light l = spot_at(iir_v3(0, 1.5f, 0), iir_v3(0, -1, 0), 40.f, 5.f);
+    iir_vec3 wi0[64];
+    uint32_t id0[64], n0 = 0;
+    for (int frame = 0; frame < 2; frame++) {
+        if (frame) l.position = iir_add(l.position, iir_v3(0.05f, 0, 0.03f));
+        update(inc, &l);
+        uint32_t n = 0, kept = 0, glossy = 0;
+        const iir_vpl *v = iir_incr_vpls(inc, &n);
+        for (uint32_t i = 0; i < n; i++) {
+            if (v[i].null_sample) continue;
+            glossy++;
+            if (!v[i].lobe.glossy || fabsf(v[i].albedo.x - 0.8f) > 1e-5f)
+                fail_msg("frame %d: VPL %u: glossy %d, albedo %g", frame, v[i].id, v[i].lobe.glossy,
+                         v[i].albedo.x);
+            iir_vec3 want = iir_normalize(iir_sub(l.position, v[i].position));
+            if (iir_length(iir_sub(v[i].wi, want)) > 1e-4f)
+                fail_msg("frame %d: VPL %u: wi %g %g %g, toward the spot %g %g %g", frame, v[i].id,
+                         v[i].wi.x, v[i].wi.y, v[i].wi.z, want.x, want.y, want.z);
+            for (uint32_t k = 0; frame && k < n0; k++)
+                if (id0[k] == v[i].id && iir_length(iir_sub(wi0[k], v[i].wi)) > 1e-3f) kept++;
+            if (!frame && n0 < 64) wi0[n0] = v[i].wi, id0[n0++] = v[i].id;
+        }
+        assert_true(glossy > 32);
+        if (frame && kept < 16) fail_msg("only %u kept VPLs turned their lobes", kept);
+        give_maps(inc);
+    }
+    iir_incr_destroy(inc);
+    iir_rt_destroy(e.rt);
+    iir_scene_destroy(e.scene);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -957,6 +1013,7 @@ int main(void)
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_memory_steady),
         cmocka_unit_test(test_smooth_path_steady),
+        cmocka_unit_test(test_glossy_lobes_follow_the_light),
     };
     return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

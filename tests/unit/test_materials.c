@@ -627,31 +627,14 @@ static void test_cutout_shadows(void **state)
 
 /* ======================== 4. pt on a GGX plane ======================== */
 
-/* glTF 2.0 specification, appendix B (the BRDF as a mix of a dielectric and a metal BRDF), in
- * double, written out independently of bsdf.c. n = +y. */
+/* glTF 2.0 specification, appendix B, independently of bsdf.c (testutil.h). n = +y. */
 typedef struct ggx_mat {
     double base, metallic, roughness; /* grey base colour */
 } ggx_mat;
 
 static double brdf(const ggx_mat *m, const double wo[3], const double wi[3])
 {
-    double nl = wi[1], nv = wo[1];
-    if (nl <= 0 || nv <= 0) return 0;
-    double h[3] = {wo[0] + wi[0], wo[1] + wi[1], wo[2] + wi[2]};
-    double hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
-    for (int k = 0; k < 3; k++) h[k] /= hl;
-    double nh = h[1], vh = fabs(wo[0] * h[0] + wo[1] * h[1] + wo[2] * h[2]);
-    double a = m->roughness * m->roughness, a2 = a * a;
-    double dd = nh * nh * (a2 - 1) + 1;
-    double D = a2 / (M_PI * dd * dd); /* (nh > 0 always: h between two upper directions) */
-    double V = 0.5 / (nl * sqrt(nv * nv * (1 - a2) + a2) + nv * sqrt(nl * nl * (1 - a2) + a2));
-    double s = pow(1 - vh, 5);
-    double specular = V * D;
-    /* dielectric_brdf = mix(diffuse, specular, F(0.04)); metal_brdf = specular F(base) */
-    double Fd = 0.04 + (1 - 0.04) * s, Fm = m->base + (1 - m->base) * s;
-    double dielectric = (1 - Fd) * m->base / M_PI + Fd * specular;
-    double metal = Fm * specular;
-    return (1 - m->metallic) * dielectric + m->metallic * metal;
+    return iir_test_gltf_brdf(m->base, m->metallic, m->roughness, wo, wi);
 }
 
 /* A 20 x 20 plane at y = 0 facing +y, one metallic-roughness material (no textures). */

@@ -1,5 +1,6 @@
 /* test_render.c -- the VPL renderer against independent answers: a VPL and point/spot lights over a
- * diffuse plane (analytic, per pixel, both visibility backends), direct light against the pt
+ * diffuse plane (analytic, per pixel, both visibility backends), a VPL over glossy planes (the
+ * glTF BRDF, per pixel), direct light against the pt
  * method (the Cornell box and an area-light scene), shadow maps against exact rays on the Cornell
  * box, interleaved sampling and its filter against full evaluation, clamping, G-buffer reuse,
  * determinism and error statuses. Scenes are written as OBJ + sidecar and loaded for real.
@@ -235,6 +236,199 @@ static void test_single_vpl_plane(void **state)
     iir_image_destroy(img);
     iir_smap_release(&v.smap);
     unload(&l);
+}
+
+/* ---- a VPL over a glossy plane: the pixel's BSDF toward the camera, as appendix B says ---- */
+
+/* The squared diagonal of the scene's bounding box (the clamp's D^2). */
+static double scene_diag2(const iir_scene *s)
+{
+    return iir_length_sq(iir_sub(s->bounds_max, s->bounds_min));
+}
+
+/* The floor's point (y = 0, normal +y) through pixel (x, y)'s centre: wi (unit, toward VPL v), wo
+ * (unit, toward the eye); returns the unclamped geometry term cos_v cos_x / d^2. */
+static double floor_geometry(const iir_camera_frame *cf, int x, int y, const iir_vpl *v,
+                             double wi[3], double wo[3])
+{
+    iir_vec3 X = plane_point(cf, x, y, 0.f);
+    iir_vec3 w = iir_sub(X, v->position), o = iir_sub(cf->origin, X);
+    double d = iir_length(w), od = iir_length(o);
+    wi[0] = -w.x / d, wi[1] = -w.y / d, wi[2] = -w.z / d;
+    wo[0] = o.x / od, wo[1] = o.y / od, wo[2] = o.z / od;
+    return fmax(0.0, iir_dot(v->normal, w) / d) * wi[1] / (d * d);
+}
+
+/* load_plane's floor in one metallic-roughness material (MTL's PBR extension: Kd base, Pm, Pr). */
+static loaded load_glossy_plane(double base, double metallic, double roughness)
+{
+    const char *dir = iir_test_tmpdir("render-glossy");
+    char mtl[160];
+    snprintf(mtl, sizeof mtl, "newmtl ggx\nKd %g %g %g\nPm %g\nPr %g\n", base, base, base, metallic,
+             roughness);
+    iir_test_write_file(dir, "glossy.mtl", mtl);
+    char path[1200];
+    snprintf(path, sizeof path, "%s/glossy.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib glossy.mtl\n");
+    iir_test_write_quad(f, "ggx", iir_v3(0, 0, 0), iir_v3(0, 0, 20), iir_v3(20, 0, 0));
+    fclose(f);
+    iir_test_write_file(dir, "glossy.scene.json",
+                        "{\"camera\": {\"position\": [0, 2.5, 1.5], \"target\": [0, 0, 0],"
+                        " \"up\": [0, 1, 0], \"fov_y\": 90}, \"lights\": []}");
+    loaded l = load(dir, "glossy");
+    const iir_material *m = &l.scene->material_list[l.scene->materials[0]];
+    assert_int_equal(m->kind, IIR_MATERIAL_METAL_ROUGH);
+    return l;
+}
+
+/* A diffuse VPL's light reflected by a glossy plane (metal and plastic), every pixel against
+ * f(wo, wi) Phi / pi cos_v cos_x / d^2 with f the independent appendix-B BRDF (testutil.h), for
+ * both visibility backends; with the clamp, f G bounded by g_max demod / pi. */
+static void test_single_vpl_glossy_plane(void **state)
+{
+    (void)state;
+    enum { W = 48, H = 48 };
+    const double mats[][3] = {{0.9, 1.0, 0.3}, {0.5, 0.0, 0.5}, {0.8, 1.0, 0.08}};
+    const char *const what[] = {"shadow map", "rays", "rays, clamp 2000"};
+    for (size_t mi = 0; mi < sizeof mats / sizeof *mats; mi++) {
+        const double *m = mats[mi];
+        loaded l = load_glossy_plane(m[0], m[1], m[2]);
+        iir_vpl v = make_vpl(3, iir_v3(0.2f, 1.f, -0.6f), iir_v3(0.f, -1.f, 0.3f), iir_v3(2, 2, 2));
+        assert_int_equal(iir_smaps_build(&v, 1, l.rt, 256, NULL), 1);
+        iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
+        iir_image *img = iir_image_create(W, H);
+        /* c_diff + f0 (iir_gb_demod): a clamped glossy pixel gets at most g_max demod / pi */
+        double demod = (1 - m[1]) * m[0] + (1 - m[1]) * 0.04 + m[1] * m[0];
+        for (int b = 0; b < 3; b++) {
+            iir_indirect_params p = params(b ? IIR_VIS_RAYS : IIR_VIS_SHADOWMAP, 1, false);
+            if (b == 2) p.clamp = 2000.f; /* g_max 0.625: G below the VPL and the lobe bounded */
+            double g_max = b == 2 ? p.clamp / scene_diag2(l.scene) : INFINITY;
+            frame(&l, &l.scene->camera, NULL, 0, &v, 1, &p, 1, img, NULL);
+            double worst = 0, peak = 0;
+            int clamped = 0;
+            for (int y = 0; y < H; y++)
+                for (int x = 0; x < W; x++) {
+                    double wi[3], wo[3];
+                    double G = fmin(floor_geometry(&cf, x, y, &v, wi, wo), g_max);
+                    double fG = iir_test_gltf_brdf(m[0], m[1], m[2], wo, wi) * G;
+                    clamped += fG > g_max * demod / M_PI;
+                    double want = fmin(fG, g_max * demod / M_PI) * 2.0 / M_PI;
+                    double got = iir_image_at(img, x, y)->x;
+                    peak = fmax(peak, want);
+                    double err = fabs(got - want) / fmax(want, 1e-6);
+                    worst = fmax(worst, err);
+                    if (err > 2e-3)
+                        fail_msg("metallic %g roughness %g, %s: pixel (%d,%d) = %g, appendix B %g",
+                                 m[1], m[2], what[b], x, y, got, want);
+                }
+            print_message("  metallic %g roughness %g, %s: worst pixel %.4f%% (peak %.4g%s)\n",
+                          m[1], m[2], what[b], 100 * worst, peak,
+                          b == 2 ? (clamped ? ", some clamped" : ", none clamped") : "");
+            /* the clamp bounds the metal's lobe of roughness 0.3 (its peak is 4.5 g_max demod) */
+            if (b == 2 && m[2] == 0.3 && !clamped) fail_msg("the clamp bounded no pixel");
+        }
+        iir_image_destroy(img);
+        iir_smap_release(&v.smap);
+        unload(&l);
+    }
+}
+
+/* A glossy VPL (a metal lobe) over the diffuse floor, facing down, its light arriving from wi:
+ * every pixel against rho / pi (Phi / albedo) f(w, wi) cos_v cos_x / d^2, f the independent
+ * appendix-B BRDF in the VPL's frame (its normal -y: y mirrored), both visibility backends; and
+ * with the lobe turned (another wi) its highlight moves. */
+static void test_glossy_vpl_over_plane(void **state)
+{
+    (void)state;
+    enum { W = 48, H = 48 };
+    loaded l = load_plane(false);
+    const double base = 0.9, metallic = 1.0, roughness = 0.3;
+    iir_vpl v = make_vpl(4, iir_v3(0.2f, 1.f, -0.1f), iir_v3(0.f, -1.f, 0.f), iir_v3(2, 2, 2));
+    v.lobe = (iir_vpl_lobe){
+        .glossy = true, .metallic = 1.f, .roughness = 0.3f, .f0 = 0.04f, .base = iir_v3s(0.9f)};
+    v.albedo = iir_v3s(0.9f); /* c_diff 0 + F0 0.9 */
+    assert_int_equal(iir_smaps_build(&v, 1, l.rt, 256, NULL), 1);
+    iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
+    iir_image *img = iir_image_create(W, H);
+    const iir_vec3 wis[2] = {iir_normalize(iir_v3(0.5f, -1.f, 0.2f)),
+                             iir_normalize(iir_v3(-0.2f, -1.f, -0.6f))};
+    int peak_at[2] = {0, 0};
+    for (int a = 0; a < 2; a++) {
+        v.wi = wis[a];
+        for (int b = 0; b < 2; b++) {
+            iir_indirect_params p = params(b ? IIR_VIS_RAYS : IIR_VIS_SHADOWMAP, 1, false);
+            frame(&l, &l.scene->camera, NULL, 0, &v, 1, &p, 1, img, NULL);
+            double worst = 0, peak = -1;
+            for (int y = 0; y < H; y++)
+                for (int x = 0; x < W; x++) {
+                    iir_vec3 X = plane_point(&cf, x, y, 0.f), w = iir_sub(X, v.position);
+                    double d = iir_length(w);
+                    /* in the VPL's frame (normal -y): mirror y */
+                    double wo[3] = {w.x / d, -w.y / d, w.z / d}, wl[3] = {v.wi.x, -v.wi.y, v.wi.z};
+                    double cos_v = -w.y / d, cos_x = -w.y / d;
+                    double want = 0.5 / M_PI * (2.0 / 0.9) *
+                                  iir_test_gltf_brdf(base, metallic, roughness, wo, wl) * cos_v *
+                                  cos_x / (d * d);
+                    double got = iir_image_at(img, x, y)->x;
+                    if (got > peak) peak = got, peak_at[a] = y * W + x;
+                    double err = fabs(got - want) / fmax(want, 1e-6);
+                    worst = fmax(worst, err);
+                    if (err > 2e-3)
+                        fail_msg("lobe %d, %s: pixel (%d,%d) = %g, expected %g", a,
+                                 b ? "rays" : "shadow map", x, y, got, want);
+                }
+            print_message("  glossy VPL, lobe %d, %s: worst pixel %.4f%%, brightest (%d, %d)\n", a,
+                          b ? "rays" : "shadow map", 100 * worst, peak_at[a] % W, peak_at[a] / W);
+        }
+    }
+    if (peak_at[0] == peak_at[1]) fail_msg("turning the lobe did not move its highlight");
+    iir_image_destroy(img);
+    iir_smap_release(&v.smap);
+    unload(&l);
+}
+
+/* receiver_bsdf: a rough dielectric (roughness 0.8) reflects a VPL as a Lambertian surface of its
+ * c_diff under `glossy` (the default) and by appendix B under `all`; `diffuse` leaves a metal's
+ * bounce light out (c_diff 0). Every pixel, exact rays, no clamp. */
+static void test_receiver_modes(void **state)
+{
+    (void)state;
+    enum { W = 32, H = 32 };
+    static const struct {
+        double mat[3];
+        iir_receiver_bsdf mode;
+        int want; /* 0: appendix B, 1: Lambert of c_diff, 2: black */
+    } cases[] = {{{0.5, 0.0, 0.8}, IIR_RECEIVER_GLOSSY, 1},
+                 {{0.5, 0.0, 0.8}, IIR_RECEIVER_ALL, 0},
+                 {{0.9, 1.0, 0.3}, IIR_RECEIVER_DIFFUSE, 2}};
+    for (size_t ci = 0; ci < sizeof cases / sizeof *cases; ci++) {
+        const double *m = cases[ci].mat;
+        loaded l = load_glossy_plane(m[0], m[1], m[2]);
+        iir_vpl v = make_vpl(3, iir_v3(0.2f, 1.f, -0.6f), iir_v3(0.f, -1.f, 0.3f), iir_v3(2, 2, 2));
+        iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
+        iir_image *img = iir_image_create(W, H);
+        iir_indirect_params p = params(IIR_VIS_RAYS, 1, false);
+        p.receiver_bsdf = cases[ci].mode;
+        frame(&l, &l.scene->camera, NULL, 0, &v, 1, &p, 1, img, NULL);
+        double sum = 0;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                double wi[3], wo[3];
+                double G = floor_geometry(&cf, x, y, &v, wi, wo);
+                double f = cases[ci].want == 0   ? iir_test_gltf_brdf(m[0], m[1], m[2], wo, wi)
+                           : cases[ci].want == 1 ? (1 - m[1]) * m[0] / M_PI
+                                                 : 0.0;
+                double want = f * 2.0 / M_PI * G, got = iir_image_at(img, x, y)->x;
+                sum += got;
+                if (fabs(got - want) > 2e-3 * want + 1e-9)
+                    fail_msg("case %zu: pixel (%d,%d) = %g, expected %g", ci, x, y, got, want);
+            }
+        if (cases[ci].want != 2 && !(sum > 0)) fail_msg("case %zu: the plane is black", ci);
+        iir_image_destroy(img);
+        unload(&l);
+    }
 }
 
 /* ---- direct light ---- */
@@ -824,6 +1018,9 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_single_vpl_plane),
+        cmocka_unit_test(test_single_vpl_glossy_plane),
+        cmocka_unit_test(test_receiver_modes),
+        cmocka_unit_test(test_glossy_vpl_over_plane),
         cmocka_unit_test(test_direct_point_and_spot_over_plane),
         cmocka_unit_test(test_direct_matches_pt_cornell),
         cmocka_unit_test(test_direct_matches_pt_area_light),

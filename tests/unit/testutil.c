@@ -146,3 +146,25 @@ bool iir_test_smooth_pixel(const iir_gbuffer *gb, int x, int y)
         }
     return true;
 }
+
+double iir_test_gltf_brdf(double base, double metallic, double roughness, const double wo[3],
+                          const double wi[3])
+{
+    double nl = wi[1], nv = wo[1];
+    if (nl <= 0 || nv <= 0) return 0;
+    double h[3] = {wo[0] + wi[0], wo[1] + wi[1], wo[2] + wi[2]};
+    double hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    for (int k = 0; k < 3; k++) h[k] /= hl;
+    double nh = h[1], vh = fabs(wo[0] * h[0] + wo[1] * h[1] + wo[2] * h[2]);
+    double a = roughness * roughness, a2 = a * a;
+    double dd = nh * nh * (a2 - 1) + 1;
+    double D = a2 / (M_PI * dd * dd); /* (nh > 0 always: h between two upper directions) */
+    double V = 0.5 / (nl * sqrt(nv * nv * (1 - a2) + a2) + nv * sqrt(nl * nl * (1 - a2) + a2));
+    double s = pow(1 - vh, 5);
+    double specular = V * D;
+    /* dielectric_brdf = mix(diffuse, specular, F(0.04)); metal_brdf = specular F(base) */
+    double Fd = 0.04 + (1 - 0.04) * s, Fm = base + (1 - base) * s;
+    double dielectric = (1 - Fd) * base / M_PI + Fd * specular;
+    double metal = Fm * specular;
+    return (1 - metallic) * dielectric + metallic * metal;
+}

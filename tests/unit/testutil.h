@@ -32,6 +32,11 @@ const char *iir_test_tmpdir(const char *test_name);
  */
 const char *iir_test_write_file(const char *dir, const char *name, const char *text);
 
+/* The glTF 2.0 specification's appendix-B BRDF (a mix of a dielectric and a metal BRDF) of a grey
+ * material, in double, written out independently of bsdf.c; n = +y, wo and wi unit. */
+double iir_test_gltf_brdf(double base, double metallic, double roughness, const double wo[3],
+                          const double wi[3]);
+
 /* Writes an OBJ quad centred at c spanned by +-a, +-b (normal cross(a, b)) with material mtl. */
 void iir_test_write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b);
 

@@ -75,6 +75,16 @@ iir_bsdf iir_bsdf_make_f0(iir_vec3 n, iir_vec3 base_color, float metallic, float
  * material: no specular lobe at all). */
 iir_bsdf iir_bsdf_make_lambert(iir_vec3 n, iir_vec3 albedo);
 
+/* Whether a metallic-roughness surface counts as glossy: every metal, and a dielectric smoother
+ * than IIR_GLOSSY_ROUGHNESS (rougher ones reflect nearly as a Lambertian surface of albedo c_diff
+ * does). The scene's notes name the glossy materials; the VPL methods' gather evaluates the full
+ * BSDF at glossy pixels only. */
+#define IIR_GLOSSY_ROUGHNESS 0.6f
+static inline bool iir_bsdf_params_glossy(float metallic, float roughness)
+{
+    return metallic > 0.f || roughness < IIR_GLOSSY_ROUGHNESS;
+}
+
 /* The lobes b has: IIR_BSDF_DIFFUSE if c_diff is not black; IIR_BSDF_GLOSSY if alpha >=
  * IIR_BSDF_DELTA_ALPHA, else IIR_BSDF_SPECULAR. Every BSDF has one of the last two (Schlick's F is
  * not 0 at grazing angles even for black metal). */

@@ -92,6 +92,14 @@ typedef enum iir_shading {
                             apply per level */
 } iir_shading;
 
+/* Which pixels reflect the VPLs' light by their full BSDF toward the camera (render_indirect.c,
+ * full shading; multires's coarse texels gather diffuse light). */
+typedef enum iir_receiver_bsdf {
+    IIR_RECEIVER_GLOSSY, /* glossy pixels (iir_bsdf_params_glossy: metals, smoother dielectrics) */
+    IIR_RECEIVER_ALL,    /* every metallic-roughness pixel (rough dielectrics' (1 - F) too) */
+    IIR_RECEIVER_DIFFUSE /* none: the diffuse albedo c_diff / pi at every pixel */
+} iir_receiver_bsdf;
+
 /* What the geometry term's clamp removed, given back (Kollig & Keller 2004; render_compensate.c).
  */
 typedef enum iir_clamp_comp {
@@ -134,6 +142,7 @@ typedef struct iir_indirect_params {
     iir_mr_params mr;          /* shading multires: the hierarchy */
     int area_samples;          /* direct light: stratified samples per pixel of every area light
                                   and of the emissive triangles (render_direct.c). [1, 4096] */
+    iir_receiver_bsdf receiver_bsdf; /* VPL light through the receiving pixel's full BSDF */
     int bounces;     /* the light bounces the VPLs stand for (the methods' `bounces`, >= 2):
                         compensation adds no light of more bounces. 0 counts as 2 */
     bool unfiltered; /* leave the raw interleaved estimate (tests, debugging); false: the
@@ -146,7 +155,7 @@ iir_indirect_params iir_indirect_params_default(void);
 /* ---- the VPL shading's parameter tables (render_params.c), each bound at its offset ---- */
 /* visibility and sm_res of an iir_indirect_params (ism always uses ISMs: it does not list them) */
 extern const iir_param_table iir_vis_table;
-/* sm_bias, interleave, area_samples of an iir_indirect_params */
+/* sm_bias, interleave, area_samples, receiver_bsdf of an iir_indirect_params */
 extern const iir_param_table iir_vpl_table;
 /* `shading` (full or multires), one iir_shading, wherever a method keeps it (.shading of an
  * iir_indirect_params for ir, iir and ism). */

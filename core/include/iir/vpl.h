@@ -56,14 +56,27 @@ static inline iir_vec3 iir_paraboloid_dir(iir_vec2 uv)
 
 /* ---- the VPL ---- */
 
+/* How a VPL sends its light on: diffuse (its flux over pi, times the cosine), or by the glossy
+ * metallic-roughness BSDF of the surface it lies on (iir_bsdf_params_glossy), toward each
+ * receiver f(wi, w) pi / albedo times that (render_indirect.c). */
+typedef struct iir_vpl_lobe {
+    bool glossy;
+    float metallic, roughness, f0; /* f0: a dielectric's reflectance at normal incidence */
+    iir_vec3 base;                 /* base colour */
+} iir_vpl_lobe;
+
 typedef struct iir_vpl {
     uint32_t id;        /* unique within its set for the set's whole life; never reused */
     bool null_sample;   /* the light's ray escaped or hit an emitter: holds its place, no light */
     iir_vec3 position;  /* on the surface */
     iir_vec3 normal;    /* unit, on the side the light arrived from */
     iir_frame frame;    /* iir_frame_from_normal(normal): the shadow map's axes */
-    iir_vec3 albedo;    /* rho at the VPL */
-    iir_vec3 flux;      /* Phi_i, the flux it re-emits (W, RGB) */
+    iir_vec3 albedo;    /* rho at the VPL: the diffuse albedo, or for a glossy lobe c_diff + F0
+                           (kept off zero), which its lobe divides back out */
+    iir_vec3 flux;      /* Phi_i, the flux it re-emits (W, RGB): the flux arriving times albedo */
+    iir_vpl_lobe lobe;  /* diffuse unless lobe.glossy */
+    iir_vec3 wi;        /* glossy lobe: unit, toward where its light arrived from (kept up to date
+                           as the light moves: iir's weighing); unused otherwise */
     iir_vec2 disk;      /* its point in its light's domain (incremental step only) */
     iir_vec2 emit;      /* area light: where on the emitter its birth ray started, in light-local
                            coordinates [-1/2, 1/2]^2 (incremental step only) */

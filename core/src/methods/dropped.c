@@ -35,9 +35,16 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
     for (uint32_t i = 0; i < scene->num_materials; i++) {
         const iir_material *m = &scene->material_list[i];
         bool glossy_direct = strcmp(method, "hier") != 0; /* hier shades its own tree */
+        const iir_method_ops *ops = iir_method_ops_of(method);
         /* one text for every glossy material (no per-material figures), so the commands and the
            page say it once, naming them all; short enough for iir_dropped.what */
-        if (iir_material_is_glossy(m) && glossy_direct)
+        if (iir_material_is_glossy(m) && ops && ops->glossy_gather)
+            iir_dropped_add(out, max, &n, method, "material", m->name,
+                            "is glossy (a metal, or roughness below 0.6): %s renders it by the "
+                            "full BSDF, VPLs on it too, but their light paths go on as from a "
+                            "diffuse surface, its lobe clamped; pt renders both",
+                            method);
+        else if (iir_material_is_glossy(m) && glossy_direct)
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is glossy (a metal, or roughness below 0.6): %s renders its direct "
                             "light by the full BSDF, its bounce light as diffuse only; pt renders "

@@ -596,6 +596,7 @@ static uint64_t iir_m_memory(const void *opts, int width, int height)
 }
 
 const iir_method_ops iir_method_iir = {
+    .glossy_gather = true,
     .name = "iir",
     .summary = "incremental instant radiosity: VPLs kept across frames, few replaced per frame",
     .tables = {{&iir_bounces_table, offsetof(iir_options, bounces)}, /* bound before iir_check */

@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "../vpls/light_path.h"
+#include "../vpls/vpl_lobe.h"
 #include "iir/method.h"
 #include "iir/ism.h"
 #include "iir/refine.h"
@@ -139,10 +140,11 @@ static bool trace_path(ir_state *ir, vpl_list *l, const iir_light *light, iir_ve
         if (!iir_is_black(sf.Le)) break; /* emitters absorb light paths */
         iir_vpl v = {.id = l->next_id++,
                      .position = sf.p,
-                     .albedo = sf.albedo,
-                     .flux = iir_mul(beta, sf.albedo),
+                     .wi = iir_neg(ray.dir),
                      .birth = ir->frame,
                      .generation = (uint8_t)(vertex - 1 < 255 ? vertex - 1 : 255)};
+        v.lobe = iir_vpl_lobe_at(&sf, &v.albedo);
+        v.flux = iir_mul(beta, v.albedo);
         iir_vpl_set_normal(&v, sf.ns);
         if (!push_vpl(l, &v)) return false;
         float q;
@@ -350,6 +352,7 @@ static uint32_t ir_dropped(const iir_scene *scene, const iir_light *lights, uint
 }
 
 const iir_method_ops iir_method_ir = {
+    .glossy_gather = true,
     .name = "ir",
     .summary = "instant radiosity: VPLs from light paths, regenerated every frame",
     .tables = {{&iir_bounces_table, offsetof(ir_options, bounces)}, /* first, as iir's */

@@ -100,6 +100,16 @@ static float pixel_weight(const comp_ctx *c, int x, int y)
     return (uint32_t)((x + y) % c->n) == c->cls ? (float)c->n : 0.f;
 }
 
+/* dE, the light a diffuse receiver of albedo rho gets, demodulated as r->raw is at pixel i: a
+ * glossy pixel's raw is demodulated by more than its albedo (iir_gb_demod); what the clamp removed
+ * comes back as diffuse light there. */
+static iir_vec3 diffuse_share(const iir_gbuffer *gb, size_t i, iir_receiver_bsdf mode, iir_vec3 dE)
+{
+    if (!iir_gb_glossy(gb, i, mode)) return dE; /* demodulated by its albedo */
+    iir_vec3 rho = gb->albedo[i], d = iir_gb_demod(gb, i, mode);
+    return iir_v3(dE.x * rho.x / d.x, dE.y * rho.y / d.y, dE.z * rho.z / d.z);
+}
+
 static void compensate_tile(const comp_ctx *c, int t, iir_raystats *st)
 {
     const iir_gbuffer *gb = &c->r->gb;
@@ -113,7 +123,8 @@ static void compensate_tile(const comp_ctx *c, int t, iir_raystats *st)
             uint32_t k = ((uint32_t)((y % c->n) * c->n + x % c->n) + c->shift) % n2;
             iir_rng rng = iir_rng_make(c->seed, i);
             iir_vec3 dE = residual(c, k, gb->position[i], gb->normal[i], &rng, st);
-            c->r->raw[i] = iir_madd(c->r->raw[i], dE, w);
+            iir_vec3 dL = diffuse_share(gb, i, iir_render_receivers(c->r, c->p), dE);
+            c->r->raw[i] = iir_madd(c->r->raw[i], dL, w);
         }
 }
 

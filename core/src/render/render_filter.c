@@ -29,7 +29,8 @@ typedef struct filter_ctx {
     int n, h;
     float end_weight; /* weight of the offsets +-h */
     float min_cos, max_rel_depth;
-    int live[IIR_MAX_SUBSETS]; /* 1 for subsets with VPLs: only their pixels hold an estimate */
+    int live[IIR_MAX_SUBSETS];   /* 1 for subsets with VPLs: only their pixels hold an estimate */
+    iir_receiver_bsdf receivers; /* how r->raw is demodulated (iir_gb_demod) */
 } filter_ctx;
 
 /* 1 if pixel j counts for the centre (branch-free: the taps' outcomes are data, not control). */
@@ -156,11 +157,12 @@ static filter_ctx make_ctx(const iir_renderer *r, const iir_indirect_params *p)
     c.min_cos = IIR_FILTER_MIN_COS;
     c.max_rel_depth = IIR_FILTER_MAX_REL_DEPTH;
     for (uint32_t k = 0; k < r->num_subsets; k++) c.live[k] = r->start[k] < r->start[k + 1];
+    c.receivers = iir_render_receivers(r, p);
     return c;
 }
 
-/* out += rho / pi * E over one segment [x0, x1) of row y inside filter tile t, E the filtered (or
- * raw) demodulated indirect light. */
+/* out += demod / pi * E (iir_gb_demod) over one segment [x0, x1) of row y inside filter tile t, E
+ * the filtered (or raw) demodulated indirect light. */
 static void compose_segment(const filter_ctx *c, bool filter, int t, int y, int x0, int x1,
                             iir_image *out)
 {
@@ -177,7 +179,7 @@ static void compose_segment(const filter_ctx *c, bool filter, int t, int y, int 
                      : coarse || !filter ? c->r->raw[i]
                                          : column_pass(c, x, y);
         iir_vec3 *L = iir_image_at(out, x, y);
-        *L = iir_add(*L, iir_mul(iir_scale(gb->albedo[i], IIR_INV_PI), E));
+        *L = iir_add(*L, iir_mul(iir_scale(iir_gb_demod(gb, i, c->receivers), IIR_INV_PI), E));
     }
 }
 

@@ -1,7 +1,9 @@
 /* render_indirect.c -- indirect light from VPLs at the G-buffer's pixels: checking the VPL set,
  * sorting the VPLs in use into interleaved subsets by id, and the per-pixel sum of vpl.h's formula
- * with the clamped geometry term and shadow-map or exact-ray visibility; not the filter that
- * gathers the subsets back (render_filter.c).
+ * with the clamped geometry term and shadow-map or exact-ray visibility; at a glossy
+ * (metal_rough) pixel each VPL's light goes through the pixel's BSDF toward the camera, demodulated
+ * by iir_gb_demod (multires's coarse texels gather diffuse light); not the filter that gathers the
+ * subsets back (render_filter.c).
  *
  * The per-frame lists are built once, single-threaded (a counting sort over a few hundred VPLs),
  * into scratch the renderer keeps; the pixel loop then only reads them. Threads: OpenMP over 64x64
@@ -10,6 +12,7 @@
 #include <omp.h>
 #include <stdlib.h>
 
+#include "iir/bsdf.h"
 #include "iir/shadowmap.h"
 #include "render_internal.h"
 
@@ -34,6 +37,14 @@ static iir_status check_vpl(const iir_vpl *v, iir_visibility vis, iir_error *err
                         v->id);
     if (!iir_is_finite3(v->flux) || v->flux.x < 0.f || v->flux.y < 0.f || v->flux.z < 0.f)
         return iir_fail(err, IIR_ERR_INVALID, "VPL %u: flux must be finite and non-negative",
+                        v->id);
+    if (v->lobe.glossy &&
+        (fabsf(iir_length(v->wi) - 1.f) > 1e-3f || !(v->albedo.x > 0.f) || !(v->albedo.y > 0.f) ||
+         !(v->albedo.z > 0.f) || !iir_is_finite3(v->lobe.base) ||
+         !isfinite(v->lobe.metallic + v->lobe.roughness + v->lobe.f0)))
+        return iir_fail(err, IIR_ERR_INVALID,
+                        "VPL %u: a glossy lobe needs a unit wi, a positive albedo and finite "
+                        "parameters",
                         v->id);
     if (vis != IIR_VIS_RAYS && (v->smap.res < 1 || !v->smap.depth))
         return iir_fail(err, IIR_ERR_INVALID,
@@ -64,6 +75,12 @@ static iir_shade_vpl shade_vpl(const iir_vpl *v, float scale, float eps)
     s.power = iir_scale(v->flux, IIR_INV_PI * scale);
     s.smap = &v->smap;
     s.generation = v->generation;
+    s.glossy = v->lobe.glossy;
+    if (!s.glossy) return s;
+    const iir_vpl_lobe *l = &v->lobe;
+    s.wi = v->wi;
+    s.inv_albedo_pi = iir_v3(IIR_PI / v->albedo.x, IIR_PI / v->albedo.y, IIR_PI / v->albedo.z);
+    s.bsdf = iir_bsdf_make_f0(v->frame.f, l->base, l->metallic, l->roughness, l->f0);
     return s;
 }
 
@@ -111,6 +128,7 @@ typedef struct indirect_ctx {
     float g_max;    /* clamp / D^2, or INFINITY */
     float rel_bias; /* sm_bias */
     int n;          /* multires: the interleave n (subset k sits at (k mod n, k / n)) */
+    iir_receiver_bsdf receivers; /* which pixels reflect by their full BSDF (iir_gb_glossy) */
 } indirect_ctx;
 
 typedef struct pixel_batch {
@@ -118,7 +136,12 @@ typedef struct pixel_batch {
     uint32_t index[BATCH];
     _Alignas(16) float px[BATCH], py[BATCH], pz[BATCH]; /* position */
     _Alignas(16) float nx[BATCH], ny[BATCH], nz[BATCH]; /* normal, facing the camera */
-    _Alignas(16) float Ex[BATCH], Ey[BATCH], Ez[BATCH]; /* sum of power G V */
+    _Alignas(16) float Ex[BATCH], Ey[BATCH], Ez[BATCH]; /* sum of power G V (times receiver) */
+    /* Glossy receivers (full shading): bit l of glossy[q] marks pixel 4q + l, whose BSDF is
+       bsdf[j] seen from wo[j]; its light is demodulated by demod[j] (iir_gb_demod). */
+    uint8_t glossy[BATCH / 4];
+    iir_bsdf bsdf[BATCH];
+    iir_vec3 wo[BATCH], demod_pi[BATCH]; /* demod_pi: pi / demod */
 } pixel_batch;
 
 static inline float min_f(float a, float b)
@@ -147,6 +170,49 @@ typedef struct vpl_geometry {
     iir_vec3 w;
     float d2, ci, cx, G;
 } vpl_geometry;
+
+/* What glossy VPL v sends toward x relative to a diffuse VPL of its albedo: f(wi, w) pi / albedo,
+ * w the unit direction from v to x (its cosine is in G). */
+static inline iir_vec3 sender(const iir_shade_vpl *v, iir_vec3 x)
+{
+    iir_vec3 w = iir_normalize(iir_sub(x, v->p));
+    return iir_mul(iir_bsdf_f(&v->bsdf, w, v->wi), v->inv_albedo_pi);
+}
+
+/* What glossy pixel j of the batch reflects toward the camera of light arriving from the VPL at p,
+ * relative to a diffuse receiver of the demodulating albedo: f(wo, wi) pi / demod (1 for a
+ * Lambertian pixel of that albedo). */
+static inline iir_vec3 receiver(const pixel_batch *b, int j, iir_vec3 p)
+{
+    iir_vec3 wi = iir_normalize(iir_sub(p, batch_x(b, j)));
+    return iir_mul(iir_bsdf_f(&b->bsdf[j], b->wo[j], wi), b->demod_pi[j]);
+}
+
+static inline bool is_glossy(const pixel_batch *b, int j)
+{
+    return (b->glossy[j >> 2] >> (j & 3)) & 1u;
+}
+
+/* Adds power G (G: the clamped geometry term times visibility) of VPL v to batch pixel j, through
+ * its BSDF when it is glossy. The clamp bounds a glossy pixel's G times its receiver factor as it
+ * bounds a diffuse pixel's G (g_max): a VPL in a sharp lobe adds no more than one beside a
+ * diffuse pixel does, keeping the lobe's colour (the spikes of point VPLs on glossy surfaces are
+ * what virtual spherical lights remove instead). */
+static inline void add_lit(pixel_batch *b, int j, const iir_shade_vpl *v, float G, float g_max)
+{
+    if (G <= 0.f) return;
+    bool glossy = is_glossy(b, j);
+    if (!glossy && !v->glossy) {
+        batch_add(b, j, iir_scale(v->power, G));
+        return;
+    }
+    iir_vec3 f = iir_v3s(G);
+    if (glossy) f = iir_mul(f, receiver(b, j, v->p));
+    if (v->glossy) f = iir_mul(f, sender(v, batch_x(b, j)));
+    float peak = fmaxf(f.x, fmaxf(f.y, f.z));
+    if (peak > g_max) f = iir_scale(f, g_max / peak);
+    batch_add(b, j, iir_mul(v->power, f));
+}
 
 /* The geometry for VPL v at x (normal n), G clamped to g_max. */
 static inline vpl_geometry geometry(const iir_shade_vpl *v, iir_vec3 x, iir_vec3 n, float g_max)
@@ -209,8 +275,7 @@ static void apply_vpl_rays(const indirect_ctx *c, const iir_shade_vpl *v, pixel_
         }
         if (any) iir_rt_occluded8(c->r->rt, &rays, occluded, st, IIR_RAYS_VISIBILITY);
         for (int k = 0; k < 8 && j0 + k < b->m; k++)
-            if (G[k] > 0.f && (!rays.valid[k] || !occluded[k]))
-                batch_add(b, j0 + k, iir_scale(v->power, G[k]));
+            if (!rays.valid[k] || !occluded[k]) add_lit(b, j0 + k, v, G[k], c->g_max);
     }
 }
 
@@ -275,6 +340,18 @@ static inline __m128 visibility4(const iir_smap_probe *p, __m128 wx, __m128 wy, 
     return pcf4(p, s, t, _mm_sub_ps(d, bias));
 }
 
+/* Adds the glossy lanes of pixels j..j+3 (GV: their G V; every lane for a glossy VPL) through
+ * the BSDFs; returns GV with those lanes zeroed (the others are added as diffuse). */
+static __m128 glossy_lanes(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b, int j,
+                           __m128 GV)
+{
+    _Alignas(16) float g[4];
+    _mm_store_ps(g, GV);
+    for (int l = 0; l < 4; l++)
+        if (v->glossy || is_glossy(b, j + l)) add_lit(b, j + l, v, g[l], c->g_max), g[l] = 0.f;
+    return _mm_load_ps(g);
+}
+
 /* Adds power G V of VPL v to every pixel of the batch, V from its shadow map, 4 pixels a step. */
 static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b)
 {
@@ -299,6 +376,7 @@ static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_
         __m128 V = visibility4(&probe, dot4(rx, ry, rz, wx, wy, wz), dot4(ux, uy, uz, wx, wy, wz),
                                ci, d2, cx);
         __m128 GV = _mm_and_ps(lit, _mm_mul_ps(G, V));
+        if (b->glossy[j >> 2] || v->glossy) GV = glossy_lanes(c, v, b, j, GV);
         _mm_store_ps(b->Ex + j, madd4(_mm_load_ps(b->Ex + j), _mm_set1_ps(v->power.x), GV));
         _mm_store_ps(b->Ey + j, madd4(_mm_load_ps(b->Ey + j), _mm_set1_ps(v->power.y), GV));
         _mm_store_ps(b->Ez + j, madd4(_mm_load_ps(b->Ez + j), _mm_set1_ps(v->power.z), GV));
@@ -316,7 +394,7 @@ static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_
         if (!g.lit) continue;
         float V = iir_smap_probe_visibility(&probe, iir_dot(g.w, v->r), iir_dot(g.w, v->u), g.ci,
                                             sqrtf(g.d2), g.cx);
-        batch_add(b, j, iir_scale(v->power, g.G * V));
+        add_lit(b, j, v, g.G * V, c->g_max);
     }
 }
 
@@ -325,23 +403,42 @@ static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_
 static void batch_push(pixel_batch *b, uint32_t i, iir_vec3 x, iir_vec3 n)
 {
     int j = b->m++;
+    if (!(j & 3)) b->glossy[j >> 2] = 0;
     b->index[j] = i;
     b->px[j] = x.x, b->py[j] = x.y, b->pz[j] = x.z;
     b->nx[j] = n.x, b->ny[j] = n.y, b->nz[j] = n.z;
     b->Ex[j] = b->Ey[j] = b->Ez[j] = 0.f;
 }
 
+/* Marks the pixel just pushed (G-buffer pixel i) glossy when its material is: its BSDF, seen
+ * from the eye. */
+static void batch_mark_glossy(pixel_batch *b, const iir_gbuffer *gb, size_t i, iir_vec3 eye,
+                              iir_receiver_bsdf mode)
+{
+    if (!iir_gb_glossy(gb, i, mode)) return;
+    int j = b->m - 1;
+    iir_vec3 x = batch_x(b, j), d = iir_gb_demod(gb, i, mode);
+    b->glossy[j >> 2] |= (uint8_t)(1u << (j & 3));
+    b->bsdf[j] =
+        iir_bsdf_make_f0(gb->normal[i], gb->base[i], gb->mr[i].x, gb->mr[i].y, gb->mr[i].z);
+    b->wo[j] = iir_normalize(iir_sub(eye, x));
+    b->demod_pi[j] = iir_v3(IIR_PI / d.x, IIR_PI / d.y, IIR_PI / d.z);
+}
+
 /* Fills b with the next (up to BATCH) pixels that see geometry of the lattice (x_first + a n,
  * y + b n) inside the tile, from (*x, *y) on, advancing them, and pads it to a multiple of 4.
  * False when none are left. */
-static bool collect(const iir_renderer *r, const iir_tile *tl, int x_first, int n, int *x, int *y,
+static bool collect(const indirect_ctx *c, const iir_tile *tl, int x_first, int n, int *x, int *y,
                     pixel_batch *b)
 {
-    const iir_gbuffer *gb = &r->gb;
+    const iir_gbuffer *gb = &c->r->gb;
     b->m = 0;
     while (*y < tl->y1 && b->m < BATCH) {
         size_t i = (size_t)*y * (size_t)gb->width + (size_t)*x;
-        if (gb->prim[i] != IIR_NO_HIT) batch_push(b, (uint32_t)i, gb->position[i], gb->normal[i]);
+        if (gb->prim[i] != IIR_NO_HIT) {
+            batch_push(b, (uint32_t)i, gb->position[i], gb->normal[i]);
+            batch_mark_glossy(b, gb, i, c->r->gb_camera.position, c->receivers);
+        }
         *x += n;
         if (*x >= tl->x1) *x = x_first, *y += n;
     }
@@ -374,7 +471,7 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *
                          (uint32_t)(n * n);
             int x = tl.x0 + i, y = tl.y0 + j;
             if (r->start[k] == r->start[k + 1]) continue;
-            while (collect(r, &tl, tl.x0 + i, n, &x, &y, b)) {
+            while (collect(c, &tl, tl.x0 + i, n, &x, &y, b)) {
                 int m = b->m;
                 evals += (uint64_t)m * (r->start[k + 1] - r->start[k]);
                 for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++) {
@@ -402,7 +499,8 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
                       p->visibility != IIR_VIS_RAYS,
                       p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
                       p->sm_bias,
-                      p->interleave};
+                      p->interleave,
+                      iir_render_receivers(r, p)};
     int tiles = iir_tile_count(r->gb.width, r->gb.height, IIR_INDIRECT_TILE), n = p->interleave;
     iir_raystats total = {0};
     int skipped = 0;
@@ -448,7 +546,8 @@ iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_param
         } else if (lifted_ray(r->eps, v, x, n, &ray)) {
             V = iir_rt_occluded(r->rt, &ray, st, IIR_RAYS_VISIBILITY) ? 0.f : 1.f;
         }
-        E = iir_madd(E, v->power, g.G * V);
+        iir_vec3 power = v->glossy ? iir_mul(v->power, sender(v, x)) : v->power;
+        E = iir_madd(E, power, g.G * V);
     }
     return E;
 }
@@ -512,7 +611,8 @@ bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, b
                       p->visibility != IIR_VIS_RAYS,
                       p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
                       p->sm_bias,
-                      p->interleave};
+                      p->interleave,
+                      IIR_RECEIVER_DIFFUSE}; /* coarse texels have no material */
     uint64_t live = 0;
     for (uint32_t k = 0; k < r->num_subsets; k++)
         if (r->start[k] < r->start[k + 1]) live |= 1ull << k;

@@ -4,6 +4,7 @@
 #ifndef IIR_RENDER_INTERNAL_H
 #define IIR_RENDER_INTERNAL_H
 
+#include "iir/bsdf.h"
 #include "iir/multires.h"
 #include "iir/render.h"
 #include "iir/scene.h"
@@ -26,6 +27,10 @@ typedef struct iir_shade_vpl {
     iir_vec3 power;      /* Phi_i / pi * N / |subset| */
     const iir_smap *smap;
     int generation; /* iir_vpl.generation: its light has generation + 1 bounces */
+    bool glossy;    /* its lobe: toward w it sends f(wi, w) pi / albedo times a diffuse VPL's */
+    iir_vec3 wi;    /* glossy: unit, toward where its light came from */
+    iir_vec3 inv_albedo_pi; /* glossy: pi / albedo */
+    iir_bsdf bsdf;          /* glossy: the lobe about n */
 } iir_shade_vpl;
 
 struct iir_renderer {
@@ -100,6 +105,35 @@ typedef struct iir_shade_job {
     iir_image *out;
 } iir_shade_job;
 
+/* Whether G-buffer pixel i reflects the VPLs' light by its full BSDF under `mode`
+ * (render_indirect.c); other pixels reflect it as Lambertian of their albedo. */
+static inline bool iir_gb_glossy(const iir_gbuffer *gb, size_t i, iir_receiver_bsdf mode)
+{
+    iir_vec3 m = gb->mr[i];
+    if (mode == IIR_RECEIVER_DIFFUSE || m.y < 0.f) return false;
+    return mode == IIR_RECEIVER_ALL || iir_bsdf_params_glossy(m.x, m.y);
+}
+
+/* The reflectance r->raw is demodulated by at G-buffer pixel i (its radiance is demod / pi * raw):
+ * the diffuse albedo; for a pixel that reflects by its full BSDF (iir_gb_glossy) the albedo plus
+ * its Fresnel reflectance at normal incidence, kept off zero, so that a metal's highlights keep
+ * its colour and texture through the filter. */
+static inline iir_vec3 iir_gb_demod(const iir_gbuffer *gb, size_t i, iir_receiver_bsdf mode)
+{
+    if (!iir_gb_glossy(gb, i, mode)) return gb->albedo[i];
+    iir_vec3 m = gb->mr[i];
+    iir_vec3 f0 = iir_add(iir_v3s(m.z * (1.f - m.x)), iir_scale(gb->base[i], m.x));
+    iir_vec3 d = iir_add(gb->albedo[i], f0);
+    return iir_v3(fmaxf(d.x, 0.02f), fmaxf(d.y, 0.02f), fmaxf(d.z, 0.02f));
+}
+
+/* The receiver mode of this frame's gather: p's in full shading; multires gathers diffuse light. */
+static inline iir_receiver_bsdf iir_render_receivers(const iir_renderer *r,
+                                                     const iir_indirect_params *p)
+{
+    return r->level ? IIR_RECEIVER_DIFFUSE : p->receiver_bsdf;
+}
+
 /* render_gbuffer.c. Resize keeps the contents only when the size is unchanged; on failure the
  * G-buffer is freed (width 0) and IIR_ERR_NOMEM returned. Render shoots pixel (x, y)'s camera ray
  * through (x + jitter.x, y + jitter.y); (0.5, 0.5) is the pixel centre of interactive frames. */
@@ -143,9 +177,10 @@ iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_param
  * stoppable). */
 bool iir_render_compensate(iir_renderer *r, const iir_shade_job *job, iir_raystats *st);
 
-/* render_filter.c: out += rho / pi * (filtered or raw) r->raw; with r->level set only its level-0
- * pixels are filtered (the others take their upsampled value, iir_multires_upsample_span, and count
- * as taps of every subset). */
+/* render_filter.c: out += demod / pi * (filtered or raw) r->raw (iir_gb_demod: glossy pixels' only
+ * in full shading, as multires gathers diffuse light); with r->level set only its level-0 pixels
+ * are filtered (the others take their upsampled value, iir_multires_upsample_span, and count as
+ * taps of every subset). */
 void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image *out);
 
 #endif

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdio.h>
 
+#include "iir/bsdf.h"
 #include "iir/hash.h"
 #include "scene_build.h"
 
@@ -29,7 +30,7 @@ int iir_material_specular_depth(const iir_material *m)
 
 bool iir_material_is_glossy(const iir_material *m)
 {
-    return m->kind == IIR_MATERIAL_METAL_ROUGH && (m->metallic > 0.f || m->roughness < 0.6f);
+    return m->kind == IIR_MATERIAL_METAL_ROUGH && iir_bsdf_params_glossy(m->metallic, m->roughness);
 }
 
 uint64_t iir_material_hash(uint64_t h, const iir_material *m)

@@ -26,6 +26,7 @@
 #include "iir/timer.h"
 #include "lights/domain_sites.h"
 #include "surface.h"
+#include "vpl_lobe.h"
 
 struct iir_incr {
     const iir_scene *scene;
@@ -54,6 +55,7 @@ typedef iir_light_domain pose;
 typedef struct sample {
     bool null_sample;
     iir_vec3 x, n, albedo; /* VPL: position, normal on the light's side, albedo */
+    iir_vpl_lobe lobe;     /* VPL: how it reflects */
     iir_vec3 o, w;         /* the ray's origin and unit direction */
     iir_vec2 q;            /* area light: the origin's light-local point on the emitter */
 } sample;
@@ -229,7 +231,7 @@ static sample trace_sample(const iir_incr *inc, const pose *ps, iir_vec3 o, iir_
     sm.null_sample = false;
     sm.x = sf.p;
     sm.n = sf.ns;
-    sm.albedo = sf.albedo;
+    sm.lobe = iir_vpl_lobe_at(&sf, &sm.albedo);
     return sm;
 }
 
@@ -307,6 +309,8 @@ static bool make_vpl(const pose *light, const sample *sm, uint32_t birth, iir_vp
     if (!sm->null_sample && iir_domain_locate(ps, sm->x, s)) {
         v->position = sm->x;
         v->albedo = sm->albedo;
+        v->lobe = sm->lobe;
+        v->wi = iir_neg(sm->w);
         iir_vpl_set_normal(v, sm->n);
     } else {
         iir_vec3 dir;
@@ -502,6 +506,18 @@ static iir_vec3 cell_flux(const pose *ps, const iir_vpl *v, double A, const doub
     return iir_scale(iir_mul(I, v->albedo), k);
 }
 
+/* A glossy VPL's lobe turns as the light moves: its light now arrives from the light's position
+ * (an area light's: the VPL's own point of it; the sun's: along its direction). */
+static void aim(const pose *light, iir_vpl *v)
+{
+    if (v->null_sample || !v->lobe.glossy) return;
+    pose at;
+    const pose *ps = pose_of(light, v, &at);
+    iir_vec3 d = iir_sub(iir_domain_origin(ps, v->position), v->position);
+    float len = iir_length(d);
+    if (len > 0.f) v->wi = iir_scale(d, 1.f / len);
+}
+
 /* WEIGH: Phi_i = I rho_i A_i profile(s_i); A_i the clipped Voronoi cell or the domain's area /
  * count. *flux_in gets the luminance of sum I A_i profile(s_i) over the VPLs (null samples
  * excluded): the flux the light sends onto reflecting surfaces. */
@@ -520,6 +536,7 @@ static iir_status phase_weigh(iir_incr *inc, const pose *ps, double *flux_in, ii
         assert(!voronoi || inc->ids[i] == v->id);
         double A = voronoi ? inc->areas[i] : uniform;
         v->flux = cell_flux(ps, v, A, &inc->xy[3 * i]);
+        aim(ps, v);
         if (!v->null_sample) *flux_in += A * iir_domain_profile(ps, &inc->xy[3 * i]);
         assert(iir_is_finite3(v->flux) && v->flux.x >= 0.f && v->flux.y >= 0.f && v->flux.z >= 0.f);
     }
@@ -641,6 +658,7 @@ iir_status iir_incr_sample_set(const iir_incr *inc, const iir_light *light, uint
         if (!make_vpl(&ps, &sm, birth, v, s)) continue;
         v->id = made++;
         v->flux = cell_flux(&ps, v, 1.0, s); /* times the cell area once the count is known */
+        aim(&ps, v);
     }
     float A = (float)(ps.area / (made ? made : 1));
     for (uint32_t i = 0; i < made; i++) out[i].flux = iir_scale(out[i].flux, A);

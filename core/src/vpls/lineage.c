@@ -10,6 +10,7 @@
 #include "iir/scene.h"
 #include "../surface.h"
 #include "light_path.h"
+#include "vpl_lobe.h"
 
 /* One parent's lineage: its descendants are vpls[first .. first + count). */
 typedef struct lineage {
@@ -59,11 +60,15 @@ static uint32_t trace(const iir_scene *scene, const iir_rt *rt, const iir_vpl *p
         iir_hit hit;
         if (!iir_rt_intersect(rt, &ray, &hit, rays, IIR_RAYS_VPL)) break;
         iir_surface sf = iir_surface_at(scene, &hit, iir_neg(ray.dir));
-        if (!iir_is_black(sf.Le) || iir_is_black(sf.albedo)) break;
-        throughput = iir_scale(iir_mul(throughput, sf.albedo), 1.f / q);
+        iir_vec3 rho;
+        iir_vpl_lobe lobe = iir_vpl_lobe_at(&sf, &rho);
+        if (!iir_is_black(sf.Le) || iir_is_black(rho)) break;
+        throughput = iir_scale(iir_mul(throughput, rho), 1.f / q);
         iir_vpl v = {.id = descendant_id(parent->id, gen),
                      .position = sf.p,
-                     .albedo = sf.albedo,
+                     .albedo = rho,
+                     .lobe = lobe,
+                     .wi = iir_neg(ray.dir),
                      .disk = parent->disk,
                      .emit = parent->emit,
                      .birth = birth,

@@ -1,0 +1,34 @@
+/* vpl_lobe.h -- how a VPL born on a surface reflects the light it got: its lobe (diffuse, or the
+ * surface's glossy metallic-roughness BSDF) and the albedo its flux is weighted by, shared by ir's
+ * paths (methods/ir.c), iir's samples (incremental.c) and descendants (lineage.c). Paths go on
+ * from a glossy VPL as from a diffuse one of that albedo (light_path.h): energy kept, directions
+ * cosine-distributed. Internal; inline. */
+#ifndef IIR_VPL_LOBE_H
+#define IIR_VPL_LOBE_H
+
+#include <math.h>
+
+#include "../surface.h"
+#include "iir/bsdf.h"
+#include "iir/vpl.h"
+
+/* The lobe of a VPL at sf; *albedo gets sf's diffuse albedo, or for a glossy lobe c_diff + F0 (the
+ * reflectance at normal incidence, kept at least 0.02 per channel). */
+static inline iir_vpl_lobe iir_vpl_lobe_at(const iir_surface *sf, iir_vec3 *albedo)
+{
+    iir_vpl_lobe lobe = {0};
+    *albedo = sf->albedo;
+    if (sf->kind != IIR_MATERIAL_METAL_ROUGH ||
+        !iir_bsdf_params_glossy(sf->metallic, sf->roughness))
+        return lobe;
+    lobe.glossy = true;
+    lobe.metallic = sf->metallic, lobe.roughness = sf->roughness, lobe.f0 = sf->specular_f0;
+    lobe.base = sf->base;
+    iir_vec3 f0 =
+        iir_add(iir_v3s(sf->specular_f0 * (1.f - sf->metallic)), iir_scale(sf->base, sf->metallic));
+    iir_vec3 a = iir_add(sf->albedo, f0);
+    *albedo = iir_v3(fmaxf(a.x, 0.02f), fmaxf(a.y, 0.02f), fmaxf(a.z, 0.02f));
+    return lobe;
+}
+
+#endif
