@@ -116,8 +116,9 @@ typedef struct iir_method_ops {
     /* pt's bounce count for this method's references (iir_method_reference_bounces): 0 = the
      * method's `bounces` parameter, or 2 (one bounce) without one. */
     int reference_bounces;
-    /* Its VPL sum reflects by a glossy pixel's full BSDF (render_indirect.c, full shading). */
-    bool glossy_gather;
+    /* Its VPL sum reflects by a glossy pixel's full BSDF (render_indirect.c, full shading) and its
+       camera rays follow mirrors and glass (iir_renderer_follow_specular). */
+    bool full_surfaces;
     /* The phases the method reports, in pipeline order, ending with IIR_PHASE_COUNT. */
     iir_phase phases[IIR_PHASE_COUNT + 1];
     /* Its own counters (frame stats' counter[i] is counters[i]), up to the first NULL name. */

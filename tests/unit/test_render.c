@@ -1,6 +1,6 @@
 /* test_render.c -- the VPL renderer against independent answers: a VPL and point/spot lights over a
  * diffuse plane (analytic, per pixel, both visibility backends), a VPL over glossy planes (the
- * glTF BRDF, per pixel), direct light against the pt
+ * glTF BRDF, per pixel), a mirror showing the floor (specular chains), direct light against the pt
  * method (the Cornell box and an area-light scene), shadow maps against exact rays on the Cornell
  * box, interleaved sampling and its filter against full evaluation, clamping, G-buffer reuse,
  * determinism and error statuses. Scenes are written as OBJ + sidecar and loaded for real.
@@ -429,6 +429,62 @@ static void test_receiver_modes(void **state)
         iir_image_destroy(img);
         unload(&l);
     }
+}
+
+/* ---- a mirror: the camera ray followed to the floor it shows ---- */
+
+/* The floor (rho 0.5) and a mirror wall (illum 3, Ks 0.8) at z = -1.5 facing +z, one VPL over the
+ * floor; the renderer follows specular chains. Every pixel that sees the mirror shows 0.8 times
+ * vpl.h's formula at the floor point its reflected ray meets (computed here), the others the floor
+ * as before; exact rays, interleave 1. */
+static void test_mirror_shows_the_floor(void **state)
+{
+    (void)state;
+    enum { W = 48, H = 48 };
+    const char *dir = iir_test_tmpdir("render-mirror");
+    iir_test_write_file(dir, "mirror.mtl",
+                        "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl mirror\nillum 3\nKs 0.8 0.8 0.8\n");
+    char path[1200];
+    snprintf(path, sizeof path, "%s/mirror.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib mirror.mtl\n");
+    iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 20), iir_v3(20, 0, 0));
+    iir_test_write_quad(f, "mirror", iir_v3(0, 1.5f, -1.5f), iir_v3(3, 0, 0), iir_v3(0, 1.5f, 0));
+    fclose(f);
+    iir_test_write_file(dir, "mirror.scene.json",
+                        "{\"camera\": {\"position\": [0, 1, 2], \"target\": [0, 0.6, -1.5],"
+                        " \"up\": [0, 1, 0], \"fov_y\": 60}, \"lights\": []}");
+    loaded l = load(dir, "mirror");
+    iir_renderer_follow_specular(l.r, IIR_VPL_SPECULAR_DEPTH);
+    iir_vpl v = make_vpl(9, iir_v3(0.3f, 1.f, 0.f), iir_v3(0.f, -1.f, 0.f), iir_v3(2, 4, 6));
+    iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
+    iir_image *img = iir_image_create(W, H);
+    iir_indirect_params p = params(IIR_VIS_RAYS, 1, false);
+    frame(&l, &l.scene->camera, NULL, 0, &v, 1, &p, 1, img, NULL);
+    int seen = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            iir_vec3 o = cf.origin, d = iir_camera_dir(&cf, x + 0.5f, y + 0.5f), k = iir_v3s(1.f);
+            float tm = (-1.5f - o.z) / d.z; /* the mirror's plane */
+            iir_vec3 m = iir_madd(o, d, tm);
+            bool mirror = tm > 0.f && fabsf(m.x) < 3.f && m.y > 0.f && m.y < 3.f &&
+                          !(d.y < 0.f && -o.y / d.y < tm); /* not the floor first */
+            if (mirror) o = m, d = iir_v3(d.x, d.y, -d.z), k = iir_v3s(0.8f), seen++;
+            iir_vec3 want = iir_v3s(0.f), X = iir_madd(o, d, -o.y / d.y);
+            if (d.y < 0.f && fabsf(X.x) < 20.f && fabsf(X.z) < 20.f) /* the floor's extent */
+                want = iir_mul(k, vpl_radiance(&v, X, 0.5f, INFINITY));
+            iir_vec3 got = *iir_image_at(img, x, y);
+            if (!close3(got, want, 2e-3f, 1e-7f))
+                fail_msg("%s pixel (%d,%d) = %g %g %g, expected %g %g %g",
+                         mirror ? "mirror" : "floor", x, y, got.x, got.y, got.z, want.x, want.y,
+                         want.z);
+        }
+    print_message("  mirror: %d of %d pixels show the floor in it, each as expected\n", seen,
+                  W * H);
+    assert_true(seen > W * H / 4);
+    iir_image_destroy(img);
+    unload(&l);
 }
 
 /* ---- direct light ---- */
@@ -1021,6 +1077,7 @@ int main(void)
         cmocka_unit_test(test_single_vpl_glossy_plane),
         cmocka_unit_test(test_receiver_modes),
         cmocka_unit_test(test_glossy_vpl_over_plane),
+        cmocka_unit_test(test_mirror_shows_the_floor),
         cmocka_unit_test(test_direct_point_and_spot_over_plane),
         cmocka_unit_test(test_direct_matches_pt_cornell),
         cmocka_unit_test(test_direct_matches_pt_area_light),

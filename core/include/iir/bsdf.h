@@ -80,6 +80,10 @@ iir_bsdf iir_bsdf_make_lambert(iir_vec3 n, iir_vec3 albedo);
  * does). The scene's notes name the glossy materials; the VPL methods' gather evaluates the full
  * BSDF at glossy pixels only. */
 #define IIR_GLOSSY_ROUGHNESS 0.6f
+/* Roughness below which a metallic-roughness surface is followed as a mirror of reflectance
+ * Schlick's F (its f0) where a method traces specular paths (whitted's tree, the VPL methods'
+ * G-buffer chains): a chrome ball of roughness 0.05 shows the room, not a highlight on black. */
+#define IIR_MIRROR_ROUGHNESS 0.1f
 static inline bool iir_bsdf_params_glossy(float metallic, float roughness)
 {
     return metallic > 0.f || roughness < IIR_GLOSSY_ROUGHNESS;

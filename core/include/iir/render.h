@@ -74,8 +74,15 @@ typedef struct iir_gbuffer {
     iir_vec3 *mr;       /* metal_rough: (metallic, roughness, dielectric f0); (0, -1, 0) for a
                            Lambertian pixel */
     iir_vec3 *emission; /* Le seen directly (one-sided emitters); 0 for background */
-    float *depth;       /* distance along the camera ray; INFINITY = background */
+    float *depth;       /* distance along the camera ray (a specular chain's: its length from the
+                           camera to the surface); INFINITY = background */
     uint32_t *prim;     /* triangle index; IIR_NO_HIT = background */
+    /* With specular chains (iir_renderer_follow_specular) a camera ray that meets a mirror, glass
+       or a near-mirror metal is followed to the first rough surface, which the fields above
+       describe (emission is seen through the chain): */
+    iir_vec3 *through; /* what the chain passes on to the camera (1 for a direct hit) */
+    float *camera_t;   /* distance along the camera ray to its first hit; INFINITY: none */
+    iir_vec3 *wo;      /* unit, from the surface toward the viewer (the chain's last ray back) */
 } iir_gbuffer;
 
 typedef enum iir_visibility {
@@ -200,6 +207,14 @@ void iir_renderer_destroy(iir_renderer *r);
  * raw indirect light, the filter's rows, the tiles' flags). The methods' memory estimates start
  * from it. */
 uint64_t iir_renderer_memory(int width, int height);
+
+/* Camera rays that meet a mirror, glass (its stronger branch) or a metal smoother than
+ * IIR_MIRROR_ROUGHNESS are followed through up to `depth` such surfaces to the first rough one,
+ * where direct and VPL light are gathered and passed back through the chain (0, the default: a
+ * specular surface is gathered where it is, and is black). */
+void iir_renderer_follow_specular(iir_renderer *r, int depth);
+/* The chains of the VPL methods (ir, iir, ism): as many links as whitted's default depth. */
+#define IIR_VPL_SPECULAR_DEPTH 8
 
 /* The G-buffer of the last frame (width 0 before the first). Valid until the next frame or
  * destroy; owned by the renderer. */

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "iir/render.h"
 #include "iir/scene.h"
 #include "method_internal.h"
 
@@ -38,7 +39,7 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
         const iir_method_ops *ops = iir_method_ops_of(method);
         /* one text for every glossy material (no per-material figures), so the commands and the
            page say it once, naming them all; short enough for iir_dropped.what */
-        if (iir_material_is_glossy(m) && ops && ops->glossy_gather)
+        if (iir_material_is_glossy(m) && ops && ops->full_surfaces)
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is glossy (a metal, or roughness below 0.6): %s renders it by the "
                             "full BSDF, VPLs on it too, but their light paths go on as from a "
@@ -55,6 +56,14 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
                             "is glossy (a metal, or roughness below 0.6): %s shades it as diffuse "
                             "only, its highlights left out; pt, whitted and hybrid render them",
                             method);
+        else if ((m->kind == IIR_MATERIAL_MIRROR || m->kind == IIR_MATERIAL_GLASS) && ops &&
+                 ops->full_surfaces)
+            iir_dropped_add(out, max, &n, method, "material", m->name,
+                            "is a %s: %s shows what it reflects or lets through (%d deep, glass "
+                            "by its stronger branch), but no light reaches the room by it (no "
+                            "caustics); pt renders both",
+                            m->kind == IIR_MATERIAL_GLASS ? "dielectric (glass)" : "mirror", method,
+                            IIR_VPL_SPECULAR_DEPTH);
         else if (m->kind == IIR_MATERIAL_MIRROR || m->kind == IIR_MATERIAL_GLASS)
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is a %s: %s renders it black (its VPLs and shading are diffuse "

@@ -295,6 +295,7 @@ static iir_status iir_m_create(const iir_scene *scene, const iir_rt *rt, const v
     s->refine = st == IIR_OK ? iir_refine_create() : NULL;
     if (st == IIR_OK && (!s->renderer || !s->refine))
         st = iir_fail(err, IIR_ERR_NOMEM, "out of memory creating iir's renderer");
+    if (st == IIR_OK) iir_renderer_follow_specular(s->renderer, IIR_VPL_SPECULAR_DEPTH);
     if (st != IIR_OK) {
         iir_m_destroy(s);
         return st;
@@ -596,7 +597,7 @@ static uint64_t iir_m_memory(const void *opts, int width, int height)
 }
 
 const iir_method_ops iir_method_iir = {
-    .glossy_gather = true,
+    .full_surfaces = true,
     .name = "iir",
     .summary = "incremental instant radiosity: VPLs kept across frames, few replaced per frame",
     .tables = {{&iir_bounces_table, offsetof(iir_options, bounces)}, /* bound before iir_check */

@@ -204,6 +204,7 @@ static iir_status ir_create(const iir_scene *scene, const iir_rt *rt, const void
         free(ir);
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory creating ir's renderer");
     }
+    iir_renderer_follow_specular(ir->renderer, IIR_VPL_SPECULAR_DEPTH);
     *state = ir;
     return IIR_OK;
 }
@@ -352,7 +353,7 @@ static uint32_t ir_dropped(const iir_scene *scene, const iir_light *lights, uint
 }
 
 const iir_method_ops iir_method_ir = {
-    .glossy_gather = true,
+    .full_surfaces = true,
     .name = "ir",
     .summary = "instant radiosity: VPLs from light paths, regenerated every frame",
     .tables = {{&iir_bounces_table, offsetof(ir_options, bounces)}, /* first, as iir's */

@@ -83,7 +83,7 @@ static uint32_t ism_dropped(const iir_scene *scene, const iir_light *lights, uin
 }
 
 const iir_method_ops iir_method_ism = {
-    .glossy_gather = true,
+    .full_surfaces = true,
     .name = "ism",
     .summary = "imperfect shadow maps: many one-bounce VPLs per frame, each with a low-resolution "
                "depth map splatted from scene points and filled by pull-push",

@@ -57,9 +57,6 @@ static const iir_param ROWS[] = {
 const iir_param_table whitted_param_table = {"whitted: ray tree", ROWS,
                                              sizeof ROWS / sizeof ROWS[0], NULL};
 
-/* Below this roughness a metal_rough surface is followed as a mirror too (smooth_reflection). */
-#define WHITTED_MIRROR_ROUGHNESS 0.1f
-
 /* ---- state ---- */
 
 struct whitted_tree {
@@ -193,14 +190,14 @@ static iir_vec3 specular(tracer *t, const iir_surface *sf, iir_vec3 V, int depth
     return iir_add(L, iir_mul(kt, branch(t, sf, g.wt, depth, iir_mul(weight, kt))));
 }
 
-/* A metal_rough surface smoother than WHITTED_MIRROR_ROUGHNESS also reflects like a mirror of
+/* A metal_rough surface smoother than IIR_MIRROR_ROUGHNESS also reflects like a mirror of
  * reflectance F(n.wo) (Schlick, the BSDF's f0) besides its local shading: Whitted's recursion for
  * the near-mirrors (a chrome ball of roughness 0.05) that the local model alone would show as a
  * highlight on black. */
 static iir_vec3 smooth_reflection(tracer *t, const iir_surface *sf, iir_vec3 V, int depth,
                                   iir_vec3 weight)
 {
-    if (sf->kind != IIR_MATERIAL_METAL_ROUGH || !(sf->roughness < WHITTED_MIRROR_ROUGHNESS))
+    if (sf->kind != IIR_MATERIAL_METAL_ROUGH || !(sf->roughness < IIR_MIRROR_ROUGHNESS))
         return iir_v3s(0.f);
     iir_bsdf b = iir_surface_bsdf(sf);
     float c = 1.f - fabsf(iir_dot(V, sf->sn));

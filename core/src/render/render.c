@@ -84,6 +84,12 @@ const iir_gbuffer *iir_renderer_gbuffer(const iir_renderer *r)
     return &r->gb;
 }
 
+void iir_renderer_follow_specular(iir_renderer *r, int depth)
+{
+    if (r->specular_depth != depth) r->gb_valid = false;
+    r->specular_depth = depth < 0 ? 0 : depth;
+}
+
 /* ---- one frame ---- */
 
 static bool same_camera(const iir_camera *a, const iir_camera *b)
@@ -110,7 +116,8 @@ static iir_status check_inputs(const iir_camera *cam, const iir_light *lights, u
 uint64_t iir_renderer_memory(int width, int height)
 {
     const iir_gbuffer *g = NULL;
-    uint64_t gbuffer = 5 * sizeof *g->position + sizeof *g->mr + sizeof *g->depth + sizeof *g->prim;
+    uint64_t gbuffer =
+        7 * sizeof *g->position + sizeof *g->mr + 2 * sizeof *g->depth + sizeof *g->prim;
     uint64_t scratch = sizeof(iir_vec3) + sizeof(iir_filter_row);
     uint64_t px = (uint64_t)width * (uint64_t)height;
     return px * (gbuffer + scratch) + (uint64_t)iir_tile_count(width, height, IIR_RENDER_TILE);
@@ -149,7 +156,8 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
         iir_camera_frame cf = iir_camera_setup(cam, w, h);
         const iir_stop stop = {r->stop, r->stop_ctx};
         r->gb_serial++;
-        if (!iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, iir_v2(0.5f, 0.5f), &stop, st)) {
+        if (!iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, iir_v2(0.5f, 0.5f), r->specular_depth,
+                                &stop, st)) {
             r->gb_valid = false;
             return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
         }
@@ -273,7 +281,7 @@ static iir_status pass_gbuffer(iir_renderer *r, const iir_camera *cam, iir_vec2 
     const iir_stop stop = {r->stop, r->stop_ctx};
     r->gb_serial++;
     r->gb_valid = false;
-    if (!iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, jitter, &stop, st))
+    if (!iir_gbuffer_render(&r->gb, r->scene, r->rt, &cf, jitter, r->specular_depth, &stop, st))
         return iir_fail(err, IIR_ERR_INTERRUPTED, "refinement pass stopped early");
     r->gb_camera = *cam; /* the area lights' camera rays go through the same jittered points */
     r->gb_shift = iir_v2(jitter.x - 0.5f, jitter.y - 0.5f);

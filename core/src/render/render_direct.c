@@ -104,6 +104,7 @@ typedef struct block {
     iir_vec3 f[8];  /* a Lambertian pixel's BRDF rho / pi */
     iir_bsdf bsdf[8];
     iir_vec3 wo[8];
+    iir_vec3 through[8]; /* what the pixel's specular chain passes on (iir_gbuffer.through) */
     iir_vec3 L[8];       /* radiance so far */
     iir_vec3 pending[8]; /* a light's contribution, kept if its shadow ray is unoccluded */
     iir_ray8 rays;
@@ -151,7 +152,7 @@ static void sample_lane(const iir_renderer *r, block *b, int k, const iir_light_
     float cos_theta = iir_dot(n, ls->wi);
     if (cos_theta <= 0.f) return;
     iir_vec3 f = b->glossy[k] ? iir_bsdf_f(&b->bsdf[k], b->wo[k], ls->wi) : b->f[k];
-    b->pending[k] = iir_scale(iir_mul(f, ls->Li), cos_theta * w / ls->pdf);
+    b->pending[k] = iir_scale(iir_mul(iir_mul(f, b->through[k]), ls->Li), cos_theta * w / ls->pdf);
     const iir_light_segment *seg = &ls->shadow;
     if (seg->tmax > 0.f)
         set_lane(&b->rays, k, seg->org, seg->dir, seg->tmax);
@@ -208,7 +209,7 @@ static void area_light_seen(const direct_ctx *c, const iir_light_eval *e, block 
         int x = b->x0 + k % BLOCK_W, y = b->y0 + k / BLOCK_W;
         if (x >= gb->width || y >= gb->height) continue;
         iir_vec3 d = iir_camera_dir(&c->cam, x + 0.5f + shift.x, y + 0.5f + shift.y);
-        float t = iir_area_light_hit(l, c->cam.origin, d, gb->depth[b->index[k]]);
+        float t = iir_area_light_hit(l, c->cam.origin, d, gb->camera_t[b->index[k]]);
         if (!isinf(t))
             b->L[k] = iir_add(
                 b->L[k], iir_area_light_radiance_at(l, &e->frame, iir_madd(c->cam.origin, d, t)));
@@ -236,7 +237,7 @@ static void shade_light(const direct_ctx *c, uint32_t li, block *b, iir_raystats
 }
 
 /* Reads the block's pixels: emission, and which of them direct light can reach. */
-static void load_block(const iir_gbuffer *gb, iir_vec3 eye, int x0, int y0, block *b)
+static void load_block(const iir_gbuffer *gb, int x0, int y0, block *b)
 {
     b->x0 = x0, b->y0 = y0;
     for (int k = 0; k < 8; k++) {
@@ -248,10 +249,11 @@ static void load_block(const iir_gbuffer *gb, iir_vec3 eye, int x0, int y0, bloc
         b->glossy[k] = hit && gb->mr[i].y >= 0.f;
         b->shaded[k] = hit && (b->glossy[k] || !iir_is_black(gb->albedo[i]));
         b->L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
+        b->through[k] = hit ? gb->through[i] : iir_v3s(0.f);
         b->f[k] = b->shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
         if (!b->glossy[k]) continue;
         /* glossy direct light by the full BSDF, seen from the camera (wo) */
-        b->wo[k] = iir_normalize(iir_sub(eye, gb->position[i]));
+        b->wo[k] = gb->wo[i];
         b->bsdf[k] =
             iir_bsdf_make_f0(gb->normal[i], gb->base[i], gb->mr[i].x, gb->mr[i].y, gb->mr[i].z);
     }
@@ -260,7 +262,7 @@ static void load_block(const iir_gbuffer *gb, iir_vec3 eye, int x0, int y0, bloc
 static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir_raystats *st)
 {
     block b;
-    load_block(&c->r->gb, c->cam.origin, x0, y0, &b);
+    load_block(&c->r->gb, x0, y0, &b);
     for (uint32_t l = 0; l < c->num_lights; l++) shade_light(c, l, &b, st);
     if (c->r->area_lights) light_samples(c, NULL, 0, &b, st);
     for (int k = 0; k < 8; k++) {

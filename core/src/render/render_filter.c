@@ -161,8 +161,9 @@ static filter_ctx make_ctx(const iir_renderer *r, const iir_indirect_params *p)
     return c;
 }
 
-/* out += demod / pi * E (iir_gb_demod) over one segment [x0, x1) of row y inside filter tile t, E
- * the filtered (or raw) demodulated indirect light. */
+/* out += through demod / pi * E (iir_gb_demod; through: the pixel's specular chain) over one
+ * segment [x0, x1) of row y inside filter tile t, E the filtered (or raw) demodulated indirect
+ * light. */
 static void compose_segment(const filter_ctx *c, bool filter, int t, int y, int x0, int x1,
                             iir_image *out)
 {
@@ -179,7 +180,8 @@ static void compose_segment(const filter_ctx *c, bool filter, int t, int y, int 
                      : coarse || !filter ? c->r->raw[i]
                                          : column_pass(c, x, y);
         iir_vec3 *L = iir_image_at(out, x, y);
-        *L = iir_add(*L, iir_mul(iir_scale(iir_gb_demod(gb, i, c->receivers), IIR_INV_PI), E));
+        iir_vec3 k = iir_mul(gb->through[i], iir_gb_demod(gb, i, c->receivers));
+        *L = iir_add(*L, iir_mul(iir_scale(k, IIR_INV_PI), E));
     }
 }
 

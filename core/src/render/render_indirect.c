@@ -411,17 +411,17 @@ static void batch_push(pixel_batch *b, uint32_t i, iir_vec3 x, iir_vec3 n)
 }
 
 /* Marks the pixel just pushed (G-buffer pixel i) glossy when its material is: its BSDF, seen
- * from the eye. */
-static void batch_mark_glossy(pixel_batch *b, const iir_gbuffer *gb, size_t i, iir_vec3 eye,
+ * from the viewer (the eye, or the specular chain's last link). */
+static void batch_mark_glossy(pixel_batch *b, const iir_gbuffer *gb, size_t i,
                               iir_receiver_bsdf mode)
 {
     if (!iir_gb_glossy(gb, i, mode)) return;
     int j = b->m - 1;
-    iir_vec3 x = batch_x(b, j), d = iir_gb_demod(gb, i, mode);
+    iir_vec3 d = iir_gb_demod(gb, i, mode);
     b->glossy[j >> 2] |= (uint8_t)(1u << (j & 3));
     b->bsdf[j] =
         iir_bsdf_make_f0(gb->normal[i], gb->base[i], gb->mr[i].x, gb->mr[i].y, gb->mr[i].z);
-    b->wo[j] = iir_normalize(iir_sub(eye, x));
+    b->wo[j] = gb->wo[i];
     b->demod_pi[j] = iir_v3(IIR_PI / d.x, IIR_PI / d.y, IIR_PI / d.z);
 }
 
@@ -437,7 +437,7 @@ static bool collect(const indirect_ctx *c, const iir_tile *tl, int x_first, int 
         size_t i = (size_t)*y * (size_t)gb->width + (size_t)*x;
         if (gb->prim[i] != IIR_NO_HIT) {
             batch_push(b, (uint32_t)i, gb->position[i], gb->normal[i]);
-            batch_mark_glossy(b, gb, i, c->r->gb_camera.position, c->receivers);
+            batch_mark_glossy(b, gb, i, c->receivers);
         }
         *x += n;
         if (*x >= tl->x1) *x = x_first, *y += n;

@@ -43,7 +43,8 @@ struct iir_renderer {
                                   compensation; NULL when it is off */
 
     iir_gbuffer gb;
-    bool gb_valid;          /* gb matches gb_camera and the frame size */
+    int specular_depth;     /* iir_renderer_follow_specular: 0 = gather at the first hit */
+    bool gb_valid;          /* gb matches gb_camera, the frame size and specular_depth */
     iir_camera gb_camera;   /* the camera gb was rendered with */
     iir_vec2 gb_shift;      /* gb's rays went through (x + 0.5, y + 0.5) + gb_shift, and
                                render_direct.c shoots them again at the area lights (not in the BVH):
@@ -141,8 +142,8 @@ iir_status iir_gbuffer_resize(iir_gbuffer *gb, int width, int height, iir_error 
 void iir_gbuffer_free(iir_gbuffer *gb);
 /* Render polls stop per tile: false once it says stop (the G-buffer is then incomplete). */
 bool iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *rt,
-                        const iir_camera_frame *cf, iir_vec2 jitter, const iir_stop *stop,
-                        iir_raystats *st);
+                        const iir_camera_frame *cf, iir_vec2 jitter, int specular_depth,
+                        const iir_stop *stop, iir_raystats *st);
 
 /* render_direct.c: out = emission + direct light (every pixel written). Each tile first polls
  * r->stop (when set) and is skipped once it said stop; returns true when that happened (out is then
