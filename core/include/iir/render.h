@@ -107,6 +107,15 @@ typedef enum iir_receiver_bsdf {
     IIR_RECEIVER_DIFFUSE /* none: the diffuse albedo c_diff / pi at every pixel */
 } iir_receiver_bsdf;
 
+/* What a VPL is (render_indirect.c): a point, or a virtual spherical light (Hasan, Krivanek,
+ * Walter, Bala 2009) of radius the distance to its IIR_VSL_NEIGHBOURS-th nearest VPL, whose light
+ * falls off as 1 / (d^2 + r^2) at every receiver and which a glossy receiver's BSDF integrates
+ * over the cone the sphere subtends (IIR_VSL_SAMPLES directions): no spike where a VPL meets a
+ * corner or a sharp lobe. */
+typedef enum iir_vpl_kind { IIR_VPL_POINT, IIR_VPL_SPHERE } iir_vpl_kind;
+#define IIR_VSL_NEIGHBOURS 4
+#define IIR_VSL_SAMPLES 8
+
 /* What the geometry term's clamp removed, given back (Kollig & Keller 2004; render_compensate.c).
  */
 typedef enum iir_clamp_comp {
@@ -150,6 +159,7 @@ typedef struct iir_indirect_params {
     int area_samples;          /* direct light: stratified samples per pixel of every area light
                                   and of the emissive triangles (render_direct.c). [1, 4096] */
     iir_receiver_bsdf receiver_bsdf; /* VPL light through the receiving pixel's full BSDF */
+    iir_vpl_kind vpl_kind;           /* points or spheres to glossy receivers */
     int bounces;     /* the light bounces the VPLs stand for (the methods' `bounces`, >= 2):
                         compensation adds no light of more bounces. 0 counts as 2 */
     bool unfiltered; /* leave the raw interleaved estimate (tests, debugging); false: the
@@ -162,7 +172,7 @@ iir_indirect_params iir_indirect_params_default(void);
 /* ---- the VPL shading's parameter tables (render_params.c), each bound at its offset ---- */
 /* visibility and sm_res of an iir_indirect_params (ism always uses ISMs: it does not list them) */
 extern const iir_param_table iir_vis_table;
-/* sm_bias, interleave, area_samples, receiver_bsdf of an iir_indirect_params */
+/* sm_bias, interleave, area_samples, receiver_bsdf, vpl_kind of an iir_indirect_params */
 extern const iir_param_table iir_vpl_table;
 /* `shading` (full or multires), one iir_shading, wherever a method keeps it (.shading of an
  * iir_indirect_params for ir, iir and ism). */

@@ -11,8 +11,10 @@
  * own ray counters (summed once at the end). */
 #include <omp.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "iir/bsdf.h"
+#include "iir/rng.h"
 #include "iir/shadowmap.h"
 #include "render_internal.h"
 
@@ -76,12 +78,32 @@ static iir_shade_vpl shade_vpl(const iir_vpl *v, float scale, float eps)
     s.smap = &v->smap;
     s.generation = v->generation;
     s.glossy = v->lobe.glossy;
+    s.radius = 0.f;
     if (!s.glossy) return s;
     const iir_vpl_lobe *l = &v->lobe;
     s.wi = v->wi;
     s.inv_albedo_pi = iir_v3(IIR_PI / v->albedo.x, IIR_PI / v->albedo.y, IIR_PI / v->albedo.z);
     s.bsdf = iir_bsdf_make_f0(v->frame.f, l->base, l->metallic, l->roughness, l->f0);
     return s;
+}
+
+/* Virtual spherical lights: each VPL's radius, the distance to its IIR_VSL_NEIGHBOURS-th nearest
+ * VPL in use (the local density of the set; 0 with fewer VPLs). O(n^2) over a few hundred. */
+static void sphere_radii(iir_shade_vpl *v, uint32_t n)
+{
+    enum { K = IIR_VSL_NEIGHBOURS };
+    for (uint32_t i = 0; i < n; i++) {
+        float near[K]; /* the K smallest squared distances, ascending */
+        for (int q = 0; q < K; q++) near[q] = INFINITY;
+        for (uint32_t j = 0; j < n; j++) {
+            float d2 = iir_length_sq(iir_sub(v[i].p, v[j].p));
+            if (j == i || !(d2 < near[K - 1])) continue;
+            int q = K - 1;
+            for (; q > 0 && near[q - 1] > d2; q--) near[q] = near[q - 1];
+            near[q] = d2;
+        }
+        v[i].radius = isfinite(near[K - 1]) ? sqrtf(near[K - 1]) : 0.f;
+    }
 }
 
 iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num_vpls,
@@ -106,6 +128,7 @@ iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num
         float scale = exact_mean ? (float)n2 : (float)used / (float)count[k];
         r->vpl[next[k]++] = shade_vpl(&vpls[i], scale, r->eps);
     }
+    if (p->vpl_kind == IIR_VPL_SPHERE) sphere_radii(r->vpl, used);
     return IIR_OK;
 }
 
@@ -188,6 +211,36 @@ static inline iir_vec3 receiver(const pixel_batch *b, int j, iir_vec3 p)
     return iir_mul(iir_bsdf_f(&b->bsdf[j], b->wo[j], wi), b->demod_pi[j]);
 }
 
+/* The same for a virtual spherical light of radius r at p: the BSDF times the receiver's cosine
+ * averaged over the cone the sphere subtends (IIR_VSL_SAMPLES directions uniform in its solid
+ * angle: rings stratified in cos theta, jittered and turned by a hash of the pair, so the average
+ * is unbiased), over the cosine toward its centre, which G holds. A point's receiver() as r goes
+ * to 0. */
+static iir_vec3 receiver_sphere(const pixel_batch *b, int j, const iir_shade_vpl *v)
+{
+    iir_vec3 x = batch_x(b, j), n = batch_n(b, j), a = iir_sub(v->p, x);
+    float d = iir_length(a);
+    a = iir_scale(a, 1.f / d);
+    float sin_max = fminf(v->radius / d, 1.f), cos_max = sqrtf(1.f - sin_max * sin_max);
+    float ca = iir_dot(n, a);
+    if (!(1.f - cos_max > 1e-7f) || !(ca > 0.f)) return receiver(b, j, v->p);
+    iir_frame fr = iir_frame_from_normal(a);
+    uint32_t px, pz;
+    memcpy(&px, &v->p.x, sizeof px), memcpy(&pz, &v->p.z, sizeof pz);
+    uint64_t h = iir_hash3(b->index[j], px, pz);
+    float turn = (float)(h >> 40) * 0x1p-24f * 2.f * IIR_PI, jit = (float)(h & 0xffffff) * 0x1p-24f;
+    iir_vec3 sum = iir_v3s(0.f);
+    for (int s = 0; s < IIR_VSL_SAMPLES; s++) {
+        float u = ((float)s + jit) / IIR_VSL_SAMPLES;
+        float ct = 1.f - u * (1.f - cos_max), st = sqrtf(fmaxf(0.f, 1.f - ct * ct));
+        float phi = turn + (float)s * 2.3999632f; /* the golden angle: rings turned apart */
+        iir_vec3 w = iir_frame_to_world(&fr, iir_v3(st * cosf(phi), st * sinf(phi), ct));
+        float c = iir_dot(n, w);
+        if (c > 0.f) sum = iir_madd(sum, iir_bsdf_f(&b->bsdf[j], b->wo[j], w), c);
+    }
+    return iir_mul(iir_scale(sum, 1.f / ((float)IIR_VSL_SAMPLES * ca)), b->demod_pi[j]);
+}
+
 static inline bool is_glossy(const pixel_batch *b, int j)
 {
     return (b->glossy[j >> 2] >> (j & 3)) & 1u;
@@ -207,14 +260,16 @@ static inline void add_lit(pixel_batch *b, int j, const iir_shade_vpl *v, float 
         return;
     }
     iir_vec3 f = iir_v3s(G);
-    if (glossy) f = iir_mul(f, receiver(b, j, v->p));
+    if (glossy) f = iir_mul(f, v->radius > 0.f ? receiver_sphere(b, j, v) : receiver(b, j, v->p));
     if (v->glossy) f = iir_mul(f, sender(v, batch_x(b, j)));
     float peak = fmaxf(f.x, fmaxf(f.y, f.z));
     if (peak > g_max) f = iir_scale(f, g_max / peak);
     batch_add(b, j, iir_mul(v->power, f));
 }
 
-/* The geometry for VPL v at x (normal n), G clamped to g_max. */
+/* The geometry for VPL v at x (normal n), G clamped to g_max. A virtual spherical light's falls
+ * off as 1 / (d^2 + r^2): bounded by 1 / r^2 near it, a point's beyond (its own bound, no clamp
+ * needed). */
 static inline vpl_geometry geometry(const iir_shade_vpl *v, iir_vec3 x, iir_vec3 n, float g_max)
 {
     vpl_geometry g = {.w = iir_sub(x, v->p)};
@@ -224,7 +279,8 @@ static inline vpl_geometry geometry(const iir_shade_vpl *v, iir_vec3 x, iir_vec3
     g.lit = g.ci > 0.f && g.cx > 0.f && g.d2 > 0.f;
     if (!g.lit) return g;
     float inv_d2 = 1.f / g.d2;
-    g.G = min_f(g.ci * g.cx * inv_d2 * inv_d2, g_max);
+    float falloff = v->radius > 0.f ? 1.f / (g.d2 + v->radius * v->radius) : inv_d2;
+    g.G = min_f(g.ci * g.cx * inv_d2 * falloff, g_max);
     return g;
 }
 
@@ -361,6 +417,8 @@ static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_
     __m128 nx = _mm_set1_ps(v->n.x), ny = _mm_set1_ps(v->n.y), nz = _mm_set1_ps(v->n.z);
     __m128 rx = _mm_set1_ps(v->r.x), ry = _mm_set1_ps(v->r.y), rz = _mm_set1_ps(v->r.z);
     __m128 ux = _mm_set1_ps(v->u.x), uy = _mm_set1_ps(v->u.y), uz = _mm_set1_ps(v->u.z);
+    bool sphere = v->radius > 0.f; /* geometry()'s falloff */
+    __m128 r2 = _mm_set1_ps(v->radius * v->radius);
     for (int j = 0; j < b->m; j += 4) {
         __m128 wx = _mm_sub_ps(_mm_load_ps(b->px + j), vx);
         __m128 wy = _mm_sub_ps(_mm_load_ps(b->py + j), vy);
@@ -372,7 +430,8 @@ static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_
                                 _mm_cmpgt_ps(d2, zero));
         if (!_mm_movemask_ps(lit)) continue;
         __m128 inv_d2 = _mm_div_ps(one, d2);
-        __m128 G = _mm_min_ps(_mm_mul_ps(_mm_mul_ps(ci, cx), _mm_mul_ps(inv_d2, inv_d2)), g_max);
+        __m128 falloff = sphere ? _mm_div_ps(one, _mm_add_ps(d2, r2)) : inv_d2;
+        __m128 G = _mm_min_ps(_mm_mul_ps(_mm_mul_ps(ci, cx), _mm_mul_ps(inv_d2, falloff)), g_max);
         __m128 V = visibility4(&probe, dot4(rx, ry, rz, wx, wy, wz), dot4(ux, uy, uz, wx, wy, wz),
                                ci, d2, cx);
         __m128 GV = _mm_and_ps(lit, _mm_mul_ps(G, V));

@@ -31,6 +31,7 @@ typedef struct iir_shade_vpl {
     iir_vec3 wi;    /* glossy: unit, toward where its light came from */
     iir_vec3 inv_albedo_pi; /* glossy: pi / albedo */
     iir_bsdf bsdf;          /* glossy: the lobe about n */
+    float radius;           /* a virtual spherical light's (0: a point) */
 } iir_shade_vpl;
 
 struct iir_renderer {

@@ -15,6 +15,8 @@ static const char *const SHADING_CHOICES[] = {"full", "multires", NULL};
 
 static const char *const RECEIVER_CHOICES[] = {"glossy", "all", "diffuse", NULL};
 
+static const char *const VPL_KIND_CHOICES[] = {"point", "sphere", NULL};
+
 static const char *const CLAMP_COMP_CHOICES[] = {"off", "full", "interleaved", NULL};
 
 static const iir_param VIS_ROWS[] = {
@@ -51,6 +53,11 @@ static const iir_param VPL_ROWS[] = {
      IIR_RECEIVER_GLOSSY, 0, 2, 0, RECEIVER_CHOICES, "",
      "which pixels reflect VPL light by their full BSDF: glossy (metals, roughness below 0.6), "
      "all (every metallic-roughness material) or diffuse (none); shading full",
+     IIR_PARAM_LIVE},
+    {"vpl_kind", IIR_PARAM_ENUM, offsetof(iir_indirect_params, vpl_kind), IIR_VPL_POINT, 0, 1, 0,
+     VPL_KIND_CHOICES, "",
+     "a VPL is a point, or a virtual spherical light of radius its 4th-nearest VPL's distance "
+     "(falling off as 1/(d^2+r^2); a glossy receiver's BSDF averaged over the cone it subtends)",
      IIR_PARAM_LIVE},
 };
 const iir_param_table iir_vpl_table = {"VPL shading (ir, iir, ism)", VPL_ROWS,
