@@ -83,6 +83,8 @@ typedef struct iir_gbuffer {
     iir_vec3 *through; /* what the chain passes on to the camera (1 for a direct hit) */
     float *camera_t;   /* distance along the camera ray to its first hit; INFINITY: none */
     iir_vec3 *wo;      /* unit, from the surface toward the viewer (the chain's last ray back) */
+    bool any_chain;    /* some pixel's through is not 1: shading reads through only then */
+    bool any_pbr;      /* some pixel is metallic-roughness (mr.y >= 0): its BSDF may be read */
 } iir_gbuffer;
 
 typedef enum iir_visibility {

@@ -249,7 +249,7 @@ static void load_block(const iir_gbuffer *gb, int x0, int y0, block *b)
         b->glossy[k] = hit && gb->mr[i].y >= 0.f;
         b->shaded[k] = hit && (b->glossy[k] || !iir_is_black(gb->albedo[i]));
         b->L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
-        b->through[k] = hit ? gb->through[i] : iir_v3s(0.f);
+        b->through[k] = !hit ? iir_v3s(0.f) : gb->any_chain ? gb->through[i] : iir_v3s(1.f);
         b->f[k] = b->shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
         if (!b->glossy[k]) continue;
         /* glossy direct light by the full BSDF, seen from the camera (wo) */

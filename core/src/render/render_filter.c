@@ -180,7 +180,8 @@ static void compose_segment(const filter_ctx *c, bool filter, int t, int y, int 
                      : coarse || !filter ? c->r->raw[i]
                                          : column_pass(c, x, y);
         iir_vec3 *L = iir_image_at(out, x, y);
-        iir_vec3 k = iir_mul(gb->through[i], iir_gb_demod(gb, i, c->receivers));
+        iir_vec3 k = gb->any_pbr ? iir_gb_demod(gb, i, c->receivers) : gb->albedo[i];
+        if (gb->any_chain) k = iir_mul(k, gb->through[i]);
         *L = iir_add(*L, iir_mul(iir_scale(k, IIR_INV_PI), E));
     }
 }

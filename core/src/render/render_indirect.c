@@ -496,7 +496,7 @@ static bool collect(const indirect_ctx *c, const iir_tile *tl, int x_first, int 
         size_t i = (size_t)*y * (size_t)gb->width + (size_t)*x;
         if (gb->prim[i] != IIR_NO_HIT) {
             batch_push(b, (uint32_t)i, gb->position[i], gb->normal[i]);
-            batch_mark_glossy(b, gb, i, c->receivers);
+            if (gb->any_pbr) batch_mark_glossy(b, gb, i, c->receivers);
         }
         *x += n;
         if (*x >= tl->x1) *x = x_first, *y += n;
