@@ -63,6 +63,12 @@ static inline iir_vec3 iir_surface_f_cos_sampled(const iir_surface *sf, const ii
     return iir_scale(bs->f, fabsf(iir_dot(bs->wi, sf->sn)));
 }
 
+/* A metal_rough surface smoother than IIR_MIRROR_ROUGHNESS as a mirror, met along unit V: the
+ * direction *wi it reflects to (about the shading normal) and its reflectance *F there (Schlick's F
+ * of its f0). False for other surfaces, or when *wi falls below the surface. Whitted's tree and
+ * the VPL methods' specular chains follow it. */
+bool iir_surface_mirror_reflection(const iir_surface *sf, iir_vec3 V, iir_vec3 *wi, iir_vec3 *F);
+
 /* Whether sf scatters light diffusely or glossily (a rough surface a gather can stop at). */
 static inline bool iir_surface_is_rough(const iir_surface *sf)
 {

@@ -952,12 +952,7 @@ static void test_glossy_lobes_follow_the_light(void **state)
 {
     (void)state;
     const char *dir = iir_test_tmpdir("incr-glossy");
-    iir_test_write_file(dir, "floor.mtl", "newmtl metal\nKd 0.8 0.8 0.8\nPm 1\nPr 0.3\n");
-    char path[1200];
-    snprintf(path, sizeof path, "%s/floor.obj", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib floor.mtl\n");
+    FILE *f = iir_test_open_obj(dir, "floor", "newmtl metal\nKd 0.8 0.8 0.8\nPm 1\nPr 0.3\n");
     iir_test_write_quad(f, "metal", iir_v3(0, 0, 0), iir_v3(0, 0, 2), iir_v3(2, 0, 0));
     fclose(f);
     iir_test_write_file(dir, "floor.scene.json",

@@ -70,12 +70,7 @@ static void unload(loaded *l)
 static loaded load_plane(bool step)
 {
     const char *dir = iir_test_tmpdir(step ? "render-step" : "render-plane");
-    iir_test_write_file(dir, "plane.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
-    char path[1200];
-    snprintf(path, sizeof path, "%s/plane.obj", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib plane.mtl\n");
+    FILE *f = iir_test_open_obj(dir, "plane", "newmtl grey\nKd 0.5 0.5 0.5\n");
     iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 20),
                         iir_v3(20, 0, 0)); /* normal +y */
     if (step) iir_test_write_quad(f, "grey", iir_v3(5, 0.5f, 0), iir_v3(0, 0, 20), iir_v3(5, 0, 0));
@@ -91,13 +86,8 @@ static loaded load_plane(bool step)
 static loaded load_lamp_scene(void)
 {
     const char *dir = iir_test_tmpdir("render-lamp");
-    iir_test_write_file(dir, "lamp.mtl",
-                        "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 10 10 10\n");
-    char path[1200];
-    snprintf(path, sizeof path, "%s/lamp.obj", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib lamp.mtl\n");
+    FILE *f = iir_test_open_obj(
+        dir, "lamp", "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 10 10 10\n");
     iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 1), iir_v3(1, 0, 0));
     iir_test_write_quad(f, "grey", iir_v3(1, 1, 0), iir_v3(0, 0, 1), iir_v3(0, 1, 0));
     iir_test_write_quad(f, "lamp", iir_v3(-0.4f, 1.5f, 0), iir_v3(0.2f, 0, 0), iir_v3(0, 0, 0.2f));
@@ -266,12 +256,7 @@ static loaded load_glossy_plane(double base, double metallic, double roughness)
     char mtl[160];
     snprintf(mtl, sizeof mtl, "newmtl ggx\nKd %g %g %g\nPm %g\nPr %g\n", base, base, base, metallic,
              roughness);
-    iir_test_write_file(dir, "glossy.mtl", mtl);
-    char path[1200];
-    snprintf(path, sizeof path, "%s/glossy.obj", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib glossy.mtl\n");
+    FILE *f = iir_test_open_obj(dir, "glossy", mtl);
     iir_test_write_quad(f, "ggx", iir_v3(0, 0, 0), iir_v3(0, 0, 20), iir_v3(20, 0, 0));
     fclose(f);
     iir_test_write_file(dir, "glossy.scene.json",
@@ -529,13 +514,8 @@ static void test_mirror_shows_the_floor(void **state)
     (void)state;
     enum { W = 48, H = 48 };
     const char *dir = iir_test_tmpdir("render-mirror");
-    iir_test_write_file(dir, "mirror.mtl",
-                        "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl mirror\nillum 3\nKs 0.8 0.8 0.8\n");
-    char path[1200];
-    snprintf(path, sizeof path, "%s/mirror.obj", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib mirror.mtl\n");
+    FILE *f = iir_test_open_obj(
+        dir, "mirror", "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl mirror\nillum 3\nKs 0.8 0.8 0.8\n");
     iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 20), iir_v3(20, 0, 0));
     iir_test_write_quad(f, "mirror", iir_v3(0, 1.5f, -1.5f), iir_v3(3, 0, 0), iir_v3(0, 1.5f, 0));
     fclose(f);

@@ -35,6 +35,18 @@ const char *iir_test_write_file(const char *dir, const char *name, const char *t
     return path;
 }
 
+FILE *iir_test_open_obj(const char *dir, const char *name, const char *mtl_text)
+{
+    char file[256], path[1200];
+    snprintf(file, sizeof file, "%s.mtl", name);
+    iir_test_write_file(dir, file, mtl_text);
+    snprintf(path, sizeof path, "%s/%s.obj", dir, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib %s.mtl\n", name);
+    return f;
+}
+
 void iir_test_write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b)
 {
     iir_vec3 v[4] = {iir_sub(iir_sub(c, a), b), iir_sub(iir_add(c, a), b),

@@ -37,6 +37,10 @@ const char *iir_test_write_file(const char *dir, const char *name, const char *t
 double iir_test_gltf_brdf(double base, double metallic, double roughness, const double wo[3],
                           const double wi[3]);
 
+/* Writes dir/name.mtl holding mtl_text and opens dir/name.obj for writing, its mtllib line written:
+ * the caller writes the quads (iir_test_write_quad) and closes it. Fails the test on error. */
+FILE *iir_test_open_obj(const char *dir, const char *name, const char *mtl_text);
+
 /* Writes an OBJ quad centred at c spanned by +-a, +-b (normal cross(a, b)) with material mtl. */
 void iir_test_write_quad(FILE *f, const char *mtl, iir_vec3 c, iir_vec3 a, iir_vec3 b);
 

@@ -34,6 +34,7 @@
 #ifndef IIR_BSDF_H
 #define IIR_BSDF_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 
@@ -84,6 +85,26 @@ iir_bsdf iir_bsdf_make_lambert(iir_vec3 n, iir_vec3 albedo);
  * Schlick's F (its f0) where a method traces specular paths (whitted's tree, the VPL methods'
  * G-buffer chains): a chrome ball of roughness 0.05 shows the room, not a highlight on black. */
 #define IIR_MIRROR_ROUGHNESS 0.1f
+
+/* Schlick: F = f0 + (1 - f0) (1 - cos)^5, cos clamped to [0, 1]. */
+static inline iir_vec3 iir_fresnel_schlick(iir_vec3 f0, float cos_theta)
+{
+    float m = 1.f - iir_clampf(cos_theta, 0.f, 1.f);
+    float m5 = iir_sqr(iir_sqr(m)) * m;
+    return iir_madd(f0, iir_sub(iir_v3s(1.f), f0), m5);
+}
+
+/* A metallic-roughness surface's diffuse albedo c_diff plus its Fresnel reflectance at normal
+ * incidence (mix(dielectric_f0, base, metallic)), each channel at least 0.02: what the VPL methods
+ * weigh a glossy VPL's flux by and demodulate a glossy pixel's light by (its BSDF divides it back
+ * out), so that a metal carries its colour and a black one stays finite. */
+static inline iir_vec3 iir_bsdf_reflectance(iir_vec3 c_diff, iir_vec3 base, float metallic,
+                                            float dielectric_f0)
+{
+    iir_vec3 f0 = iir_add(iir_v3s(dielectric_f0 * (1.f - metallic)), iir_scale(base, metallic));
+    iir_vec3 r = iir_add(c_diff, f0);
+    return iir_v3(fmaxf(r.x, 0.02f), fmaxf(r.y, 0.02f), fmaxf(r.z, 0.02f));
+}
 static inline bool iir_bsdf_params_glossy(float metallic, float roughness)
 {
     return metallic > 0.f || roughness < IIR_GLOSSY_ROUGHNESS;

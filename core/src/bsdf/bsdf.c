@@ -25,14 +25,6 @@ static iir_vec3 clamp01(iir_vec3 c)
     return iir_v3(iir_clampf(c.x, 0.f, 1.f), iir_clampf(c.y, 0.f, 1.f), iir_clampf(c.z, 0.f, 1.f));
 }
 
-/* Schlick: F = f0 + (1 - f0) (1 - cos)^5. */
-static iir_vec3 fresnel_schlick(iir_vec3 f0, float cos_theta)
-{
-    float m = 1.f - iir_clampf(cos_theta, 0.f, 1.f);
-    float m5 = iir_sqr(iir_sqr(m)) * m;
-    return iir_madd(f0, iir_sub(iir_v3s(1.f), f0), m5);
-}
-
 /* ======================= local frame: normal +z, both directions above ======================= */
 
 /* f = (1 - F) c_diff / pi + F D V; the delta lobe left out. */
@@ -42,7 +34,7 @@ static iir_vec3 f_local(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
     if (b->lambert) return iir_scale(b->c_diff, IIR_INV_PI);
     iir_vec3 wh = iir_normalize(iir_add(wo, wi));
     /* |v.h| as the mean of wo.wh and wi.wh (equal, but this way f is symmetric in float too) */
-    iir_vec3 F = fresnel_schlick(b->f0, 0.5f * fabsf(iir_dot(wo, wh) + iir_dot(wi, wh)));
+    iir_vec3 F = iir_fresnel_schlick(b->f0, 0.5f * fabsf(iir_dot(wo, wh) + iir_dot(wi, wh)));
     /* f_diffuse = (1 - F) c_diff / pi */
     iir_vec3 f = iir_scale(iir_mul(iir_sub(iir_v3s(1.f), F), b->c_diff), IIR_INV_PI);
     if (is_delta(b)) return f;
@@ -56,7 +48,7 @@ static iir_vec3 f_local(const iir_bsdf *b, iir_vec3 wo, iir_vec3 wi)
 static float spec_probability_local(const iir_bsdf *b, iir_vec3 wo)
 {
     if (wo.z <= 0.f || b->lambert) return 0.f;
-    float Fs = iir_luminance(fresnel_schlick(b->f0, wo.z));
+    float Fs = iir_luminance(iir_fresnel_schlick(b->f0, wo.z));
     float Fd = iir_luminance(b->c_diff) * (1.f - Fs);
     return Fs + Fd > 0.f ? Fs / (Fs + Fd) : 1.f;
 }
@@ -85,7 +77,7 @@ static bool sample_delta_local(const iir_bsdf *b, iir_vec3 wo, float p_spec, iir
 {
     s->wi = iir_reflect(iir_neg(wo), iir_v3(0.f, 0.f, 1.f));
     if (s->wi.z <= 0.f) return false;
-    s->f = iir_scale(fresnel_schlick(b->f0, wo.z), 1.f / s->wi.z);
+    s->f = iir_scale(iir_fresnel_schlick(b->f0, wo.z), 1.f / s->wi.z);
     s->pdf = p_spec;
     s->flags = IIR_BSDF_SPECULAR;
     return true;

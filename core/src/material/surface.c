@@ -7,6 +7,8 @@
 
 #include <math.h>
 
+#include "specular.h"
+
 /* ======================== interpolation ======================== */
 
 typedef struct tri_verts {
@@ -272,4 +274,13 @@ bool iir_surface_covers(const iir_scene *s, uint32_t prim, float u, float v)
     if (!iir_material_has_cutout(m)) return true;
     float cutoff = m->alpha_mode == IIR_ALPHA_MASK ? m->alpha_cutoff : 0.5f;
     return iir_surface_alpha(s, prim, u, v) >= cutoff;
+}
+
+bool iir_surface_mirror_reflection(const iir_surface *sf, iir_vec3 V, iir_vec3 *wi, iir_vec3 *F)
+{
+    if (sf->kind != IIR_MATERIAL_METAL_ROUGH || !(sf->roughness < IIR_MIRROR_ROUGHNESS))
+        return false;
+    *F = iir_fresnel_schlick(iir_surface_bsdf(sf).f0, fabsf(iir_dot(V, sf->sn)));
+    *wi = iir_reflect(V, sf->sn);
+    return iir_dot(*wi, sf->ns) > 0.f;
 }

@@ -197,14 +197,8 @@ static iir_vec3 specular(tracer *t, const iir_surface *sf, iir_vec3 V, int depth
 static iir_vec3 smooth_reflection(tracer *t, const iir_surface *sf, iir_vec3 V, int depth,
                                   iir_vec3 weight)
 {
-    if (sf->kind != IIR_MATERIAL_METAL_ROUGH || !(sf->roughness < IIR_MIRROR_ROUGHNESS))
-        return iir_v3s(0.f);
-    iir_bsdf b = iir_surface_bsdf(sf);
-    float c = 1.f - fabsf(iir_dot(V, sf->sn));
-    float c5 = c * c * c * c * c;
-    iir_vec3 F = iir_add(b.f0, iir_scale(iir_sub(iir_v3s(1.f), b.f0), c5));
-    iir_vec3 wi = iir_reflect(V, sf->sn);
-    if (iir_dot(wi, sf->ns) <= 0.f) return iir_v3s(0.f);
+    iir_vec3 wi, F;
+    if (!iir_surface_mirror_reflection(sf, V, &wi, &F)) return iir_v3s(0.f);
     return iir_mul(F, branch(t, sf, wi, depth, iir_mul(weight, F)));
 }
 

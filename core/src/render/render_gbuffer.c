@@ -96,12 +96,8 @@ static bool chain_link(const iir_surface *sf, iir_vec3 V, float eps, iir_ray *ra
         bool refract = g.has_t && 1.f - g.F >= g.F;
         d = refract ? g.wt : g.wr;
         *w = refract ? iir_scale(sf->specular, 1.f - g.F) : iir_v3s(g.F);
-    } else {
-        iir_bsdf b = iir_surface_bsdf(sf);
-        float c = 1.f - fabsf(iir_dot(V, sf->sn)), c5 = c * c * c * c * c;
-        *w = iir_add(b.f0, iir_scale(iir_sub(iir_v3s(1.f), b.f0), c5));
-        d = iir_reflect(V, sf->sn);
-        if (iir_dot(d, sf->ns) <= 0.f) return false;
+    } else if (!iir_surface_mirror_reflection(sf, V, &d, w)) {
+        return false;
     }
     iir_vec3 side = iir_dot(d, sf->n) < 0.f ? iir_neg(sf->n) : sf->n;
     *ray = iir_make_ray(iir_madd(sf->p, side, eps), d, 0.f, INFINITY);

@@ -117,16 +117,14 @@ static inline bool iir_gb_glossy(const iir_gbuffer *gb, size_t i, iir_receiver_b
 }
 
 /* The reflectance r->raw is demodulated by at G-buffer pixel i (its radiance is demod / pi * raw):
- * the diffuse albedo; for a pixel that reflects by its full BSDF (iir_gb_glossy) the albedo plus
- * its Fresnel reflectance at normal incidence, kept off zero, so that a metal's highlights keep
- * its colour and texture through the filter. */
+ * the diffuse albedo; for a pixel that reflects by its full BSDF (iir_gb_glossy)
+ * iir_bsdf_reflectance, so that a metal's highlights keep its colour and texture through the
+ * filter. */
 static inline iir_vec3 iir_gb_demod(const iir_gbuffer *gb, size_t i, iir_receiver_bsdf mode)
 {
     if (!iir_gb_glossy(gb, i, mode)) return gb->albedo[i];
     iir_vec3 m = gb->mr[i];
-    iir_vec3 f0 = iir_add(iir_v3s(m.z * (1.f - m.x)), iir_scale(gb->base[i], m.x));
-    iir_vec3 d = iir_add(gb->albedo[i], f0);
-    return iir_v3(fmaxf(d.x, 0.02f), fmaxf(d.y, 0.02f), fmaxf(d.z, 0.02f));
+    return iir_bsdf_reflectance(gb->albedo[i], gb->base[i], m.x, m.z);
 }
 
 /* The receiver mode of this frame's gather: p's in full shading; multires gathers diffuse light. */

@@ -12,8 +12,8 @@
 #include "iir/bsdf.h"
 #include "iir/vpl.h"
 
-/* The lobe of a VPL at sf; *albedo gets sf's diffuse albedo, or for a glossy lobe c_diff + F0 (the
- * reflectance at normal incidence, kept at least 0.02 per channel). */
+/* The lobe of a VPL at sf; *albedo gets sf's diffuse albedo, or for a glossy lobe
+ * iir_bsdf_reflectance (c_diff + F0). */
 static inline iir_vpl_lobe iir_vpl_lobe_at(const iir_surface *sf, iir_vec3 *albedo)
 {
     iir_vpl_lobe lobe = {0};
@@ -24,10 +24,7 @@ static inline iir_vpl_lobe iir_vpl_lobe_at(const iir_surface *sf, iir_vec3 *albe
     lobe.glossy = true;
     lobe.metallic = sf->metallic, lobe.roughness = sf->roughness, lobe.f0 = sf->specular_f0;
     lobe.base = sf->base;
-    iir_vec3 f0 =
-        iir_add(iir_v3s(sf->specular_f0 * (1.f - sf->metallic)), iir_scale(sf->base, sf->metallic));
-    iir_vec3 a = iir_add(sf->albedo, f0);
-    *albedo = iir_v3(fmaxf(a.x, 0.02f), fmaxf(a.y, 0.02f), fmaxf(a.z, 0.02f));
+    *albedo = iir_bsdf_reflectance(sf->albedo, sf->base, sf->metallic, sf->specular_f0);
     return lobe;
 }
 
