@@ -81,11 +81,10 @@ static compared compare(const loaded *l, const iir_view *v, iir_image *a, iir_im
 
 /* ---- an open box corner: floor, back wall, left wall (nothing occludes anything) ---- */
 
-static loaded load_corner(void)
+static loaded load_corner_of(const char *name, const char *mtl)
 {
-    const char *dir = iir_test_tmpdir("rsm-corner");
-    iir_test_write_file(dir, "corner.mtl",
-                        "newmtl grey\nKd 0.6 0.6 0.6\nnewmtl red\nKd 0.7 0.2 0.2\n");
+    const char *dir = iir_test_tmpdir(name);
+    iir_test_write_file(dir, "corner.mtl", mtl);
     char path[1200];
     snprintf(path, sizeof path, "%s/corner.obj", dir);
     FILE *f = fopen(path, "w");
@@ -99,6 +98,12 @@ static loaded load_corner(void)
                         "{\"camera\": {\"position\": [3, 3.5, 6], \"target\": [-0.5, 0.8, -0.5],"
                         " \"fov_y\": 50}, \"lights\": []}");
     return iir_test_load(dir, "corner");
+}
+
+static loaded load_corner(void)
+{
+    return load_corner_of("rsm-corner",
+                          "newmtl grey\nKd 0.6 0.6 0.6\nnewmtl red\nKd 0.7 0.2 0.2\n");
 }
 
 /* One light of each kind over the corner, lighting the floor and the walls. */
@@ -156,6 +161,47 @@ static void test_corner_matches_pt(void **state)
     check_corner_kind(&c, corner_light(IIR_LIGHT_POINT, IIR_SPOT_COSINE));
     check_corner_kind(&c, corner_light(IIR_LIGHT_SUN, IIR_SPOT_COSINE));
     check_corner_kind(&c, corner_light(IIR_LIGHT_AREA, IIR_SPOT_COSINE));
+    iir_test_unload(&c);
+}
+
+/* The corner with its floor and back wall of brass (a metal of roughness 0.35), the left wall
+ * red and diffuse: every receiver and every texel on the brass reflects by its BSDF (a metal has no
+ * diffuse albedo: shaded as diffuse it would be black). Nothing occludes, so rsm and hier gathering
+ * the whole map converge to pt --bounces 2 as in the diffuse corner only if the glossy receivers'
+ * BSDF and the texels' lobes are right. */
+static void check_glossy_corner(const loaded *c, const char *method, double max_rel)
+{
+    enum { W = 48, H = 40 };
+    iir_light light = corner_light(IIR_LIGHT_SPOT, IIR_SPOT_COSINE);
+    iir_view v = {&light, 1, c->scene->camera};
+    iir_params p = iir_params_default();
+    iir_frame_stats fs;
+    iir_test_set(&p, "spp", 2048);
+    iir_test_set(&p, "bounces", 2);
+    iir_test_set(&p, "jitter", 0);
+    iir_image *ref = render("pt", c, &v, W, H, &p, &fs);
+    iir_test_set(&p, "rsm_res", 128);
+    iir_test_set(&p, "rsm_samples", 4096);
+    iir_test_set(&p, "rsm_radius", 2);
+    iir_test_set(&p, "rsm_lowres", 1);
+    iir_test_set(&p, "clamp", 0);
+    iir_image *img = render(method, c, &v, W, H, &p, &fs);
+    compared k = compare(c, &v, img, ref);
+    print_message("%s vs pt, glossy corner: relMSE %.2e on %d pixels, means %.4f / %.4f\n", method,
+                  k.rel, k.n, k.mean_a, k.mean_b);
+    assert_true(k.rel < max_rel);
+    assert_true(fabs(k.mean_a - k.mean_b) < 0.03 * k.mean_b);
+    iir_image_destroy(img);
+    iir_image_destroy(ref);
+}
+
+static void test_glossy_corner_matches_pt(void **state)
+{
+    (void)state;
+    loaded c = load_corner_of("rsm-glossy-corner", "newmtl grey\nKd 0.9 0.7 0.45\nPm 1\nPr 0.35\n"
+                                                   "newmtl red\nKd 0.7 0.2 0.2\n");
+    check_glossy_corner(&c, "rsm", 5e-3);
+    check_glossy_corner(&c, "hier", 5e-3);
     iir_test_unload(&c);
 }
 
@@ -336,9 +382,13 @@ static void test_deterministic_and_live(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_corner_matches_pt), cmocka_unit_test(test_leak_through_a_wall),
-        cmocka_unit_test(test_cornell_bound),     cmocka_unit_test(test_interpolation),
-        cmocka_unit_test(test_multires),          cmocka_unit_test(test_deterministic_and_live),
+        cmocka_unit_test(test_corner_matches_pt),
+        cmocka_unit_test(test_glossy_corner_matches_pt),
+        cmocka_unit_test(test_leak_through_a_wall),
+        cmocka_unit_test(test_cornell_bound),
+        cmocka_unit_test(test_interpolation),
+        cmocka_unit_test(test_multires),
+        cmocka_unit_test(test_deterministic_and_live),
     };
     return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

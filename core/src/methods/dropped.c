@@ -35,26 +35,28 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
     uint32_t n = 0;
     for (uint32_t i = 0; i < scene->num_materials; i++) {
         const iir_material *m = &scene->material_list[i];
-        bool glossy_direct = strcmp(method, "hier") != 0; /* hier shades its own tree */
         const iir_method_ops *ops = iir_method_ops_of(method);
+        /* rsm and hier gather one bounce from the lights' maps: no light paths go on */
+        bool maps = strcmp(method, "rsm") == 0 || strcmp(method, "hier") == 0;
         /* one text for every glossy material (no per-material figures), so the commands and the
            page say it once, naming them all; short enough for iir_dropped.what */
-        if (iir_material_is_glossy(m) && ops && ops->full_surfaces)
+        if (iir_material_is_glossy(m) && ops && ops->full_surfaces && maps)
+            iir_dropped_add(out, max, &n, method, "material", m->name,
+                            "is glossy (a metal, or roughness below 0.6): %s renders it by the "
+                            "full BSDF, the maps' texels on it too (one bounce, its lobe "
+                            "clamped); pt renders more bounces",
+                            method);
+        else if (iir_material_is_glossy(m) && ops && ops->full_surfaces)
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is glossy (a metal, or roughness below 0.6): %s renders it by the "
                             "full BSDF, VPLs on it too, but their light paths go on as from a "
                             "diffuse surface, its lobe clamped; pt renders both",
                             method);
-        else if (iir_material_is_glossy(m) && glossy_direct)
+        else if (iir_material_is_glossy(m))
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is glossy (a metal, or roughness below 0.6): %s renders its direct "
                             "light by the full BSDF, its bounce light as diffuse only; pt renders "
                             "both",
-                            method);
-        else if (iir_material_is_glossy(m))
-            iir_dropped_add(out, max, &n, method, "material", m->name,
-                            "is glossy (a metal, or roughness below 0.6): %s shades it as diffuse "
-                            "only, its highlights left out; pt, whitted and hybrid render them",
                             method);
         else if ((m->kind == IIR_MATERIAL_MIRROR || m->kind == IIR_MATERIAL_GLASS) && ops &&
                  ops->full_surfaces)

@@ -29,6 +29,7 @@
 #include "iir/timer.h"
 #include "iir/vplsets.h"
 #include "method_internal.h"
+#include "../render/render_internal.h"
 #include "rsm_map.h"
 
 /* ---- parameters ---- */
@@ -93,12 +94,13 @@ typedef struct hier_state {
 
 /* ---- shading ---- */
 
-/* Bounce irradiance at (x, n) from the lights' maps; adds the gather samples to *evals. */
-static iir_vec3 bounce_point(const hier_state *s, iir_vec3 x, iir_vec3 n, uint64_t *evals)
+/* Demodulated bounce light at receiver q from the lights' maps; adds the gather samples to
+ * *evals. */
+static iir_vec3 bounce_point(const hier_state *s, const rsm_receiver *q, uint64_t *evals)
 {
     iir_vec3 E = iir_v3s(0.f);
     for (uint32_t l = 0; l < s->num_maps; l++)
-        E = iir_add(E, rsm_gather_map(&s->pattern, &s->maps[l], x, n));
+        E = iir_add(E, rsm_gather_map(&s->pattern, &s->maps[l], q));
     *evals += (uint64_t)s->num_maps * (uint64_t)s->pattern.m;
     return E;
 }
@@ -110,22 +112,60 @@ static uint64_t shade_samples(void *ctx, int m, uint32_t cls, const iir_mr_sampl
     (void)m, (void)cls, (void)st;
     const hier_state *s = ctx;
     uint64_t evals = 0;
-    for (int i = 0; i < count; i++) E[i] = bounce_point(s, smp[i].position, smp[i].normal, &evals);
+    for (int i = 0; i < count; i++) {
+        rsm_receiver q = rsm_receiver_at(smp[i].position, smp[i].normal);
+        E[i] = bounce_point(s, &q, &evals);
+    }
     return evals;
 }
 
-/* The pixels at discontinuities (level 0): evaluated here, per pixel. */
+/* The pixels at discontinuities (level 0) and the glossy ones (their light is view-dependent):
+ * evaluated here, per pixel, a glossy one by its full BSDF. */
 static uint64_t shade_pixels(hier_state *s, const iir_gbuffer *gb, const uint8_t *levels)
 {
     const int n = gb->width * gb->height;
     uint64_t evals = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : evals)
     for (int p = 0; p < n; p++) {
-        if (levels[p] != 0) continue;
-        s->E[p] = isfinite(gb->depth[p]) ? bounce_point(s, gb->position[p], gb->normal[p], &evals)
-                                         : iir_v3s(0.f);
+        bool glossy = gb->any_pbr && iir_gb_glossy(gb, (size_t)p, IIR_RECEIVER_GLOSSY);
+        if (levels[p] != 0 && !glossy) continue;
+        iir_vec3 demod;
+        rsm_receiver q = rsm_receiver_pixel(gb, (size_t)p, &demod);
+        s->E[p] = isfinite(gb->depth[p]) ? bounce_point(s, &q, &evals) : iir_v3s(0.f);
     }
     return evals;
+}
+
+/* The direct light of the glossy pixels, evaluated per pixel by their full BSDF over the tree's
+ * (which interpolates irradiance), demodulated as their bounce light is (iir_gb_demod). */
+static uint64_t glossy_direct(hier_state *s, const iir_gbuffer *gb)
+{
+    const int n = gb->width * gb->height;
+    uint64_t evals = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : evals)
+    for (int p = 0; p < n; p++) {
+        if (!isfinite(gb->depth[p]) || !iir_gb_glossy(gb, (size_t)p, IIR_RECEIVER_GLOSSY)) continue;
+        iir_vec3 demod;
+        rsm_receiver q = rsm_receiver_pixel(gb, (size_t)p, &demod);
+        iir_vec3 L = hier_direct_bsdf(&s->lights, q.x, &q.bsdf, q.wo, &evals);
+        s->tree.D[p] = iir_mul(L, q.demod_pi);
+    }
+    return evals;
+}
+
+/* Adds every pixel's light to out: its demodulated direct and bounce light times the
+ * demodulation (iir_gb_demod: the albedo where diffuse), over pi, times what its specular chain
+ * passes on. */
+static void compose(const hier_state *s, const iir_gbuffer *gb, iir_image *out)
+{
+    const size_t n = (size_t)gb->width * gb->height;
+#pragma omp parallel for schedule(static)
+    for (size_t p = 0; p < n; p++) {
+        iir_vec3 demod = gb->any_pbr ? iir_gb_demod(gb, p, IIR_RECEIVER_GLOSSY) : gb->albedo[p];
+        iir_vec3 L = iir_mul(demod, iir_add(s->tree.D[p], s->E[p]));
+        if (gb->any_chain) L = iir_mul(L, gb->through[p]);
+        out->pixels[p] = iir_madd(out->pixels[p], L, 1.f / (float)M_PI);
+    }
 }
 
 /* Fills s->E (bounce light) for every pixel -- the hierarchy's levels, then the level-0 pixels --
@@ -153,6 +193,7 @@ static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *s
     const iir_stop stop = {s->stop, s->stop_ctx};
     hier_tree_input in = {gb, s->mr, &s->lights, s->o.mr.mr_levels, s->o.light_split};
     st = hier_tree_shade(&s->tree, &in, &stop, &evals, err);
+    if (st == IIR_OK && gb->any_pbr) evals += glossy_direct(s, gb);
     stats->phase_ms[IIR_PHASE_DIRECT] = iir_now_ms() - t;
     stats->vpl_evals = evals;
     return st;
@@ -183,7 +224,7 @@ static void add_seen_area_lights(const iir_view *view, const iir_gbuffer *gb, ii
             for (int x = 0; x < gb->width; x++) {
                 size_t p = (size_t)y * gb->width + x;
                 iir_vec3 d = iir_camera_dir(&cf, (float)x + 0.5f, (float)y + 0.5f);
-                float t = iir_area_light_hit(l, view->camera.position, d, gb->depth[p]);
+                float t = iir_area_light_hit(l, view->camera.position, d, gb->camera_t[p]);
                 if (!isinf(t))
                     out->pixels[p] = iir_add(
                         out->pixels[p],
@@ -216,10 +257,7 @@ static iir_status hier_render(void *state, const iir_view *view, iir_image *out,
     const iir_gbuffer *gb = iir_renderer_gbuffer(s->renderer);
     st = shade(s, gb, stats, err);
     if (st != IIR_OK) return st;
-    for (size_t p = 0; p < (size_t)gb->width * gb->height; p++)
-        out->pixels[p] =
-            iir_madd(out->pixels[p], iir_mul(gb->albedo[p], iir_add(s->tree.D[p], s->E[p])),
-                     1.f / (float)M_PI);
+    compose(s, gb, out);
     add_seen_area_lights(view, gb, out);
     stats->phase_ms[IIR_PHASE_GBUFFER] = rt.gbuffer_ms;
     stats->phase_ms[IIR_PHASE_DIRECT] += rt.direct_ms; /* the emitters the camera sees */
@@ -267,6 +305,7 @@ static iir_status hier_create(const iir_scene *scene, const iir_rt *rt, const vo
     s->rt = rt;
     iir_status st = iir_voxels_build(scene, o->voxel_res, stop, &s->grid, err);
     s->renderer = iir_renderer_create(scene, rt);
+    if (s->renderer) iir_renderer_follow_specular(s->renderer, IIR_VPL_SPECULAR_DEPTH);
     s->mr = iir_multires_create();
     if (st == IIR_OK &&
         (!s->renderer || !s->mr ||
@@ -333,6 +372,7 @@ const iir_method_ops iir_method_hier = {
     .update = hier_update,
     .memory = hier_memory,
     .dropped = hier_dropped,
+    .full_surfaces = true,
     .phases = {IIR_PHASE_MAPS, IIR_PHASE_GBUFFER, IIR_PHASE_INDIRECT, IIR_PHASE_DIRECT,
                IIR_PHASE_COUNT},
 };

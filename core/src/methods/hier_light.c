@@ -109,7 +109,10 @@ static iir_vec3 unshadowed(const hier_point *pt, const iir_light_sample *ls, iir
     return iir_scale(ls->Li, k);
 }
 
-iir_vec3 hier_direct(const hier_lights *hl, iir_vec3 x, iir_vec3 n, uint64_t *evals)
+/* The light of every point at x (normal n), each point's irradiance through the BSDF b toward wo
+ * when b is given. */
+static iir_vec3 direct(const hier_lights *hl, iir_vec3 x, iir_vec3 n, const iir_bsdf *b,
+                       iir_vec3 wo, uint64_t *evals)
 {
     iir_vec3 E = iir_v3s(0.f);
     iir_light_ctx ctx = {x, n, hl->offset};
@@ -118,8 +121,19 @@ iir_vec3 hier_direct(const hier_lights *hl, iir_vec3 x, iir_vec3 n, uint64_t *ev
         iir_light_sample ls = iir_light_sample_li(&hl->eval[pt->light], &ctx, pt->u);
         iir_vec3 e = unshadowed(pt, &ls, n);
         if (iir_is_black(e) || blocked(hl, &ls.shadow)) continue;
-        E = iir_add(E, e);
+        E = iir_add(E, b ? iir_mul(e, iir_bsdf_f(b, wo, ls.wi)) : e);
     }
     *evals += hl->num_pts;
     return E;
+}
+
+iir_vec3 hier_direct(const hier_lights *hl, iir_vec3 x, iir_vec3 n, uint64_t *evals)
+{
+    return direct(hl, x, n, NULL, iir_v3s(0.f), evals);
+}
+
+iir_vec3 hier_direct_bsdf(const hier_lights *hl, iir_vec3 x, const iir_bsdf *b, iir_vec3 wo,
+                          uint64_t *evals)
+{
+    return direct(hl, x, b->frame.f, b, wo, evals);
 }

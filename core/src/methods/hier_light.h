@@ -18,6 +18,7 @@
 
 #include <stdint.h>
 
+#include "iir/bsdf.h"
 #include "iir/light.h"
 #include "iir/voxels.h"
 
@@ -58,5 +59,9 @@ void hier_lights_free(hier_lights *hl);
 /* The direct irradiance at x (normal n, facing the camera) from every point, shadowed as hl->vis
  * says; adds the points evaluated to *evals. Read-only on hl: any thread may call it. */
 iir_vec3 hier_direct(const hier_lights *hl, iir_vec3 x, iir_vec3 n, uint64_t *evals);
+/* The same reflected by BSDF b toward wo (its normal: the receiver's): radiance, not irradiance
+ * (a glossy pixel's, evaluated per pixel). */
+iir_vec3 hier_direct_bsdf(const hier_lights *hl, iir_vec3 x, const iir_bsdf *b, iir_vec3 wo,
+                          uint64_t *evals);
 
 #endif

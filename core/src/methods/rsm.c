@@ -40,6 +40,7 @@
 #include "iir/timer.h"
 #include "iir/vplsets.h"
 #include "method_internal.h"
+#include "../render/render_internal.h"
 #include "rsm_map.h"
 
 /* rsm's counters: frame stats' counter[RSM_RECOMPUTED]. */
@@ -115,14 +116,32 @@ float iir_clamp_g_max(const iir_scene *scene, float clamp)
 
 /* ---- gathering ---- */
 
-/* The demodulated one-bounce light at a G-buffer pixel (0 for background). */
+/* The demodulated one-bounce light at a G-buffer pixel (0 for background): by its full BSDF
+ * where it is glossy (rsm_receiver_pixel). */
 static iir_vec3 gather(const rsm_state *s, const iir_gbuffer *gb, size_t i)
 {
-    iir_vec3 e = iir_v3s(0.f);
+    iir_vec3 e = iir_v3s(0.f), demod;
     if (!isfinite(gb->depth[i])) return e;
+    rsm_receiver q = rsm_receiver_pixel(gb, i, &demod);
     for (uint32_t l = 0; l < s->num_maps; l++)
-        e = iir_add(e, rsm_gather_map(&s->pattern, &s->maps[l], gb->position[i], gb->normal[i]));
+        e = iir_add(e, rsm_gather_map(&s->pattern, &s->maps[l], &q));
     return e;
+}
+
+/* Adds pixel i's radiance, demodulated light e, to out: times demod / pi and what its specular
+ * chain passes on. */
+static void put(iir_image *out, const iir_gbuffer *gb, size_t i, iir_vec3 e)
+{
+    iir_vec3 d = gb->any_pbr ? iir_gb_demod(gb, i, IIR_RECEIVER_GLOSSY) : gb->albedo[i];
+    iir_vec3 L = iir_mul(d, e);
+    if (gb->any_chain) L = iir_mul(L, gb->through[i]);
+    out->pixels[i] = iir_madd(out->pixels[i], L, 1.f / (float)M_PI);
+}
+
+/* Whether pixel i's light is view-dependent (a glossy receiver): never interpolated. */
+static bool glossy(const iir_gbuffer *gb, size_t i)
+{
+    return gb->any_pbr && iir_gb_glossy(gb, i, IIR_RECEIVER_GLOSSY);
 }
 
 /* Interpolation nodes: columns 0, L, 2L, ... and the last column; rows likewise. */
@@ -136,10 +155,11 @@ static int node_pixel(int i, int size, int L)
     return p < size ? p : size - 1;
 }
 
-/* Whether node pixel j may stand for pixel i's surface: the filter's test (render.h). */
+/* Whether node pixel j may stand for pixel i's surface: the filter's test (render.h), and
+ * neither glossy. */
 static bool node_agrees(const iir_gbuffer *gb, size_t i, size_t j)
 {
-    if (!isfinite(gb->depth[j])) return false;
+    if (!isfinite(gb->depth[j]) || glossy(gb, i) || glossy(gb, j)) return false;
     if (iir_dot(gb->normal[i], gb->normal[j]) < IIR_FILTER_MIN_COS) return false;
     float plane = fabsf(iir_dot(gb->normal[i], iir_sub(gb->position[j], gb->position[i])));
     return plane <= IIR_FILTER_MAX_REL_DEPTH * gb->depth[i];
@@ -221,7 +241,7 @@ static iir_status shade_lowres(rsm_state *s, const iir_gbuffer *gb, iir_image *o
             } else {
                 gathered += interpolate(s, gb, nx, x, y, &e);
             }
-            out->pixels[p] = iir_madd(out->pixels[p], iir_mul(gb->albedo[p], e), 1.f / (float)M_PI);
+            put(out, gb, p, e);
         }
     if (s->stopped) return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     uint64_t per_gather = (uint64_t)s->num_maps * (uint64_t)s->pattern.m;
@@ -241,9 +261,9 @@ static uint64_t gather_samples(void *ctx, int m, uint32_t cls, const iir_mr_samp
     const rsm_state *s = ctx;
     for (int i = 0; i < count; i++) {
         E[i] = iir_v3s(0.f);
+        rsm_receiver q = rsm_receiver_at(smp[i].position, smp[i].normal);
         for (uint32_t l = 0; l < s->num_maps; l++)
-            E[i] = iir_add(
-                E[i], rsm_gather_map(&s->pattern, &s->maps[l], smp[i].position, smp[i].normal));
+            E[i] = iir_add(E[i], rsm_gather_map(&s->pattern, &s->maps[l], &q));
     }
     return (uint64_t)count * s->num_maps * (uint64_t)s->pattern.m;
 }
@@ -267,9 +287,8 @@ static iir_status shade_multires(rsm_state *s, const iir_gbuffer *gb, iir_image 
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : gathered)
     for (int q = 0; q < n; q++) {
         if (!isfinite(gb->depth[q])) continue;
-        if (levels[q] == 0) s->E[q] = gather(s, gb, (size_t)q), gathered++;
-        out->pixels[q] =
-            iir_madd(out->pixels[q], iir_mul(gb->albedo[q], s->E[q]), 1.f / (float)M_PI);
+        if (levels[q] == 0 || glossy(gb, (size_t)q)) s->E[q] = gather(s, gb, (size_t)q), gathered++;
+        put(out, gb, (size_t)q, s->E[q]);
     }
     stats->vpl_evals = evals + (uint64_t)gathered * s->num_maps * (uint64_t)s->pattern.m;
     stats->counter[RSM_RECOMPUTED] = (double)gathered / n;
@@ -367,6 +386,7 @@ static iir_status rsm_create(const iir_scene *scene, const iir_rt *rt, const voi
     s->rt = rt;
     s->o = *(const rsm_options *)opts;
     s->renderer = iir_renderer_create(scene, rt);
+    if (s->renderer) iir_renderer_follow_specular(s->renderer, IIR_VPL_SPECULAR_DEPTH);
     s->mr = iir_multires_create();
     if (!s->renderer || !s->mr ||
         !rsm_pattern_build(&s->pattern, &s->o.map, iir_clamp_g_max(scene, s->o.clamp))) {
@@ -436,6 +456,7 @@ const iir_method_ops iir_method_rsm = {
     .update = rsm_update,
     .memory = rsm_memory,
     .dropped = rsm_dropped,
+    .full_surfaces = true,
     .phases = {IIR_PHASE_MAPS, IIR_PHASE_GBUFFER, IIR_PHASE_DIRECT, IIR_PHASE_INDIRECT,
                IIR_PHASE_COUNT},
     .counters = RSM_COUNTERS,

@@ -11,6 +11,8 @@
 #include "iir/vplsets.h"
 #include "method_internal.h"
 
+#include "../render/render_internal.h"
+#include "../vpls/vpl_lobe.h"
 #include "surface.h"
 
 bool rsm_map_alloc(rsm_map *m, int res)
@@ -76,8 +78,9 @@ static iir_vpl texel_at(const rsm_map *m, uint32_t k, iir_vec2 t, const iir_scen
     float emitted = iir_domain_profile(&m->dom, s) * A;
     v.null_sample = false;
     v.position = sf.p;
-    v.albedo = sf.albedo;
-    v.flux = iir_scale(iir_mul(emitter_radiance(m, k), sf.albedo), emitted);
+    v.lobe = iir_vpl_lobe_at(&sf, &v.albedo);
+    v.wi = iir_neg(w);
+    v.flux = iir_scale(iir_mul(emitter_radiance(m, k), v.albedo), emitted);
     iir_vpl_set_normal(&v, sf.ns);
     return v;
 }
@@ -92,10 +95,10 @@ iir_status rsm_map_render(rsm_map *m, const iir_light *l, const iir_scene *scene
     m->sphere = down_frame();
     m->half = sphere ? 2.f : (float)m->dom.R;
     const int res = m->res;
-    uint32_t lit = 0, in_disk = 0;
+    uint32_t lit = 0, in_disk = 0, glossy = 0;
     iir_raystats rays = {0};
     bool stopped = false;
-#pragma omp parallel for schedule(dynamic, 4) reduction(+ : lit, in_disk)
+#pragma omp parallel for schedule(dynamic, 4) reduction(+ : lit, in_disk, glossy)
     for (int y = 0; y < res; y++) {
         bool quit;
 #pragma omp atomic read
@@ -112,12 +115,14 @@ iir_status rsm_map_render(rsm_map *m, const iir_light *l, const iir_scene *scene
                                 2.f * ((float)y + 0.5f) / (float)res - 1.f);
             m->texel[k] = texel_at(m, k, t, scene, rt, &local);
             lit += !m->texel[k].null_sample;
+            glossy += m->texel[k].lobe.glossy;
             in_disk += t.x * t.x + t.y * t.y < 1.f;
         }
 #pragma omp critical(rsm_rays)
         iir_raystats_add(&rays, &local);
     }
     m->lit = lit;
+    m->glossy = glossy > 0;
     m->in_disk = in_disk;
     if (st) iir_raystats_add(st, &rays);
     return stopped ? iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early") : IIR_OK;
@@ -216,9 +221,42 @@ void rsm_pattern_free(rsm_pattern *p)
     p->m = 0;
 }
 
-iir_vec3 rsm_gather_map(const rsm_pattern *p, const rsm_map *m, iir_vec3 x, iir_vec3 n)
+rsm_receiver rsm_receiver_pixel(const iir_gbuffer *gb, size_t i, iir_vec3 *demod)
 {
-    iir_vec2 c = rsm_map_project(m, x);
+    rsm_receiver q = rsm_receiver_at(gb->position[i], gb->normal[i]);
+    *demod = gb->albedo[i];
+    if (!gb->any_pbr || !iir_gb_glossy(gb, i, IIR_RECEIVER_GLOSSY)) return q;
+    *demod = iir_gb_demod(gb, i, IIR_RECEIVER_GLOSSY);
+    iir_vec3 m = gb->mr[i], d = *demod;
+    q.glossy = true;
+    q.bsdf = iir_bsdf_make_f0(q.n, gb->base[i], m.x, m.y, m.z);
+    q.wo = gb->wo[i];
+    q.demod_pi = iir_v3(IIR_PI / d.x, IIR_PI / d.y, IIR_PI / d.z);
+    return q;
+}
+
+/* G_k s_k r_k of texel v toward receiver q (w: unit, from v to q), its peak clamped to g_max. */
+static iir_vec3 lobes(const iir_vpl *v, const rsm_receiver *q, iir_vec3 w, float G, float g_max)
+{
+    iir_vec3 f = iir_v3s(G);
+    if (q->glossy) f = iir_mul(f, iir_mul(iir_bsdf_f(&q->bsdf, q->wo, iir_neg(w)), q->demod_pi));
+    if (v->lobe.glossy) {
+        const iir_vpl_lobe *l = &v->lobe;
+        iir_bsdf b = iir_bsdf_make_f0(v->normal, l->base, l->metallic, l->roughness, l->f0);
+        iir_vec3 a = v->albedo;
+        f = iir_mul(
+            f, iir_mul(iir_bsdf_f(&b, w, v->wi), iir_v3(IIR_PI / a.x, IIR_PI / a.y, IIR_PI / a.z)));
+    }
+    float peak = fmaxf(f.x, fmaxf(f.y, f.z));
+    return peak > g_max ? iir_scale(f, g_max / peak) : f;
+}
+
+/* The gather's sum over the pattern; `diffuse` (a constant where it is inlined) when neither the
+ * receiver nor any texel is glossy. */
+static inline iir_vec3 gather_sum(const rsm_pattern *p, const rsm_map *m, const rsm_receiver *q,
+                                  const bool diffuse)
+{
+    iir_vec2 c = rsm_map_project(m, q->x);
     const int res = m->res;
     const float half_res = 0.5f * (float)res;
     iir_vec3 sum = iir_v3s(0.f);
@@ -228,13 +266,23 @@ iir_vec3 rsm_gather_map(const rsm_pattern *p, const rsm_map *m, iir_vec3 x, iir_
         if (!(fx >= 0.f && fy >= 0.f && fx < (float)res && fy < (float)res)) continue;
         const iir_vpl *v = &m->texel[(int)fy * res + (int)fx];
         if (v->null_sample) continue;
-        iir_vec3 to = iir_sub(x, v->position);
+        iir_vec3 to = iir_sub(q->x, v->position);
         float d2 = iir_dot(to, to);
         if (!(d2 > 0.f)) continue;
-        float cos_v = iir_dot(v->normal, to), cos_x = -iir_dot(n, to);
+        float cos_v = iir_dot(v->normal, to), cos_x = -iir_dot(q->n, to);
         if (cos_v <= 0.f || cos_x <= 0.f) continue;
-        float G = fminf(cos_v * cos_x / (d2 * d2), p->g_max);
-        sum = iir_madd(sum, v->flux, d[2] * G);
+        float G = cos_v * cos_x / (d2 * d2);
+        if (diffuse || (!q->glossy && !v->lobe.glossy)) {
+            sum = iir_madd(sum, v->flux, d[2] * fminf(G, p->g_max));
+            continue;
+        }
+        iir_vec3 f = lobes(v, q, iir_scale(to, 1.f / sqrtf(d2)), G, p->g_max);
+        sum = iir_add(sum, iir_scale(iir_mul(v->flux, f), d[2]));
     }
     return iir_scale(sum, 1.f / (float)M_PI);
+}
+
+iir_vec3 rsm_gather_map(const rsm_pattern *p, const rsm_map *m, const rsm_receiver *q)
+{
+    return !q->glossy && !m->glossy ? gather_sum(p, m, q, true) : gather_sum(p, m, q, false);
 }

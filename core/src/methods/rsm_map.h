@@ -18,6 +18,8 @@
 #include "iir/light.h"
 #include "iir/method.h"
 #include "iir/light_domain.h"
+#include "iir/render.h"
+#include "iir/bsdf.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
 #include "iir/vpl.h"
@@ -31,6 +33,7 @@ typedef struct rsm_map {
     iir_vpl *texel;   /* res * res, row-major from t = (-1, -1); id = texel index */
     uint32_t in_disk; /* texels whose centre lies on the domain's disk (all for a sphere) */
     uint32_t lit;     /* texels that are not null samples */
+    bool glossy;      /* some texel's lobe is glossy */
 } rsm_map;
 
 /* Allocates the texels of a res x res map; false when out of memory. */
@@ -81,8 +84,32 @@ typedef struct rsm_pattern {
 bool rsm_pattern_build(rsm_pattern *p, const iir_rsm_options *o, float g_max);
 void rsm_pattern_free(rsm_pattern *p);
 
-/* sum_k w_k (Phi_k / pi) min(G_k, g_max) over map m's texels around receiver x (normal n): the
- * demodulated one-bounce light (times rho_x / pi it is radiance). */
-iir_vec3 rsm_gather_map(const rsm_pattern *p, const rsm_map *m, iir_vec3 x, iir_vec3 n);
+/* Who gathers: a point and its unit normal, and for a glossy receiver (a G-buffer pixel that
+ * iir_gb_glossy says reflects by its full BSDF) that BSDF, the direction toward the viewer and
+ * pi / demod (demod: iir_gb_demod, what the gather's result is multiplied by over pi). */
+typedef struct rsm_receiver {
+    iir_vec3 x, n;
+    bool glossy;
+    iir_bsdf bsdf;
+    iir_vec3 wo, demod_pi;
+} rsm_receiver;
+
+/* A diffuse receiver at x (normal n); its glossy fields are left unset. */
+static inline rsm_receiver rsm_receiver_at(iir_vec3 x, iir_vec3 n)
+{
+    rsm_receiver q;
+    q.x = x, q.n = n, q.glossy = false;
+    return q;
+}
+
+/* G-buffer pixel i as a receiver (glossy when iir_gb_glossy says so at receiver_bsdf = glossy);
+ * *demod gets what the gather's result is multiplied by over pi. */
+rsm_receiver rsm_receiver_pixel(const iir_gbuffer *gb, size_t i, iir_vec3 *demod);
+
+/* sum_k w_k (Phi_k / pi) min(G_k s_k r_k, g_max) over map m's texels around receiver q: the
+ * demodulated one-bounce light (times demod / pi it is radiance). s_k is a glossy texel's lobe
+ * toward q relative to a diffuse texel (f(wi_k, w) pi / albedo_k), r_k a glossy receiver's
+ * (f(wo, w) pi / demod), 1 for diffuse ones; the clamp bounds the product as rendering does. */
+iir_vec3 rsm_gather_map(const rsm_pattern *p, const rsm_map *m, const rsm_receiver *q);
 
 #endif
