@@ -49,8 +49,8 @@ uint32_t iir_dropped_emitters(const iir_scene *scene, const char *method, iir_dr
         else if (iir_material_is_glossy(m) && ops && ops->full_surfaces)
             iir_dropped_add(out, max, &n, method, "material", m->name,
                             "is glossy (a metal, or roughness below 0.6): %s renders it by the "
-                            "full BSDF, VPLs on it too, but their light paths go on as from a "
-                            "diffuse surface, its lobe clamped; pt renders both",
+                            "full BSDF, VPLs on it and the light paths leaving them too, but "
+                            "clamps its lobes as the geometry term; pt does not clamp",
                             method);
         else if (iir_material_is_glossy(m))
             iir_dropped_add(out, max, &n, method, "material", m->name,

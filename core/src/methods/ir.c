@@ -147,9 +147,10 @@ static bool trace_path(ir_state *ir, vpl_list *l, const iir_light *light, iir_ve
         v.flux = iir_mul(beta, v.albedo);
         iir_vpl_set_normal(&v, sf.ns);
         if (!push_vpl(l, &v)) return false;
-        float q;
-        if (!iir_light_path_continue(&v, eps, rng, &ray, &q)) break;
-        beta = iir_scale(v.flux, 1.f / q);
+        iir_light_step step;
+        if (!iir_light_path_continue(&v, eps, rng, &step)) break;
+        ray = step.ray;
+        beta = iir_mul(v.flux, step.weight);
     }
     return true;
 }

@@ -23,6 +23,12 @@
  *  - Rate: `full` traces one ray per pixel. `interleaved` traces from one diagonal of the n x n
  *    interleave lattice (n of its n^2 classes, chosen by the seed) with weight n, and the
  *    geometry-aware filter gathers them as it gathers the VPL subsets: n times fewer rays.
+ *  - Glossy receivers (iir_gb_glossy): the VPL sum clamped G times the receiver's factor
+ *    r = max_c f_c pi / demod_c (render_indirect.c's add_lit), so the first step samples the
+ *    pixel's BSDF instead, carrying f |cos| / (pdf demod) (r->raw's demodulation), and the residual
+ *    is (1 - g_max / (G r))^+: a clamped lobe's light comes back as the lobe (Kollig & Keller with
+ *    the BSDF). Later steps and the hit points' light are diffuse (a glossy VPL's sender factor is
+ *    not in the residual).
  *  - Materials: mirror and glass have albedo 0: a path that meets one ends (no light added).
  *
  * Threads: OpenMP over tiles, each pixel adding only to its own r->raw entry, its random numbers
@@ -62,23 +68,59 @@ static iir_vec3 direct_at(const comp_ctx *c, const iir_surface *sf, iir_rng *rng
     return iir_scale(ls.Li, cos_theta / ls.pdf);
 }
 
-/* dE at x (normal n, facing the side light is wanted from) for subset k: the recursion above. */
-static iir_vec3 residual(const comp_ctx *c, uint32_t k, iir_vec3 x, iir_vec3 n, iir_rng *rng,
-                         iir_raystats *st)
+/* The first step's direction from a receiver, and what it carries: cosine-distributed from a
+ * diffuse one (T = 1, r = 1: the geometry term alone was clamped); from a glossy one's BSDF,
+ * T = f |cos| / (pdf demod) and r = max over channels of f pi / demod, the receiver factor the
+ * VPL sum clamped G times (render_indirect.c). False when the BSDF's sample fails. */
+typedef struct comp_receiver {
+    const iir_bsdf *bsdf; /* NULL: diffuse */
+    iir_vec3 wo, demod;
+} comp_receiver;
+
+static bool first_step(const comp_receiver *q, iir_vec3 n, iir_rng *rng, iir_vec3 *w, iir_vec3 *T,
+                       float *r)
+{
+    if (!q->bsdf) {
+        iir_frame fr = iir_frame_from_normal(n);
+        *w = iir_frame_to_world(&fr, iir_sample_cosine_hemisphere(iir_rng_uniform2(rng)));
+        *T = iir_v3s(1.f), *r = 1.f;
+        return true;
+    }
+    iir_bsdf_sample s;
+    float uc = iir_rng_uniform(rng);
+    if (!iir_bsdf_sample_f(q->bsdf, q->wo, uc, iir_rng_uniform2(rng), &s) ||
+        (s.flags & IIR_BSDF_SPECULAR))
+        return false; /* a delta lobe is no part of the VPL sum */
+    iir_vec3 f = iir_v3(s.f.x / q->demod.x, s.f.y / q->demod.y, s.f.z / q->demod.z);
+    *w = s.wi;
+    *T = iir_scale(f, fabsf(iir_dot(n, s.wi)) / s.pdf);
+    *r = IIR_PI * fmaxf(f.x, fmaxf(f.y, f.z));
+    return true;
+}
+
+/* dE at x (normal n, facing the side light is wanted from) for subset k: the recursion above, its
+ * first step by the receiver q. */
+static iir_vec3 residual(const comp_ctx *c, uint32_t k, iir_vec3 x, iir_vec3 n,
+                         const comp_receiver *q, iir_rng *rng, iir_raystats *st)
 {
     iir_vec3 E = iir_v3s(0.f), beta = iir_v3s(1.f);
     for (int depth = 1; depth <= MAX_DEPTH && depth <= c->max_bounce; depth++) {
-        iir_frame fr = iir_frame_from_normal(n);
-        iir_vec3 w = iir_frame_to_world(&fr, iir_sample_cosine_hemisphere(iir_rng_uniform2(rng)));
+        iir_vec3 w, T = iir_v3s(1.f);
+        float r = 1.f;
+        if (depth == 1 && !first_step(q, n, rng, &w, &T, &r)) break;
+        if (depth > 1) {
+            iir_frame fr = iir_frame_from_normal(n);
+            w = iir_frame_to_world(&fr, iir_sample_cosine_hemisphere(iir_rng_uniform2(rng)));
+        }
         iir_ray ray = iir_make_ray(iir_madd(x, n, c->r->eps), w, 0.f, INFINITY);
         iir_hit hit;
         if (!iir_rt_intersect(c->r->rt, &ray, &hit, st, IIR_RAYS_BOUNCE)) break;
         iir_surface sf = iir_surface_at(c->r->scene, &hit, iir_neg(w));
         iir_vec3 d = iir_sub(sf.p, x);
-        float d2 = iir_length_sq(d), cos_x = iir_dot(n, w), cos_y = -iir_dot(sf.ns, w);
-        float G = d2 > 0.f ? cos_x * cos_y / d2 : 0.f;
+        float d2 = iir_length_sq(d), cos_x = fabsf(iir_dot(n, w)), cos_y = -iir_dot(sf.ns, w);
+        float G = d2 > 0.f ? cos_x * cos_y / d2 * r : 0.f;
         if (!(G > c->g_max) || iir_is_black(sf.albedo)) break;
-        beta = iir_scale(iir_mul(beta, sf.albedo), 1.f - c->g_max / G);
+        beta = iir_scale(iir_mul(iir_mul(beta, T), sf.albedo), 1.f - c->g_max / G);
         iir_vec3 Ey = direct_at(c, &sf, rng, st);
         Ey = iir_add(
             Ey, iir_render_vpl_light_at(c->r, c->p, k, sf.p, sf.ns, c->max_bounce - 1 - depth, st));
@@ -100,16 +142,6 @@ static float pixel_weight(const comp_ctx *c, int x, int y)
     return (uint32_t)((x + y) % c->n) == c->cls ? (float)c->n : 0.f;
 }
 
-/* dE, the light a diffuse receiver of albedo rho gets, demodulated as r->raw is at pixel i: a
- * glossy pixel's raw is demodulated by more than its albedo (iir_gb_demod); what the clamp removed
- * comes back as diffuse light there. */
-static iir_vec3 diffuse_share(const iir_gbuffer *gb, size_t i, iir_receiver_bsdf mode, iir_vec3 dE)
-{
-    if (!iir_gb_glossy(gb, i, mode)) return dE; /* demodulated by its albedo */
-    iir_vec3 rho = gb->albedo[i], d = iir_gb_demod(gb, i, mode);
-    return iir_v3(dE.x * rho.x / d.x, dE.y * rho.y / d.y, dE.z * rho.z / d.z);
-}
-
 static void compensate_tile(const comp_ctx *c, int t, iir_raystats *st)
 {
     const iir_gbuffer *gb = &c->r->gb;
@@ -122,9 +154,16 @@ static void compensate_tile(const comp_ctx *c, int t, iir_raystats *st)
             if (gb->prim[i] == IIR_NO_HIT || w == 0.f) continue;
             uint32_t k = ((uint32_t)((y % c->n) * c->n + x % c->n) + c->shift) % n2;
             iir_rng rng = iir_rng_make(c->seed, i);
-            iir_vec3 dE = residual(c, k, gb->position[i], gb->normal[i], &rng, st);
-            iir_vec3 dL = diffuse_share(gb, i, iir_render_receivers(c->r, c->p), dE);
-            c->r->raw[i] = iir_madd(c->r->raw[i], dL, w);
+            comp_receiver q = {.bsdf = NULL};
+            iir_bsdf b;
+            if (gb->any_pbr && iir_gb_glossy(gb, i, iir_render_receivers(c->r, c->p))) {
+                iir_vec3 m = gb->mr[i];
+                b = iir_bsdf_make_f0(gb->normal[i], gb->base[i], m.x, m.y, m.z);
+                q = (comp_receiver){&b, gb->wo[i],
+                                    iir_gb_demod(gb, i, iir_render_receivers(c->r, c->p))};
+            }
+            iir_vec3 dE = residual(c, k, gb->position[i], gb->normal[i], &q, &rng, st);
+            c->r->raw[i] = iir_madd(c->r->raw[i], dE, w);
         }
 }
 

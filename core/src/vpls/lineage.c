@@ -12,10 +12,16 @@
 #include "light_path.h"
 #include "vpl_lobe.h"
 
-/* One parent's lineage: its descendants are vpls[first .. first + count). */
+/* One parent's lineage: its descendants are vpls[first .. first + count). The first step leaves
+ * the parent along d0 carrying w0 times its flux; a glossy parent's w0 follows its light (pdf_q0 >
+ * 0: re-weighed by iir_vpl_lobe_weight each frame; a delta step, pdf_q0 = 0, holds while the
+ * parent's wi is wi0 and is traced again when it turns). */
 typedef struct lineage {
     uint32_t parent;
     uint32_t first, count;
+    iir_vec3 w0, d0, wi0;
+    float pdf_q0;
+    bool glossy; /* the parent's lobe is */
 } lineage;
 
 /* A frame's lineages and their descendants (two of them: the last frame's and the new one). */
@@ -23,7 +29,7 @@ typedef struct generation {
     lineage *lin;
     uint32_t num_lin, lin_cap;
     iir_vpl *v;
-    iir_vec3 *T; /* each descendant's path throughput from its parent */
+    iir_vec3 *T; /* each descendant's path throughput past the lineage's first step (w0) */
     uint32_t n, cap;
 } generation;
 
@@ -44,31 +50,34 @@ static uint32_t descendant_id(uint32_t parent, int gen)
     return (uint32_t)iir_hash3(parent, (uint64_t)gen, 0x11ea9e);
 }
 
-/* Traces parent's path, writing at most cap descendants and their throughputs. */
+/* Traces parent's path, writing at most cap descendants and their throughputs past the first
+ * step, which *l gets (w0, d0, pdf_q0, wi0, glossy). */
 static uint32_t trace(const iir_scene *scene, const iir_rt *rt, const iir_vpl *parent, int bounces,
                       uint64_t seed, uint32_t birth, iir_vpl *out, iir_vec3 *T, uint32_t cap,
-                      iir_raystats *rays)
+                      lineage *l, iir_raystats *rays)
 {
     iir_rng rng = iir_rng_make(iir_hash3(seed, parent->id, 0x11ea9e), 0);
     iir_vec3 throughput = iir_v3s(1.f);
     const iir_vpl *from = parent;
-    float eps = iir_rt_epsilon(rt), q;
+    float eps = iir_rt_epsilon(rt);
     uint32_t n = 0;
-    iir_ray ray;
+    iir_light_step step;
+    *l = (lineage){.parent = parent->id, .wi0 = parent->wi, .glossy = parent->lobe.glossy};
     for (int gen = 1; gen <= bounces - 2 && n < cap; gen++) {
-        if (!iir_light_path_continue(from, eps, &rng, &ray, &q)) break;
+        if (!iir_light_path_continue(from, eps, &rng, &step)) break;
+        if (gen == 1) l->w0 = step.weight, l->d0 = step.ray.dir, l->pdf_q0 = step.pdf_q;
         iir_hit hit;
-        if (!iir_rt_intersect(rt, &ray, &hit, rays, IIR_RAYS_VPL)) break;
-        iir_surface sf = iir_surface_at(scene, &hit, iir_neg(ray.dir));
+        if (!iir_rt_intersect(rt, &step.ray, &hit, rays, IIR_RAYS_VPL)) break;
+        iir_surface sf = iir_surface_at(scene, &hit, iir_neg(step.ray.dir));
         iir_vec3 rho;
         iir_vpl_lobe lobe = iir_vpl_lobe_at(&sf, &rho);
         if (!iir_is_black(sf.Le) || iir_is_black(rho)) break;
-        throughput = iir_scale(iir_mul(throughput, rho), 1.f / q);
+        throughput = iir_mul(throughput, gen == 1 ? rho : iir_mul(rho, step.weight));
         iir_vpl v = {.id = descendant_id(parent->id, gen),
                      .position = sf.p,
                      .albedo = rho,
                      .lobe = lobe,
-                     .wi = iir_neg(ray.dir),
+                     .wi = iir_neg(step.ray.dir),
                      .disk = parent->disk,
                      .emit = parent->emit,
                      .birth = birth,
@@ -87,8 +96,10 @@ uint32_t iir_lineage_trace(const iir_scene *scene, const iir_rt *rt, const iir_v
 {
     if (parent->null_sample) return 0;
     iir_vec3 T[64];
-    uint32_t n = trace(scene, rt, parent, bounces, seed, birth, out, T, cap < 64 ? cap : 64, rays);
-    for (uint32_t k = 0; k < n; k++) out[k].flux = iir_mul(parent->flux, T[k]);
+    lineage l;
+    uint32_t n =
+        trace(scene, rt, parent, bounces, seed, birth, out, T, cap < 64 ? cap : 64, &l, rays);
+    for (uint32_t k = 0; k < n; k++) out[k].flux = iir_mul(iir_mul(parent->flux, l.w0), T[k]);
     return n;
 }
 
@@ -186,28 +197,41 @@ static uint32_t find(const iir_lineage *L, uint32_t id)
     }
 }
 
-/* Appends parent's lineage to next: cur's carried over, else traced. */
+/* Whether old, parent's lineage of the last frame, still holds: always, unless its first step
+ * was a glossy parent's delta and the parent's light has turned since. */
+static bool still_holds(const lineage *old, const iir_vpl *parent)
+{
+    return !old->glossy || old->pdf_q0 > 0.f || iir_dot(old->wi0, parent->wi) > 1.f - 1e-6f;
+}
+
+/* Appends parent's lineage to next: cur's carried over (a glossy parent's first step re-weighed
+ * for its current wi), else traced. */
 static void carry_or_trace(iir_lineage *L, const iir_vpl *parent, uint64_t seed, iir_raystats *rays,
                            iir_lineage_stats *st)
 {
     generation *g = &L->next;
     lineage *l = &g->lin[g->num_lin++];
-    l->parent = parent->id, l->first = g->n, l->count = 0;
-    uint32_t k = find(L, parent->id);
-    if (k != UINT32_MAX) {
+    uint32_t k = find(L, parent->id), first = g->n;
+    if (k != UINT32_MAX && still_holds(&L->cur.lin[k], parent)) {
         const lineage *old = &L->cur.lin[k];
+        *l = *old;
         memcpy(&g->v[g->n], &L->cur.v[old->first], old->count * sizeof *g->v);
         memcpy(&g->T[g->n], &L->cur.T[old->first], old->count * sizeof *g->T);
-        l->count = old->count;
         L->used[k] = 1;
         st->kept += old->count;
+        if (l->glossy && l->pdf_q0 > 0.f) {
+            iir_bsdf b = iir_vpl_lobe_bsdf(parent);
+            l->w0 = iir_vpl_lobe_weight(parent, &b, l->d0, l->pdf_q0);
+        }
     } else {
-        l->count = trace(L->scene, L->rt, parent, L->bounces, seed, parent->birth, &g->v[g->n],
-                         &g->T[g->n], (uint32_t)(L->bounces - 2), rays);
-        st->born += l->count;
+        uint32_t n = trace(L->scene, L->rt, parent, L->bounces, seed, parent->birth, &g->v[g->n],
+                           &g->T[g->n], (uint32_t)(L->bounces - 2), l, rays);
+        l->count = n;
+        st->born += n;
     }
-    for (uint32_t j = l->first; j < l->first + l->count; j++)
-        g->v[j].flux = iir_mul(parent->flux, g->T[j]);
+    l->first = first;
+    iir_vec3 flux = iir_mul(parent->flux, l->w0);
+    for (uint32_t j = l->first; j < l->first + l->count; j++) g->v[j].flux = iir_mul(flux, g->T[j]);
     g->n += l->count;
 }
 

@@ -1,8 +1,7 @@
 /* vpl_lobe.h -- how a VPL born on a surface reflects the light it got: its lobe (diffuse, or the
  * surface's glossy metallic-roughness BSDF) and the albedo its flux is weighted by, shared by ir's
- * paths (methods/ir.c), iir's samples (incremental.c) and descendants (lineage.c). Paths go on
- * from a glossy VPL as from a diffuse one of that albedo (light_path.h): energy kept, directions
- * cosine-distributed. Internal; inline. */
+ * paths (methods/ir.c), iir's samples (incremental.c) and descendants (lineage.c); paths go on
+ * from a glossy VPL in directions sampled from its BSDF (light_path.h). Internal; inline. */
 #ifndef IIR_VPL_LOBE_H
 #define IIR_VPL_LOBE_H
 
@@ -26,6 +25,25 @@ static inline iir_vpl_lobe iir_vpl_lobe_at(const iir_surface *sf, iir_vec3 *albe
     lobe.base = sf->base;
     *albedo = iir_bsdf_reflectance(sf->albedo, sf->base, sf->metallic, sf->specular_f0);
     return lobe;
+}
+
+/* The BSDF of glossy VPL v's surface (its normal: the side its light arrived from). */
+static inline iir_bsdf iir_vpl_lobe_bsdf(const iir_vpl *v)
+{
+    const iir_vpl_lobe *l = &v->lobe;
+    return iir_bsdf_make_f0(v->normal, l->base, l->metallic, l->roughness, l->f0);
+}
+
+/* What a light path leaving glossy VPL v along d carries relative to v's flux, d having been
+ * sampled with density pdf and the path kept with probability q:
+ *     f(wi, d) |n . d| / (pdf q albedo)
+ * (v's flux is the arriving flux times its albedo; light_path.h). With v's current wi it
+ * re-weighs a kept path whose VPL's light has turned (lineage.c). */
+static inline iir_vec3 iir_vpl_lobe_weight(const iir_vpl *v, const iir_bsdf *b, iir_vec3 d,
+                                           float pdf_q)
+{
+    iir_vec3 f = iir_scale(iir_bsdf_f(b, v->wi, d), fabsf(iir_dot(v->normal, d)) / pdf_q);
+    return iir_v3(f.x / v->albedo.x, f.y / v->albedo.y, f.z / v->albedo.z);
 }
 
 #endif
