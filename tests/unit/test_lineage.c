@@ -260,31 +260,6 @@ static void test_glossy_parent_reweighs(void **state)
 
 /* ---- light paths through a glossy surface ---- */
 
-/* An open corner whose floor is brass (a metal of roughness 0.4), a spot aimed at the floor so
- * that its reflection lights the walls. */
-static fixture load_brass_corner(void)
-{
-    const char *dir = iir_test_tmpdir("lineage-brass-corner");
-    iir_test_write_file(dir, "corner.mtl",
-                        "newmtl brass\nKd 0.9 0.7 0.45\nPm 1\nPr 0.4\nnewmtl grey\nKd 0.7 0.7 "
-                        "0.7\nnewmtl red\nKd 0.7 0.2 0.2\n");
-    char path[1200];
-    snprintf(path, sizeof path, "%s/corner.obj", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib corner.mtl\n");
-    iir_test_write_quad(f, "brass", iir_v3(-2, 0, -2), iir_v3(0, 0, 4), iir_v3(4, 0, 0));
-    iir_test_write_quad(f, "grey", iir_v3(-2, 0, -2), iir_v3(4, 0, 0), iir_v3(0, 2, 0));
-    iir_test_write_quad(f, "red", iir_v3(-2, 0, -2), iir_v3(0, 2, 0), iir_v3(0, 0, 4));
-    fclose(f);
-    iir_test_write_file(dir, "corner.scene.json",
-                        "{\"camera\": {\"position\": [3, 3.5, 6], \"target\": [-0.5, 0.8, -0.5],"
-                        " \"fov_y\": 50}, \"lights\": [{\"type\": \"spot\", \"name\": \"spot\","
-                        " \"position\": [1.5, 2.5, 1.5], \"direction\": [-0.3, -1, -0.5],"
-                        " \"intensity\": [6, 6, 6], \"cone_angle\": 40}]}");
-    return iir_test_load(dir, "corner");
-}
-
 /* The mean luminance of method's image of f with p, refined to convergence (exact visibility, no
  * filter: refine.h). */
 static double refined_mean(const fixture *f, const char *method, const iir_params *p, int w, int h)
@@ -312,7 +287,7 @@ static void test_glossy_paths_against_pt(void **state)
 {
     (void)state;
     enum { W = 64, H = 48 };
-    fixture c = load_brass_corner();
+    fixture c = iir_test_brass_corner();
     double pt[2], got[2][2];
     static const char *const methods[] = {"ir", "iir"};
     for (int b = 0; b < 2; b++) {

@@ -71,6 +71,11 @@ int iir_test_cornell_teardown(void **state);
 iir_test_cornell iir_test_load(const char *dir, const char *name);
 void iir_test_unload(iir_test_cornell *l);
 
+/* An open corner (floor, back and left walls, 4 x 4 x 2, nothing occluding) whose floor is brass
+ * (a metal of roughness 0.4; the walls grey and red, diffuse), lit by a spot aimed at the floor so
+ * that its reflection lights the walls. */
+iir_test_cornell iir_test_brass_corner(void);
+
 /* Creates method `name` over the fixture's scene; fails the running cmocka test with the method's
  * error when it cannot. */
 /* Sets parameter `name` of p (any method's), failing the test when it is refused. */

@@ -27,8 +27,10 @@
  *    r = max_c f_c pi / demod_c (render_indirect.c's add_lit), so the first step samples the
  *    pixel's BSDF instead, carrying f |cos| / (pdf demod) (r->raw's demodulation), and the residual
  *    is (1 - g_max / (G r))^+: a clamped lobe's light comes back as the lobe (Kollig & Keller with
- *    the BSDF). Later steps and the hit points' light are diffuse (a glossy VPL's sender factor is
- *    not in the residual).
+ *    the BSDF). A glossy hit point y (a VPL there sends by its lobe: iir_vpl_lobe_at) gives back
+ *    its direct light reflected toward x by its BSDF, where the clamp of G r s removed it (s its
+ *    VPLs' sender factor for that light), and ends the path: the light its VPLs' own VPLs add is
+ *    not compensated there.
  *  - Materials: mirror and glass have albedo 0: a path that meets one ends (no light added).
  *
  * Threads: OpenMP over tiles, each pixel adding only to its own r->raw entry, its random numbers
@@ -40,6 +42,7 @@
 #include "render_internal.h"
 #include "sampling.h"
 #include "surface.h"
+#include "../vpls/vpl_lobe.h"
 
 enum { MAX_DEPTH = 8 };
 
@@ -54,14 +57,16 @@ typedef struct comp_ctx {
     uint32_t cls;   /* interleaved: the lattice diagonal that traces, [0, n) */
 } comp_ctx;
 
-/* E_direct(y): one sample of a light of the frame, towards the side of ns. */
-static iir_vec3 direct_at(const comp_ctx *c, const iir_surface *sf, iir_rng *rng, iir_raystats *st)
+/* E_direct(y): one sample of a light of the frame, towards the side of ns; *wi its direction. */
+static iir_vec3 direct_at(const comp_ctx *c, const iir_surface *sf, iir_rng *rng, iir_raystats *st,
+                          iir_vec3 *wi)
 {
     float u_pick = iir_rng_uniform(rng);
     iir_light_ctx ctx = iir_surface_light_ctx(sf, c->r->eps);
     iir_light_sample ls =
         iir_lightset_sample_li(c->r->comp_lights, &ctx, u_pick, iir_rng_uniform2(rng));
     float cos_theta = iir_dot(sf->ns, ls.wi);
+    *wi = ls.wi;
     if (ls.pdf <= 0.f || cos_theta <= 0.f || iir_is_black(ls.Li)) return iir_v3s(0.f);
     iir_ray shadow = iir_segment_ray(&ls.shadow);
     if (iir_rt_occluded(c->r->rt, &shadow, st, IIR_RAYS_SHADOW)) return iir_v3s(0.f);
@@ -70,20 +75,20 @@ static iir_vec3 direct_at(const comp_ctx *c, const iir_surface *sf, iir_rng *rng
 
 /* The first step's direction from a receiver, and what it carries: cosine-distributed from a
  * diffuse one (T = 1, r = 1: the geometry term alone was clamped); from a glossy one's BSDF,
- * T = f |cos| / (pdf demod) and r = max over channels of f pi / demod, the receiver factor the
- * VPL sum clamped G times (render_indirect.c). False when the BSDF's sample fails. */
+ * T = f |cos| / (pdf demod) and r = f pi / demod, the receiver factor the VPL sum clamped G times
+ * (render_indirect.c). False when the BSDF's sample fails. */
 typedef struct comp_receiver {
     const iir_bsdf *bsdf; /* NULL: diffuse */
     iir_vec3 wo, demod;
 } comp_receiver;
 
 static bool first_step(const comp_receiver *q, iir_vec3 n, iir_rng *rng, iir_vec3 *w, iir_vec3 *T,
-                       float *r)
+                       iir_vec3 *r)
 {
     if (!q->bsdf) {
         iir_frame fr = iir_frame_from_normal(n);
         *w = iir_frame_to_world(&fr, iir_sample_cosine_hemisphere(iir_rng_uniform2(rng)));
-        *T = iir_v3s(1.f), *r = 1.f;
+        *T = iir_v3s(1.f), *r = iir_v3s(1.f);
         return true;
     }
     iir_bsdf_sample s;
@@ -94,19 +99,35 @@ static bool first_step(const comp_receiver *q, iir_vec3 n, iir_rng *rng, iir_vec
     iir_vec3 f = iir_v3(s.f.x / q->demod.x, s.f.y / q->demod.y, s.f.z / q->demod.z);
     *w = s.wi;
     *T = iir_scale(f, fabsf(iir_dot(n, s.wi)) / s.pdf);
-    *r = IIR_PI * fmaxf(f.x, fmaxf(f.y, f.z));
+    *r = iir_scale(f, IIR_PI);
     return true;
 }
 
+/* A glossy hit point y (lobe l, reflectance rho): its direct light reflected toward x (along -w)
+ * by its BSDF where the VPL sum's clamp of G r s removed it (s = f pi / rho, the sender factor of
+ * y's VPLs for that light; Gg the geometry term), carried by beta. The path ends there. */
+static iir_vec3 glossy_hit(const comp_ctx *c, const iir_surface *sf, const iir_vpl_lobe *l,
+                           iir_vec3 rho, iir_vec3 w, float Gg, iir_vec3 r, iir_vec3 beta,
+                           iir_rng *rng, iir_raystats *st)
+{
+    iir_vec3 wi, Ey = direct_at(c, sf, rng, st, &wi);
+    if (iir_is_black(Ey)) return Ey;
+    iir_bsdf b = iir_bsdf_make_f0(sf->ns, l->base, l->metallic, l->roughness, l->f0);
+    iir_vec3 f = iir_scale(iir_bsdf_f(&b, iir_neg(w), wi), IIR_PI);
+    iir_vec3 g = iir_scale(iir_mul(r, f), Gg);
+    float peak = fmaxf(g.x / rho.x, fmaxf(g.y / rho.y, g.z / rho.z));
+    if (!(peak > c->g_max)) return iir_v3s(0.f);
+    return iir_scale(iir_mul(iir_mul(beta, f), Ey), 1.f - c->g_max / peak);
+}
+
 /* dE at x (normal n, facing the side light is wanted from) for subset k: the recursion above, its
- * first step by the receiver q. */
+ * first step by the receiver q; a glossy hit point ends it (glossy_hit). */
 static iir_vec3 residual(const comp_ctx *c, uint32_t k, iir_vec3 x, iir_vec3 n,
                          const comp_receiver *q, iir_rng *rng, iir_raystats *st)
 {
     iir_vec3 E = iir_v3s(0.f), beta = iir_v3s(1.f);
     for (int depth = 1; depth <= MAX_DEPTH && depth <= c->max_bounce; depth++) {
-        iir_vec3 w, T = iir_v3s(1.f);
-        float r = 1.f;
+        iir_vec3 w, T = iir_v3s(1.f), r = iir_v3s(1.f);
         if (depth == 1 && !first_step(q, n, rng, &w, &T, &r)) break;
         if (depth > 1) {
             iir_frame fr = iir_frame_from_normal(n);
@@ -116,12 +137,18 @@ static iir_vec3 residual(const comp_ctx *c, uint32_t k, iir_vec3 x, iir_vec3 n,
         iir_hit hit;
         if (!iir_rt_intersect(c->r->rt, &ray, &hit, st, IIR_RAYS_BOUNCE)) break;
         iir_surface sf = iir_surface_at(c->r->scene, &hit, iir_neg(w));
-        iir_vec3 d = iir_sub(sf.p, x);
+        iir_vec3 d = iir_sub(sf.p, x), rho;
         float d2 = iir_length_sq(d), cos_x = fabsf(iir_dot(n, w)), cos_y = -iir_dot(sf.ns, w);
-        float G = d2 > 0.f ? cos_x * cos_y / d2 * r : 0.f;
+        float Gg = d2 > 0.f ? cos_x * cos_y / d2 : 0.f;
+        iir_vpl_lobe lobe = iir_vpl_lobe_at(&sf, &rho);
+        if (lobe.glossy && Gg > 0.f) {
+            E = iir_add(E, glossy_hit(c, &sf, &lobe, rho, w, Gg, r, iir_mul(beta, T), rng, st));
+            break;
+        }
+        float G = Gg * fmaxf(r.x, fmaxf(r.y, r.z));
         if (!(G > c->g_max) || iir_is_black(sf.albedo)) break;
         beta = iir_scale(iir_mul(iir_mul(beta, T), sf.albedo), 1.f - c->g_max / G);
-        iir_vec3 Ey = direct_at(c, &sf, rng, st);
+        iir_vec3 wi, Ey = direct_at(c, &sf, rng, st, &wi);
         Ey = iir_add(
             Ey, iir_render_vpl_light_at(c->r, c->p, k, sf.p, sf.ns, c->max_bounce - 1 - depth, st));
         E = iir_add(E, iir_mul(beta, Ey));
