@@ -450,17 +450,14 @@ static double cone_mean(const double *m, iir_vec3 X, iir_vec3 p, double r, const
     return sum / (Q * Q);
 }
 
-/* A virtual spherical light (vpl_kind sphere) over a glossy metal: with radius 1e-4 every pixel is
- * the point VPL's (2e-3); with radius 0.3 the image mean is (Phi / pi) cos_v / (d^2 + r^2) times
- * the BSDF's mean over the cone (quadrature here) to 2%, every pixel to 25% (8 directions per
- * pair), and its brightest pixel below the point's (the spike spread). Exact rays, no clamp. */
-static void test_virtual_spherical_light(void **state)
+/* A virtual spherical light (vpl_kind sphere) over a glossy metal of roughness m[2]: with radius
+ * 1e-4 every pixel is the point VPL's (2e-3); with radius 0.3 the image mean is (Phi / pi) cos_v /
+ * (d^2 + r^2) times the BSDF's mean over the cone (quadrature here) to 2%, every pixel to 25% (8
+ * directions per pair, some drawn by the BSDF where the lobe is narrower than the cone), and its
+ * brightest pixel below the point's (the spike spread). Exact rays, no clamp. */
+static void check_virtual_spherical_light(const double m[3], bool check_mean, bool check_pixels)
 {
-    (void)state;
     enum { W = 40, H = 40 };
-    /* roughness 0.5: eight directions per pair estimate the cone well; for sharp lobes (0.15:
-       the image mean 30% low, heavy-tailed) the lobe should be importance-sampled (not done) */
-    const double m[3] = {0.9, 1.0, 0.5};
     loaded l = load_glossy_plane(m[0], m[1], m[2]);
     iir_camera_frame cf = iir_camera_setup(&l.scene->camera, W, H);
     iir_image *pt_img = iir_image_create(W, H), *img = iir_image_create(W, H);
@@ -471,11 +468,11 @@ static void test_virtual_spherical_light(void **state)
     frame(&l, &l.scene->camera, NULL, 0, v, vsl_set(v, 1e-4f), &p, 1, img, NULL);
     for (int i = 0; i < W * H; i++)
         if (!close3(img->pixels[i], pt_img->pixels[i], 2e-3f, 1e-9f))
-            fail_msg("radius 1e-4: pixel %d = %g, the point's %g", i, img->pixels[i].x,
-                     pt_img->pixels[i].x);
+            fail_msg("roughness %g, radius 1e-4: pixel %d = %g, the point's %g", m[2], i,
+                     img->pixels[i].x, pt_img->pixels[i].x);
     const float r = 0.3f;
     frame(&l, &l.scene->camera, NULL, 0, v, vsl_set(v, r), &p, 1, img, NULL);
-    double got = 0, want = 0, worst = 0, peak = 0, peak_point = 0;
+    double got = 0, want = 0, worst = 0, peak = 0, peak_point = 0, peak_want = 0;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
             double wi[3], wo[3];
@@ -485,22 +482,46 @@ static void test_virtual_spherical_light(void **state)
             double want_px =
                 2.0 / M_PI * cos_v / (d2 + r * r) * cone_mean(m, X, v[0].position, r, wo);
             double g = iir_image_at(img, x, y)->x;
-            got += g, want += want_px;
+            got += g, want += want_px, peak_want = fmax(peak_want, want_px);
             worst = fmax(worst, fabs(g - want_px) / fmax(want_px, 1e-3));
             peak = fmax(peak, g), peak_point = fmax(peak_point, iir_image_at(pt_img, x, y)->x);
         }
-    print_message(
-        "  VSL r %.1f: mean %.5f, quadrature %.5f (%.2f%%), worst pixel %.1f%%, peak %.3f "
-        "(points %.3f)\n",
-        r, got / (W * H), want / (W * H), 100 * fabs(got - want) / want, 100 * worst, peak,
-        peak_point);
-    if (fabs(got - want) > 0.02 * want) fail_msg("VSL mean %g, quadrature %g", got, want);
-    if (worst > 0.25) fail_msg("VSL worst pixel %.1f%% off the quadrature", 100 * worst);
-    if (!(peak < peak_point))
-        fail_msg("the VSL's peak %g is not below the point's %g", peak, peak_point);
+    print_message("  VSL r %.1f, roughness %.2f: mean %.5f, quadrature %.5f (%+.2f%%), worst pixel "
+                  "%.1f%%, peak %.3f (quadrature %.3f, points %.3f)\n",
+                  r, m[2], got / (W * H), want / (W * H), 100 * (got - want) / want, 100 * worst,
+                  peak, peak_want, peak_point);
+    if (check_mean && fabs(got - want) > 0.02 * want)
+        fail_msg("roughness %g: VSL mean %g, quadrature %g", m[2], got, want);
+    if (check_pixels && worst > 0.25)
+        fail_msg("roughness %g: VSL worst pixel %.1f%% off the quadrature", m[2], 100 * worst);
+    /* the spike spread -- where the exact image's peak is below the point's: at 0.15 the point's
+       sharp highlight falls between the pixels and the exact one is brighter (1.76, 0.88) */
+    if (peak_want < peak_point && !(peak < peak_point))
+        fail_msg("roughness %g: the VSL's peak %g is not below the point's %g", m[2], peak,
+                 peak_point);
     iir_image_destroy(img);
     iir_image_destroy(pt_img);
     unload(&l);
+}
+
+/* The check above for a rough, a glossy and a sharp lobe. Each pixel is one estimate from 8
+ * directions (receiver_sphere), so the image mean is a random number too: over other random
+ * streams (a copy of receiver_sphere, 200 images) its relative spread is 0.4% at roughness 0.5,
+ * 3.1% at 0.3 and 6.3% at 0.15, the worst pixel typically 10%, 44% and 100% (uniform directions
+ * alone: 34% and 315% at 0.15; half of them from the BSDF throughout: 2.2% and 52% at 0.5). The
+ * bounds are checked where they hold: both at 0.5, the mean at 0.3 (-1.6% with this stream, by
+ * no margin); the worst pixel at 0.3 (40%) and both at 0.15 (+12%, 105%) are not met with 8
+ * directions -- printed, not checked. */
+static void test_virtual_spherical_light(void **state)
+{
+    (void)state;
+    const struct {
+        double roughness;
+        bool check_mean, check_pixels;
+    } cases[] = {{0.5, true, true}, {0.3, true, false}, {0.15, false, false}};
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++)
+        check_virtual_spherical_light((const double[3]){0.9, 1.0, cases[i].roughness},
+                                      cases[i].check_mean, cases[i].check_pixels);
 }
 
 /* ---- a mirror: the camera ray followed to the floor it shows ---- */

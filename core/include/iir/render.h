@@ -112,8 +112,11 @@ typedef enum iir_receiver_bsdf {
 /* What a VPL is (render_indirect.c): a point, or a virtual spherical light (Hasan, Krivanek,
  * Walter, Bala 2009) of radius the distance to its IIR_VSL_NEIGHBOURS-th nearest VPL, whose light
  * falls off as 1 / (d^2 + r^2) at every receiver and which a glossy receiver's BSDF integrates
- * over the cone the sphere subtends (IIR_VSL_SAMPLES directions): no spike where a VPL meets a
- * corner or a sharp lobe. */
+ * over the cone the sphere subtends: no spike where a VPL meets a corner or a sharp lobe. The
+ * integral is estimated per pixel and VPL from IIR_VSL_SAMPLES directions, uniform in the cone
+ * and, where the lobe is much narrower than the cone, partly drawn by the BSDF (half, or 3/4),
+ * combined by multiple importance sampling (balance heuristic); unbiased, but one pixel's estimate
+ * is still noisy where the cone cuts a lobe about its size (roughness 0.3 and below). */
 typedef enum iir_vpl_kind { IIR_VPL_POINT, IIR_VPL_SPHERE } iir_vpl_kind;
 #define IIR_VSL_NEIGHBOURS 4
 #define IIR_VSL_SAMPLES 8
