@@ -26,8 +26,8 @@ const char *iir_test_tmpdir(const char *test_name)
 
 const char *iir_test_write_file(const char *dir, const char *name, const char *text)
 {
-    static char path[1024];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
+    static char path[1200]; /* dir (iir_test_tmpdir's, under 1024) and a name */
+    if (snprintf(path, sizeof path, "%s/%s", dir, name) >= (int)sizeof path) return NULL;
     FILE *f = fopen(path, "wb");
     if (!f) return NULL;
     fwrite(text, 1, strlen(text), f);
@@ -184,17 +184,12 @@ double iir_test_gltf_brdf(double base, double metallic, double roughness, const 
 iir_test_cornell iir_test_brass_corner(void)
 {
     const char *dir = iir_test_tmpdir("lineage-brass-corner");
-    iir_test_write_file(dir, "corner.mtl",
-                        "newmtl brass\nKd 0.9 0.7 0.45\nPm 1\nPr 0.4\nnewmtl grey\nKd 0.7 0.7 "
-                        "0.7\nnewmtl red\nKd 0.7 0.2 0.2\n");
-    char path[1200];
-    snprintf(path, sizeof path, "%s/corner.obj", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib corner.mtl\n");
-    iir_test_write_quad(f, "brass", iir_v3(-2, 0, -2), iir_v3(0, 0, 4), iir_v3(4, 0, 0));
-    iir_test_write_quad(f, "grey", iir_v3(-2, 0, -2), iir_v3(4, 0, 0), iir_v3(0, 2, 0));
-    iir_test_write_quad(f, "red", iir_v3(-2, 0, -2), iir_v3(0, 2, 0), iir_v3(0, 0, 4));
+    FILE *f = iir_test_open_obj(dir, "corner",
+                                "newmtl brass\nKd 0.9 0.7 0.45\nPm 1\nPr 0.4\nnewmtl grey\nKd 0.7 "
+                                "0.7 0.7\nnewmtl red\nKd 0.7 0.2 0.2\n");
+    iir_test_write_quad(f, "brass", iir_v3(0, 0, 0), iir_v3(0, 0, 2), iir_v3(2, 0, 0));
+    iir_test_write_quad(f, "grey", iir_v3(0, 1, -2), iir_v3(2, 0, 0), iir_v3(0, 1, 0));
+    iir_test_write_quad(f, "red", iir_v3(-2, 1, 0), iir_v3(0, 1, 0), iir_v3(0, 0, 2));
     fclose(f);
     iir_test_write_file(dir, "corner.scene.json",
                         "{\"camera\": {\"position\": [3, 3.5, 6], \"target\": [-0.5, 0.8, -0.5],"
