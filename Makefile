@@ -101,7 +101,9 @@ bench: build
 	    out/bench/cornell-multires-1024 out/bench/conference-multires-1024 \
 	    $(foreach p,teleport occluder $(STRESS),out/bench/cornell-$(p)) \
 	    out/bench/cornell-classics out/bench/cornell-spheres out/bench/cornell-bounces \
-	    out/bench/cornell-compensation out/bench/cornell-controller out/bench/material-room
+	    out/bench/cornell-compensation out/bench/cornell-controller out/bench/material-room \
+	    out/bench/glossy-spheres out/bench/glossy-room out/bench/glossy-vsl \
+	    out/bench/glossy-flicker/cornell_spheres out/bench/glossy-flicker/material_room
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods $(PEERS),pt \
@@ -139,6 +141,15 @@ bench: build
 	$(BENCH) cornell_spheres --anim orbit --frames 0:100 --size 320x240 \
 	    --methods whitted,hybrid,radiosity,pt --bounces 8 --sweep spp=4,16 --ref-spp 512 \
 	    --ref-every 25 --save-images --out out/bench/cornell-spheres
+	$(BENCH) cornell_spheres --anim orbit --frames 0:40 --size 320x240 --methods iir,ir \
+	    --sweep bounces=2,4 --ref-spp 512 --ref-every 20 --out out/bench/glossy-spheres
+	$(BENCH) material_room --anim orbit --frames 0:40 --size 320x240 --methods iir,ir \
+	    --sweep bounces=2,4 --ref-spp 256 --ref-every 20 --out out/bench/glossy-room
+	$(foreach s,cornell_spheres material_room,$(BENCH) $(s) --anim orbit --frames 10:14 \
+	    --size 160x120 --methods iir,ir --sweep bounces=2,4 --ref-spp 4096 --ref-every 2 \
+	    --out out/bench/glossy-flicker/$(s) &&) true
+	$(BENCH) material_room --frames 0:4 --size 256x192 --methods iir,ir --sweep vpl_kind=point,sphere \
+	    --sweep clamp=0,100 --ref-spp 512 --ref-every 2 --out out/bench/glossy-vsl
 	rm -rf out/bench/ffcache && $(foreach a,0.008 0.002 0.0005,$(foreach run,compute load, \
 	    IIR_CACHE_DIR=out/bench/ffcache $(BUILD)/iird render --method radiosity --patch-area $(a) \
 	    --size 64x48 --out out/bench/ffcache/still.png 2>&1 | grep "form factors of" &&)) true
