@@ -270,13 +270,14 @@ static loaded load_glossy_plane(double base, double metallic, double roughness)
 
 /* A diffuse VPL's light reflected by a glossy plane (metal and plastic), every pixel against
  * f(wo, wi) Phi / pi cos_v cos_x / d^2 with f the independent appendix-B BRDF (testutil.h), for
- * both visibility backends; with the clamp, f G bounded by g_max demod / pi. */
+ * both visibility backends and with shading multires (which shades glossy pixels at full
+ * resolution); with the clamp, f G bounded by g_max demod / pi. */
 static void test_single_vpl_glossy_plane(void **state)
 {
     (void)state;
     enum { W = 48, H = 48 };
     const double mats[][3] = {{0.9, 1.0, 0.3}, {0.5, 0.0, 0.5}, {0.8, 1.0, 0.08}};
-    const char *const what[] = {"shadow map", "rays", "rays, clamp 2000"};
+    const char *const what[] = {"shadow map", "rays", "rays, clamp 2000", "rays, multires"};
     for (size_t mi = 0; mi < sizeof mats / sizeof *mats; mi++) {
         const double *m = mats[mi];
         loaded l = load_glossy_plane(m[0], m[1], m[2]);
@@ -286,9 +287,10 @@ static void test_single_vpl_glossy_plane(void **state)
         iir_image *img = iir_image_create(W, H);
         /* c_diff + f0 (iir_gb_demod): a clamped glossy pixel gets at most g_max demod / pi */
         double demod = (1 - m[1]) * m[0] + (1 - m[1]) * 0.04 + m[1] * m[0];
-        for (int b = 0; b < 3; b++) {
+        for (int b = 0; b < 4; b++) {
             iir_indirect_params p = params(b ? IIR_VIS_RAYS : IIR_VIS_SHADOWMAP, 1, false);
             if (b == 2) p.clamp = 2000.f; /* g_max 0.625: G below the VPL and the lobe bounded */
+            if (b == 3) p.shading = IIR_SHADING_MULTIRES;
             double g_max = b == 2 ? p.clamp / scene_diag2(l.scene) : INFINITY;
             frame(&l, &l.scene->camera, NULL, 0, &v, 1, &p, 1, img, NULL);
             double worst = 0, peak = 0;

@@ -58,7 +58,9 @@ enum { IIR_MR_MAX_LEVEL = 6, IIR_MR_BATCH = 256, IIR_MR_MAX_CLASSES = 64 };
 /* A point to evaluate: a pixel's or a coarse texel's G-buffer sample. */
 typedef struct iir_mr_sample {
     iir_vec3 position, normal, albedo;
+    uint32_t pixel; /* a pixel's G-buffer index; IIR_MR_TEXEL for a coarse texel */
 } iir_mr_sample;
+#define IIR_MR_TEXEL UINT32_MAX
 
 /* Evaluates count (<= IIR_MR_BATCH) samples of class cls = cy m + cx of an m x m lattice (m
  * divides nothing in particular: the class unites the caller's n x n classes (kx, ky) with

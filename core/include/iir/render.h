@@ -101,8 +101,9 @@ typedef enum iir_shading {
                             apply per level */
 } iir_shading;
 
-/* Which pixels reflect the VPLs' light by their full BSDF toward the camera (render_indirect.c,
- * full shading; multires's coarse texels gather diffuse light). */
+/* Which pixels reflect the VPLs' light by their full BSDF toward the camera (render_indirect.c;
+ * multires shades glossy pixels at full resolution, its coarse texels diffuse: `all` is `glossy`
+ * there). */
 typedef enum iir_receiver_bsdf {
     IIR_RECEIVER_GLOSSY, /* glossy pixels (iir_bsdf_params_glossy: metals, smoother dielectrics) */
     IIR_RECEIVER_ALL,    /* every metallic-roughness pixel (rough dielectrics' (1 - F) too) */

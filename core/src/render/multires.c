@@ -19,6 +19,7 @@
 #include <string.h>
 
 #include "iir/multires.h"
+#include "render_internal.h"
 
 /* Levels smaller than this many texels are built by one thread: a parallel loop's barrier costs
  * more than their work (and much more on a machine whose cores other jobs share). */
@@ -178,12 +179,15 @@ static int pair_bits(const iir_gbuffer *gb, int x, int y, const iir_mr_params *p
     return bits;
 }
 
-/* Pixel (x, y)'s mark from the pair bits: background, or a pair it belongs to is dissimilar. */
+/* Pixel (x, y)'s mark from the pair bits: background, or a pair it belongs to is dissimilar; or
+ * a glossy surface (iir_gb_glossy's rule: its light depends on the view, so it is shaded per
+ * pixel by its BSDF). */
 static uint8_t pixel_mark(const iir_gbuffer *gb, const int *pairs, int x, int y)
 {
     size_t w = (size_t)gb->width, i = (size_t)y * w + (size_t)x;
     bool m = gb->prim[i] == IIR_NO_HIT || pairs[i] || (x > 0 && (pairs[i - 1] & RIGHT)) ||
-             (y > 0 && (pairs[i - w] & BELOW));
+             (y > 0 && (pairs[i - w] & BELOW)) ||
+             (gb->any_pbr && iir_gb_glossy(gb, i, IIR_RECEIVER_GLOSSY));
     return m ? MARKED : 0;
 }
 
@@ -225,6 +229,7 @@ static void build_texel(iir_multires *mr, const iir_gbuffer *gb, int l, int i, i
     t->s[it].position = iir_scale(s.x, inv);
     t->s[it].normal = iir_normalize(s.n);
     t->s[it].albedo = iir_scale(s.a, inv);
+    t->s[it].pixel = IIR_MR_TEXEL;
     t->depth[it] = s.d * inv;
 }
 
@@ -556,7 +561,7 @@ typedef struct texel_batch {
 
 static iir_mr_sample pixel_sample(const iir_gbuffer *gb, uint32_t i)
 {
-    return (iir_mr_sample){gb->position[i], gb->normal[i], gb->albedo[i]};
+    return (iir_mr_sample){gb->position[i], gb->normal[i], gb->albedo[i], i};
 }
 
 /* Evaluates one item into its level's E (level 0: into out); returns the evaluations. */

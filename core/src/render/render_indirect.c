@@ -2,7 +2,8 @@
  * sorting the VPLs in use into interleaved subsets by id, and the per-pixel sum of vpl.h's formula
  * with the clamped geometry term and shadow-map or exact-ray visibility; at a glossy
  * (metal_rough) pixel each VPL's light goes through the pixel's BSDF toward the camera, demodulated
- * by iir_gb_demod (multires's coarse texels gather diffuse light); not the filter that gathers the
+ * by iir_gb_demod (multires shades such pixels at full resolution, its coarse texels as diffuse
+ * surfaces); not the filter that gathers the
  * subsets back (render_filter.c).
  *
  * The per-frame lists are built once, single-threaded (a counting sort over a few hundred VPLs),
@@ -719,7 +720,11 @@ static uint64_t coarse_samples(void *ctx, int m, uint32_t cls, const iir_mr_samp
             union_size += r->start[k + 1] - r->start[k];
     pixel_batch b;
     b.m = 0;
-    for (int q = 0; q < count; q++) batch_push(&b, (uint32_t)q, s[q].position, s[q].normal);
+    for (int q = 0; q < count; q++) {
+        bool pixel = s[q].pixel != IIR_MR_TEXEL; /* its index seeds a sphere's directions */
+        batch_push(&b, pixel ? s[q].pixel : (uint32_t)q, s[q].position, s[q].normal);
+        if (pixel && r->gb.any_pbr) batch_mark_glossy(&b, &r->gb, s[q].pixel, c->receivers);
+    }
     while (b.m % 4) batch_push(&b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
     b.m = count;
     for (int q = 0; q < count; q++) E[q] = iir_v3s(0.f);
@@ -743,7 +748,7 @@ bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, b
                       p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
                       p->sm_bias,
                       p->interleave,
-                      IIR_RECEIVER_DIFFUSE}; /* coarse texels have no material */
+                      iir_render_receivers(r, p)}; /* coarse texels: diffuse (coarse_samples) */
     uint64_t live = 0;
     for (uint32_t k = 0; k < r->num_subsets; k++)
         if (r->start[k] < r->start[k + 1]) live |= 1ull << k;

@@ -127,11 +127,14 @@ static inline iir_vec3 iir_gb_demod(const iir_gbuffer *gb, size_t i, iir_receive
     return iir_bsdf_reflectance(gb->albedo[i], gb->base[i], m.x, m.z);
 }
 
-/* The receiver mode of this frame's gather: p's in full shading; multires gathers diffuse light. */
+/* The receiver mode of this frame's gather: p's in full shading. Multires shades the glossy pixels
+ * at full resolution (its hierarchy marks them) and its coarse texels as diffuse, so there `all`
+ * is `glossy`: a rough dielectric may lie on a coarse texel. */
 static inline iir_receiver_bsdf iir_render_receivers(const iir_renderer *r,
                                                      const iir_indirect_params *p)
 {
-    return r->level ? IIR_RECEIVER_DIFFUSE : p->receiver_bsdf;
+    if (r->level && p->receiver_bsdf == IIR_RECEIVER_ALL) return IIR_RECEIVER_GLOSSY;
+    return p->receiver_bsdf;
 }
 
 /* render_gbuffer.c. Resize keeps the contents only when the size is unchanged; on failure the
@@ -177,8 +180,8 @@ iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_param
  * stoppable). */
 bool iir_render_compensate(iir_renderer *r, const iir_shade_job *job, iir_raystats *st);
 
-/* render_filter.c: out += demod / pi * (filtered or raw) r->raw (iir_gb_demod: glossy pixels' only
- * in full shading, as multires gathers diffuse light); with r->level set only its level-0 pixels
+/* render_filter.c: out += demod / pi * (filtered or raw) r->raw (iir_gb_demod: the glossy pixels',
+ * which multires shades at full resolution); with r->level set only its level-0 pixels
  * are filtered (the others take their upsampled value, iir_multires_upsample_span, and count as
  * taps of every subset). */
 void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image *out);

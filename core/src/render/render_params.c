@@ -52,7 +52,7 @@ static const iir_param VPL_ROWS[] = {
     {"receiver_bsdf", IIR_PARAM_ENUM, offsetof(iir_indirect_params, receiver_bsdf),
      IIR_RECEIVER_GLOSSY, 0, 2, 0, RECEIVER_CHOICES, "",
      "which pixels reflect VPL light by their full BSDF: glossy (metals, roughness below 0.6), "
-     "all (every metallic-roughness material) or diffuse (none); shading full",
+     "all (every metallic-roughness material; glossy with shading multires) or diffuse (none)",
      IIR_PARAM_LIVE},
     {"vpl_kind", IIR_PARAM_ENUM, offsetof(iir_indirect_params, vpl_kind), IIR_VPL_POINT, 0, 1, 0,
      VPL_KIND_CHOICES, "",
