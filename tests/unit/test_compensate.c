@@ -220,8 +220,8 @@ static void test_multires_refused(void **state)
  * VPL sum bounds the lobes of the brass pixels and of the brass VPLs as it bounds G, and the
  * compensation samples a glossy pixel's BSDF and reflects a brass hit point's direct light by its
  * BSDF, so the refined image's mean comes back to pt's (--bounces 2) within 2%, where the clamped
- * one is measurably darker (0.72 of it; compensating as if every surface were diffuse, as the
- * build before did, gave back nothing: 0.72 -> 0.72 in `iird render` of this corner). */
+ * one is measurably darker (0.74 of it; compensating as if every surface were diffuse, as the
+ * build before did, gave back nothing: 0.74 -> 0.74 in `iird render` of this corner). */
 static void test_glossy_corner_matches_pt(void **state)
 {
     (void)state;

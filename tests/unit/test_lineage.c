@@ -281,7 +281,7 @@ static double refined_mean(const fixture *f, const char *method, const iir_param
 
 /* The second bounce's light (the mean of bounces 3 less bounces 2) in the brass corner: light
  * paths leave the brass by its BSDF, so ir's and iir's match pt's within 5%. Leaving it
- * cosine-distributed, as the build before did, they kept 0.60 of it (most of the metal's
+ * cosine-distributed, as the build before did, they kept 0.62 of it (most of the metal's
  * reflection went up into the open sky instead of into the walls). */
 static void test_glossy_paths_against_pt(void **state)
 {

@@ -84,16 +84,7 @@ static compared compare(const loaded *l, const iir_view *v, iir_image *a, iir_im
 static loaded load_corner_of(const char *name, const char *mtl)
 {
     const char *dir = iir_test_tmpdir(name);
-    iir_test_write_file(dir, "corner.mtl", mtl);
-    char path[1200];
-    snprintf(path, sizeof path, "%s/corner.obj", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib corner.mtl\n");
-    iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 2), iir_v3(2, 0, 0));
-    iir_test_write_quad(f, "grey", iir_v3(0, 2, -2), iir_v3(2, 0, 0), iir_v3(0, 2, 0));
-    iir_test_write_quad(f, "red", iir_v3(-2, 2, 0), iir_v3(0, 2, 0), iir_v3(0, 0, 2));
-    fclose(f);
+    iir_test_corner_obj(dir, mtl, "grey", "grey", "red");
     iir_test_write_file(dir, "corner.scene.json",
                         "{\"camera\": {\"position\": [3, 3.5, 6], \"target\": [-0.5, 0.8, -0.5],"
                         " \"fov_y\": 50}, \"lights\": []}");
@@ -124,32 +115,41 @@ static iir_light corner_light(iir_light_type type, iir_spot_profile profile)
     return l;
 }
 
-static void check_corner_kind(const loaded *c, iir_light light)
+/* `method` gathering the whole map (128^2 texels, 4096 samples, no clamp, every pixel) against
+ * pt --bounces 2 at spp samples, over view v at 48 x 40. */
+static compared against_pt(const loaded *c, const iir_view *v, const char *method, int spp,
+                           iir_frame_stats *fs)
 {
     enum { W = 48, H = 40 };
-    iir_light_fit_sun(&light, c->scene);
-    iir_view v = {&light, 1, c->scene->camera};
     iir_params p = iir_params_default();
-    iir_frame_stats fs;
-    iir_test_set(&p, "spp", 1024);
+    iir_test_set(&p, "spp", spp);
     iir_test_set(&p, "bounces", 2);
     iir_test_set(&p, "jitter", 0);
-    iir_image *ref = render("pt", c, &v, W, H, &p, &fs);
+    iir_image *ref = render("pt", c, v, W, H, &p, fs);
     iir_test_set(&p, "rsm_res", 128);
     iir_test_set(&p, "rsm_samples", 4096);
     iir_test_set(&p, "rsm_radius", 2);
     iir_test_set(&p, "rsm_lowres", 1);
     iir_test_set(&p, "clamp", 0);
-    iir_image *img = render("rsm", c, &v, W, H, &p, &fs);
-    compared k = compare(c, &v, img, ref);
+    iir_image *img = render(method, c, v, W, H, &p, fs);
+    compared k = compare(c, v, img, ref);
+    iir_image_destroy(img);
+    iir_image_destroy(ref);
+    return k;
+}
+
+static void check_corner_kind(const loaded *c, iir_light light)
+{
+    iir_light_fit_sun(&light, c->scene);
+    iir_view v = {&light, 1, c->scene->camera};
+    iir_frame_stats fs;
+    compared k = against_pt(c, &v, "rsm", 1024, &fs);
     print_message(
         "%-9s rsm vs pt (nothing occludes): relMSE %.2e on %d pixels, means %.4f / %.4f\n",
         iir_light_kind(&light), k.rel, k.n, k.mean_a, k.mean_b);
     assert_true(k.rel < 5e-3);
     assert_true(fabs(k.mean_a - k.mean_b) < 0.03 * k.mean_b);
     assert_true(fs.vpl.count > 0);
-    iir_image_destroy(img);
-    iir_image_destroy(ref);
 }
 
 static void test_corner_matches_pt(void **state)
@@ -171,28 +171,14 @@ static void test_corner_matches_pt(void **state)
  * BSDF and the texels' lobes are right. */
 static void check_glossy_corner(const loaded *c, const char *method, double max_rel)
 {
-    enum { W = 48, H = 40 };
     iir_light light = corner_light(IIR_LIGHT_SPOT, IIR_SPOT_COSINE);
     iir_view v = {&light, 1, c->scene->camera};
-    iir_params p = iir_params_default();
     iir_frame_stats fs;
-    iir_test_set(&p, "spp", 2048);
-    iir_test_set(&p, "bounces", 2);
-    iir_test_set(&p, "jitter", 0);
-    iir_image *ref = render("pt", c, &v, W, H, &p, &fs);
-    iir_test_set(&p, "rsm_res", 128);
-    iir_test_set(&p, "rsm_samples", 4096);
-    iir_test_set(&p, "rsm_radius", 2);
-    iir_test_set(&p, "rsm_lowres", 1);
-    iir_test_set(&p, "clamp", 0);
-    iir_image *img = render(method, c, &v, W, H, &p, &fs);
-    compared k = compare(c, &v, img, ref);
+    compared k = against_pt(c, &v, method, 2048, &fs);
     print_message("%s vs pt, glossy corner: relMSE %.2e on %d pixels, means %.4f / %.4f\n", method,
                   k.rel, k.n, k.mean_a, k.mean_b);
     assert_true(k.rel < max_rel);
     assert_true(fabs(k.mean_a - k.mean_b) < 0.03 * k.mean_b);
-    iir_image_destroy(img);
-    iir_image_destroy(ref);
 }
 
 static void test_glossy_corner_matches_pt(void **state)

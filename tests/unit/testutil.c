@@ -181,16 +181,23 @@ double iir_test_gltf_brdf(double base, double metallic, double roughness, const 
     return (1 - metallic) * dielectric + metallic * metal;
 }
 
+void iir_test_corner_obj(const char *dir, const char *mtl_text, const char *floor, const char *back,
+                         const char *left)
+{
+    FILE *f = iir_test_open_obj(dir, "corner", mtl_text);
+    iir_test_write_quad(f, floor, iir_v3(0, 0, 0), iir_v3(0, 0, 2), iir_v3(2, 0, 0));
+    iir_test_write_quad(f, back, iir_v3(0, 2, -2), iir_v3(2, 0, 0), iir_v3(0, 2, 0));
+    iir_test_write_quad(f, left, iir_v3(-2, 2, 0), iir_v3(0, 2, 0), iir_v3(0, 0, 2));
+    fclose(f);
+}
+
 iir_test_cornell iir_test_brass_corner(void)
 {
     const char *dir = iir_test_tmpdir("lineage-brass-corner");
-    FILE *f = iir_test_open_obj(dir, "corner",
-                                "newmtl brass\nKd 0.9 0.7 0.45\nPm 1\nPr 0.4\nnewmtl grey\nKd 0.7 "
-                                "0.7 0.7\nnewmtl red\nKd 0.7 0.2 0.2\n");
-    iir_test_write_quad(f, "brass", iir_v3(0, 0, 0), iir_v3(0, 0, 2), iir_v3(2, 0, 0));
-    iir_test_write_quad(f, "grey", iir_v3(0, 1, -2), iir_v3(2, 0, 0), iir_v3(0, 1, 0));
-    iir_test_write_quad(f, "red", iir_v3(-2, 1, 0), iir_v3(0, 1, 0), iir_v3(0, 0, 2));
-    fclose(f);
+    iir_test_corner_obj(dir,
+                        "newmtl brass\nKd 0.9 0.7 0.45\nPm 1\nPr 0.4\nnewmtl grey\nKd 0.7 0.7 "
+                        "0.7\nnewmtl red\nKd 0.7 0.2 0.2\n",
+                        "brass", "grey", "red");
     iir_test_write_file(dir, "corner.scene.json",
                         "{\"camera\": {\"position\": [3, 3.5, 6], \"target\": [-0.5, 0.8, -0.5],"
                         " \"fov_y\": 50}, \"lights\": [{\"type\": \"spot\", \"name\": \"spot\","

@@ -71,7 +71,13 @@ int iir_test_cornell_teardown(void **state);
 iir_test_cornell iir_test_load(const char *dir, const char *name);
 void iir_test_unload(iir_test_cornell *l);
 
-/* An open corner (floor, back and left walls, 4 x 4 x 2, nothing occluding) whose floor is brass
+/* Writes dir/corner.obj (and corner.mtl holding mtl_text): an open corner, nothing occluding --
+ * the floor y = 0 over [-2, 2]^2, the back wall z = -2 and the left wall x = -2, 4 high -- of the
+ * materials named floor, back and left. */
+void iir_test_corner_obj(const char *dir, const char *mtl_text, const char *floor, const char *back,
+                         const char *left);
+
+/* An open corner (iir_test_corner_obj) whose floor is brass
  * (a metal of roughness 0.4; the walls grey and red, diffuse), lit by a spot aimed at the floor so
  * that its reflection lights the walls. */
 iir_test_cornell iir_test_brass_corner(void);
