@@ -1,7 +1,8 @@
-/* test_insert_budget.c -- iir's insertion by time (insert_ms): when many VPLs die at once the set
- * refills in the next frame as far as the budget allows, where a fixed kmax leaves it short for
- * many frames; a budget too small for one VPL still inserts one; kmax 0 (no cap) without a budget
- * is refused. Counts from the method's frame stats on the built-in Cornell box. */
+/* test_insert_budget.c -- iir's insertion by time (insert_ms) and by refill (the default): when
+ * many VPLs die at once the set refills in the next frame as far as the budget allows, and with
+ * refill in the frame they died, where a fixed kmax (refill false) leaves it short for many frames;
+ * a budget too small for one VPL still inserts one; kmax 0 (no cap) without a budget is refused.
+ * Counts from the method's frame stats on the built-in Cornell box. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -43,23 +44,29 @@ static uint32_t count_after_swing(const fixture *f, const iir_params *p, int mor
 static void test_budget_refills(void **state)
 {
     const fixture *f = *state;
-    iir_params fixed = iir_params_default(), budget;
+    iir_params fixed = iir_params_default(), budget, refill;
     iir_test_set(&fixed, "vpls", 128);
     iir_test_set(&fixed, "sm_res", 16);
     iir_test_set(&fixed, "interleave", 1);
+    refill = fixed; /* the default: what died is replaced in its frame */
+    iir_test_set(&fixed, "refill", 0);
     budget = fixed;
     iir_test_set(&budget, "kmax", 0);
     iir_test_set(&budget, "insert_ms", 1000); /* far more than 128 small maps cost */
-    uint32_t last_fixed, last_budget, died_fixed, died_budget;
+    uint32_t last_fixed, last_budget, last_refill, died_fixed, died_budget, died_refill;
     uint32_t n_fixed = count_after_swing(f, &fixed, 2, &last_fixed, &died_fixed);
     uint32_t n_budget = count_after_swing(f, &budget, 2, &last_budget, &died_budget);
-    print_message("after the swing (%u and %u died): kmax 8 keeps %u (then %u), insert_ms 1000 "
-                  "keeps %u (then %u) of 128\n",
-                  died_fixed, died_budget, n_fixed, last_fixed, n_budget, last_budget);
-    assert_true(died_fixed > 16 && died_budget > 16);
+    uint32_t n_refill = count_after_swing(f, &refill, 2, &last_refill, &died_refill);
+    print_message("after the swing (%u, %u and %u died): kmax 8 keeps %u (then %u), insert_ms "
+                  "1000 keeps %u (then %u), refill keeps %u (then %u) of 128\n",
+                  died_fixed, died_budget, died_refill, n_fixed, last_fixed, n_budget, last_budget,
+                  n_refill, last_refill);
+    assert_true(died_fixed > 16 && died_budget > 16 && died_refill > 16);
     assert_true(n_fixed < 128 - 8);
     assert_int_equal(n_budget, 128);
     assert_int_equal(last_budget, 128);
+    assert_int_equal(n_refill, 128);
+    assert_int_equal(last_refill, 128);
 }
 
 /* A budget smaller than any VPL's cost still inserts one a frame (the step needs one). */

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include <cmocka.h>
+#include <omp.h>
 
 #include "iir/rng.h"
 #include "iir/rt.h"
@@ -190,9 +191,52 @@ static void test_build_only_what_is_missing(void **state)
     for (int i = 0; i < N; i++) iir_smap_release(&vpls[i].smap);
 }
 
+/* A budget of maps (iir's refill): the first `full` missing maps in array order at the asked
+ * resolution, the other missing ones at a quarter of it and marked coarse; a later call with
+ * nothing missing renders the first coarse ones again at full resolution, the same texels as a
+ * map rendered alone, and leaves the rest; the same result on one thread as on two. */
+static void test_budget(void **state)
+{
+    const iir_test_cornell *c = *state;
+    enum { N = 12, FULL = 4, RES = 32 };
+    iir_vpl a[N], b[N];
+    for (uint32_t i = 0; i < N; i++)
+        a[i] = vpl_at(i, iir_v3(-0.9f + 0.15f * (float)i, 0.f, 0.4f), iir_v3(0, 1, 0));
+    a[2].null_sample = true;
+    memcpy(b, a, sizeof a);
+    assert_int_equal(iir_smaps_build_budget(a, N, c->rt, RES, FULL, NULL, NULL, NULL), N - 1);
+    for (uint32_t i = 0; i < N; i++) {
+        bool full = i != 2 && i <= FULL; /* the null sample holds no place in the budget */
+        assert_int_equal(a[i].smap.res, i == 2 ? 0 : full ? RES : RES / 4);
+        assert_int_equal(a[i].smap.coarse, i != 2 && !full);
+    }
+    /* nothing missing: the first FULL coarse ones come back at RES, exactly as rendered alone */
+    assert_int_equal(iir_smaps_build_budget(a, N, c->rt, RES, FULL, NULL, NULL, NULL), FULL);
+    for (uint32_t i = 0; i < N; i++) {
+        bool full = i != 2 && i <= 2 * FULL;
+        assert_int_equal(a[i].smap.res, i == 2 ? 0 : full ? RES : RES / 4);
+        if (i == 2 || !full) continue;
+        iir_smap alone = {0};
+        assert_true(iir_smap_render(&alone, c->rt, &a[i], RES, NULL));
+        assert_memory_equal(alone.depth, a[i].smap.depth, sizeof(float) * RES * RES);
+        iir_smap_release(&alone);
+    }
+    /* one thread: the same resolutions */
+    int threads = omp_get_max_threads();
+    omp_set_num_threads(1);
+    iir_smaps_build_budget(b, N, c->rt, RES, FULL, NULL, NULL, NULL);
+    iir_smaps_build_budget(b, N, c->rt, RES, FULL, NULL, NULL, NULL);
+    omp_set_num_threads(threads);
+    for (uint32_t i = 0; i < N; i++) {
+        assert_int_equal(a[i].smap.res, b[i].smap.res);
+        iir_smap_release(&a[i].smap), iir_smap_release(&b[i].smap);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_budget),
         cmocka_unit_test(test_paraboloid_round_trip),
         cmocka_unit_test(test_floor_vpl_sees_ceiling),
         cmocka_unit_test(test_lookup_matches_rays),

@@ -42,7 +42,9 @@
  * endpoint of the shortest Delaunay edge in the denser neighbourhood (ties: the younger, larger id;
  *               see tri.h), updating the triangulation. Stops at one remaining site. So, with
  *               v = valid: deleted = min(max(k_min - invalidated, v - N, 0), max(v, 1) - 1).
- *   INSERT      While count < N and inserted < k_max (after a regeneration: while count < N): take
+ *   INSERT      While count < N and inserted < k_max (after a regeneration: while count < N; with
+ *               `refill`, while inserted < max(k_max, invalidated + deleted): what the frame
+ *               removed is replaced in it, so a set at N stays at N): take
  *               the largest empty circle's centre c (tri.h), pull it inside the disk to at most
  *               R (1 - IIR_INCR_EDGE_MARGIN) so that float directions stay strictly inside the
  *               cone, cast one closest-hit ray from p along its direction. A hit on a non-emissive
@@ -107,6 +109,7 @@ typedef struct iir_incr_params {
     iir_weights weights;   /* default IIR_WEIGHTS_VORONOI */
     float regen_threshold; /* regenerate when more than this fraction dies at once, (0, 1], 0.5 */
     uint64_t seed;         /* scrambles the Hammersley sets; default 1 */
+    bool refill;           /* INSERT may exceed k_max to replace what this frame removed; false */
 } iir_incr_params;
 
 /* The defaults above. */

@@ -29,6 +29,8 @@ extern "C" {
 typedef struct iir_smap {
     int res;      /* res x res texels; 0 = not rendered */
     float *depth; /* distance to the first hit per texel, INFINITY where the ray escaped */
+    bool coarse;  /* rendered below the asked resolution to bound a frame's cost, to be rendered
+                     again at it when a frame has room (iir_smaps_build_budget) */
 } iir_smap;
 
 /* Frees the map's texels (allocated with malloc by the shadow-map renderer) and marks it not

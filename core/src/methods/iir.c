@@ -46,6 +46,7 @@ typedef struct iir_options {
     float regen_threshold; /* regenerate when more than this fraction dies */
     int bounces;           /* 2: the kept set alone; more: its VPLs carry descendants */
     float insert_ms;       /* > 0: time a frame for new VPLs and their maps (kmax caps, 0 none) */
+    bool refill;           /* every VPL removed is replaced in its frame (insert_ms 0 only) */
     iir_ctl_options ctl;   /* target_fps > 0: the controller sets vpls, interleave and sm_res */
 } iir_options;
 
@@ -66,6 +67,10 @@ static const iir_param IIR_ROWS[] = {
      WEIGHTS_CHOICES, "", "VPL flux by Voronoi cell area or uniform (the paper's)", IIR_PARAM_LIVE},
     {"regen_threshold", IIR_PARAM_FLOAT, offsetof(iir_options, regen_threshold), 0.5, 1e-6, 1, 0,
      NULL, "", "regenerate the whole set when more than this fraction of it dies", IIR_PARAM_LIVE},
+    {"refill", IIR_PARAM_BOOL, offsetof(iir_options, refill), 1, 0, 1, 0, NULL, "",
+     "replace every VPL removed in its own frame, beyond kmax when more died (their shadow maps at "
+     "half resolution, rendered again at full in later frames within kmax); false: kmax a frame",
+     IIR_PARAM_LIVE},
 };
 
 /* bounces >= 2; kmax 0 only with insert_ms; kmin <= kmax (when > 0) <= vpls, blaming the one the
@@ -109,6 +114,7 @@ typedef struct iir_state {
     iir_options params; /* the ones in use: asked, with the controller's setting when it is on */
     iir_ctl *ctl;       /* target_fps > 0: the frame-time controller; else NULL */
     bool restore;       /* target_fps just went to 0: the next frame brings back the asked set */
+    bool maps_all;      /* this frame renders every missing map at sm_res (restoring the set) */
     iir_renderer *renderer;
     iir_vplsets *sets;
     iir_ism_points *ism; /* visibility=ism: the scene's point set, made on first use */
@@ -186,6 +192,7 @@ static iir_incr_params incr_params(const iir_options *p, uint32_t k_max, uint32_
     ip.weights = p->weights;
     ip.regen_threshold = p->regen_threshold;
     ip.seed = p->common.seed;
+    ip.refill = p->refill && p->insert_ms <= 0.f;
     return ip;
 }
 
@@ -214,6 +221,7 @@ static void apply_insert_limit(iir_state *s)
 {
     bool restore = s->restore;
     s->restore = false;
+    s->maps_all = restore;
     if (s->params.insert_ms <= 0.f && !s->ctl && !restore) return;
     uint32_t count = set_count(s), N = (uint32_t)s->params.vpls;
     bool short_of_n = count < N;
@@ -342,15 +350,21 @@ static void fill_counts(const iir_incr_stats *is, uint32_t maps, iir_vpl_counts 
     c->shadowmaps = maps;
 }
 
-/* The maps (exact or ISMs) of v[0..n) that have none, of light k's set; *built = how many. */
-static iir_status maps_of(iir_state *s, uint32_t k, iir_vpl *v, uint32_t n, iir_raystats *rays,
-                          uint32_t *built, iir_error *err)
+/* The maps (exact or ISMs) of v[0..n) that have none, of light k's set; *built = how many. With
+ * refill (and not after a regeneration, whose maps are all new) beyond kmax at full resolution
+ * the rest are coarse and rendered again later within kmax (iir_smaps_build_budget). */
+static iir_status maps_of(iir_state *s, uint32_t k, iir_vpl *v, uint32_t n, bool regenerated,
+                          iir_raystats *rays, uint32_t *built, iir_error *err)
 {
     *built = 0;
     if (!n) return IIR_OK;
     if (s->params.vpl.visibility == IIR_VIS_SHADOWMAP) {
+        const iir_options *o = &s->params;
         *built =
-            iir_smaps_build_missing(v, n, s->rt, s->params.vpl.sm_res, rays, s->stop, s->stop_ctx);
+            o->refill && o->insert_ms <= 0.f && !regenerated && !s->maps_all
+                ? iir_smaps_build_budget(v, n, s->rt, o->vpl.sm_res, (uint32_t)o->kmax, rays,
+                                         s->stop, s->stop_ctx)
+                : iir_smaps_build_missing(v, n, s->rt, o->vpl.sm_res, rays, s->stop, s->stop_ctx);
         return IIR_OK;
     }
     return iir_ism_maps_build(&s->ism, s->scene, s->rt, &s->params.ism, s->params.common.seed, k, v,
@@ -360,7 +374,8 @@ static iir_status maps_of(iir_state *s, uint32_t k, iir_vpl *v, uint32_t n, iir_
 /* Shadow maps (exact or ISMs, as visibility says) for every set's new VPLs, on the sets' own
  * arrays (where maps live), until the stop hook says stop; *maps = how many were built. Fails
  * only when ISM's point set cannot be made. */
-static iir_status build_maps(iir_state *s, iir_raystats *rays, uint32_t *maps, iir_error *err)
+static iir_status build_maps(iir_state *s, const iir_incr_stats *is, iir_raystats *rays,
+                             uint32_t *maps, iir_error *err)
 {
     iir_visibility vis = s->params.vpl.visibility;
     iir_status st = IIR_OK;
@@ -371,9 +386,10 @@ static iir_status build_maps(iir_state *s, iir_raystats *rays, uint32_t *maps, i
         uint32_t n = 0, nd = 0, built = 0;
         iir_vpl *v = set ? iir_incr_vpls(set, &n) : NULL;
         iir_vpl *d = iir_vplsets_descendants(s->sets, k, &nd);
-        st = maps_of(s, k, v, n, rays, &built, err);
+        bool regen = is->initial || is->vpl.regenerated;
+        st = maps_of(s, k, v, n, regen, rays, &built, err);
         *maps += built;
-        if (st == IIR_OK) st = maps_of(s, k, d, nd, rays, &built, err);
+        if (st == IIR_OK) st = maps_of(s, k, d, nd, regen, rays, &built, err);
         *maps += built;
     }
     return st;
@@ -403,7 +419,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     iir_raystats_add(&stats->rays, &is.rays);
     double t1 = iir_now_ms();
     uint32_t maps = 0;
-    st = build_maps(s, &stats->rays, &maps, err);
+    st = build_maps(s, &is, &stats->rays, &maps, err);
     if (st != IIR_OK) return s->frame++, st;
     if (s->stop && s->stop(s->stop_ctx)) /* the maps not built are built by the next frame */
         return s->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");

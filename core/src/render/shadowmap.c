@@ -54,6 +54,7 @@ bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, i
         for (int i0 = 0; i0 < res; i0 += 8)
             trace_run(rt, v, org, i0, j, res, m->depth + (size_t)j * (size_t)res, st);
     m->res = res;
+    m->coarse = false;
     return true;
 }
 
@@ -90,6 +91,59 @@ uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int 
                                iir_raystats *st, iir_stop_fn stop, void *ctx)
 {
     return build(vpls, n, rt, res, false, st, stop, ctx);
+}
+
+/* Whether v lacks a map (pass 0) or holds a coarse one below res (pass 1). */
+static bool wants(const iir_vpl *v, int res, int pass)
+{
+    if (v->null_sample) return false;
+    return pass == 0 ? v->smap.res == 0 : v->smap.coarse && v->smap.res < res;
+}
+
+/* The index before which the first `budget` VPLs that pass wants lie (n when fewer do); *used
+ * gets how many that is. */
+static uint32_t cut(const iir_vpl *vpls, uint32_t n, int res, int pass, uint32_t budget,
+                    uint32_t *used)
+{
+    *used = 0;
+    for (uint32_t i = 0; i < n; i++)
+        if (wants(&vpls[i], res, pass) && (*used)++ == budget) {
+            *used = budget;
+            return i;
+        }
+    return n;
+}
+
+uint32_t iir_smaps_build_budget(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, uint32_t full,
+                                iir_raystats *st, iir_stop_fn stop, void *ctx)
+{
+    /* in array order (deterministic): the first `full` missing maps at res, the other missing ones
+       coarse, and as many of the coarse ones already there as the budget has left at res */
+    uint32_t used[2];
+    uint32_t cuts[2] = {cut(vpls, n, res, 0, full, &used[0]), 0};
+    cuts[1] = cut(vpls, n, res, 1, full - used[0], &used[1]);
+    int coarse_res = res / 4 > 8 ? res / 4 : res < 8 ? res : 8;
+    uint32_t built = 0;
+    iir_raystats total = {0};
+    for (int pass = 1; pass >= 0; pass--) { /* upgrades first: pass 0 makes new coarse maps */
+#pragma omp parallel reduction(+ : built)
+        {
+            iir_raystats local = {0};
+#pragma omp for schedule(dynamic, 1)
+            for (int64_t i = 0; i < (int64_t)n; i++) {
+                iir_vpl *v = &vpls[i];
+                bool at_res = (uint32_t)i < cuts[pass];
+                if (!wants(v, res, pass) || (pass == 1 && !at_res) || (stop && stop(ctx))) continue;
+                if (!iir_smap_render(&v->smap, rt, v, at_res ? res : coarse_res, &local)) continue;
+                v->smap.coarse = !at_res;
+                built++;
+            }
+#pragma omp critical(iir_smap_rays)
+            iir_raystats_add(&total, &local);
+        }
+    }
+    if (st) iir_raystats_add(st, &total);
+    return built;
 }
 
 uint32_t iir_smaps_build_missing(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res,

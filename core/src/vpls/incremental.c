@@ -610,6 +610,8 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *light, iir_incr_stats
 
     /* 4. delete */
     if (status == IIR_OK && !regen) status = phase_delete(inc, c->invalidated, &c->deleted, err);
+    if (p->refill && !regen && c->invalidated + c->deleted > limit)
+        limit = c->invalidated + c->deleted; /* what this frame removed comes back in it */
     lap(&st, IIR_INCR_DELETE, &t);
 
     /* 5. insert */
