@@ -115,6 +115,7 @@ typedef struct iir_state {
     iir_ctl *ctl;       /* target_fps > 0: the frame-time controller; else NULL */
     bool restore;       /* target_fps just went to 0: the next frame brings back the asked set */
     bool maps_all;      /* this frame renders every missing map at sm_res (restoring the set) */
+    bool remap;         /* the maps were dropped (another visibility): the next frame is maps_all */
     iir_renderer *renderer;
     iir_vplsets *sets;
     iir_ism_points *ism; /* visibility=ism: the scene's point set, made on first use */
@@ -221,7 +222,8 @@ static void apply_insert_limit(iir_state *s)
 {
     bool restore = s->restore;
     s->restore = false;
-    s->maps_all = restore;
+    s->maps_all = restore || s->remap;
+    s->remap = false;
     if (s->params.insert_ms <= 0.f && !s->ctl && !restore) return;
     uint32_t count = set_count(s), N = (uint32_t)s->params.vpls;
     bool short_of_n = count < N;
@@ -595,8 +597,10 @@ static void iir_m_update(void *state, const void *opts)
         if (s->params.vpl.visibility == IIR_VIS_SHADOWMAP) release_maps(s, s->params.vpl.sm_res);
     }
     if (was != s->params.vpl.visibility &&
-        (was == IIR_VIS_ISM || s->params.vpl.visibility == IIR_VIS_ISM))
+        (was == IIR_VIS_ISM || s->params.vpl.visibility == IIR_VIS_ISM)) {
         release_maps(s, 0);
+        s->remap = true;
+    }
     iir_incr_params ip = incr_params(&s->params, insert_limit(s), (uint32_t)s->params.kmin);
     iir_vplsets_set_params(s->sets, &ip, &err); /* valid once bound (N: the sets follow it) */
     iir_vplsets_set_bounces(s->sets, s->params.bounces); /* new: descendants traced anew */
