@@ -850,6 +850,50 @@ static iir_light orbit(iir_light l, int f)
     return l;
 }
 
+/* With refill, a fast sweep (the orbit at 8 times its speed: about 8 VPLs die a frame, and the
+ * cone leaves uncovered ground behind its survivors) keeps the set at N on every frame; a frame
+ * inserts what it removed before the holes plus at most k_max for the holes, and after each
+ * frame no empty circle is wider than IIR_INCR_HOLE cells unless those k_max were all spent;
+ * without refill the same sweep leaves the set short (155 of 256). */
+static void test_refill_keeps_n(void **state)
+{
+    const env *e = *state;
+    enum { FRAMES = 40 };
+    for (int k = 0; k < 2; k++) {
+        iir_incr *inc = make_incr(e, 256, IIR_WEIGHTS_VORONOI, 1);
+        iir_incr_params p = iir_incr_get_params(inc);
+        p.refill = k == 0;
+        iir_error err = {0};
+        assert_int_equal(iir_incr_set_params(inc, &p, &err), IIR_OK);
+        iir_light l = cornell_spot(e);
+        uint32_t least = p.target, open = 0;
+        double R = 0;
+        for (int f = 0; f <= FRAMES; f++) {
+            l = orbit(l, 8 * f);
+            iir_incr_stats st = update(inc, &l);
+            give_maps(inc);
+            const iir_vpl_counts *c = &st.vpl;
+            if (f == 0 || c->regenerated) continue;
+            least = c->count < least ? c->count : least;
+            double centre[2], r;
+            assert_int_equal(iir_tri_largest_empty_circle(iir_incr_tri(inc), centre, &r),
+                             IIR_TRI_OK);
+            R = iir_tri_radius(iir_incr_tri(inc));
+            double hole = IIR_INCR_HOLE * R / sqrt((double)p.target);
+            bool spent = c->inserted >= p.k_max; /* the holes may have had all of k_max */
+            open += r > hole && !spent;
+            if (k == 0 && r > hole && !spent)
+                fail_msg("frame %d: an empty circle of %g, a hole is %g", f, r, hole);
+        }
+        print_message("fast sweep, refill %s: the set at least %u of %u, %u frames with a hole "
+                      "left open\n",
+                      k == 0 ? "on" : "off", least, p.target, open);
+        if (k == 0) assert_int_equal(least, p.target);
+        if (k == 1) assert_true(least < p.target);
+        iir_incr_destroy(inc); /* and the maps */
+    }
+}
+
 /* Along the orbit nothing jumps, so after the first update no frame regenerates; each frame
  * replaces between k_min and k_max + invalidated VPLs (invalidated + deleted) and inserts at most
  * k_max; the set is back at N whenever the frame's budget allows (count = min(N, valid - deleted +
@@ -1008,6 +1052,7 @@ int main(void)
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_memory_steady),
         cmocka_unit_test(test_smooth_path_steady),
+        cmocka_unit_test(test_refill_keeps_n),
         cmocka_unit_test(test_glossy_lobes_follow_the_light),
     };
     return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);

@@ -44,7 +44,10 @@
  *               v = valid: deleted = min(max(k_min - invalidated, v - N, 0), max(v, 1) - 1).
  *   INSERT      While count < N and inserted < k_max (after a regeneration: while count < N; with
  *               `refill`, while inserted < max(k_max, invalidated + deleted): what the frame
- *               removed is replaced in it, so a set at N stays at N): take
+ *               removed is replaced in it, so a set at N stays at N; and then, up to k_max
+ *               more, while an empty circle is wider than IIR_INCR_HOLE cells -- a hole the
+ *               light swept into or uncovered -- a VPL goes there and the most crowded one is
+ *               deleted, counted in inserted and deleted): take
  *               the largest empty circle's centre c (tri.h), pull it inside the disk to at most
  *               R (1 - IIR_INCR_EDGE_MARGIN) so that float directions stay strictly inside the
  *               cone, cast one closest-hit ray from p along its direction. A hit on a non-emissive
@@ -99,6 +102,9 @@ struct iir_stri;
 /* New samples keep |s| <= R (1 - IIR_INCR_EDGE_MARGIN) so they stay strictly inside the cone when
  * their float world positions are reprojected. */
 #define IIR_INCR_EDGE_MARGIN 1e-4
+/* With refill, an empty circle wider than this times the radius of a cell of a set of N (sqrt of
+ * the domain's area / (pi N)) is a hole: a VPL moves there from the most crowded place. */
+#define IIR_INCR_HOLE 2.0
 
 typedef enum iir_weights { IIR_WEIGHTS_UNIFORM, IIR_WEIGHTS_VORONOI } iir_weights;
 

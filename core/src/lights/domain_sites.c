@@ -77,12 +77,13 @@ iir_tri_status iir_sites_shortest_edge(const iir_sites *s, uint32_t *denser_id)
     return iir_tri_shortest_edge(s->tri, denser_id, NULL, NULL);
 }
 
-iir_tri_status iir_sites_largest_empty(const iir_sites *s, double centre[3])
+iir_tri_status iir_sites_largest_empty(const iir_sites *s, double centre[3], double *radius)
 {
-    double radius;
-    if (s->shape == IIR_DOMAIN_SPHERE) return iir_stri_largest_empty_cap(s->stri, centre, &radius);
+    double r;
+    if (!radius) radius = &r;
+    if (s->shape == IIR_DOMAIN_SPHERE) return iir_stri_largest_empty_cap(s->stri, centre, radius);
     centre[2] = 0.0;
-    return iir_tri_largest_empty_circle(s->tri, centre, &radius);
+    return iir_tri_largest_empty_circle(s->tri, centre, radius);
 }
 
 iir_tri_status iir_sites_cell_areas(const iir_sites *s, uint32_t *ids, double *areas, size_t cap,

@@ -32,8 +32,9 @@ iir_tri_status iir_sites_remove(iir_sites *s, uint32_t id);
 /* Whether the site with this id is in the set. */
 int iir_sites_has(const iir_sites *s, uint32_t id);
 iir_tri_status iir_sites_shortest_edge(const iir_sites *s, uint32_t *denser_id);
-/* The largest empty circle (disk) or cap (sphere): its centre. */
-iir_tri_status iir_sites_largest_empty(const iir_sites *s, double centre[3]);
+/* The largest empty circle (disk) or cap (sphere): its centre, and its radius (the cap's: geodesic)
+ * when radius is not NULL. */
+iir_tri_status iir_sites_largest_empty(const iir_sites *s, double centre[3], double *radius);
 iir_tri_status iir_sites_cell_areas(const iir_sites *s, uint32_t *ids, double *areas, size_t cap,
                                     size_t *n);
 

@@ -40,7 +40,7 @@ struct iir_incr {
     unsigned char *alive; /* [cap] scratch: VPLs kept by the phase running */
     double *removed;      /* [3 cap]: domain points of the VPLs the last update removed */
     uint32_t num_removed; /* <= the count before that update <= cap */
-    uint32_t count, cap;  /* cap >= max(N, count) */
+    uint32_t count, cap;  /* cap >= max(room(params), count) */
     uint32_t next_id;     /* the id of the next VPL created */
     uint32_t frame;       /* updates so far: the birth of the VPLs made now */
     uint32_t generations; /* Hammersley sets made so far: the scramble's stream */
@@ -106,6 +106,13 @@ const char *iir_incr_phase_name(iir_incr_phase phase)
 
 /* ==== lifetime =============================================================================== */
 
+/* The VPLs a set of p holds at most within an update: N, and with refill the holes' VPLs before
+ * the crowded ones go (phase_holes). */
+static uint32_t room(const iir_incr_params *p)
+{
+    return p->target + (p->refill ? p->k_max : 0);
+}
+
 /* Makes room for cap VPLs; on failure the old buffers stay (realloc keeps them). */
 static iir_status reserve(iir_incr *inc, uint32_t cap, iir_error *err)
 {
@@ -139,7 +146,7 @@ iir_status iir_incr_create(const iir_scene *scene, const iir_rt *rt, const iir_i
     inc->scene = scene;
     inc->rt = rt;
     inc->params = *p;
-    st = reserve(inc, p->target, err);
+    st = reserve(inc, room(p), err);
     if (st != IIR_OK) {
         iir_incr_destroy(inc);
         return st;
@@ -165,7 +172,7 @@ void iir_incr_destroy(iir_incr *inc)
 iir_status iir_incr_set_params(iir_incr *inc, const iir_incr_params *p, iir_error *err)
 {
     iir_status st = iir_incr_params_validate(p, err);
-    if (st == IIR_OK) st = reserve(inc, p->target, err);
+    if (st == IIR_OK) st = reserve(inc, room(p), err);
     if (st == IIR_OK) inc->params = *p;
     return st;
 }
@@ -471,28 +478,61 @@ static iir_status phase_delete(iir_incr *inc, uint32_t replaced, uint32_t *delet
     return IIR_OK;
 }
 
-/* INSERT: while below N and below `limit` insertions, a ray towards the largest empty circle's
- * (cap's) centre, pulled a margin inside a disk's edge; the VPL or null sample it gives joins the
- * triangulation before the next circle. */
+/* One VPL at the largest empty circle's (cap's) centre, pulled a margin inside a disk's edge, when
+ * that circle is wider than r_min: a ray towards it, the VPL or null sample it gives joining the
+ * triangulation. *added false when the circle is not wider, the set is empty (only when a
+ * regeneration found nothing) or the domain saturated. */
+static iir_status insert_one(iir_incr *inc, const pose *ps, double r_min, bool *added,
+                             iir_raystats *rays, iir_error *err)
+{
+    double c[3], s[3], r;
+    *added = false;
+    iir_tri_status ts = iir_sites_largest_empty(&inc->sites, c, &r);
+    if (ts == IIR_TRI_TOO_FEW || !(r > r_min)) return IIR_OK;
+    if (ts != IIR_TRI_OK) return tri_fail(ts, "finding the largest empty circle", err);
+    iir_domain_pull_inside(ps, c, IIR_INCR_EDGE_MARGIN, s);
+    sample sm = trace_point(inc, ps, s, iir_domain_emitter_stratum(ps, inc->next_id), rays);
+    if (!stage(inc, ps, &sm)) return IIR_OK; /* only for a cone too narrow for float directions */
+    ts = iir_sites_insert(&inc->sites, &inc->xy[3 * inc->count], inc->next_id);
+    if (ts == IIR_TRI_DUPLICATE_POINT || ts == IIR_TRI_OUTSIDE) return IIR_OK; /* saturated */
+    if (ts != IIR_TRI_OK) return tri_fail(ts, "inserting", err);
+    commit(inc);
+    *added = true;
+    return IIR_OK;
+}
+
+/* INSERT: while below N and below `limit` insertions, insert_one at any circle. */
 static iir_status phase_insert(iir_incr *inc, const pose *ps, uint32_t limit, uint32_t *inserted,
                                iir_raystats *rays, iir_error *err)
 {
     *inserted = 0;
-    while (inc->count < inc->params.target && *inserted < limit) {
-        double c[3], s[3];
-        iir_tri_status ts = iir_sites_largest_empty(&inc->sites, c);
-        if (ts == IIR_TRI_TOO_FEW) break; /* an empty set: only when a regeneration found nothing */
-        if (ts != IIR_TRI_OK) return tri_fail(ts, "finding the largest empty circle", err);
-        iir_domain_pull_inside(ps, c, IIR_INCR_EDGE_MARGIN, s);
-        sample sm = trace_point(inc, ps, s, iir_domain_emitter_stratum(ps, inc->next_id), rays);
-        if (!stage(inc, ps, &sm)) break; /* only for a cone too narrow for float directions */
-        ts = iir_sites_insert(&inc->sites, &inc->xy[3 * inc->count], inc->next_id);
-        if (ts == IIR_TRI_DUPLICATE_POINT || ts == IIR_TRI_OUTSIDE) break; /* saturated */
-        if (ts != IIR_TRI_OK) return tri_fail(ts, "inserting", err);
-        commit(inc);
-        (*inserted)++;
+    bool added = true;
+    iir_status st = IIR_OK;
+    while (st == IIR_OK && added && inc->count < inc->params.target && *inserted < limit) {
+        st = insert_one(inc, ps, -1.0, &added, rays, err);
+        *inserted += added;
     }
-    return IIR_OK;
+    return st;
+}
+
+/* HOLES (refill): while an empty circle is wider than IIR_INCR_HOLE times the radius of a cell of
+ * a set of N (the part of the domain the light swept into, or uncovered, faster than the frame's
+ * replacements), a VPL there, up to `limit`; then the most crowded ones (the shortest edges') go
+ * until the set is back at N. A survivor's cell then stops growing over light its VPL does not
+ * see. */
+static iir_status phase_holes(iir_incr *inc, const pose *ps, uint32_t limit, uint32_t *inserted,
+                              uint32_t *deleted, iir_raystats *rays, iir_error *err)
+{
+    double r_hole = IIR_INCR_HOLE * sqrt(ps->area / (IIR_PI * (double)inc->params.target));
+    *inserted = *deleted = 0;
+    bool added = true;
+    iir_status st = IIR_OK;
+    while (st == IIR_OK && added && *inserted < limit && inc->count < inc->cap) {
+        st = insert_one(inc, ps, r_hole, &added, rays, err);
+        *inserted += added;
+    }
+    if (st != IIR_OK || !*inserted) return st;
+    return phase_delete(inc, inc->params.k_min, deleted, err); /* only the excess over N */
 }
 
 /* Phi = I rho A profile(s): the flux a VPL carries for a cell of area A at domain point s (I is
@@ -614,10 +654,13 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *light, iir_incr_stats
         limit = c->invalidated + c->deleted; /* what this frame removed comes back in it */
     lap(&st, IIR_INCR_DELETE, &t);
 
-    /* 5. insert */
-    uint32_t added = 0;
+    /* 5. insert (with refill: and fill the holes) */
+    uint32_t added = 0, moved = 0, trimmed = 0;
     if (status == IIR_OK) status = phase_insert(inc, &ps, limit, &added, &st.rays, err);
-    c->inserted += added;
+    if (status == IIR_OK && p->refill && !regen)
+        status = phase_holes(inc, &ps, p->k_max, &moved, &trimmed, &st.rays, err);
+    c->inserted += added + moved;
+    c->deleted += trimmed;
     lap(&st, IIR_INCR_INSERT, &t);
 
     /* 6. weigh */
