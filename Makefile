@@ -103,7 +103,8 @@ bench: build
 	    out/bench/cornell-classics out/bench/cornell-spheres out/bench/cornell-bounces \
 	    out/bench/cornell-compensation out/bench/cornell-controller out/bench/material-room \
 	    out/bench/glossy-spheres out/bench/glossy-room out/bench/glossy-vsl \
-	    out/bench/glossy-flicker/cornell_spheres out/bench/glossy-flicker/material_room
+	    out/bench/glossy-flicker/cornell_spheres out/bench/glossy-flicker/material_room \
+	    out/bench/refill
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods $(PEERS),pt \
@@ -145,6 +146,14 @@ bench: build
 	    --sweep bounces=2,4 --ref-spp 512 --ref-every 20 --out out/bench/glossy-spheres
 	$(BENCH) material_room --anim orbit --frames 0:40 --size 320x240 --methods iir,ir \
 	    --sweep bounces=2,4 --ref-spp 256 --ref-every 20 --out out/bench/glossy-room
+	$(foreach p,orbit sweep-fast teleport occluder corner grazing void,$(BENCH) --anim $(p) \
+	    --methods iir,ir --sweep refill=false,true --size 128x96 --ref-spp 64 --ref-every 10 \
+	    --out out/bench/refill/cornell_box-$(p) &&) true
+	$(foreach k,cornell_point:orbit cornell_gltf_spot:orbit cornell_area:orbit breakfast_room:day \
+	    breakfast_room:lamp-shade conference:orbit conference_points:drift,$(BENCH) \
+	    $(word 1,$(subst :, ,$(k))) --anim $(word 2,$(subst :, ,$(k))) --frames 0:60 --methods iir,ir \
+	    --sweep refill=false,true --size 128x96 --ref-spp 64 --ref-every 10 \
+	    --out out/bench/refill/$(subst :,-,$(k)) &&) true
 	$(foreach s,cornell_spheres material_room,$(BENCH) $(s) --anim orbit --frames 10:14 \
 	    --size 160x120 --methods iir,ir --sweep bounces=2,4 --ref-spp 4096 --ref-every 2 \
 	    --out out/bench/glossy-flicker/$(s) &&) true
