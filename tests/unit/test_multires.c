@@ -156,12 +156,7 @@ static void test_discontinuities(void **state)
 static void load_floor(iir_scene **scene, iir_rt **rt)
 {
     const char *dir = iir_test_tmpdir("multires-floor");
-    iir_test_write_file(dir, "floor.mtl", "newmtl grey\nKd 0.5 0.5 0.5\n");
-    char path[1200];
-    snprintf(path, sizeof path, "%s/floor.obj", dir);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f, "mtllib floor.mtl\n");
+    FILE *f = iir_test_open_obj(dir, "floor", "newmtl grey\nKd 0.5 0.5 0.5\n");
     iir_test_write_quad(f, "grey", iir_v3(0, 0, 0), iir_v3(0, 0, 20), iir_v3(20, 0, 0));
     fclose(f);
     iir_test_write_file(dir, "floor.scene.json",

@@ -81,8 +81,8 @@ uint32_t iir_smaps_build(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, i
 uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res,
                                iir_raystats *st, iir_stop_fn stop, void *ctx);
 /* A frame's maps within a budget of `full` maps at res (iir refilling its set at once): the VPLs
- * without a map get one at res while the budget lasts and at res / 2 (a quarter of the rays)
- * beyond it, marked coarse; the budget left then renders coarse maps again at res -- each in array
+ * without a map get one at res while the budget lasts and at res / 4 (at least 8; a sixteenth of
+ * the rays) beyond it, marked coarse; the budget left then renders coarse maps again at res -- each in array
  * order, so the result does not depend on the threads. Returns the maps rendered. */
 uint32_t iir_smaps_build_budget(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, uint32_t full,
                                 iir_raystats *st, iir_stop_fn stop, void *ctx);

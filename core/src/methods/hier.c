@@ -119,18 +119,16 @@ static uint64_t shade_samples(void *ctx, int m, uint32_t cls, const iir_mr_sampl
     return evals;
 }
 
-/* The pixels at discontinuities (level 0) and the glossy ones (their light is view-dependent):
- * evaluated here, per pixel, a glossy one by its full BSDF. */
+/* The pixels at discontinuities (level 0; the hierarchy marks the glossy ones too, as their light
+ * depends on the view): evaluated here, per pixel, a glossy one by its full BSDF. */
 static uint64_t shade_pixels(hier_state *s, const iir_gbuffer *gb, const uint8_t *levels)
 {
     const int n = gb->width * gb->height;
     uint64_t evals = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : evals)
     for (int p = 0; p < n; p++) {
-        bool glossy = gb->any_pbr && iir_gb_glossy(gb, (size_t)p, IIR_RECEIVER_GLOSSY);
-        if (levels[p] != 0 && !glossy) continue;
-        iir_vec3 demod;
-        rsm_receiver q = rsm_receiver_pixel(gb, (size_t)p, &demod);
+        if (levels[p] != 0) continue;
+        rsm_receiver q = rsm_receiver_pixel(gb, (size_t)p);
         s->E[p] = isfinite(gb->depth[p]) ? bounce_point(s, &q, &evals) : iir_v3s(0.f);
     }
     return evals;
@@ -145,8 +143,7 @@ static uint64_t glossy_direct(hier_state *s, const iir_gbuffer *gb)
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : evals)
     for (int p = 0; p < n; p++) {
         if (!isfinite(gb->depth[p]) || !iir_gb_glossy(gb, (size_t)p, IIR_RECEIVER_GLOSSY)) continue;
-        iir_vec3 demod;
-        rsm_receiver q = rsm_receiver_pixel(gb, (size_t)p, &demod);
+        rsm_receiver q = rsm_receiver_pixel(gb, (size_t)p);
         iir_vec3 L = hier_direct_bsdf(&s->lights, q.x, &q.bsdf, q.wo, &evals);
         s->tree.D[p] = iir_mul(L, q.demod_pi);
     }

@@ -69,7 +69,8 @@ static const iir_param IIR_ROWS[] = {
      NULL, "", "regenerate the whole set when more than this fraction of it dies", IIR_PARAM_LIVE},
     {"refill", IIR_PARAM_BOOL, offsetof(iir_options, refill), 1, 0, 1, 0, NULL, "",
      "replace every VPL removed in its own frame, beyond kmax when more died (their shadow maps at "
-     "half resolution, rendered again at full in later frames within kmax); false: kmax a frame",
+     "a quarter of sm_res, rendered again at full in later frames within kmax); false: kmax a "
+     "frame",
      IIR_PARAM_LIVE},
 };
 

@@ -120,9 +120,9 @@ float iir_clamp_g_max(const iir_scene *scene, float clamp)
  * where it is glossy (rsm_receiver_pixel). */
 static iir_vec3 gather(const rsm_state *s, const iir_gbuffer *gb, size_t i)
 {
-    iir_vec3 e = iir_v3s(0.f), demod;
+    iir_vec3 e = iir_v3s(0.f);
     if (!isfinite(gb->depth[i])) return e;
-    rsm_receiver q = rsm_receiver_pixel(gb, i, &demod);
+    rsm_receiver q = rsm_receiver_pixel(gb, i);
     for (uint32_t l = 0; l < s->num_maps; l++)
         e = iir_add(e, rsm_gather_map(&s->pattern, &s->maps[l], &q));
     return e;
@@ -287,7 +287,7 @@ static iir_status shade_multires(rsm_state *s, const iir_gbuffer *gb, iir_image 
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : gathered)
     for (int q = 0; q < n; q++) {
         if (!isfinite(gb->depth[q])) continue;
-        if (levels[q] == 0 || glossy(gb, (size_t)q)) s->E[q] = gather(s, gb, (size_t)q), gathered++;
+        if (levels[q] == 0) s->E[q] = gather(s, gb, (size_t)q), gathered++; /* glossy ones too */
         put(out, gb, (size_t)q, s->E[q]);
     }
     stats->vpl_evals = evals + (uint64_t)gathered * s->num_maps * (uint64_t)s->pattern.m;

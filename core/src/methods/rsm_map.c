@@ -221,17 +221,14 @@ void rsm_pattern_free(rsm_pattern *p)
     p->m = 0;
 }
 
-rsm_receiver rsm_receiver_pixel(const iir_gbuffer *gb, size_t i, iir_vec3 *demod)
+rsm_receiver rsm_receiver_pixel(const iir_gbuffer *gb, size_t i)
 {
     rsm_receiver q = rsm_receiver_at(gb->position[i], gb->normal[i]);
-    *demod = gb->albedo[i];
     if (!gb->any_pbr || !iir_gb_glossy(gb, i, IIR_RECEIVER_GLOSSY)) return q;
-    *demod = iir_gb_demod(gb, i, IIR_RECEIVER_GLOSSY);
-    iir_vec3 m = gb->mr[i], d = *demod;
     q.glossy = true;
-    q.bsdf = iir_bsdf_make_f0(q.n, gb->base[i], m.x, m.y, m.z);
+    q.bsdf = iir_gb_bsdf(gb, i);
     q.wo = gb->wo[i];
-    q.demod_pi = iir_v3(IIR_PI / d.x, IIR_PI / d.y, IIR_PI / d.z);
+    q.demod_pi = iir_pi_over(iir_gb_demod(gb, i, IIR_RECEIVER_GLOSSY));
     return q;
 }
 
@@ -241,11 +238,8 @@ static iir_vec3 lobes(const iir_vpl *v, const rsm_receiver *q, iir_vec3 w, float
     iir_vec3 f = iir_v3s(G);
     if (q->glossy) f = iir_mul(f, iir_mul(iir_bsdf_f(&q->bsdf, q->wo, iir_neg(w)), q->demod_pi));
     if (v->lobe.glossy) {
-        const iir_vpl_lobe *l = &v->lobe;
-        iir_bsdf b = iir_bsdf_make_f0(v->normal, l->base, l->metallic, l->roughness, l->f0);
-        iir_vec3 a = v->albedo;
-        f = iir_mul(
-            f, iir_mul(iir_bsdf_f(&b, w, v->wi), iir_v3(IIR_PI / a.x, IIR_PI / a.y, IIR_PI / a.z)));
+        iir_bsdf b = iir_vpl_lobe_bsdf(v);
+        f = iir_mul(f, iir_mul(iir_bsdf_f(&b, w, v->wi), iir_pi_over(v->albedo)));
     }
     float peak = fmaxf(f.x, fmaxf(f.y, f.z));
     return peak > g_max ? iir_scale(f, g_max / peak) : f;

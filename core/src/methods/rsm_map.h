@@ -102,9 +102,9 @@ static inline rsm_receiver rsm_receiver_at(iir_vec3 x, iir_vec3 n)
     return q;
 }
 
-/* G-buffer pixel i as a receiver (glossy when iir_gb_glossy says so at receiver_bsdf = glossy);
- * *demod gets what the gather's result is multiplied by over pi. */
-rsm_receiver rsm_receiver_pixel(const iir_gbuffer *gb, size_t i, iir_vec3 *demod);
+/* G-buffer pixel i as a receiver (glossy when iir_gb_glossy says so at receiver_bsdf = glossy;
+ * the gather's result is then multiplied by iir_gb_demod over pi). */
+rsm_receiver rsm_receiver_pixel(const iir_gbuffer *gb, size_t i);
 
 /* sum_k w_k (Phi_k / pi) min(G_k s_k r_k, g_max) over map m's texels around receiver q: the
  * demodulated one-bounce light (times demod / pi it is radiance). s_k is a glossy texel's lobe

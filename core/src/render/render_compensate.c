@@ -52,9 +52,10 @@ typedef struct comp_ctx {
     uint32_t shift;
     uint64_t seed;
     float g_max;
-    int n;          /* interleave */
-    int max_bounce; /* B - 1 */
-    uint32_t cls;   /* interleaved: the lattice diagonal that traces, [0, n) */
+    int n;                       /* interleave */
+    int max_bounce;              /* B - 1 */
+    uint32_t cls;                /* interleaved: the lattice diagonal that traces, [0, n) */
+    iir_receiver_bsdf receivers; /* the frame's (iir_render_receivers) */
 } comp_ctx;
 
 /* E_direct(y): one sample of a light of the frame, towards the side of ns; *wi its direction. */
@@ -112,7 +113,7 @@ static iir_vec3 glossy_hit(const comp_ctx *c, const iir_surface *sf, const iir_v
 {
     iir_vec3 wi, Ey = direct_at(c, sf, rng, st, &wi);
     if (iir_is_black(Ey)) return Ey;
-    iir_bsdf b = iir_bsdf_make_f0(sf->ns, l->base, l->metallic, l->roughness, l->f0);
+    iir_bsdf b = iir_lobe_bsdf(l, sf->ns);
     iir_vec3 f = iir_scale(iir_bsdf_f(&b, iir_neg(w), wi), IIR_PI);
     iir_vec3 g = iir_scale(iir_mul(r, f), Gg);
     float peak = fmaxf(g.x / rho.x, fmaxf(g.y / rho.y, g.z / rho.z));
@@ -183,11 +184,9 @@ static void compensate_tile(const comp_ctx *c, int t, iir_raystats *st)
             iir_rng rng = iir_rng_make(c->seed, i);
             comp_receiver q = {.bsdf = NULL};
             iir_bsdf b;
-            if (gb->any_pbr && iir_gb_glossy(gb, i, iir_render_receivers(c->r, c->p))) {
-                iir_vec3 m = gb->mr[i];
-                b = iir_bsdf_make_f0(gb->normal[i], gb->base[i], m.x, m.y, m.z);
-                q = (comp_receiver){&b, gb->wo[i],
-                                    iir_gb_demod(gb, i, iir_render_receivers(c->r, c->p))};
+            if (gb->any_pbr && iir_gb_glossy(gb, i, c->receivers)) {
+                b = iir_gb_bsdf(gb, i);
+                q = (comp_receiver){&b, gb->wo[i], iir_gb_demod(gb, i, c->receivers)};
             }
             iir_vec3 dE = residual(c, k, gb->position[i], gb->normal[i], &q, &rng, st);
             c->r->raw[i] = iir_madd(c->r->raw[i], dE, w);
@@ -204,7 +203,8 @@ bool iir_render_compensate(iir_renderer *r, const iir_shade_job *job, iir_raysta
                   .g_max = p->clamp / r->diag2,
                   .n = p->interleave,
                   .max_bounce = (p->bounces > 2 ? p->bounces : 2) - 1,
-                  .cls = (uint32_t)(iir_hash3(job->seed, 0xc1, 0) % (uint64_t)p->interleave)};
+                  .cls = (uint32_t)(iir_hash3(job->seed, 0xc1, 0) % (uint64_t)p->interleave),
+                  .receivers = iir_render_receivers(r, p)};
     int tiles = iir_tile_count(r->gb.width, r->gb.height, IIR_RENDER_TILE);
     iir_raystats total = {0};
     int skipped = 0;

@@ -254,8 +254,7 @@ static void load_block(const iir_gbuffer *gb, int x0, int y0, block *b)
         if (!b->glossy[k]) continue;
         /* glossy direct light by the full BSDF, seen from the camera (wo) */
         b->wo[k] = gb->wo[i];
-        b->bsdf[k] =
-            iir_bsdf_make_f0(gb->normal[i], gb->base[i], gb->mr[i].x, gb->mr[i].y, gb->mr[i].z);
+        b->bsdf[k] = iir_gb_bsdf(gb, i);
     }
 }
 

@@ -18,6 +18,7 @@
 #include "iir/rng.h"
 #include "iir/shadowmap.h"
 #include "render_internal.h"
+#include "../vpls/vpl_lobe.h"
 
 /* ---- the VPL set of this frame ---- */
 
@@ -81,10 +82,9 @@ static iir_shade_vpl shade_vpl(const iir_vpl *v, float scale, float eps)
     s.glossy = v->lobe.glossy;
     s.radius = 0.f;
     if (!s.glossy) return s;
-    const iir_vpl_lobe *l = &v->lobe;
     s.wi = v->wi;
-    s.inv_albedo_pi = iir_v3(IIR_PI / v->albedo.x, IIR_PI / v->albedo.y, IIR_PI / v->albedo.z);
-    s.bsdf = iir_bsdf_make_f0(v->frame.f, l->base, l->metallic, l->roughness, l->f0);
+    s.inv_albedo_pi = iir_pi_over(v->albedo);
+    s.bsdf = iir_vpl_lobe_bsdf(v);
     return s;
 }
 
@@ -549,12 +549,10 @@ static void batch_mark_glossy(pixel_batch *b, const iir_gbuffer *gb, size_t i,
 {
     if (!iir_gb_glossy(gb, i, mode)) return;
     int j = b->m - 1;
-    iir_vec3 d = iir_gb_demod(gb, i, mode);
     b->glossy[j >> 2] |= (uint8_t)(1u << (j & 3));
-    b->bsdf[j] =
-        iir_bsdf_make_f0(gb->normal[i], gb->base[i], gb->mr[i].x, gb->mr[i].y, gb->mr[i].z);
+    b->bsdf[j] = iir_gb_bsdf(gb, i);
     b->wo[j] = gb->wo[i];
-    b->demod_pi[j] = iir_v3(IIR_PI / d.x, IIR_PI / d.y, IIR_PI / d.z);
+    b->demod_pi[j] = iir_pi_over(iir_gb_demod(gb, i, mode));
 }
 
 /* Fills b with the next (up to BATCH) pixels that see geometry of the lattice (x_first + a n,

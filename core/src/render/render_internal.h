@@ -127,6 +127,20 @@ static inline iir_vec3 iir_gb_demod(const iir_gbuffer *gb, size_t i, iir_receive
     return iir_bsdf_reflectance(gb->albedo[i], gb->base[i], m.x, m.z);
 }
 
+/* Pixel i's metallic-roughness BSDF (about its shading normal, which faces the viewer). */
+static inline iir_bsdf iir_gb_bsdf(const iir_gbuffer *gb, size_t i)
+{
+    iir_vec3 m = gb->mr[i];
+    return iir_bsdf_make_f0(gb->normal[i], gb->base[i], m.x, m.y, m.z);
+}
+
+/* pi / a per channel: what a glossy lobe's f is divided by to compare with a Lambertian one of
+ * reflectance a (a kept off zero: iir_bsdf_reflectance). */
+static inline iir_vec3 iir_pi_over(iir_vec3 a)
+{
+    return iir_v3(IIR_PI / a.x, IIR_PI / a.y, IIR_PI / a.z);
+}
+
 /* The receiver mode of this frame's gather: p's in full shading. Multires shades the glossy pixels
  * at full resolution (its hierarchy marks them) and its coarse texels as diffuse, so there `all`
  * is `glossy`: a rough dielectric may lie on a coarse texel. */

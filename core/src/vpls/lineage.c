@@ -219,15 +219,11 @@ static void carry_or_trace(iir_lineage *L, const iir_vpl *parent, uint64_t seed,
         memcpy(&g->T[g->n], &L->cur.T[old->first], old->count * sizeof *g->T);
         L->used[k] = 1;
         st->kept += old->count;
-        if (l->glossy && l->pdf_q0 > 0.f) {
-            iir_bsdf b = iir_vpl_lobe_bsdf(parent);
-            l->w0 = iir_vpl_lobe_weight(parent, &b, l->d0, l->pdf_q0);
-        }
+        if (l->glossy && l->pdf_q0 > 0.f) l->w0 = iir_vpl_lobe_weight(parent, l->d0, l->pdf_q0);
     } else {
-        uint32_t n = trace(L->scene, L->rt, parent, L->bounces, seed, parent->birth, &g->v[g->n],
-                           &g->T[g->n], (uint32_t)(L->bounces - 2), l, rays);
-        l->count = n;
-        st->born += n;
+        l->count = trace(L->scene, L->rt, parent, L->bounces, seed, parent->birth, &g->v[g->n],
+                         &g->T[g->n], (uint32_t)(L->bounces - 2), l, rays);
+        st->born += l->count;
     }
     l->first = first;
     iir_vec3 flux = iir_mul(parent->flux, l->w0);

@@ -27,11 +27,16 @@ static inline iir_vpl_lobe iir_vpl_lobe_at(const iir_surface *sf, iir_vec3 *albe
     return lobe;
 }
 
+/* Glossy lobe l as a BSDF about unit normal n. */
+static inline iir_bsdf iir_lobe_bsdf(const iir_vpl_lobe *l, iir_vec3 n)
+{
+    return iir_bsdf_make_f0(n, l->base, l->metallic, l->roughness, l->f0);
+}
+
 /* The BSDF of glossy VPL v's surface (its normal: the side its light arrived from). */
 static inline iir_bsdf iir_vpl_lobe_bsdf(const iir_vpl *v)
 {
-    const iir_vpl_lobe *l = &v->lobe;
-    return iir_bsdf_make_f0(v->normal, l->base, l->metallic, l->roughness, l->f0);
+    return iir_lobe_bsdf(&v->lobe, v->normal);
 }
 
 /* What a light path leaving glossy VPL v along d carries relative to v's flux, d having been
@@ -39,10 +44,10 @@ static inline iir_bsdf iir_vpl_lobe_bsdf(const iir_vpl *v)
  *     f(wi, d) |n . d| / (pdf q albedo)
  * (v's flux is the arriving flux times its albedo; light_path.h). With v's current wi it
  * re-weighs a kept path whose VPL's light has turned (lineage.c). */
-static inline iir_vec3 iir_vpl_lobe_weight(const iir_vpl *v, const iir_bsdf *b, iir_vec3 d,
-                                           float pdf_q)
+static inline iir_vec3 iir_vpl_lobe_weight(const iir_vpl *v, iir_vec3 d, float pdf_q)
 {
-    iir_vec3 f = iir_scale(iir_bsdf_f(b, v->wi, d), fabsf(iir_dot(v->normal, d)) / pdf_q);
+    iir_bsdf b = iir_vpl_lobe_bsdf(v);
+    iir_vec3 f = iir_scale(iir_bsdf_f(&b, v->wi, d), fabsf(iir_dot(v->normal, d)) / pdf_q);
     return iir_v3(f.x / v->albedo.x, f.y / v->albedo.y, f.z / v->albedo.z);
 }
 
