@@ -82,8 +82,8 @@ uint32_t iir_smaps_build_until(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int 
                                iir_raystats *st, iir_stop_fn stop, void *ctx);
 /* A frame's maps within a budget of `full` maps at res (iir refilling its set at once): the VPLs
  * without a map get one at res while the budget lasts and at res / 4 (at least 8; a sixteenth of
- * the rays) beyond it, marked coarse; the budget left then renders coarse maps again at res -- each in array
- * order, so the result does not depend on the threads. Returns the maps rendered. */
+ * the rays) beyond it, marked coarse; the budget left then renders coarse maps again at res --
+ * each in array order, so the result does not depend on the threads. Returns the maps rendered. */
 uint32_t iir_smaps_build_budget(iir_vpl *vpls, uint32_t n, const iir_rt *rt, int res, uint32_t full,
                                 iir_raystats *st, iir_stop_fn stop, void *ctx);
 /* The same for the VPLs that have no map at all (res 0): maps of another resolution are kept (the
