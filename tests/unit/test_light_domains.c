@@ -5,7 +5,8 @@
  *     light sends onto reflecting surfaces times their albedo, measured by the test's own dense
  *     sampling of the light's emission (iir_light_sample_emission, light.c; escaping rays and rays
  *     onto emitters count zero, as null samples do), with Voronoi weights right after the motion
- *     and with both Voronoi and uniform weights after the light rests;
+ *     and with both Voronoi and uniform weights after the light rests; for an area light also the
+ *     same cells carrying the mean over fresh points of the emitter (where its bias comes from);
  *   - one bounce: ir and iir with 16k VPLs and exact visibility against pt with one bounce (same
  *     light), with the bound test_methods.c uses for the spot;
  *   - the disc lamp's emitter strata and its VPLs' origins lie on the disc, spread by area. */
