@@ -154,6 +154,9 @@ bench: build
 	    $(word 1,$(subst :, ,$(k))) --anim $(word 2,$(subst :, ,$(k))) --frames 0:60 --methods iir,ir \
 	    --sweep refill=false,true --size 128x96 --ref-spp 64 --ref-every 10 \
 	    --out out/bench/refill/$(subst :,-,$(k)) &&) true
+	$(foreach spp,64 2048,$(BENCH) conference_points --anim drift --frames 0:22 --size 128x96 \
+	    --methods iir,ir --ref-spp $(spp) --ref-every 10 \
+	    --out out/bench/flicker-ref/conference_points-drift-$(spp) &&) true
 	$(foreach s,cornell_spheres material_room,$(BENCH) $(s) --anim orbit --frames 10:14 \
 	    --size 160x120 --methods iir,ir --sweep bounces=2,4 --ref-spp 4096 --ref-every 2 \
 	    --out out/bench/glossy-flicker/$(s) &&) true
