@@ -154,6 +154,13 @@ bench: build
 	    $(word 1,$(subst :, ,$(k))) --anim $(word 2,$(subst :, ,$(k))) --frames 0:60 --methods iir,ir \
 	    --sweep refill=false,true --size 128x96 --ref-spp 64 --ref-every 10 \
 	    --out out/bench/refill/$(subst :,-,$(k)) &&) true
+	$(foreach p,orbit sweep-fast teleport occluder corner grazing void,$(BENCH) --anim $(p) \
+	    --methods iir,ir --size 128x96 --ref-spp 1024 --ref-every 10 \
+	    --out out/bench/quiet-ref/cornell_box-$(p) &&) true
+	$(foreach k,cornell_point:orbit cornell_gltf_spot:orbit cornell_area:orbit breakfast_room:day \
+	    breakfast_room:lamp-shade conference:orbit,$(BENCH) $(word 1,$(subst :, ,$(k))) \
+	    --anim $(word 2,$(subst :, ,$(k))) --frames 0:60 --methods iir,ir --size 128x96 \
+	    --ref-spp 1024 --ref-every 10 --out out/bench/quiet-ref/$(subst :,-,$(k)) &&) true
 	$(foreach spp,64 2048,$(BENCH) conference_points --anim drift --frames 0:22 --size 128x96 \
 	    --methods iir,ir --ref-spp $(spp) --ref-every 10 \
 	    --out out/bench/flicker-ref/conference_points-drift-$(spp) &&) true
