@@ -101,6 +101,18 @@ static iir_light light_of(const fixture *f, enum kind k, iir_vec3 u)
 
 /* ---- the test's own measure of the flux onto reflecting surfaces ---- */
 
+/* The albedo of the reflecting surface the ray from o along unit w reaches facing it, or NULL when
+ * it escapes or reaches an emitter or a back face (what a null sample is). */
+static const iir_vec3 *reflector(const fixture *f, iir_vec3 o, iir_vec3 w, iir_raystats *st)
+{
+    iir_ray ray = iir_make_ray(o, w, 0.f, INFINITY);
+    iir_hit hit;
+    if (!iir_rt_intersect(f->rt, &ray, &hit, st, IIR_RAYS_BENCH)) return NULL;
+    iir_surface sf = iir_surface_at(f->scene, &hit, iir_neg(w));
+    if (!iir_is_black(sf.mat->emission) || !(iir_dot(sf.ns, iir_neg(w)) > 0.f)) return NULL;
+    return &sf.mat->albedo;
+}
+
 /* E[beta rho] over M emission samples: the flux a perfect VPL set carries, per channel. */
 static iir_vec3 dense_reflected(const fixture *f, const iir_light *l, int M)
 {
@@ -109,14 +121,11 @@ static iir_vec3 dense_reflected(const fixture *f, const iir_light *l, int M)
     iir_raystats st = {{0}};
     for (int i = 0; i < M; i++) {
         iir_light_ray r = iir_light_sample_emission(l, iir_rng_uniform2(&rng));
-        iir_ray ray = iir_make_ray(r.origin, r.dir, 0.f, INFINITY);
-        iir_hit hit;
-        if (!iir_rt_intersect(f->rt, &ray, &hit, &st, IIR_RAYS_BENCH)) continue;
-        iir_surface sf = iir_surface_at(f->scene, &hit, iir_neg(r.dir));
-        if (!iir_is_black(sf.mat->emission) || !(iir_dot(sf.ns, iir_neg(r.dir)) > 0.f)) continue;
-        sum[0] += (double)r.beta.x * sf.mat->albedo.x;
-        sum[1] += (double)r.beta.y * sf.mat->albedo.y;
-        sum[2] += (double)r.beta.z * sf.mat->albedo.z;
+        const iir_vec3 *rho = reflector(f, r.origin, r.dir, &st);
+        if (!rho) continue;
+        sum[0] += (double)r.beta.x * rho->x;
+        sum[1] += (double)r.beta.y * rho->y;
+        sum[2] += (double)r.beta.z * rho->z;
     }
     return iir_v3((float)(sum[0] / M), (float)(sum[1] / M), (float)(sum[2] / M));
 }
@@ -236,12 +245,8 @@ static double area_oracle(const fixture *f, iir_incr *inc, const iir_light *l)
             iir_light_domain at = iir_domain_at_emitter(&ps, q);
             iir_vec3 o, w;
             iir_domain_ray(&at, p, &o, &w);
-            iir_ray ray = iir_make_ray(o, w, 0.f, INFINITY);
-            iir_hit hit;
-            if (!iir_rt_intersect(f->rt, &ray, &hit, &st, IIR_RAYS_BENCH)) continue;
-            iir_surface sf = iir_surface_at(f->scene, &hit, iir_neg(w));
-            if (!iir_is_black(sf.Le) || !(iir_dot(sf.ns, iir_sub(o, sf.p)) > 0.f)) continue;
-            e += (double)iir_light_emission_at(l, q).x * sf.mat->albedo.x;
+            const iir_vec3 *rho = reflector(f, o, w, &st);
+            if (rho) e += (double)iir_light_emission_at(l, q).x * rho->x;
         }
         sum += A[i] * iir_domain_profile(&ps, p) * e / M;
     }
