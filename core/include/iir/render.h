@@ -50,6 +50,7 @@
 
 #include "iir/camera.h"
 #include "iir/image.h"
+#include "iir/isa.h"
 #include "iir/light.h"
 #include "iir/params.h"
 #include "iir/rt.h"
@@ -218,6 +219,11 @@ typedef struct iir_renderer iir_renderer;
  * yet; returns NULL on allocation failure. */
 iir_renderer *iir_renderer_create(const struct iir_scene *scene, const iir_rt *rt);
 void iir_renderer_destroy(iir_renderer *r);
+
+/* The instruction set of the renderer's shading kernels (isa.h): iir_isa_default() at creation;
+ * set to isa when this build and CPU support it. Returns the set now in use. Any set gives the
+ * scalar one's image up to float rounding. */
+iir_isa iir_renderer_set_isa(iir_renderer *r, iir_isa isa);
 
 /* Bytes a renderer holds for frames of width x height: its G-buffer and its per-pixel scratch (the
  * raw indirect light, the filter's rows, the tiles' flags). The methods' memory estimates start

@@ -53,6 +53,7 @@ iir_renderer *iir_renderer_create(const iir_scene *scene, const iir_rt *rt)
     r->rt = rt;
     r->eps = iir_rt_epsilon(rt);
     r->diag2 = iir_length_sq(iir_sub(scene->bounds_max, scene->bounds_min));
+    r->isa = iir_isa_default();
     iir_lightset *set = iir_lightset_create(scene, NULL, 0);
     if (!set) {
         free(r);
@@ -65,6 +66,12 @@ iir_renderer *iir_renderer_create(const iir_scene *scene, const iir_rt *rt)
     return r;
 }
 
+iir_isa iir_renderer_set_isa(iir_renderer *r, iir_isa isa)
+{
+    if (iir_isa_supported(isa)) r->isa = isa;
+    return r->isa;
+}
+
 void iir_renderer_destroy(iir_renderer *r)
 {
     if (!r) return;
@@ -75,6 +82,7 @@ void iir_renderer_destroy(iir_renderer *r)
     free(r->raw);
     free(r->rows);
     free(r->near_fine);
+    free(r->fmask);
     free(r->vpl);
     free(r);
 }
@@ -118,7 +126,7 @@ uint64_t iir_renderer_memory(int width, int height)
     const iir_gbuffer *g = NULL;
     uint64_t gbuffer =
         7 * sizeof *g->position + sizeof *g->mr + 2 * sizeof *g->depth + sizeof *g->prim;
-    uint64_t scratch = sizeof(iir_vec3) + sizeof(iir_filter_row);
+    uint64_t scratch = sizeof(iir_vec3) + sizeof(iir_filter_row) + sizeof(uint32_t);
     uint64_t px = (uint64_t)width * (uint64_t)height;
     return px * (gbuffer + scratch) + (uint64_t)iir_tile_count(width, height, IIR_RENDER_TILE);
 }
@@ -132,12 +140,15 @@ static iir_status resize(iir_renderer *r, int w, int h, iir_error *err)
     free(r->raw);
     free(r->rows);
     free(r->near_fine);
+    free(r->fmask);
     r->raw = malloc(sizeof(iir_vec3) * (size_t)w * (size_t)h);
     r->rows = malloc(sizeof(iir_filter_row) * (size_t)w * (size_t)h);
     r->near_fine = malloc((size_t)iir_tile_count(w, h, IIR_RENDER_TILE));
     r->near_fine_gen = 0;
+    r->fmask = malloc(sizeof(uint32_t) * (size_t)w * (size_t)h);
+    r->fmask_serial = 0;
     iir_status s = iir_gbuffer_resize(&r->gb, w, h, err);
-    if (s == IIR_OK && (!r->raw || !r->rows || !r->near_fine)) {
+    if (s == IIR_OK && (!r->raw || !r->rows || !r->near_fine || !r->fmask)) {
         iir_gbuffer_free(&r->gb);
         s = iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %dx%d frame", w, h);
     }

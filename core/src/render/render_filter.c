@@ -26,6 +26,7 @@
 
 typedef struct filter_ctx {
     const iir_renderer *r;
+    const uint32_t *mask; /* r->fmask: which taps are similar (tap_similar) */
     int n, h;
     float end_weight; /* weight of the offsets +-h */
     float min_cos, max_rel_depth;
@@ -40,6 +41,33 @@ static inline int similar(const filter_ctx *c, size_t centre, size_t j)
     float dc = gb->depth[centre];
     return (fabsf(gb->depth[j] - dc) <= c->max_rel_depth * dc) &
            (iir_dot(gb->normal[j], gb->normal[centre]) >= c->min_cos);
+}
+
+/* The taps' similarity, per G-buffer: bit MAX_H + d of pixel i's mask says whether the tap d pixels
+ * along its row is similar to it, bit 16 + MAX_H + d the tap d pixels along its column (0 beyond
+ * the image). It depends only on the G-buffer, which is kept while the camera is still, so the
+ * passes read one word per pixel instead of testing depths and normals tap by tap. */
+enum { MAX_H = IIR_MAX_INTERLEAVE / 2, COLUMN = 16 };
+
+static uint32_t pixel_mask(const filter_ctx *c, int x, int y)
+{
+    const iir_gbuffer *gb = &c->r->gb;
+    size_t centre = (size_t)y * (size_t)gb->width + (size_t)x;
+    uint32_t m = 0;
+    for (int d = -c->h; d <= c->h; d++) {
+        if (x + d >= 0 && x + d < gb->width)
+            m |= (uint32_t)similar(c, centre, centre + (size_t)(ptrdiff_t)d) << (MAX_H + d);
+        if (y + d >= 0 && y + d < gb->height)
+            m |= (uint32_t)similar(c, centre, centre + (size_t)((ptrdiff_t)d * gb->width))
+                 << (COLUMN + MAX_H + d);
+    }
+    return m;
+}
+
+/* Whether the tap d pixels along the row (COLUMN: the column) of pixel i is similar to it. */
+static inline int tap_similar(const filter_ctx *c, size_t i, int axis, int d)
+{
+    return (int)(c->mask[i] >> (axis + MAX_H + d)) & 1;
 }
 
 static inline float tap_weight(const filter_ctx *c, int d)
@@ -58,13 +86,13 @@ static iir_filter_row row_pass(const filter_ctx *c, int x, int y, const int *liv
     for (int xx = x0; xx <= x1; xx++, sx = sx + 1 == n ? 0 : sx + 1) {
         size_t j = row + (size_t)xx;
         if (c->r->level) { /* multires: a coarse pixel is a tap of every subset */
-            if (!((live[sx] | (c->r->level[j] > 0)) & similar(c, centre, j))) continue;
+            if (!((live[sx] | (c->r->level[j] > 0)) & tap_similar(c, centre, 0, xx - x))) continue;
             float w = tap_weight(c, xx - x);
             acc.sum = iir_madd(acc.sum, c->r->raw[j], w); /* upsample_tile filled it */
             acc.w += w;
             continue;
         }
-        float w = (live[sx] & similar(c, centre, j)) ? tap_weight(c, xx - x) : 0.f;
+        float w = (live[sx] & tap_similar(c, centre, 0, xx - x)) ? tap_weight(c, xx - x) : 0.f;
         acc.sum = iir_madd(acc.sum, c->r->raw[j], w);
         acc.w += w;
     }
@@ -114,6 +142,17 @@ static void upsample_tile(const filter_ctx *c, int t, bool known)
                                    c->r->raw + (size_t)y * (size_t)gb->width + (size_t)tl.x0);
 }
 
+/* The masks of a tile's pixels (every pixel: the filter of a multires frame reads few, but the
+ * masks outlive it). */
+static void mask_tile(const filter_ctx *c, int t)
+{
+    const iir_gbuffer *gb = &c->r->gb;
+    iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_RENDER_TILE, t);
+    for (int y = tl.y0; y < tl.y1; y++)
+        for (int x = tl.x0; x < tl.x1; x++)
+            c->r->fmask[(size_t)y * (size_t)gb->width + (size_t)x] = pixel_mask(c, x, y);
+}
+
 /* Row pass over a tile. */
 static void row_pass_tile(const filter_ctx *c, int t)
 {
@@ -140,7 +179,7 @@ static iir_vec3 column_pass(const filter_ctx *c, int x, int y)
     float wsum = 0.f;
     for (int yy = y0; yy <= y1; yy++) {
         size_t j = (size_t)yy * (size_t)w + (size_t)x;
-        float wt = similar(c, centre, j) ? tap_weight(c, yy - y) : 0.f;
+        float wt = tap_similar(c, centre, COLUMN, yy - y) ? tap_weight(c, yy - y) : 0.f;
         sum = iir_madd(sum, c->r->rows[j].sum, wt);
         wsum += wt * c->r->rows[j].w;
     }
@@ -208,8 +247,14 @@ void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image 
     /* the tiles near level-0 pixels change only with the hierarchy (kept while the camera is) */
     uint64_t gen = r->level ? iir_multires_generation(r->mr) : 0;
     bool known = r->near_fine_gen == gen && r->near_fine_h == c.h;
+    bool masked = r->fmask_serial == r->gb_serial && r->fmask_h == c.h;
+    c.mask = r->fmask;
 #pragma omp parallel
     {
+        if (filter && !masked) {
+#pragma omp for schedule(dynamic, 1)
+            for (int t = 0; t < tiles; t++) mask_tile(&c, t);
+        }
         if (filter && r->level) {
 #pragma omp for schedule(dynamic, 1)
             for (int t = 0; t < tiles; t++) upsample_tile(&c, t, known);
@@ -222,4 +267,5 @@ void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image 
         for (int y = 0; y < gb->height; y++) compose_row(&c, filter, y, out);
     }
     if (filter && r->level) r->near_fine_gen = gen, r->near_fine_h = c.h;
+    if (filter) r->fmask_serial = r->gb_serial, r->fmask_h = c.h;
 }

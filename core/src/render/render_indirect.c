@@ -17,7 +17,7 @@
 #include "iir/bsdf.h"
 #include "iir/rng.h"
 #include "iir/shadowmap.h"
-#include "render_internal.h"
+#include "render_batch.h"
 #include "../vpls/vpl_lobe.h"
 
 /* ---- the VPL set of this frame ---- */
@@ -138,40 +138,23 @@ iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num
  * Order: per tile, per subset, the tile's pixels of that subset are collected into a batch; then
  * each of the subset's VPLs is applied to the whole batch. Consecutive lookups thus hit one map at
  * neighbouring texels (the batch spans a few degrees seen from the VPL), and everything about the
- * VPL stays in registers. The batch is structure-of-arrays, padded to a multiple of 4 with pixels
- * of zero normal (which no VPL lights), so the shadow-map kernel runs 4 pixels per step with SSE2.
+ * VPL stays in registers. The batch is structure-of-arrays, padded to whole vector lanes with
+ * pixels of zero normal (which no VPL lights), so the shadow-map kernel of the renderer's
+ * instruction set (render_batch.h) runs 4 or 8 pixels per step.
  */
-
-enum { BATCH = 256 }; /* pixels per batch: 10 KB of stack */
 
 typedef struct indirect_ctx {
     const iir_renderer *r;
     iir_stop_fn stop; /* NULL when the work must not stop early */
     uint32_t shift;   /* added to every pixel's subset (mod n^2) */
     bool use_smap;
-    float g_max;    /* clamp / D^2, or INFINITY */
-    float rel_bias; /* sm_bias */
-    int n;          /* multires: the interleave n (subset k sits at (k mod n, k / n)) */
+    iir_kernel_args args;   /* g_max: clamp / D^2, or INFINITY; rel_bias: sm_bias */
+    iir_smap_kernel kernel; /* the renderer's instruction set's (r->isa) */
+    int n;                  /* multires: the interleave n (subset k sits at (k mod n, k / n)) */
     iir_receiver_bsdf receivers; /* which pixels reflect by their full BSDF (iir_gb_glossy) */
 } indirect_ctx;
 
-typedef struct pixel_batch {
-    int m; /* pixels; the arrays are valid up to m rounded up to 4 */
-    uint32_t index[BATCH];
-    _Alignas(16) float px[BATCH], py[BATCH], pz[BATCH]; /* position */
-    _Alignas(16) float nx[BATCH], ny[BATCH], nz[BATCH]; /* normal, facing the camera */
-    _Alignas(16) float Ex[BATCH], Ey[BATCH], Ez[BATCH]; /* sum of power G V (times receiver) */
-    /* Glossy receivers (full shading): bit l of glossy[q] marks pixel 4q + l, whose BSDF is
-       bsdf[j] seen from wo[j]; its light is demodulated by demod[j] (iir_gb_demod). */
-    uint8_t glossy[BATCH / 4];
-    iir_bsdf bsdf[BATCH];
-    iir_vec3 wo[BATCH], demod_pi[BATCH]; /* demod_pi: pi / demod */
-} pixel_batch;
-
-static inline float min_f(float a, float b)
-{
-    return a < b ? a : b;
-}
+typedef iir_pixel_batch pixel_batch;
 
 /* The pixel's position and normal. */
 static inline iir_vec3 batch_x(const pixel_batch *b, int j)
@@ -186,14 +169,6 @@ static inline void batch_add(pixel_batch *b, int j, iir_vec3 L)
 {
     b->Ex[j] += L.x, b->Ey[j] += L.y, b->Ez[j] += L.z;
 }
-
-/* The geometry between a VPL and a pixel: w = x - p, its squared length, the cosines times d at
- * the VPL (ci) and at the pixel (cx), and the clamped geometry term. */
-typedef struct vpl_geometry {
-    bool lit; /* both sides face each other at a distance; otherwise G is 0 */
-    iir_vec3 w;
-    float d2, ci, cx, G;
-} vpl_geometry;
 
 /* What glossy VPL v sends toward x relative to a diffuse VPL of its albedo: f(wi, w) pi / albedo,
  * w the unit direction from v to x (its cosine is in G). */
@@ -314,20 +289,15 @@ static iir_vec3 receiver_sphere(const pixel_batch *b, int j, const iir_shade_vpl
     return iir_mul(iir_scale(sum, 1.f / ca), b->demod_pi[j]);
 }
 
-static inline bool is_glossy(const pixel_batch *b, int j)
-{
-    return (b->glossy[j >> 2] >> (j & 3)) & 1u;
-}
-
 /* Adds power G (G: the clamped geometry term times visibility) of VPL v to batch pixel j, through
  * its BSDF when it is glossy. The clamp bounds a glossy pixel's G times its receiver factor as it
  * bounds a diffuse pixel's G (g_max): a VPL in a sharp lobe adds no more than one beside a
  * diffuse pixel does, keeping the lobe's colour (the spikes of point VPLs on glossy surfaces are
  * what virtual spherical lights remove instead). */
-static inline void add_lit(pixel_batch *b, int j, const iir_shade_vpl *v, float G, float g_max)
+void iir_batch_add_lit(pixel_batch *b, int j, const iir_shade_vpl *v, float G, float g_max)
 {
     if (G <= 0.f) return;
-    bool glossy = is_glossy(b, j);
+    bool glossy = iir_batch_is_glossy(b, j);
     if (!glossy && !v->glossy) {
         batch_add(b, j, iir_scale(v->power, G));
         return;
@@ -338,23 +308,6 @@ static inline void add_lit(pixel_batch *b, int j, const iir_shade_vpl *v, float 
     float peak = fmaxf(f.x, fmaxf(f.y, f.z));
     if (peak > g_max) f = iir_scale(f, g_max / peak);
     batch_add(b, j, iir_mul(v->power, f));
-}
-
-/* The geometry for VPL v at x (normal n), G clamped to g_max. A virtual spherical light's falls
- * off as 1 / (d^2 + r^2): bounded by 1 / r^2 near it, a point's beyond (its own bound, no clamp
- * needed). */
-static inline vpl_geometry geometry(const iir_shade_vpl *v, iir_vec3 x, iir_vec3 n, float g_max)
-{
-    vpl_geometry g = {.w = iir_sub(x, v->p)};
-    g.d2 = iir_length_sq(g.w);
-    g.ci = iir_dot(v->n, g.w);
-    g.cx = -iir_dot(n, g.w);
-    g.lit = g.ci > 0.f && g.cx > 0.f && g.d2 > 0.f;
-    if (!g.lit) return g;
-    float inv_d2 = 1.f / g.d2;
-    float falloff = v->radius > 0.f ? 1.f / (g.d2 + v->radius * v->radius) : inv_d2;
-    g.G = min_f(g.ci * g.cx * inv_d2 * falloff, g_max);
-    return g;
 }
 
 /* The occlusion ray from x lifted along n to the VPL's lifted position. False when the two are
@@ -397,145 +350,23 @@ static void apply_vpl_rays(const indirect_ctx *c, const iir_shade_vpl *v, pixel_
             G[k] = 0.f;
             rays.valid[k] = 0;
             if (j >= b->m) continue;
-            vpl_geometry g = geometry(v, batch_x(b, j), batch_n(b, j), c->g_max);
+            iir_vpl_geometry g =
+                iir_vpl_geometry_at(v, batch_x(b, j), batch_n(b, j), c->args.g_max);
             if (!g.lit) continue;
             G[k] = g.G;
             any |= visibility_ray(c, v, batch_x(b, j), batch_n(b, j), &rays, k);
         }
         if (any) iir_rt_occluded8(c->r->rt, &rays, occluded, st, IIR_RAYS_VISIBILITY);
         for (int k = 0; k < 8 && j0 + k < b->m; k++)
-            if (!rays.valid[k] || !occluded[k]) add_lit(b, j0 + k, v, G[k], c->g_max);
+            if (!rays.valid[k] || !occluded[k])
+                iir_batch_add_lit(b, j0 + k, v, G[k], c->args.g_max);
     }
 }
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-
-/* 4 lanes of a + b * c. */
-static inline __m128 madd4(__m128 a, __m128 b, __m128 c)
-{
-    return _mm_add_ps(a, _mm_mul_ps(b, c));
-}
-static inline __m128 dot4(__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz)
-{
-    return madd4(madd4(_mm_mul_ps(ax, bx), ay, by), az, bz);
-}
-
-/* iir_smap_pcf for 4 lanes: the texel loads are scalar (SSE2 has no gather). */
-static inline __m128 pcf4(const iir_smap_probe *p, __m128 s, __m128 t, __m128 dmb)
-{
-    __m128i i0 = _mm_cvttps_epi32(s), j0 = _mm_cvttps_epi32(t);
-    __m128 fx = _mm_sub_ps(s, _mm_cvtepi32_ps(i0)), fy = _mm_sub_ps(t, _mm_cvtepi32_ps(j0));
-    _Alignas(16) int32_t is[4], js[4];
-    _Alignas(16) float d00[4], d10[4], d01[4], d11[4];
-    _mm_store_si128((__m128i *)is, i0);
-    _mm_store_si128((__m128i *)js, j0);
-    for (int l = 0; l < 4; l++) {
-        int di = is[l] + 1 < p->res, dj = js[l] + 1 < p->res;
-        const float *row0 = p->depth + (size_t)js[l] * (size_t)p->res;
-        const float *row1 = row0 + (size_t)dj * (size_t)p->res;
-        d00[l] = row0[is[l]], d10[l] = row0[is[l] + di];
-        d01[l] = row1[is[l]], d11[l] = row1[is[l] + di];
-    }
-    __m128 one = _mm_set1_ps(1.f);
-    __m128 v00 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d00)), one);
-    __m128 v10 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d10)), one);
-    __m128 v01 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d01)), one);
-    __m128 v11 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d11)), one);
-    __m128 top = madd4(v00, fx, _mm_sub_ps(v10, v00)),
-           bottom = madd4(v01, fx, _mm_sub_ps(v11, v01));
-    return madd4(top, fy, _mm_sub_ps(bottom, top));
-}
-
-/* iir_smap_probe_visibility for 4 lanes (keep the two in step): the bias model of shadowmap.h and
- * the texel-space point, then pcf4. wx, wy, wz: x - p in the VPL's frame; cx as there. */
-static inline __m128 visibility4(const iir_smap_probe *p, __m128 wx, __m128 wy, __m128 wz,
-                                 __m128 d2, __m128 cx)
-{
-    __m128 zero = _mm_setzero_ps(), d = _mm_sqrt_ps(d2);
-    cx = _mm_max_ps(cx, _mm_mul_ps(_mm_set1_ps(1e-6f), d));
-    __m128 sin_d = _mm_sqrt_ps(_mm_max_ps(zero, _mm_sub_ps(d2, _mm_mul_ps(cx, cx))));
-    __m128 dwz = _mm_add_ps(d, wz), inv = _mm_div_ps(_mm_set1_ps(1.f), _mm_mul_ps(dwz, cx));
-    __m128 k = _mm_mul_ps(_mm_set1_ps(p->half_res), _mm_mul_ps(cx, inv));
-    __m128 slope =
-        _mm_min_ps(_mm_mul_ps(sin_d, _mm_mul_ps(dwz, inv)), _mm_set1_ps(IIR_SMAP_MAX_SLOPE));
-    __m128 texel_d = _mm_mul_ps(dwz, _mm_set1_ps(p->texel));
-    __m128 bias = madd4(madd4(_mm_set1_ps(p->eps), d, _mm_set1_ps(p->rel_bias)),
-                        _mm_mul_ps(_mm_set1_ps(IIR_SMAP_SLOPE_TEXELS), texel_d), slope);
-    /* Clamped with max first: a NaN (a masked-out lane) becomes 0, a valid texel. */
-    __m128 c = _mm_set1_ps(p->half_res - 0.5f), hi = _mm_set1_ps(p->max_st);
-    __m128 s = _mm_min_ps(_mm_max_ps(madd4(c, wx, k), zero), hi);
-    __m128 t = _mm_min_ps(_mm_max_ps(madd4(c, wy, k), zero), hi);
-    return pcf4(p, s, t, _mm_sub_ps(d, bias));
-}
-
-/* Adds the glossy lanes of pixels j..j+3 (GV: their G V; every lane for a glossy VPL) through
- * the BSDFs; returns GV with those lanes zeroed (the others are added as diffuse). */
-static __m128 glossy_lanes(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b, int j,
-                           __m128 GV)
-{
-    _Alignas(16) float g[4];
-    _mm_store_ps(g, GV);
-    for (int l = 0; l < 4; l++)
-        if (v->glossy || is_glossy(b, j + l)) add_lit(b, j + l, v, g[l], c->g_max), g[l] = 0.f;
-    return _mm_load_ps(g);
-}
-
-/* Adds power G V of VPL v to every pixel of the batch, V from its shadow map, 4 pixels a step. */
-static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b)
-{
-    iir_smap_probe probe = iir_smap_probe_make(v->smap, c->rel_bias, c->r->eps);
-    __m128 zero = _mm_setzero_ps(), g_max = _mm_set1_ps(c->g_max), one = _mm_set1_ps(1.f);
-    __m128 vx = _mm_set1_ps(v->p.x), vy = _mm_set1_ps(v->p.y), vz = _mm_set1_ps(v->p.z);
-    __m128 nx = _mm_set1_ps(v->n.x), ny = _mm_set1_ps(v->n.y), nz = _mm_set1_ps(v->n.z);
-    __m128 rx = _mm_set1_ps(v->r.x), ry = _mm_set1_ps(v->r.y), rz = _mm_set1_ps(v->r.z);
-    __m128 ux = _mm_set1_ps(v->u.x), uy = _mm_set1_ps(v->u.y), uz = _mm_set1_ps(v->u.z);
-    bool sphere = v->radius > 0.f; /* geometry()'s falloff */
-    __m128 r2 = _mm_set1_ps(v->radius * v->radius);
-    for (int j = 0; j < b->m; j += 4) {
-        __m128 wx = _mm_sub_ps(_mm_load_ps(b->px + j), vx);
-        __m128 wy = _mm_sub_ps(_mm_load_ps(b->py + j), vy);
-        __m128 wz = _mm_sub_ps(_mm_load_ps(b->pz + j), vz);
-        __m128 d2 = dot4(wx, wy, wz, wx, wy, wz), ci = dot4(nx, ny, nz, wx, wy, wz);
-        __m128 cx = _mm_sub_ps(zero, dot4(_mm_load_ps(b->nx + j), _mm_load_ps(b->ny + j),
-                                          _mm_load_ps(b->nz + j), wx, wy, wz));
-        __m128 lit = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(ci, zero), _mm_cmpgt_ps(cx, zero)),
-                                _mm_cmpgt_ps(d2, zero));
-        if (!_mm_movemask_ps(lit)) continue;
-        __m128 inv_d2 = _mm_div_ps(one, d2);
-        __m128 falloff = sphere ? _mm_div_ps(one, _mm_add_ps(d2, r2)) : inv_d2;
-        __m128 G = _mm_min_ps(_mm_mul_ps(_mm_mul_ps(ci, cx), _mm_mul_ps(inv_d2, falloff)), g_max);
-        __m128 V = visibility4(&probe, dot4(rx, ry, rz, wx, wy, wz), dot4(ux, uy, uz, wx, wy, wz),
-                               ci, d2, cx);
-        __m128 GV = _mm_and_ps(lit, _mm_mul_ps(G, V));
-        if (b->glossy[j >> 2] || v->glossy) GV = glossy_lanes(c, v, b, j, GV);
-        _mm_store_ps(b->Ex + j, madd4(_mm_load_ps(b->Ex + j), _mm_set1_ps(v->power.x), GV));
-        _mm_store_ps(b->Ey + j, madd4(_mm_load_ps(b->Ey + j), _mm_set1_ps(v->power.y), GV));
-        _mm_store_ps(b->Ez + j, madd4(_mm_load_ps(b->Ez + j), _mm_set1_ps(v->power.z), GV));
-    }
-}
-
-#else
-
-/* Portable: adds power G V of VPL v to every pixel of the batch, V from its shadow map. */
-static void apply_vpl_smap(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b)
-{
-    iir_smap_probe probe = iir_smap_probe_make(v->smap, c->rel_bias, c->r->eps);
-    for (int j = 0; j < b->m; j++) {
-        vpl_geometry g = geometry(v, batch_x(b, j), batch_n(b, j), c->g_max);
-        if (!g.lit) continue;
-        float V = iir_smap_probe_visibility(&probe, iir_dot(g.w, v->r), iir_dot(g.w, v->u), g.ci,
-                                            sqrtf(g.d2), g.cx);
-        add_lit(b, j, v, g.G * V, c->g_max);
-    }
-}
-
-#endif
 
 static void batch_push(pixel_batch *b, uint32_t i, iir_vec3 x, iir_vec3 n)
 {
     int j = b->m++;
-    if (!(j & 3)) b->glossy[j >> 2] = 0;
+    if (!(j & 7)) b->glossy[j >> 3] = 0;
     b->index[j] = i;
     b->px[j] = x.x, b->py[j] = x.y, b->pz[j] = x.z;
     b->nx[j] = n.x, b->ny[j] = n.y, b->nz[j] = n.z;
@@ -549,21 +380,21 @@ static void batch_mark_glossy(pixel_batch *b, const iir_gbuffer *gb, size_t i,
 {
     if (!iir_gb_glossy(gb, i, mode)) return;
     int j = b->m - 1;
-    b->glossy[j >> 2] |= (uint8_t)(1u << (j & 3));
+    b->glossy[j >> 3] |= (uint8_t)(1u << (j & 7));
     b->bsdf[j] = iir_gb_bsdf(gb, i);
     b->wo[j] = gb->wo[i];
     b->demod_pi[j] = iir_pi_over(iir_gb_demod(gb, i, mode));
 }
 
-/* Fills b with the next (up to BATCH) pixels that see geometry of the lattice (x_first + a n,
- * y + b n) inside the tile, from (*x, *y) on, advancing them, and pads it to a multiple of 4.
+/* Fills b with the next (up to IIR_BATCH) pixels that see geometry of the lattice (x_first + a n,
+ * y + b n) inside the tile, from (*x, *y) on, advancing them, and pads it to whole lanes.
  * False when none are left. */
 static bool collect(const indirect_ctx *c, const iir_tile *tl, int x_first, int n, int *x, int *y,
                     pixel_batch *b)
 {
     const iir_gbuffer *gb = &c->r->gb;
     b->m = 0;
-    while (*y < tl->y1 && b->m < BATCH) {
+    while (*y < tl->y1 && b->m < IIR_BATCH) {
         size_t i = (size_t)*y * (size_t)gb->width + (size_t)*x;
         if (gb->prim[i] != IIR_NO_HIT) {
             batch_push(b, (uint32_t)i, gb->position[i], gb->normal[i]);
@@ -573,15 +404,19 @@ static bool collect(const indirect_ctx *c, const iir_tile *tl, int x_first, int 
         if (*x >= tl->x1) *x = x_first, *y += n;
     }
     int m = b->m;
-    while (b->m % 4) batch_push(b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
+    while (b->m % IIR_BATCH_LANES) batch_push(b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
     b->m = m;
     return m > 0;
 }
 
-/* Rounds the batch's count up to the padded length the SSE2 kernel steps through. */
-static int padded(int m)
+/* Adds power G V of VPL v to every pixel of the batch: V from its map by the kernel, or by rays. */
+static void apply_vpl(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b,
+                      iir_raystats *st)
 {
-    return (m + 3) & ~3;
+    if (c->use_smap)
+        c->kernel(&c->args, v, b);
+    else
+        apply_vpl_rays(c, v, b, st);
 }
 
 /* Shades one tile; returns the pixel-VPL pairs shaded. */
@@ -604,15 +439,8 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *
             while (collect(c, &tl, tl.x0 + i, n, &x, &y, b)) {
                 int m = b->m;
                 evals += (uint64_t)m * (r->start[k + 1] - r->start[k]);
-                for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++) {
-                    if (c->use_smap) {
-                        b->m = padded(m);
-                        apply_vpl_smap(c, &r->vpl[v], b);
-                        b->m = m;
-                    } else {
-                        apply_vpl_rays(c, &r->vpl[v], b, st);
-                    }
-                }
+                for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++)
+                    apply_vpl(c, &r->vpl[v], b, st);
                 for (int q = 0; q < m; q++)
                     r->raw[b->index[q]] = iir_v3(b->Ex[q], b->Ey[q], b->Ez[q]);
             }
@@ -620,17 +448,25 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *
     return evals;
 }
 
+/* The context of one frame's gather: subset shift, stop hook when stoppable, the kernel. */
+static indirect_ctx make_ctx(const iir_renderer *r, const iir_indirect_params *p, uint32_t shift,
+                             bool stoppable)
+{
+    indirect_ctx c = {.r = r,
+                      .stop = stoppable ? r->stop : NULL,
+                      .shift = shift,
+                      .use_smap = p->visibility != IIR_VIS_RAYS,
+                      .args = {p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY, p->sm_bias, r->eps},
+                      .kernel = iir_smap_kernel_for(r->isa),
+                      .n = p->interleave,
+                      .receivers = iir_render_receivers(r, p)};
+    return c;
+}
+
 bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t shift,
                          bool stoppable, iir_raystats *st, uint64_t *evals)
 {
-    indirect_ctx c = {r,
-                      stoppable ? r->stop : NULL,
-                      shift,
-                      p->visibility != IIR_VIS_RAYS,
-                      p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
-                      p->sm_bias,
-                      p->interleave,
-                      iir_render_receivers(r, p)};
+    indirect_ctx c = make_ctx(r, p, shift, stoppable);
     int tiles = iir_tile_count(r->gb.width, r->gb.height, IIR_INDIRECT_TILE), n = p->interleave;
     iir_raystats total = {0};
     int skipped = 0;
@@ -665,7 +501,7 @@ iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_param
     for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++) {
         const iir_shade_vpl *v = &r->vpl[i];
         if (v->generation > max_generation) continue;
-        vpl_geometry g = geometry(v, x, n, g_max);
+        iir_vpl_geometry g = iir_vpl_geometry_at(v, x, n, g_max);
         if (!g.lit) continue;
         float V = 1.f;
         iir_ray ray;
@@ -685,23 +521,15 @@ iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_param
 /* ---- multires: the VPL sum at the hierarchy's texels and level-0 pixels (multires.h's client)
  * ---- */
 
-_Static_assert((int)IIR_MR_BATCH <= (int)BATCH, "a multires batch must fit a pixel batch");
+_Static_assert((int)IIR_MR_BATCH <= (int)IIR_BATCH, "a multires batch must fit a pixel batch");
 
 /* Adds subset k's power G V to every sample of the batch (its E zeroed first). */
 static void apply_subset(const indirect_ctx *c, uint32_t k, int count, pixel_batch *b,
                          iir_raystats *st)
 {
     const iir_renderer *r = c->r;
-    for (int q = 0; q < padded(count); q++) b->Ex[q] = b->Ey[q] = b->Ez[q] = 0.f;
-    for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++) {
-        if (c->use_smap) {
-            b->m = padded(count);
-            apply_vpl_smap(c, &r->vpl[v], b);
-            b->m = count;
-        } else {
-            apply_vpl_rays(c, &r->vpl[v], b, st);
-        }
-    }
+    for (int q = 0; q < iir_batch_padded(count); q++) b->Ex[q] = b->Ey[q] = b->Ez[q] = 0.f;
+    for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++) apply_vpl(c, &r->vpl[v], b, st);
 }
 
 /* Shades samples of class cls of an m x m lattice: the union U of the subsets k whose lattice
@@ -723,7 +551,7 @@ static uint64_t coarse_samples(void *ctx, int m, uint32_t cls, const iir_mr_samp
         batch_push(&b, pixel ? s[q].pixel : (uint32_t)q, s[q].position, s[q].normal);
         if (pixel && r->gb.any_pbr) batch_mark_glossy(&b, &r->gb, s[q].pixel, c->receivers);
     }
-    while (b.m % 4) batch_push(&b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
+    while (b.m % IIR_BATCH_LANES) batch_push(&b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
     b.m = count;
     for (int q = 0; q < count; q++) E[q] = iir_v3s(0.f);
     for (uint32_t k = 0; k < r->num_subsets && union_size; k++) {
@@ -739,14 +567,7 @@ static uint64_t coarse_samples(void *ctx, int m, uint32_t cls, const iir_mr_samp
 bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, bool stoppable,
                                 iir_raystats *st, uint64_t *evals)
 {
-    indirect_ctx c = {r,
-                      stoppable ? r->stop : NULL,
-                      0,
-                      p->visibility != IIR_VIS_RAYS,
-                      p->clamp > 0.f ? p->clamp / r->diag2 : INFINITY,
-                      p->sm_bias,
-                      p->interleave,
-                      iir_render_receivers(r, p)}; /* coarse texels: diffuse (coarse_samples) */
+    indirect_ctx c = make_ctx(r, p, 0, stoppable); /* coarse texels: diffuse (coarse_samples) */
     uint64_t live = 0;
     for (uint32_t k = 0; k < r->num_subsets; k++)
         if (r->start[k] < r->start[k + 1]) live |= 1ull << k;

@@ -5,6 +5,7 @@
 #define IIR_RENDER_INTERNAL_H
 
 #include "iir/bsdf.h"
+#include "iir/isa.h"
 #include "iir/multires.h"
 #include "iir/render.h"
 #include "iir/scene.h"
@@ -61,6 +62,9 @@ struct iir_renderer {
                                within the filter's reach (render_filter.c) */
     uint64_t near_fine_gen; /* the multires generation near_fine was computed for; 0 = none */
     int near_fine_h;        /* and the filter's half-width */
+    uint32_t *fmask;       /* per pixel: which of the filter's taps are similar (render_filter.c) */
+    uint64_t fmask_serial; /* the G-buffer (gb_serial) fmask was computed for; 0 = none */
+    int fmask_h;           /* and the filter's half-width */
 
     /* Per frame: the VPLs in use, sorted by subset; subset k is vpl[start[k] .. start[k+1]). */
     iir_shade_vpl *vpl;
@@ -68,6 +72,7 @@ struct iir_renderer {
     uint32_t num_subsets; /* n^2 */
     uint32_t start[IIR_MAX_SUBSETS + 1];
 
+    iir_isa isa;      /* the shading kernels' instruction set (iir_renderer_set_isa) */
     iir_stop_fn stop; /* refinement passes poll it; NULL = never */
     void *stop_ctx;
 };

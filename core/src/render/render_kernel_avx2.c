@@ -1,0 +1,116 @@
+/* render_kernel_avx2.c -- the shadow-map kernel of the VPL sum 8 pixels a step with AVX2 and FMA
+ * (render_batch.h), its four PCF texels fetched by gathers. Built with -mavx2 -mfma (CMakeLists)
+ * and called only where iir_isa_supported(IIR_ISA_AVX2). */
+#include "render_batch.h"
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+
+static inline __m256 dot8(__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by, __m256 bz)
+{
+    return _mm256_fmadd_ps(az, bz, _mm256_fmadd_ps(ay, by, _mm256_mul_ps(ax, bx)));
+}
+
+/* 1 where dmb <= depth, else 0. */
+static inline __m256 passes(__m256 dmb, __m256 depth)
+{
+    return _mm256_and_ps(_mm256_cmp_ps(dmb, depth, _CMP_LE_OQ), _mm256_set1_ps(1.f));
+}
+
+/* iir_smap_pcf for 8 lanes (s, t already clamped to [0, max_st]). */
+static inline __m256 pcf8(const iir_smap_probe *p, __m256 s, __m256 t, __m256 dmb)
+{
+    __m256i i0 = _mm256_cvttps_epi32(s), j0 = _mm256_cvttps_epi32(t);
+    __m256 fx = _mm256_sub_ps(s, _mm256_cvtepi32_ps(i0)),
+           fy = _mm256_sub_ps(t, _mm256_cvtepi32_ps(j0));
+    __m256i last = _mm256_set1_epi32(p->res - 1), res = _mm256_set1_epi32(p->res);
+    /* +1 texel right and down, except at the last column or row (cmpgt gives -1 there) */
+    __m256i di = _mm256_add_epi32(_mm256_set1_epi32(1), _mm256_cmpeq_epi32(i0, last));
+    __m256i dj = _mm256_and_si256(_mm256_cmpgt_epi32(last, j0), res);
+    __m256i at00 = _mm256_add_epi32(_mm256_mullo_epi32(j0, res), i0);
+    __m256i at01 = _mm256_add_epi32(at00, dj);
+    const float *d = p->depth;
+    __m256 v00 = passes(dmb, _mm256_i32gather_ps(d, at00, 4));
+    __m256 v10 = passes(dmb, _mm256_i32gather_ps(d, _mm256_add_epi32(at00, di), 4));
+    __m256 v01 = passes(dmb, _mm256_i32gather_ps(d, at01, 4));
+    __m256 v11 = passes(dmb, _mm256_i32gather_ps(d, _mm256_add_epi32(at01, di), 4));
+    __m256 top = _mm256_fmadd_ps(fx, _mm256_sub_ps(v10, v00), v00);
+    __m256 bottom = _mm256_fmadd_ps(fx, _mm256_sub_ps(v11, v01), v01);
+    return _mm256_fmadd_ps(fy, _mm256_sub_ps(bottom, top), top);
+}
+
+/* iir_smap_probe_visibility for 8 lanes (keep the two in step). */
+static inline __m256 visibility8(const iir_smap_probe *p, __m256 wx, __m256 wy, __m256 wz,
+                                 __m256 d2, __m256 cx)
+{
+    __m256 zero = _mm256_setzero_ps(), d = _mm256_sqrt_ps(d2);
+    cx = _mm256_max_ps(cx, _mm256_mul_ps(_mm256_set1_ps(1e-6f), d));
+    __m256 sin_d = _mm256_sqrt_ps(_mm256_max_ps(zero, _mm256_fnmadd_ps(cx, cx, d2)));
+    __m256 dwz = _mm256_add_ps(d, wz);
+    __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.f), _mm256_mul_ps(dwz, cx));
+    __m256 k = _mm256_mul_ps(_mm256_set1_ps(p->half_res), _mm256_mul_ps(cx, inv));
+    __m256 slope = _mm256_min_ps(_mm256_mul_ps(sin_d, _mm256_mul_ps(dwz, inv)),
+                                 _mm256_set1_ps(IIR_SMAP_MAX_SLOPE));
+    __m256 texel_d = _mm256_mul_ps(dwz, _mm256_set1_ps(p->texel));
+    __m256 bias =
+        _mm256_fmadd_ps(_mm256_mul_ps(_mm256_set1_ps(IIR_SMAP_SLOPE_TEXELS), texel_d), slope,
+                        _mm256_fmadd_ps(d, _mm256_set1_ps(p->rel_bias), _mm256_set1_ps(p->eps)));
+    /* Clamped with max first: a NaN (a masked-out lane) becomes 0, a valid texel. */
+    __m256 c = _mm256_set1_ps(p->half_res - 0.5f), hi = _mm256_set1_ps(p->max_st);
+    __m256 s = _mm256_min_ps(_mm256_max_ps(_mm256_fmadd_ps(wx, k, c), zero), hi);
+    __m256 t = _mm256_min_ps(_mm256_max_ps(_mm256_fmadd_ps(wy, k, c), zero), hi);
+    return pcf8(p, s, t, _mm256_sub_ps(d, bias));
+}
+
+/* Adds the glossy lanes of pixels j..j+7 (GV: their G V; every lane for a glossy VPL) through
+ * the BSDFs; returns GV with those lanes zeroed (the others are added as diffuse). */
+static __m256 glossy_lanes(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b,
+                           int j, __m256 GV)
+{
+    _Alignas(32) float g[8];
+    _mm256_store_ps(g, GV);
+    for (int l = 0; l < 8; l++)
+        if (v->glossy || iir_batch_is_glossy(b, j + l))
+            iir_batch_add_lit(b, j + l, v, g[l], a->g_max), g[l] = 0.f;
+    return _mm256_load_ps(g);
+}
+
+void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b)
+{
+    iir_smap_probe probe = iir_smap_probe_make(v->smap, a->rel_bias, a->eps);
+    __m256 zero = _mm256_setzero_ps(), g_max = _mm256_set1_ps(a->g_max), one = _mm256_set1_ps(1.f);
+    __m256 vx = _mm256_set1_ps(v->p.x), vy = _mm256_set1_ps(v->p.y), vz = _mm256_set1_ps(v->p.z);
+    __m256 nx = _mm256_set1_ps(v->n.x), ny = _mm256_set1_ps(v->n.y), nz = _mm256_set1_ps(v->n.z);
+    __m256 rx = _mm256_set1_ps(v->r.x), ry = _mm256_set1_ps(v->r.y), rz = _mm256_set1_ps(v->r.z);
+    __m256 ux = _mm256_set1_ps(v->u.x), uy = _mm256_set1_ps(v->u.y), uz = _mm256_set1_ps(v->u.z);
+    __m256 Px = _mm256_set1_ps(v->power.x), Py = _mm256_set1_ps(v->power.y),
+           Pz = _mm256_set1_ps(v->power.z);
+    bool sphere = v->radius > 0.f; /* iir_vpl_geometry_at's falloff */
+    __m256 r2 = _mm256_set1_ps(v->radius * v->radius);
+    int end = iir_batch_padded(b->m);
+    for (int j = 0; j < end; j += 8) {
+        __m256 wx = _mm256_sub_ps(_mm256_load_ps(b->px + j), vx);
+        __m256 wy = _mm256_sub_ps(_mm256_load_ps(b->py + j), vy);
+        __m256 wz = _mm256_sub_ps(_mm256_load_ps(b->pz + j), vz);
+        __m256 d2 = dot8(wx, wy, wz, wx, wy, wz), ci = dot8(nx, ny, nz, wx, wy, wz);
+        __m256 cx = _mm256_sub_ps(zero, dot8(_mm256_load_ps(b->nx + j), _mm256_load_ps(b->ny + j),
+                                             _mm256_load_ps(b->nz + j), wx, wy, wz));
+        __m256 lit = _mm256_and_ps(
+            _mm256_and_ps(_mm256_cmp_ps(ci, zero, _CMP_GT_OQ), _mm256_cmp_ps(cx, zero, _CMP_GT_OQ)),
+            _mm256_cmp_ps(d2, zero, _CMP_GT_OQ));
+        if (!_mm256_movemask_ps(lit)) continue;
+        __m256 inv_d2 = _mm256_div_ps(one, d2);
+        __m256 falloff = sphere ? _mm256_div_ps(one, _mm256_add_ps(d2, r2)) : inv_d2;
+        __m256 G = _mm256_min_ps(
+            _mm256_mul_ps(_mm256_mul_ps(ci, cx), _mm256_mul_ps(inv_d2, falloff)), g_max);
+        __m256 V = visibility8(&probe, dot8(rx, ry, rz, wx, wy, wz), dot8(ux, uy, uz, wx, wy, wz),
+                               ci, d2, cx);
+        __m256 GV = _mm256_and_ps(lit, _mm256_mul_ps(G, V));
+        if (b->glossy[j >> 3] || v->glossy) GV = glossy_lanes(a, v, b, j, GV);
+        _mm256_store_ps(b->Ex + j, _mm256_fmadd_ps(Px, GV, _mm256_load_ps(b->Ex + j)));
+        _mm256_store_ps(b->Ey + j, _mm256_fmadd_ps(Py, GV, _mm256_load_ps(b->Ey + j)));
+        _mm256_store_ps(b->Ez + j, _mm256_fmadd_ps(Pz, GV, _mm256_load_ps(b->Ez + j)));
+    }
+}
+
+#endif
