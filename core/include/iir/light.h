@@ -340,6 +340,28 @@ typedef struct iir_light_sample {
  * light's plane. Whether ctx's surface faces wi is the caller's to test. */
 iir_light_sample iir_light_sample_li(const iir_light_eval *e, const iir_light_ctx *ctx, iir_vec2 u);
 
+/* ---- a delta light at 8 receivers at once (light_lanes_avx2.c): the direct-light kernel ---- */
+
+/* 8 receiving points, structure of arrays: the points on their surfaces and their unit normals. */
+typedef struct iir_light_lanes {
+    _Alignas(32) float px[8], py[8], pz[8], nx[8], ny[8], nz[8];
+} iir_light_lanes;
+
+/* What iir_light_sample_li and the renderer's sample test make of delta light e at each lane: wi,
+ * the unit direction to the light; E = Li (n . wi), 0 where no light arrives or the surface faces
+ * away from wi; and the shadow segment org + t dir, t in (0, tmax), org the receiver's end
+ * (iir_light_ctx_origin), tmax 0 when the ends are too close to test and INFINITY for a sun. */
+typedef struct iir_light_delta_lanes {
+    _Alignas(32) float wx[8], wy[8], wz[8], Ex[8], Ey[8], Ez[8];
+    float ox[8], oy[8], oz[8], dx[8], dy[8], dz[8], tmax[8];
+} iir_light_delta_lanes;
+
+/* iir_light_sample_li of delta light e (point, spot or sun) at the 8 lanes (ctx.eps = eps), with
+ * AVX2 and FMA: only where iir_isa_supported(IIR_ISA_AVX2). The same light as the scalar
+ * function up to float rounding (test_light: every kind, lane by lane). */
+void iir_light_sample_delta8_avx2(const iir_light_eval *e, float eps, const iir_light_lanes *in,
+                                  iir_light_delta_lanes *out);
+
 /* The solid-angle pdf iir_light_sample_li gives area light l's point at distance dist along unit
  * wi from the receiving point (0 when wi meets it from behind), the pick probability not included.
  */

@@ -216,6 +216,37 @@ static void area_light_seen(const direct_ctx *c, const iir_light_eval *e, block 
     }
 }
 
+#if defined(__x86_64__)
+/* A delta light at the block by iir_light_sample_delta8_avx2 (sample_lane's test and sum with the
+ * light's arithmetic 8 lanes wide): one packet of shadow rays. */
+static void delta_lanes(const direct_ctx *c, const iir_light_eval *e, block *b, iir_raystats *st)
+{
+    const iir_gbuffer *gb = &c->r->gb;
+    iir_light_lanes in;
+    for (int k = 0; k < 8; k++) {
+        iir_vec3 x = gb->position[b->index[k]], n = gb->normal[b->index[k]];
+        in.px[k] = x.x, in.py[k] = x.y, in.pz[k] = x.z;
+        in.nx[k] = n.x, in.ny[k] = n.y, in.nz[k] = n.z;
+    }
+    iir_light_delta_lanes out;
+    iir_light_sample_delta8_avx2(e, c->r->eps, &in, &out);
+    clear_rays(b);
+    for (int k = 0; k < 8; k++) {
+        iir_vec3 E = iir_v3(out.Ex[k], out.Ey[k], out.Ez[k]);
+        if (!b->shaded[k] || iir_is_black(E)) continue;
+        iir_vec3 wi = iir_v3(out.wx[k], out.wy[k], out.wz[k]);
+        iir_vec3 f = b->glossy[k] ? iir_bsdf_f(&b->bsdf[k], b->wo[k], wi) : b->f[k];
+        b->pending[k] = iir_mul(iir_mul(f, b->through[k]), E);
+        if (out.tmax[k] > 0.f)
+            set_lane(&b->rays, k, iir_v3(out.ox[k], out.oy[k], out.oz[k]),
+                     iir_v3(out.dx[k], out.dy[k], out.dz[k]), out.tmax[k]);
+        else
+            b->L[k] = iir_add(b->L[k], b->pending[k]);
+    }
+    resolve(c->r, b, st);
+}
+#endif
+
 /* One light's direct light at the block: a delta light's sample per pixel (one packet), an area
  * light's samples and where the camera sees it. */
 static void shade_light(const direct_ctx *c, uint32_t li, block *b, iir_raystats *st)
@@ -226,6 +257,12 @@ static void shade_light(const direct_ctx *c, uint32_t li, block *b, iir_raystats
         area_light_seen(c, &e, b);
         return;
     }
+#if defined(__x86_64__)
+    if (c->r->isa >= IIR_ISA_AVX2) {
+        delta_lanes(c, &e, b, st);
+        return;
+    }
+#endif
     clear_rays(b);
     for (int k = 0; k < 8; k++) {
         if (!b->shaded[k]) continue;
