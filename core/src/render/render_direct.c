@@ -10,8 +10,10 @@
  * Agrees in expectation with `pt --bounces 1`: pt picks one light by flux per sample, this sums
  * every light; pt weights area-light samples by MIS against BSDF sampling, this uses the
  * light sample alone (weight 1), which is unbiased by itself. Shadow rays go out as 8-wide packets
- * over 4x2 pixel blocks (neighbouring pixels, one light: coherent rays). Threads: OpenMP over
- * tiles, each writing only its own pixels of the frame; ray counters per thread, summed once. */
+ * over 4x2 pixel blocks (neighbouring pixels, one light: coherent rays); with AVX2 a point, spot
+ * or sun is evaluated at the block's 8 pixels at once (iir_light_sample_delta8_avx2). Threads:
+ * OpenMP over bands of two whole rows, each writing only its own pixels of the frame; ray counters
+ * per thread, summed once. */
 #include <omp.h>
 
 #include "iir/rng.h"
@@ -319,21 +321,21 @@ bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_rays
                     1.f / (float)n,
                     iir_camera_setup(&r->gb_camera, r->gb.width, r->gb.height)};
     iir_image *out = job->out;
-    int w = out->width, h = out->height, tiles = iir_tile_count(w, h, IIR_RENDER_TILE);
+    /* bands of BLOCK_H whole rows: each per-pixel array streams through memory in long runs
+       (16-pixel tile rows are a few cache lines each, too short for the prefetchers) */
+    int w = out->width, h = out->height, bands = (h + BLOCK_H - 1) / BLOCK_H;
     iir_raystats total = {0};
 #pragma omp parallel
     {
         iir_raystats local = {0};
 #pragma omp for schedule(dynamic, 1)
-        for (int t = 0; t < tiles; t++) {
+        for (int t = 0; t < bands; t++) {
             if (r->stop && r->stop(r->stop_ctx)) {
 #pragma omp atomic write
                 stopped = true;
                 continue;
             }
-            iir_tile tl = iir_tile_at(w, h, IIR_RENDER_TILE, t);
-            for (int y = tl.y0; y < tl.y1; y += BLOCK_H)
-                for (int x = tl.x0; x < tl.x1; x += BLOCK_W) shade_block(&c, x, y, out, &local);
+            for (int x = 0; x < w; x += BLOCK_W) shade_block(&c, x, t * BLOCK_H, out, &local);
         }
 #pragma omp critical(iir_direct_rays)
         iir_raystats_add(&total, &local);

@@ -1,6 +1,6 @@
 /* render_kernel_avx2.c -- the shadow-map kernel of the VPL sum 8 pixels a step with AVX2 and FMA
- * (render_batch.h), its four PCF texels fetched by gathers. Built with -mavx2 -mfma (CMakeLists)
- * and called only where iir_isa_supported(IIR_ISA_AVX2). */
+ * (render_batch.h), its four PCF texels fetched by two 64-bit gathers per row. Built with -mavx2
+ * -mfma (CMakeLists) and called only where iir_isa_supported(IIR_ISA_AVX2). */
 #include "render_batch.h"
 
 #if defined(__x86_64__)
@@ -17,23 +17,36 @@ static inline __m256 passes(__m256 dmb, __m256 depth)
     return _mm256_and_ps(_mm256_cmp_ps(dmb, depth, _CMP_LE_OQ), _mm256_set1_ps(1.f));
 }
 
-/* iir_smap_pcf for 8 lanes (s, t already clamped to [0, max_st]). */
+/* Texels idx and idx + 1 of depth (a row's neighbours) at 8 lanes, two texels a gathered 64-bit
+ * load: *left the first of each pair, *right the second. */
+static inline void texel_pairs(const float *depth, __m256i idx, __m256 *left, __m256 *right)
+{
+    const double *base = (const double *)(const void *)depth; /* 8-byte loads at 4-byte steps */
+    __m256 lo = _mm256_castpd_ps(_mm256_i32gather_pd(base, _mm256_castsi256_si128(idx), 4));
+    __m256 hi = _mm256_castpd_ps(_mm256_i32gather_pd(base, _mm256_extracti128_si256(idx, 1), 4));
+    /* lo: l0 r0 l1 r1 | l2 r2 l3 r3, hi: lanes 4..7 alike; shuffles give lanes 0 1 4 5 | 2 3 6 7 */
+    *left = _mm256_castpd_ps(
+        _mm256_permute4x64_pd(_mm256_castps_pd(_mm256_shuffle_ps(lo, hi, 0x88)), 0xd8));
+    *right = _mm256_castpd_ps(
+        _mm256_permute4x64_pd(_mm256_castps_pd(_mm256_shuffle_ps(lo, hi, 0xdd)), 0xd8));
+}
+
+/* iir_smap_pcf for 8 lanes (s, t already clamped to [0, max_st]). The 2x2 footprint's corner is
+ * kept off the last row and column: there the weight of the texel beyond is 1 instead of the
+ * scalar path's 0 on the texel before, the same blend of 0s and 1s exactly. */
 static inline __m256 pcf8(const iir_smap_probe *p, __m256 s, __m256 t, __m256 dmb)
 {
-    __m256i i0 = _mm256_cvttps_epi32(s), j0 = _mm256_cvttps_epi32(t);
-    __m256 fx = _mm256_sub_ps(s, _mm256_cvtepi32_ps(i0)),
-           fy = _mm256_sub_ps(t, _mm256_cvtepi32_ps(j0));
-    __m256i last = _mm256_set1_epi32(p->res - 1), res = _mm256_set1_epi32(p->res);
-    /* +1 texel right and down, except at the last column or row (cmpgt gives -1 there) */
-    __m256i di = _mm256_add_epi32(_mm256_set1_epi32(1), _mm256_cmpeq_epi32(i0, last));
-    __m256i dj = _mm256_and_si256(_mm256_cmpgt_epi32(last, j0), res);
-    __m256i at00 = _mm256_add_epi32(_mm256_mullo_epi32(j0, res), i0);
-    __m256i at01 = _mm256_add_epi32(at00, dj);
-    const float *d = p->depth;
-    __m256 v00 = passes(dmb, _mm256_i32gather_ps(d, at00, 4));
-    __m256 v10 = passes(dmb, _mm256_i32gather_ps(d, _mm256_add_epi32(at00, di), 4));
-    __m256 v01 = passes(dmb, _mm256_i32gather_ps(d, at01, 4));
-    __m256 v11 = passes(dmb, _mm256_i32gather_ps(d, _mm256_add_epi32(at01, di), 4));
+    __m256i last = _mm256_set1_epi32(p->res - 2);
+    __m256i i0 = _mm256_min_epi32(_mm256_cvttps_epi32(s), last);
+    __m256i j0 = _mm256_min_epi32(_mm256_cvttps_epi32(t), last);
+    __m256 fx = _mm256_sub_ps(s, _mm256_cvtepi32_ps(i0));
+    __m256 fy = _mm256_sub_ps(t, _mm256_cvtepi32_ps(j0));
+    __m256i at = _mm256_add_epi32(_mm256_mullo_epi32(j0, _mm256_set1_epi32(p->res)), i0);
+    __m256 d00, d10, d01, d11;
+    texel_pairs(p->depth, at, &d00, &d10);
+    texel_pairs(p->depth, _mm256_add_epi32(at, _mm256_set1_epi32(p->res)), &d01, &d11);
+    __m256 v00 = passes(dmb, d00), v10 = passes(dmb, d10);
+    __m256 v01 = passes(dmb, d01), v11 = passes(dmb, d11);
     __m256 top = _mm256_fmadd_ps(fx, _mm256_sub_ps(v10, v00), v00);
     __m256 bottom = _mm256_fmadd_ps(fx, _mm256_sub_ps(v11, v01), v01);
     return _mm256_fmadd_ps(fy, _mm256_sub_ps(bottom, top), top);
@@ -77,6 +90,10 @@ static __m256 glossy_lanes(const iir_kernel_args *a, const iir_shade_vpl *v, iir
 
 void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b)
 {
+    if (v->smap->res < 2) { /* pcf8's footprint needs two texels a side */
+        iir_apply_smap_scalar(a, v, b);
+        return;
+    }
     iir_smap_probe probe = iir_smap_probe_make(v->smap, a->rel_bias, a->eps);
     __m256 zero = _mm256_setzero_ps(), g_max = _mm256_set1_ps(a->g_max), one = _mm256_set1_ps(1.f);
     __m256 vx = _mm256_set1_ps(v->p.x), vy = _mm256_set1_ps(v->p.y), vz = _mm256_set1_ps(v->p.z);
