@@ -18,8 +18,9 @@
  * the upsampled mean of all of them: iir_multires_upsample_span, written to r->raw first in the
  * tiles near level-0 pixels), and takes its own value unfiltered.
  *
- * Threads: both passes are OpenMP loops over tiles writing only their own pixels; the implicit
- * barrier after the row pass orders it before the column pass that reads neighbouring tiles. */
+ * Threads: both passes are OpenMP loops over whole rows (long runs through each per-pixel array)
+ * writing only their own pixels; the implicit barrier after the row pass orders it before the
+ * column pass that reads neighbouring rows. */
 #include <omp.h>
 
 #include "render_internal.h"
@@ -153,17 +154,19 @@ static void mask_tile(const filter_ctx *c, int t)
             c->r->fmask[(size_t)y * (size_t)gb->width + (size_t)x] = pixel_mask(c, x, y);
 }
 
-/* Row pass over a tile. */
-static void row_pass_tile(const filter_ctx *c, int t)
+/* Row pass over row y, in the segments of filter tiles whose rows a column pass reads: whole rows
+ * stream through memory (a tile's 16-pixel pieces are too short for the prefetchers). */
+static void row_pass_row(const filter_ctx *c, int y)
 {
     const iir_gbuffer *gb = &c->r->gb;
-    iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_RENDER_TILE, t);
-    if (c->r->level && !c->r->near_fine[t]) return; /* no level-0 pixel reads this tile's rows */
-    int n = c->n;
-    for (int y = tl.y0; y < tl.y1; y++) {
-        const int *live = &c->live[(y % n) * n];
-        int sx = ((tl.x0 - c->h) % n + n) % n;
-        for (int x = tl.x0; x < tl.x1; x++, sx = sx + 1 == n ? 0 : sx + 1)
+    int n = c->n, tiles_x = (gb->width + IIR_RENDER_TILE - 1) / IIR_RENDER_TILE;
+    const int *live = &c->live[(y % n) * n];
+    for (int tx = 0; tx < tiles_x; tx++) {
+        int t = (y / IIR_RENDER_TILE) * tiles_x + tx, x0 = tx * IIR_RENDER_TILE;
+        int x1 = x0 + IIR_RENDER_TILE < gb->width ? x0 + IIR_RENDER_TILE : gb->width;
+        if (c->r->level && !c->r->near_fine[t]) continue; /* no level-0 pixel reads these rows */
+        int sx = ((x0 - c->h) % n + n) % n;
+        for (int x = x0; x < x1; x++, sx = sx + 1 == n ? 0 : sx + 1)
             if (row_wanted(c, x, y))
                 c->r->rows[(size_t)y * (size_t)gb->width + (size_t)x] = row_pass(c, x, y, live, sx);
     }
@@ -260,8 +263,8 @@ void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image 
             for (int t = 0; t < tiles; t++) upsample_tile(&c, t, known);
         }
         if (filter) {
-#pragma omp for schedule(dynamic, 1)
-            for (int t = 0; t < tiles; t++) row_pass_tile(&c, t);
+#pragma omp for schedule(dynamic, 8)
+            for (int y = 0; y < gb->height; y++) row_pass_row(&c, y);
         }
 #pragma omp for schedule(dynamic, 8)
         for (int y = 0; y < gb->height; y++) compose_row(&c, filter, y, out);
