@@ -48,14 +48,17 @@ typedef struct iir_kernel_args {
     float g_max, rel_bias, eps;
 } iir_kernel_args;
 
-/* Adds power G V of VPL v (its map's visibility) to every pixel of the batch, up to
- * iir_batch_padded(b->m). */
-typedef void (*iir_smap_kernel)(const iir_kernel_args *a, const iir_shade_vpl *v,
+/* Adds power G V of VPLs v[0 .. count) (each map's visibility) to every pixel of the batch, up
+ * to iir_batch_padded(b->m). */
+typedef void (*iir_smap_kernel)(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
                                 iir_pixel_batch *b);
 
-void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b);
-void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b);
-void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b);
+void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
+                           iir_pixel_batch *b);
+void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
+                         iir_pixel_batch *b);
+void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
+                         iir_pixel_batch *b);
 
 /* The kernel for isa (one this build and CPU support: iir_isa_supported). */
 iir_smap_kernel iir_smap_kernel_for(iir_isa isa);

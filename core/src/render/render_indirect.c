@@ -409,14 +409,15 @@ static bool collect(const indirect_ctx *c, const iir_tile *tl, int x_first, int 
     return m > 0;
 }
 
-/* Adds power G V of VPL v to every pixel of the batch: V from its map by the kernel, or by rays. */
-static void apply_vpl(const indirect_ctx *c, const iir_shade_vpl *v, pixel_batch *b,
-                      iir_raystats *st)
+/* Adds power G V of VPLs v[0 .. count) to every pixel of the batch: V from their maps by the
+ * kernel, or by rays. */
+static void apply_vpls(const indirect_ctx *c, const iir_shade_vpl *v, uint32_t count,
+                       pixel_batch *b, iir_raystats *st)
 {
     if (c->use_smap)
-        c->kernel(&c->args, v, b);
+        c->kernel(&c->args, v, count, b);
     else
-        apply_vpl_rays(c, v, b, st);
+        for (uint32_t i = 0; i < count; i++) apply_vpl_rays(c, &v[i], b, st);
 }
 
 /* Shades one tile; returns the pixel-VPL pairs shaded. */
@@ -439,8 +440,7 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *
             while (collect(c, &tl, tl.x0 + i, n, &x, &y, b)) {
                 int m = b->m;
                 evals += (uint64_t)m * (r->start[k + 1] - r->start[k]);
-                for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++)
-                    apply_vpl(c, &r->vpl[v], b, st);
+                apply_vpls(c, &r->vpl[r->start[k]], r->start[k + 1] - r->start[k], b, st);
                 for (int q = 0; q < m; q++)
                     r->raw[b->index[q]] = iir_v3(b->Ex[q], b->Ey[q], b->Ez[q]);
             }
@@ -529,7 +529,7 @@ static void apply_subset(const indirect_ctx *c, uint32_t k, int count, pixel_bat
 {
     const iir_renderer *r = c->r;
     for (int q = 0; q < iir_batch_padded(count); q++) b->Ex[q] = b->Ey[q] = b->Ez[q] = 0.f;
-    for (uint32_t v = r->start[k]; v < r->start[k + 1]; v++) apply_vpl(c, &r->vpl[v], b, st);
+    apply_vpls(c, &r->vpl[r->start[k]], r->start[k + 1] - r->start[k], b, st);
 }
 
 /* Shades samples of class cls of an m x m lattice: the union U of the subsets k whose lattice

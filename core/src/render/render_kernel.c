@@ -2,7 +2,7 @@
  * the vector kernels are tested against, and the choice of kernel by instruction set. */
 #include "render_batch.h"
 
-void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b)
+static void apply_one(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b)
 {
     iir_smap_probe probe = iir_smap_probe_make(v->smap, a->rel_bias, a->eps);
     for (int j = 0; j < b->m; j++) {
@@ -19,6 +19,12 @@ void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, iir
         b->Ey[j] += v->power.y * (g.G * V);
         b->Ez[j] += v->power.z * (g.G * V);
     }
+}
+
+void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
+                           iir_pixel_batch *b)
+{
+    for (uint32_t i = 0; i < count; i++) apply_one(a, &v[i], b);
 }
 
 iir_smap_kernel iir_smap_kernel_for(iir_isa isa)

@@ -52,9 +52,11 @@ static inline __m256 pcf8(const iir_smap_probe *p, __m256 s, __m256 t, __m256 dm
     return _mm256_fmadd_ps(fy, _mm256_sub_ps(bottom, top), top);
 }
 
-/* iir_smap_probe_visibility for 8 lanes (keep the two in step). */
-static inline __m256 visibility8(const iir_smap_probe *p, __m256 wx, __m256 wy, __m256 wz,
-                                 __m256 d2, __m256 cx)
+/* iir_smap_probe_visibility for 8 lanes up to the lookup (keep the two in step): the bias model
+ * of shadowmap.h and the texel-space point (s, t) with the distance minus the bias, dmb; pcf8
+ * then gives the visibility. */
+static inline void lookup8(const iir_smap_probe *p, __m256 wx, __m256 wy, __m256 wz, __m256 d2,
+                           __m256 cx, __m256 *s, __m256 *t, __m256 *dmb)
 {
     __m256 zero = _mm256_setzero_ps(), d = _mm256_sqrt_ps(d2);
     cx = _mm256_max_ps(cx, _mm256_mul_ps(_mm256_set1_ps(1e-6f), d));
@@ -70,9 +72,24 @@ static inline __m256 visibility8(const iir_smap_probe *p, __m256 wx, __m256 wy, 
                         _mm256_fmadd_ps(d, _mm256_set1_ps(p->rel_bias), _mm256_set1_ps(p->eps)));
     /* Clamped with max first: a NaN (a masked-out lane) becomes 0, a valid texel. */
     __m256 c = _mm256_set1_ps(p->half_res - 0.5f), hi = _mm256_set1_ps(p->max_st);
-    __m256 s = _mm256_min_ps(_mm256_max_ps(_mm256_fmadd_ps(wx, k, c), zero), hi);
-    __m256 t = _mm256_min_ps(_mm256_max_ps(_mm256_fmadd_ps(wy, k, c), zero), hi);
-    return pcf8(p, s, t, _mm256_sub_ps(d, bias));
+    *s = _mm256_min_ps(_mm256_max_ps(_mm256_fmadd_ps(wx, k, c), zero), hi);
+    *t = _mm256_min_ps(_mm256_max_ps(_mm256_fmadd_ps(wy, k, c), zero), hi);
+    *dmb = _mm256_sub_ps(d, bias);
+}
+
+/* Asks for the cache lines of the two texel rows pcf8 will read at (s, t). */
+static inline void prefetch8(const iir_smap_probe *p, __m256 s, __m256 t)
+{
+    __m256i last = _mm256_set1_epi32(p->res - 2);
+    __m256i i0 = _mm256_min_epi32(_mm256_cvttps_epi32(s), last);
+    __m256i j0 = _mm256_min_epi32(_mm256_cvttps_epi32(t), last);
+    _Alignas(32) int32_t at[8];
+    _mm256_store_si256((__m256i *)at,
+                       _mm256_add_epi32(_mm256_mullo_epi32(j0, _mm256_set1_epi32(p->res)), i0));
+    for (int l = 0; l < 8; l++) {
+        _mm_prefetch((const char *)(p->depth + at[l]), _MM_HINT_T0);
+        _mm_prefetch((const char *)(p->depth + at[l] + p->res), _MM_HINT_T0);
+    }
 }
 
 /* Adds the glossy lanes of pixels j..j+7 (GV: their G V; every lane for a glossy VPL) through
@@ -88,24 +105,26 @@ static __m256 glossy_lanes(const iir_kernel_args *a, const iir_shade_vpl *v, iir
     return _mm256_load_ps(g);
 }
 
-void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b)
+/* One VPL's geometry pass: G (0 on unlit lanes), each lane's texel-space point and distance minus
+ * bias, and which 8-lane groups have a lit lane; the texels' cache lines are asked for as it goes
+ * (the maps do not fit the caches: waiting for each gather's lines would bound the kernel). */
+typedef struct lookups {
+    _Alignas(32) float S[IIR_BATCH], T[IIR_BATCH], DMB[IIR_BATCH], G[IIR_BATCH];
+    uint8_t any[IIR_BATCH / 8];
+} lookups;
+
+static void geometry_pass(const iir_kernel_args *a, const iir_shade_vpl *v,
+                          const iir_pixel_batch *b, lookups *L)
 {
-    if (v->smap->res < 2) { /* pcf8's footprint needs two texels a side */
-        iir_apply_smap_scalar(a, v, b);
-        return;
-    }
     iir_smap_probe probe = iir_smap_probe_make(v->smap, a->rel_bias, a->eps);
     __m256 zero = _mm256_setzero_ps(), g_max = _mm256_set1_ps(a->g_max), one = _mm256_set1_ps(1.f);
     __m256 vx = _mm256_set1_ps(v->p.x), vy = _mm256_set1_ps(v->p.y), vz = _mm256_set1_ps(v->p.z);
     __m256 nx = _mm256_set1_ps(v->n.x), ny = _mm256_set1_ps(v->n.y), nz = _mm256_set1_ps(v->n.z);
     __m256 rx = _mm256_set1_ps(v->r.x), ry = _mm256_set1_ps(v->r.y), rz = _mm256_set1_ps(v->r.z);
     __m256 ux = _mm256_set1_ps(v->u.x), uy = _mm256_set1_ps(v->u.y), uz = _mm256_set1_ps(v->u.z);
-    __m256 Px = _mm256_set1_ps(v->power.x), Py = _mm256_set1_ps(v->power.y),
-           Pz = _mm256_set1_ps(v->power.z);
     bool sphere = v->radius > 0.f; /* iir_vpl_geometry_at's falloff */
     __m256 r2 = _mm256_set1_ps(v->radius * v->radius);
-    int end = iir_batch_padded(b->m);
-    for (int j = 0; j < end; j += 8) {
+    for (int j = 0, end = iir_batch_padded(b->m); j < end; j += 8) {
         __m256 wx = _mm256_sub_ps(_mm256_load_ps(b->px + j), vx);
         __m256 wy = _mm256_sub_ps(_mm256_load_ps(b->py + j), vy);
         __m256 wz = _mm256_sub_ps(_mm256_load_ps(b->pz + j), vz);
@@ -115,19 +134,60 @@ void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, iir_p
         __m256 lit = _mm256_and_ps(
             _mm256_and_ps(_mm256_cmp_ps(ci, zero, _CMP_GT_OQ), _mm256_cmp_ps(cx, zero, _CMP_GT_OQ)),
             _mm256_cmp_ps(d2, zero, _CMP_GT_OQ));
-        if (!_mm256_movemask_ps(lit)) continue;
+        L->any[j >> 3] = _mm256_movemask_ps(lit) != 0;
+        if (!L->any[j >> 3]) continue;
         __m256 inv_d2 = _mm256_div_ps(one, d2);
         __m256 falloff = sphere ? _mm256_div_ps(one, _mm256_add_ps(d2, r2)) : inv_d2;
-        __m256 G = _mm256_min_ps(
+        __m256 g = _mm256_min_ps(
             _mm256_mul_ps(_mm256_mul_ps(ci, cx), _mm256_mul_ps(inv_d2, falloff)), g_max);
-        __m256 V = visibility8(&probe, dot8(rx, ry, rz, wx, wy, wz), dot8(ux, uy, uz, wx, wy, wz),
-                               ci, d2, cx);
-        __m256 GV = _mm256_and_ps(lit, _mm256_mul_ps(G, V));
+        _mm256_store_ps(L->G + j, _mm256_and_ps(lit, g));
+        __m256 s, t, dmb;
+        lookup8(&probe, dot8(rx, ry, rz, wx, wy, wz), dot8(ux, uy, uz, wx, wy, wz), ci, d2, cx, &s,
+                &t, &dmb);
+        prefetch8(&probe, s, t);
+        _mm256_store_ps(L->S + j, s), _mm256_store_ps(L->T + j, t);
+        _mm256_store_ps(L->DMB + j, dmb);
+    }
+}
+
+/* One VPL's lookups (its geometry pass in L): power G V into the batch. */
+static void lookup_pass(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b,
+                        const lookups *L)
+{
+    iir_smap_probe probe = iir_smap_probe_make(v->smap, a->rel_bias, a->eps);
+    __m256 Px = _mm256_set1_ps(v->power.x), Py = _mm256_set1_ps(v->power.y),
+           Pz = _mm256_set1_ps(v->power.z);
+    for (int j = 0, end = iir_batch_padded(b->m); j < end; j += 8) {
+        if (!L->any[j >> 3]) continue;
+        __m256 V = pcf8(&probe, _mm256_load_ps(L->S + j), _mm256_load_ps(L->T + j),
+                        _mm256_load_ps(L->DMB + j));
+        __m256 GV = _mm256_mul_ps(_mm256_load_ps(L->G + j), V); /* G is 0 on unlit lanes */
         if (b->glossy[j >> 3] || v->glossy) GV = glossy_lanes(a, v, b, j, GV);
         _mm256_store_ps(b->Ex + j, _mm256_fmadd_ps(Px, GV, _mm256_load_ps(b->Ex + j)));
         _mm256_store_ps(b->Ey + j, _mm256_fmadd_ps(Py, GV, _mm256_load_ps(b->Ey + j)));
         _mm256_store_ps(b->Ez + j, _mm256_fmadd_ps(Pz, GV, _mm256_load_ps(b->Ez + j)));
     }
+}
+
+/* Software-pipelined over the VPLs: VPL i's geometry pass (asking for its texels) runs before VPL
+ * i - 1's lookups, so each VPL's lines have a whole pass's time to arrive. */
+void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
+                         iir_pixel_batch *b)
+{
+    lookups L[2];
+    int cur = 0;
+    const iir_shade_vpl *pending = NULL; /* its geometry pass is in L[1 - cur] */
+    for (uint32_t i = 0; i < count; i++) {
+        if (v[i].smap->res < 2) { /* pcf8's footprint needs two texels a side */
+            iir_apply_smap_scalar(a, &v[i], 1, b);
+            continue;
+        }
+        geometry_pass(a, &v[i], b, &L[cur]);
+        if (pending) lookup_pass(a, pending, b, &L[1 - cur]);
+        pending = &v[i];
+        cur = 1 - cur;
+    }
+    if (pending) lookup_pass(a, pending, b, &L[1 - cur]);
 }
 
 #endif

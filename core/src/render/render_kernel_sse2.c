@@ -76,7 +76,7 @@ static __m128 glossy_lanes(const iir_kernel_args *a, const iir_shade_vpl *v, iir
     return _mm_load_ps(g);
 }
 
-void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b)
+static void apply_one(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b)
 {
     iir_smap_probe probe = iir_smap_probe_make(v->smap, a->rel_bias, a->eps);
     __m128 zero = _mm_setzero_ps(), g_max = _mm_set1_ps(a->g_max), one = _mm_set1_ps(1.f);
@@ -108,6 +108,12 @@ void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, iir_p
         _mm_store_ps(b->Ey + j, madd4(_mm_load_ps(b->Ey + j), _mm_set1_ps(v->power.y), GV));
         _mm_store_ps(b->Ez + j, madd4(_mm_load_ps(b->Ez + j), _mm_set1_ps(v->power.z), GV));
     }
+}
+
+void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
+                         iir_pixel_batch *b)
+{
+    for (uint32_t i = 0; i < count; i++) apply_one(a, &v[i], b);
 }
 
 #endif
