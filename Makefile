@@ -88,7 +88,9 @@ test-cluster: build
 # classics (radiosity at three patch sizes beside ir and iir against 8-bounce references; iir and
 # ir at 2, 4 and 8 bounces; whitted,
 # hybrid, radiosity and pt on the mirror/glass box; radiosity's form-factor time and cache load at
-# each patch size) -- each
+# each patch size), the shading phases (issue 31: Cornell and conference at 512x384 and 1024x768,
+# full and multires; each instruction set of the kernels, IIR_ISA; images of the scalar and the
+# AVX2 kernels against the same references, out/bench/shading/) -- each
 # with references (cached in $(REFCACHE): a second run skips them), frames.csv, summary.json and
 # charts in out/bench/<scene>-<path>/. Measured: 6 min 44 s on 2 quiet cores with the references
 # already cached (2026-11-25); with an empty cache their rendering comes on top (not timed).
@@ -104,7 +106,7 @@ bench: build
 	    out/bench/cornell-compensation out/bench/cornell-controller out/bench/material-room \
 	    out/bench/glossy-spheres out/bench/glossy-room out/bench/glossy-vsl \
 	    out/bench/glossy-flicker/cornell_spheres out/bench/glossy-flicker/material_room \
-	    out/bench/refill
+	    out/bench/refill out/bench/shading
 	$(BUILD)/iird raybench conference
 	$(BUILD)/iird raybench
 	$(BENCH) --anim orbit --frames 0:100 --size 320x240 --methods $(PEERS),pt \
@@ -169,6 +171,14 @@ bench: build
 	    --out out/bench/glossy-flicker/$(s) &&) true
 	$(BENCH) material_room --frames 0:4 --size 256x192 --methods iir,ir --sweep vpl_kind=point,sphere \
 	    --sweep clamp=0,100 --ref-spp 512 --ref-every 2 --out out/bench/glossy-vsl
+	$(foreach s,cornell_box conference,$(foreach z,512x384 1024x768,$(BENCH) $(s) --anim orbit \
+	    --frames 0:60 --size $(z) --methods iir,ir --sweep shading=full,multires --ref-spp 0 \
+	    --out out/bench/shading/$(s)-$(z) &&)) true
+	$(foreach i,scalar sse2 avx2,IIR_ISA=$(i) $(BENCH) --anim orbit --frames 0:60 --size 512x384 \
+	    --methods iir,ir --ref-spp 0 --out out/bench/shading/isa-$(i) &&) true
+	$(foreach s,cornell_box conference,$(foreach i,scalar avx2,IIR_ISA=$(i) $(BENCH) $(s) --anim orbit \
+	    --frames 0:60 --size 256x192 --methods iir,ir --ref-spp 256 --ref-every 10 \
+	    --out out/bench/shading/images-$(s)-$(i) &&)) true
 	rm -rf out/bench/ffcache && $(foreach a,0.008 0.002 0.0005,$(foreach run,compute load, \
 	    IIR_CACHE_DIR=out/bench/ffcache $(BUILD)/iird render --method radiosity --patch-area $(a) \
 	    --size 64x48 --out out/bench/ffcache/still.png 2>&1 | grep "form factors of" &&)) true

@@ -12,6 +12,7 @@
 #include <cjson/cJSON.h>
 
 #include "bench.h"
+#include "iir/isa.h"
 #include "cli.h"
 
 /* ---- per-run statistics ---- */
@@ -256,6 +257,7 @@ static cJSON *machine_json(void)
     cJSON_AddNumberToObject(m, "nproc", (double)sysconf(_SC_NPROCESSORS_ONLN));
     cJSON_AddNumberToObject(m, "omp_threads", omp_get_max_threads());
     cJSON_AddStringToObject(m, "cpu_model", model);
+    cJSON_AddStringToObject(m, "isa", iir_isa_name(iir_isa_default()));
     return m;
 }
 
@@ -497,6 +499,8 @@ void iird_bench_summary(const iird_bench *b, FILE *f)
     print_ratios(b, s, f);
     print_knees(b, s, f);
     print_settings(b, f);
+    fprintf(f, "shading kernels: %s (IIR_ISA caps them: scalar, sse2, avx2)\n",
+            iir_isa_name(iir_isa_default()));
 }
 
 /* ---- charts ---- */

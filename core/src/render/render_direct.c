@@ -21,11 +21,13 @@
 #include "render_internal.h"
 
 enum { BLOCK_W = 4, BLOCK_H = 2 }; /* one packet; divides IIR_RENDER_TILE */
+enum { MAX_PREPARED = 64 }; /* lights prepared once a frame (more: once a block, as they come) */
 
 typedef struct direct_ctx {
     const iir_renderer *r;
     const iir_light *lights;
     uint32_t num_lights;
+    const iir_light_eval *evals; /* lights[i] prepared, when the frame has few (else NULL) */
     uint64_t seed;
     int samples; /* per pixel per area light (and for the emissive triangles) */
     float inv_samples;
@@ -253,7 +255,7 @@ static void delta_lanes(const direct_ctx *c, const iir_light_eval *e, block *b, 
  * light's samples and where the camera sees it. */
 static void shade_light(const direct_ctx *c, uint32_t li, block *b, iir_raystats *st)
 {
-    iir_light_eval e = iir_light_prepare(&c->lights[li]);
+    iir_light_eval e = c->evals ? c->evals[li] : iir_light_prepare(&c->lights[li]);
     if (!iir_light_is_delta(e.light)) {
         light_samples(c, &e, 1u + (uint64_t)li, b, st);
         area_light_seen(c, &e, b);
@@ -316,10 +318,16 @@ bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_rays
     direct_ctx c = {r,
                     job->lights,
                     job->num_lights,
+                    NULL,
                     job->seed,
                     n,
                     1.f / (float)n,
                     iir_camera_setup(&r->gb_camera, r->gb.width, r->gb.height)};
+    iir_light_eval evals[MAX_PREPARED];
+    if (c.num_lights <= MAX_PREPARED) {
+        for (uint32_t l = 0; l < c.num_lights; l++) evals[l] = iir_light_prepare(&c.lights[l]);
+        c.evals = evals;
+    }
     iir_image *out = job->out;
     /* bands of BLOCK_H whole rows: each per-pixel array streams through memory in long runs
        (16-pixel tile rows are a few cache lines each, too short for the prefetchers) */
