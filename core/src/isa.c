@@ -18,7 +18,8 @@ bool iir_isa_supported(iir_isa isa)
     case IIR_ISA_SSE2:
         return true; /* part of x86-64 */
     case IIR_ISA_AVX2:
-        return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+        return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+               __builtin_cpu_supports("f16c");
 #endif
     default:
         return false;

@@ -238,7 +238,8 @@ static double method_mb(const iir_method *m)
     uint32_t n = 0;
     const iir_vpl *v = iir_method_vpls(m, &n);
     double bytes = (double)n * sizeof(iir_vpl);
-    for (uint32_t i = 0; i < n; i++) bytes += (double)v[i].smap.res * v[i].smap.res * sizeof(float);
+    for (uint32_t i = 0; i < n; i++)
+        bytes += (double)v[i].smap.res * v[i].smap.res * sizeof *v[i].smap.depth;
     return bytes / (1024.0 * 1024.0);
 }
 

@@ -94,7 +94,7 @@ static void give_maps(iir_incr *inc)
     iir_vpl *v = iir_incr_vpls(inc, &n);
     for (uint32_t i = 0; i < n; i++)
         if (!v[i].null_sample && v[i].smap.res == 0) {
-            v[i].smap.depth = malloc(sizeof(float));
+            v[i].smap.depth = malloc(sizeof(uint16_t));
             v[i].smap.res = 1;
         }
 }

@@ -1,7 +1,8 @@
 /* test_isa.c -- the shading kernels of every instruction set this machine runs (isa.h) give the
  * scalar reference's frame up to float rounding: the same VPLs and G-buffer rendered once per set,
  * on the Cornell box (diffuse) and on a brass corner (glossy receivers and glossy VPLs, virtual
- * spherical lights), in full and multires shading. */
+ * spherical lights), in full and multires shading; and the half floats the maps are stored in,
+ * converted as the scalar kernels do and as F16C does. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -12,8 +13,10 @@
 
 #include "testutil.h"
 
+#include "iir/half.h"
 #include "iir/isa.h"
 #include "iir/method.h"
+#include "iir/rng.h"
 #include "iir/render.h"
 #include "iir/scene.h"
 
@@ -129,6 +132,50 @@ static void test_brass_corner(void **state)
     iir_test_unload(&f);
 }
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+__attribute__((target("f16c"))) static uint16_t f16c_from(float f)
+{
+    return (uint16_t)_cvtss_sh(f, _MM_FROUND_TO_NEAREST_INT);
+}
+__attribute__((target("f16c"))) static float f16c_to(uint16_t h)
+{
+    return _cvtsh_ss(h);
+}
+#endif
+
+/* half.h's conversions, which the scalar and SSE2 kernels read the maps with, against F16C's,
+ * which the AVX2 kernel reads them with: every non-negative half to float, and floats across the
+ * whole range (subnormal halves, ties, overflow) to half. Without F16C: the round trip alone. */
+static void test_half_floats(void **state)
+{
+    (void)state;
+    bool f16c = false;
+#if defined(__x86_64__)
+    f16c = __builtin_cpu_supports("f16c");
+#endif
+    for (uint32_t h = 0; h <= 0x7c00u; h++) {
+        float f = iir_half_to_float((uint16_t)h);
+        assert_int_equal(iir_half_from_float(f), h);
+#if defined(__x86_64__)
+        if (f16c) assert_true(f == f16c_to((uint16_t)h));
+#endif
+    }
+    assert_int_equal(iir_half_from_float(INFINITY), IIR_HALF_INF);
+    assert_int_equal(iir_half_from_float(65519.f), 0x7bffu);
+    assert_int_equal(iir_half_from_float(65520.f), IIR_HALF_INF);
+    if (!f16c) return;
+#if defined(__x86_64__)
+    iir_rng rng = iir_rng_make(11, 0);
+    for (int k = 0; k < 1000000; k++) {
+        /* exponents from far below the subnormal halves to beyond their range */
+        float f = ldexpf(1.f + iir_rng_uniform(&rng), (int)(iir_rng_uniform(&rng) * 48.f) - 30);
+        if (k % 4 == 0) f = iir_half_to_float((uint16_t)(k % 0x7c00)) * 1.0004882f; /* near ties */
+        assert_int_equal(iir_half_from_float(f), f16c_from(f));
+    }
+#endif
+}
+
 static void test_names(void **state)
 {
     (void)state;
@@ -144,6 +191,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_names),
+        cmocka_unit_test(test_half_floats),
         cmocka_unit_test(test_cornell),
         cmocka_unit_test(test_brass_corner),
     };

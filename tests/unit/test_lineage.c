@@ -68,8 +68,8 @@ static void test_survivors_keep_descendants(void **state)
         iir_vpl *d = iir_lineage_vpls(L, &nd);
         iir_vpl *before = malloc((nd ? nd : 1) * sizeof *before);
         for (uint32_t k = 0; k < nd; k++) {
-            if (!d[k].smap.depth) d[k].smap.depth = malloc(sizeof(float)), d[k].smap.res = 1;
-            d[k].smap.depth[0] = (float)k; /* this frame's index */
+            if (!d[k].smap.depth) d[k].smap.depth = malloc(sizeof(uint16_t)), d[k].smap.res = 1;
+            d[k].smap.depth[0] = (uint16_t)k; /* this frame's index */
             before[k] = d[k];
         }
         l.position = iir_add(l.position, iir_v3(0.01f, 0, 0));

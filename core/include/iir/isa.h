@@ -1,8 +1,8 @@
 /* isa.h -- the instruction sets the shading kernels are built for, and which one this machine
  * runs: the renderer's per-pixel loops exist once per set (scalar C, the reference the others are
- * tested against; SSE2, every x86-64; AVX2 with FMA) and the widest one the CPU supports is chosen
- * at run time, so one binary runs on any x86-64 machine. IIR_ISA in the environment (scalar, sse2,
- * avx2) caps the choice, for measuring one against another. */
+ * tested against; SSE2, every x86-64; AVX2 with FMA and F16C) and the widest one the CPU supports
+ * is chosen at run time, so one binary runs on any x86-64 machine. IIR_ISA in the environment
+ * (scalar, sse2, avx2) caps the choice, for measuring one against another. */
 #ifndef IIR_ISA_H
 #define IIR_ISA_H
 

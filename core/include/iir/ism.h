@@ -79,7 +79,8 @@ typedef struct iir_ism_params {
     uint64_t key;            /* with the VPL id, where its subset starts */
 } iir_ism_params;
 
-/* Floats of per-thread scratch iir_ism_render needs at resolution res (pull-push's levels). */
+/* Floats of per-thread scratch iir_ism_render needs at resolution res (the map in floats, then
+ * pull-push's levels). */
 size_t iir_ism_scratch_floats(int res);
 
 /* Renders v's ISM into m: (re)allocates m->depth with malloc when it has no texels or another

@@ -2,13 +2,16 @@
  * looking points up in it. Not the map's storage and lifetime (iir_smap in vpl.h) and not shading
  * (render.h).
  *
- * Layout (vpl.h): res x res floats, row-major, row j holds v in [j/res, (j+1)/res), column i holds
- * u in [i/res, (i+1)/res); (u, v) is the paraboloid parametrisation of the hemisphere about the
- * VPL's normal in its frame (r, u, f = normal). Texel (i, j) stores the distance from the map's
- * origin (the VPL's position lifted by iir_rt_epsilon along its normal) to the first surface along
- * the direction of the texel centre, INFINITY where that ray escapes. Texel centres outside the
- * unit disk of the parametrisation (the corners) are traced along the horizon direction of their
- * angle, so lookups near the horizon, and the 2x2 filter there, read sensible depths.
+ * Layout (vpl.h): res x res half floats (half.h), row-major, row j holds v in [j/res, (j+1)/res),
+ * column i holds u in [i/res, (i+1)/res); (u, v) is the paraboloid parametrisation of the
+ * hemisphere about the VPL's normal in its frame (r, u, f = normal). Texel (i, j) stores the
+ * distance from the map's origin (the VPL's position lifted by iir_rt_epsilon along its normal) to
+ * the first surface along the direction of the texel centre, over the map's scale (iir_smap_scale),
+ * +infinity where that ray escapes. Texel centres outside the unit disk of the parametrisation (the
+ * corners) are traced along the horizon direction of their angle, so lookups near the horizon, and
+ * the 2x2 filter there, read sensible depths. Half floats hold a depth to 2^-11 of itself, far
+ * inside the bias below (0.005 of the distance at the least), and halve the bytes the shading loop
+ * reads from maps that do not fit the caches (issue 31: 16 MB of float maps at 256 VPLs of 128^2).
  *
  * The paraboloid map is conformal: a texel subtends 2 (1 + cos theta) / res radians at polar angle
  * theta, from 4/res straight up to 2/res at the horizon.
@@ -31,7 +34,7 @@
  * pair with G > 0, against exact rays): b_rel from 0 to 0.05 moves agreement by less than 0.2%,
  * since the slope term does the work, so the default stays small to keep gaps tight.
  *
- * Resolution trades rays and memory (res^2 rays and 4 res^2 bytes per VPL, paid once at its birth)
+ * Resolution trades rays and memory (res^2 rays and 2 res^2 bytes per VPL, paid once at its birth)
  * against the width of the band along shadow edges where the map is wrong (a texel at 2 m spans
  * 4 m / res to 8 m / res): at 64^2 98.2% of the pairs agree (G-weighted |V_map - V_ray| 1.2%),
  * at 128^2 98.8% (0.6%), at 256^2 98.9% (0.4%, the paper's size). Most of what remains at 256^2
@@ -41,13 +44,14 @@
  * are each tested and the results blended with bilinear weights, so visibility is a fraction in
  * [0, 1] and shadow edges are ramps, not texel staircases. Against a nearest-texel lookup (with its
  * footprint's smaller slope term) it raises agreement at 128^2 from 97.9% to 98.8%, for three more
- * loads per lookup (the renderer's lookups are 4-wide SSE2 arithmetic around scalar loads). */
+ * loads per lookup (the renderer gathers them: render_batch.h). */
 #ifndef IIR_SHADOWMAP_H
 #define IIR_SHADOWMAP_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "iir/half.h"
 #include "iir/rt.h"
 #include "iir/vecmath.h"
 #include "iir/vpl.h"
@@ -61,6 +65,20 @@ extern "C" {
 #define IIR_SMAP_MAX_SLOPE 8.f     /* tan theta_x cap: about 83 degrees */
 
 /* ---- rendering maps ---- */
+
+/* The scale of every map of a scene whose ray epsilon is eps (iir_rt_epsilon): the least power of
+ * two >= 8 eps. A scene's extent is at most 1e5 eps (rt.c), so a depth over the scale is at most
+ * 12500, inside a half float's range, and at 2^-11 relative precision down to 1e-3 eps. */
+static inline float iir_smap_scale(float eps)
+{
+    return exp2f(ceilf(log2f(8.f * eps)));
+}
+
+/* Texel (i, j) of map m as a distance (INFINITY where its ray escaped). */
+static inline float iir_smap_depth_at(const iir_smap *m, int i, int j)
+{
+    return iir_half_to_float(m->depth[(size_t)j * (size_t)m->res + (size_t)i]) * m->scale;
+}
 
 /* Renders v's map at res x res (1 <= res <= IIR_SMAP_MAX_RES): (re)allocates m->depth with malloc
  * when it has no texels or another resolution, then traces one ray per texel centre from the VPL's
@@ -107,7 +125,8 @@ static inline float iir_smap_bias(float d, float dz, float tan_x, int res, float
 /* A map prepared for many lookups: the per-map constants, computed once (iir_smap_probe_make)
  * and kept out of the caller's loop over receivers. */
 typedef struct iir_smap_probe {
-    const float *depth;
+    const uint16_t *depth; /* half floats (half.h) */
+    float inv_scale;       /* 1 / the map's scale: a distance in the map's units */
     int res;
     float half_res; /* res / 2: the paraboloid's scale */
     float max_st;   /* res - 1: the last texel centre */
@@ -120,6 +139,7 @@ static inline iir_smap_probe iir_smap_probe_make(const iir_smap *m, float rel_bi
 {
     iir_smap_probe p;
     p.depth = m->depth;
+    p.inv_scale = 1.f / m->scale; /* exact: a power of two */
     p.res = m->res;
     p.half_res = 0.5f * (float)m->res;
     p.max_st = (float)m->res - 1.f;
@@ -130,8 +150,9 @@ static inline iir_smap_probe iir_smap_probe_make(const iir_smap *m, float rel_bi
 }
 
 /* 2x2 PCF at texel-space point (s, t), texel centres at integers (s = u res - 1/2): the fraction
- * of the four texels around it, bilinearly weighted, whose depth is at least dist_minus_bias.
- * Points beyond the outer texel centres take the border texels (s, t clamped). */
+ * of the four texels around it, bilinearly weighted, whose depth is at least dist_minus_bias (in
+ * the map's units: over its scale). Points beyond the outer texel centres take the border texels
+ * (s, t clamped). */
 static inline float iir_smap_pcf(const iir_smap_probe *p, float s, float t, float dist_minus_bias)
 {
     s = s > 0.f ? (s < p->max_st ? s : p->max_st) : 0.f; /* NaN: 0 */
@@ -139,12 +160,12 @@ static inline float iir_smap_pcf(const iir_smap_probe *p, float s, float t, floa
     int i0 = (int)s, j0 = (int)t;
     float fx = s - (float)i0, fy = t - (float)j0;
     int di = i0 + 1 < p->res, dj = j0 + 1 < p->res;
-    const float *row0 = p->depth + (size_t)j0 * (size_t)p->res;
-    const float *row1 = row0 + (size_t)dj * (size_t)p->res;
-    float v00 = dist_minus_bias <= row0[i0] ? 1.f : 0.f;
-    float v10 = dist_minus_bias <= row0[i0 + di] ? 1.f : 0.f;
-    float v01 = dist_minus_bias <= row1[i0] ? 1.f : 0.f;
-    float v11 = dist_minus_bias <= row1[i0 + di] ? 1.f : 0.f;
+    const uint16_t *row0 = p->depth + (size_t)j0 * (size_t)p->res;
+    const uint16_t *row1 = row0 + (size_t)dj * (size_t)p->res;
+    float v00 = dist_minus_bias <= iir_half_to_float(row0[i0]) ? 1.f : 0.f;
+    float v10 = dist_minus_bias <= iir_half_to_float(row0[i0 + di]) ? 1.f : 0.f;
+    float v01 = dist_minus_bias <= iir_half_to_float(row1[i0]) ? 1.f : 0.f;
+    float v11 = dist_minus_bias <= iir_half_to_float(row1[i0 + di]) ? 1.f : 0.f;
     float top = v00 + fx * (v10 - v00), bottom = v01 + fx * (v11 - v01);
     return top + fy * (bottom - top);
 }
@@ -165,7 +186,7 @@ static inline float iir_smap_probe_visibility(const iir_smap_probe *p, float wx,
     float texel_d = (d + wz) * p->texel; /* d times the texel angle 2 (1 + dz) / res */
     float bias = p->eps + d * p->rel_bias + IIR_SMAP_SLOPE_TEXELS * texel_d * slope;
     float c = p->half_res - 0.5f;
-    return iir_smap_pcf(p, wx * k + c, wy * k + c, d - bias);
+    return iir_smap_pcf(p, wx * k + c, wy * k + c, (d - bias) * p->inv_scale);
 }
 
 /* Visibility in [0, 1] of point x (receiver normal n_x, unit) from VPL v through map m, with the

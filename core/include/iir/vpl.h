@@ -27,10 +27,12 @@ extern "C" {
 /* ---- the shadow map ---- */
 
 typedef struct iir_smap {
-    int res;      /* res x res texels; 0 = not rendered */
-    float *depth; /* distance to the first hit per texel, INFINITY where the ray escaped */
-    bool coarse;  /* rendered below the asked resolution to bound a frame's cost, to be rendered
-                     again at it when a frame has room (iir_smaps_build_budget) */
+    int res;         /* res x res texels; 0 = not rendered */
+    uint16_t *depth; /* per texel, the distance to the first hit over scale as a half float
+                        (half.h), +infinity where the ray escaped */
+    float scale;     /* a power of two (iir_smap_scale): depth[i] * scale is the distance */
+    bool coarse;     /* rendered below the asked resolution to bound a frame's cost, to be rendered
+                        again at it when a frame has room (iir_smaps_build_budget) */
 } iir_smap;
 
 /* Frees the map's texels (allocated with malloc by the shadow-map renderer) and marks it not

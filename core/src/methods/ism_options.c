@@ -23,7 +23,7 @@ static const iir_param ISM_ROWS[] = {
      "points", "ISM: points sampled uniformly over the scene's area, once per method",
      IIR_PARAM_RESTART},
     {"ism_res", IIR_PARAM_INT, offsetof(iir_ism_options, res), 32, 8, 128, 0, NULL, "pixels",
-     "ISM: resolution of each VPL's imperfect shadow map (4 res^2 bytes per VPL)",
+     "ISM: resolution of each VPL's imperfect shadow map (2 res^2 bytes per VPL)",
      IIR_PARAM_RESTART},
     {"ism_points_per_vpl", IIR_PARAM_INT, offsetof(iir_ism_options, points_per_vpl), 1024, 64,
      262144, 0, NULL, "points",
@@ -54,7 +54,7 @@ iir_status iir_ism_maps_build(iir_ism_points **pts, const iir_scene *scene, cons
 uint64_t iir_ism_memory(const iir_ism_options *o, iir_visibility visibility, uint32_t n)
 {
     if (visibility != IIR_VIS_ISM) return 0;
-    uint64_t map = 4ull * (uint64_t)o->res * (uint64_t)o->res;
+    uint64_t map = 2ull * (uint64_t)o->res * (uint64_t)o->res;
     uint64_t points = (uint64_t)o->points * (sizeof(iir_ism_sample) + sizeof(iir_vec3));
     return (uint64_t)n * map + points;
 }

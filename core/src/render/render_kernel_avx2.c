@@ -1,6 +1,6 @@
 /* render_kernel_avx2.c -- the shadow-map kernel of the VPL sum 8 pixels a step with AVX2 and FMA
- * (render_batch.h), its four PCF texels fetched by two 64-bit gathers per row. Built with -mavx2
- * -mfma (CMakeLists) and called only where iir_isa_supported(IIR_ISA_AVX2). */
+ * (render_batch.h), its four PCF texels (half floats) fetched by one 32-bit gather per row. Built
+ * with -mavx2 -mfma (CMakeLists) and called only where iir_isa_supported(IIR_ISA_AVX2). */
 #include "render_batch.h"
 
 #if defined(__x86_64__)
@@ -17,18 +17,16 @@ static inline __m256 passes(__m256 dmb, __m256 depth)
     return _mm256_and_ps(_mm256_cmp_ps(dmb, depth, _CMP_LE_OQ), _mm256_set1_ps(1.f));
 }
 
-/* Texels idx and idx + 1 of depth (a row's neighbours) at 8 lanes, two texels a gathered 64-bit
- * load: *left the first of each pair, *right the second. */
-static inline void texel_pairs(const float *depth, __m256i idx, __m256 *left, __m256 *right)
+/* Texels idx and idx + 1 of depth (a row's neighbours) at 8 lanes as floats, two half texels a
+ * gathered 32-bit load: *left the first of each pair, *right the second. */
+static inline void texel_pairs(const uint16_t *depth, __m256i idx, __m256 *left, __m256 *right)
 {
-    const double *base = (const double *)(const void *)depth; /* 8-byte loads at 4-byte steps */
-    __m256 lo = _mm256_castpd_ps(_mm256_i32gather_pd(base, _mm256_castsi256_si128(idx), 4));
-    __m256 hi = _mm256_castpd_ps(_mm256_i32gather_pd(base, _mm256_extracti128_si256(idx, 1), 4));
-    /* lo: l0 r0 l1 r1 | l2 r2 l3 r3, hi: lanes 4..7 alike; shuffles give lanes 0 1 4 5 | 2 3 6 7 */
-    *left = _mm256_castpd_ps(
-        _mm256_permute4x64_pd(_mm256_castps_pd(_mm256_shuffle_ps(lo, hi, 0x88)), 0xd8));
-    *right = _mm256_castpd_ps(
-        _mm256_permute4x64_pd(_mm256_castps_pd(_mm256_shuffle_ps(lo, hi, 0xdd)), 0xd8));
+    __m256i x = _mm256_i32gather_epi32((const int *)(const void *)depth, idx, 2);
+    __m256i lo = _mm256_and_si256(x, _mm256_set1_epi32(0xffff)), hi = _mm256_srli_epi32(x, 16);
+    /* packed: lo 0-3, hi 0-3 | lo 4-7, hi 4-7; permuted: lo 0-7 | hi 0-7 */
+    __m256i halves = _mm256_permute4x64_epi64(_mm256_packus_epi32(lo, hi), 0xd8);
+    *left = _mm256_cvtph_ps(_mm256_castsi256_si128(halves));
+    *right = _mm256_cvtph_ps(_mm256_extracti128_si256(halves, 1));
 }
 
 /* iir_smap_pcf for 8 lanes (s, t already clamped to [0, max_st]). The 2x2 footprint's corner is
@@ -74,7 +72,7 @@ static inline void lookup8(const iir_smap_probe *p, __m256 wx, __m256 wy, __m256
     __m256 c = _mm256_set1_ps(p->half_res - 0.5f), hi = _mm256_set1_ps(p->max_st);
     *s = _mm256_min_ps(_mm256_max_ps(_mm256_fmadd_ps(wx, k, c), zero), hi);
     *t = _mm256_min_ps(_mm256_max_ps(_mm256_fmadd_ps(wy, k, c), zero), hi);
-    *dmb = _mm256_sub_ps(d, bias);
+    *dmb = _mm256_mul_ps(_mm256_sub_ps(d, bias), _mm256_set1_ps(p->inv_scale));
 }
 
 /* Asks for the cache lines of the two texel rows pcf8 will read at (s, t). */

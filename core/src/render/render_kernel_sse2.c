@@ -15,27 +15,36 @@ static inline __m128 dot4(__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by,
     return madd4(madd4(_mm_mul_ps(ax, bx), ay, by), az, bz);
 }
 
-/* iir_smap_pcf for 4 lanes. */
+/* iir_half_to_float for 4 lanes (non-negative halves in 32-bit lanes): exact. */
+static inline __m128 half_to_float4(__m128i h)
+{
+    __m128i inf = _mm_set1_epi32(IIR_HALF_INF);
+    __m128 is_inf = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(h, inf), inf));
+    __m128i bits = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x7fff)), 13);
+    __m128 f = _mm_mul_ps(_mm_castsi128_ps(bits), _mm_set1_ps(0x1p112f));
+    return _mm_or_ps(_mm_andnot_ps(is_inf, f), _mm_and_ps(is_inf, _mm_set1_ps(INFINITY)));
+}
+
+/* iir_smap_pcf for 4 lanes: the texel loads are scalar (SSE2 has no gather). */
 static inline __m128 pcf4(const iir_smap_probe *p, __m128 s, __m128 t, __m128 dmb)
 {
     __m128i i0 = _mm_cvttps_epi32(s), j0 = _mm_cvttps_epi32(t);
     __m128 fx = _mm_sub_ps(s, _mm_cvtepi32_ps(i0)), fy = _mm_sub_ps(t, _mm_cvtepi32_ps(j0));
     _Alignas(16) int32_t is[4], js[4];
-    _Alignas(16) float d00[4], d10[4], d01[4], d11[4];
+    _Alignas(16) int32_t d00[4], d10[4], d01[4], d11[4];
     _mm_store_si128((__m128i *)is, i0);
     _mm_store_si128((__m128i *)js, j0);
     for (int l = 0; l < 4; l++) {
         int di = is[l] + 1 < p->res, dj = js[l] + 1 < p->res;
-        const float *row0 = p->depth + (size_t)js[l] * (size_t)p->res;
-        const float *row1 = row0 + (size_t)dj * (size_t)p->res;
+        const uint16_t *row0 = p->depth + (size_t)js[l] * (size_t)p->res;
+        const uint16_t *row1 = row0 + (size_t)dj * (size_t)p->res;
         d00[l] = row0[is[l]], d10[l] = row0[is[l] + di];
         d01[l] = row1[is[l]], d11[l] = row1[is[l] + di];
     }
     __m128 one = _mm_set1_ps(1.f);
-    __m128 v00 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d00)), one);
-    __m128 v10 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d10)), one);
-    __m128 v01 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d01)), one);
-    __m128 v11 = _mm_and_ps(_mm_cmple_ps(dmb, _mm_load_ps(d11)), one);
+#define PASSES(d) _mm_and_ps(_mm_cmple_ps(dmb, half_to_float4(_mm_load_si128((__m128i *)d))), one)
+    __m128 v00 = PASSES(d00), v10 = PASSES(d10), v01 = PASSES(d01), v11 = PASSES(d11);
+#undef PASSES
     __m128 top = madd4(v00, fx, _mm_sub_ps(v10, v00)),
            bottom = madd4(v01, fx, _mm_sub_ps(v11, v01));
     return madd4(top, fy, _mm_sub_ps(bottom, top));
@@ -60,7 +69,7 @@ static inline __m128 visibility4(const iir_smap_probe *p, __m128 wx, __m128 wy, 
     __m128 c = _mm_set1_ps(p->half_res - 0.5f), hi = _mm_set1_ps(p->max_st);
     __m128 s = _mm_min_ps(_mm_max_ps(madd4(c, wx, k), zero), hi);
     __m128 t = _mm_min_ps(_mm_max_ps(madd4(c, wy, k), zero), hi);
-    return pcf4(p, s, t, _mm_sub_ps(d, bias));
+    return pcf4(p, s, t, _mm_mul_ps(_mm_sub_ps(d, bias), _mm_set1_ps(p->inv_scale)));
 }
 
 /* Adds the glossy lanes of pixels j..j+3 (GV: their G V; every lane for a glossy VPL) through

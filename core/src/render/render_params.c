@@ -25,7 +25,7 @@ static const iir_param VIS_ROWS[] = {
      "VPL visibility: shadowmap (fast), rays (exact, slow) or ism (imperfect shadow maps, cheap)",
      IIR_PARAM_LIVE},
     {"sm_res", IIR_PARAM_INT, offsetof(iir_indirect_params, sm_res), 128, 8, 2048, 0, NULL,
-     "pixels", "shadow-map resolution (res^2 rays and 4 res^2 bytes per VPL, paid at its birth)",
+     "pixels", "shadow-map resolution (res^2 rays and 2 res^2 bytes per VPL, paid at its birth)",
      IIR_PARAM_RESTART},
 };
 const iir_param_table iir_vis_table = {"VPL visibility (ir, iir)", VIS_ROWS,
@@ -159,6 +159,6 @@ uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int
        levels (a third of the pixels) a flag, a sample, a depth, E, F and an order entry */
     if (o->shading == IIR_SHADING_MULTIRES) bytes += px * (1 + 1 + 4 + 4) + px / 3 * 69;
     bytes += px * (24 + 12); /* refinement: double sum + pass image */
-    uint64_t map = o->visibility == IIR_VIS_SHADOWMAP ? 4ull * (uint64_t)o->sm_res * o->sm_res : 0;
+    uint64_t map = o->visibility == IIR_VIS_SHADOWMAP ? 2ull * (uint64_t)o->sm_res * o->sm_res : 0;
     return bytes + (uint64_t)n * (sizeof(iir_vpl) + map);
 }

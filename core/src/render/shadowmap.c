@@ -22,9 +22,10 @@ static iir_vec3 texel_dir(int i, int j, int res)
     return iir_paraboloid_dir(iir_v2(0.5f * (x + 1.f), 0.5f * (y + 1.f)));
 }
 
-/* Traces texels i0 .. i0+7 of row j (those < res) as one packet. */
+/* Traces texels i0 .. i0+7 of row j (those < res) as one packet, storing each distance times
+ * inv_scale as a half float. */
 static void trace_run(const iir_rt *rt, const iir_vpl *v, iir_vec3 org, int i0, int j, int res,
-                      float *row, iir_raystats *st)
+                      float inv_scale, uint16_t *row, iir_raystats *st)
 {
     iir_ray8 rays;
     for (int k = 0; k < 8; k++) {
@@ -38,7 +39,8 @@ static void trace_run(const iir_rt *rt, const iir_vpl *v, iir_vec3 org, int i0, 
     }
     iir_hit hits[8];
     iir_rt_intersect8(rt, &rays, hits, st, IIR_RAYS_SHADOWMAP);
-    for (int k = 0; k < 8 && i0 + k < res; k++) row[i0 + k] = hits[k].t;
+    for (int k = 0; k < 8 && i0 + k < res; k++)
+        row[i0 + k] = iir_half_from_float(hits[k].t * inv_scale);
 }
 
 bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, iir_raystats *st)
@@ -46,13 +48,15 @@ bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, i
     assert(res >= 1 && res <= IIR_SMAP_MAX_RES && "iir_smap_render: resolution out of range");
     if (!m->depth || m->res != res) {
         iir_smap_release(m);
-        m->depth = malloc(sizeof(float) * (size_t)res * (size_t)res);
+        m->depth = malloc(sizeof *m->depth * (size_t)res * (size_t)res);
         if (!m->depth) return false;
     }
+    m->scale = iir_smap_scale(iir_rt_epsilon(rt));
     iir_vec3 org = iir_madd(v->position, v->frame.f, iir_rt_epsilon(rt));
     for (int j = 0; j < res; j++)
         for (int i0 = 0; i0 < res; i0 += 8)
-            trace_run(rt, v, org, i0, j, res, m->depth + (size_t)j * (size_t)res, st);
+            trace_run(rt, v, org, i0, j, res, 1.f / m->scale, m->depth + (size_t)j * (size_t)res,
+                      st);
     m->res = res;
     m->coarse = false;
     return true;

@@ -106,7 +106,7 @@ iir_status iir_ism_points_create(const iir_scene *scene, uint32_t n, uint64_t se
 
 size_t iir_ism_scratch_floats(int res)
 {
-    return iir_pullpush_scratch_floats(res, res);
+    return (size_t)res * (size_t)res + iir_pullpush_scratch_floats(res, res);
 }
 
 /* The texel holding local direction w (w.z > 0, |w| = len) at resolution res: iir_paraboloid_uv
@@ -146,12 +146,15 @@ bool iir_ism_render(iir_smap *m, const iir_ism_points *pts, const iir_vpl *v,
     size_t texels = (size_t)p->res * (size_t)p->res;
     if (!m->depth || m->res != p->res) {
         iir_smap_release(m);
-        m->depth = malloc(sizeof(float) * texels);
+        m->depth = malloc(sizeof *m->depth * texels);
         if (!m->depth) return false;
     }
-    for (size_t k = 0; k < texels; k++) m->depth[k] = INFINITY;
-    iir_ism_splat(m->depth, pts, v, p, eps);
-    iir_pullpush(m->depth, p->res, p->res, scratch);
+    float *depth = scratch; /* the map in floats, then pull-push's levels */
+    for (size_t k = 0; k < texels; k++) depth[k] = INFINITY;
+    iir_ism_splat(depth, pts, v, p, eps);
+    iir_pullpush(depth, p->res, p->res, scratch + texels);
+    m->scale = iir_smap_scale(eps);
+    for (size_t k = 0; k < texels; k++) m->depth[k] = iir_half_from_float(depth[k] / m->scale);
     m->res = p->res;
     return true;
 }
