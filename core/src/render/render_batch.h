@@ -60,6 +60,12 @@ void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, uint3
 void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
                          iir_pixel_batch *b);
 
+/* A vector kernel's lanes j .. j + lanes - 1 with G V in g: those through a BSDF (a glossy pixel,
+ * or every lane for a glossy VPL) are added by iir_batch_add_lit and zeroed in g; the caller adds
+ * the rest as diffuse. */
+void iir_batch_glossy_lanes(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b,
+                            int j, float *g, int lanes);
+
 /* The kernel for isa (one this build and CPU support: iir_isa_supported). */
 iir_smap_kernel iir_smap_kernel_for(iir_isa isa);
 

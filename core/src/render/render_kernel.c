@@ -27,6 +27,14 @@ void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, uin
     for (uint32_t i = 0; i < count; i++) apply_one(a, &v[i], b);
 }
 
+void iir_batch_glossy_lanes(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b,
+                            int j, float *g, int lanes)
+{
+    for (int l = 0; l < lanes; l++)
+        if (v->glossy || iir_batch_is_glossy(b, j + l))
+            iir_batch_add_lit(b, j + l, v, g[l], a->g_max), g[l] = 0.f;
+}
+
 iir_smap_kernel iir_smap_kernel_for(iir_isa isa)
 {
     switch (isa) {

@@ -97,9 +97,7 @@ static __m256 glossy_lanes(const iir_kernel_args *a, const iir_shade_vpl *v, iir
 {
     _Alignas(32) float g[8];
     _mm256_store_ps(g, GV);
-    for (int l = 0; l < 8; l++)
-        if (v->glossy || iir_batch_is_glossy(b, j + l))
-            iir_batch_add_lit(b, j + l, v, g[l], a->g_max), g[l] = 0.f;
+    iir_batch_glossy_lanes(a, v, b, j, g, 8);
     return _mm256_load_ps(g);
 }
 

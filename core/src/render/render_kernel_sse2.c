@@ -79,9 +79,7 @@ static __m128 glossy_lanes(const iir_kernel_args *a, const iir_shade_vpl *v, iir
 {
     _Alignas(16) float g[4];
     _mm_store_ps(g, GV);
-    for (int l = 0; l < 4; l++)
-        if (v->glossy || iir_batch_is_glossy(b, j + l))
-            iir_batch_add_lit(b, j + l, v, g[l], a->g_max), g[l] = 0.f;
+    iir_batch_glossy_lanes(a, v, b, j, g, 4);
     return _mm_load_ps(g);
 }
 
