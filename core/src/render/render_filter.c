@@ -48,7 +48,7 @@ static inline int similar(const filter_ctx *c, size_t centre, size_t j)
  * along its row is similar to it, bit 16 + MAX_H + d the tap d pixels along its column (0 beyond
  * the image). It depends only on the G-buffer, which is kept while the camera is still, so the
  * passes read one word per pixel instead of testing depths and normals tap by tap. */
-enum { MAX_H = IIR_MAX_INTERLEAVE / 2, COLUMN = 16 };
+enum { MAX_H = IIR_FILTER_MAX_H, COLUMN = IIR_FILTER_COLUMN };
 
 static uint32_t pixel_mask(const filter_ctx *c, int x, int y)
 {
@@ -241,6 +241,44 @@ static void compose_row(const filter_ctx *c, bool filter, int y, iir_image *out)
     }
 }
 
+/* Composes row y with the column pass 8 pixels a step (full shading, AVX2). */
+static void compose_row_lanes(const filter_ctx *c, const iir_filter_lanes *fl, int y,
+                              iir_image *out)
+{
+    enum { SPAN = 256 };
+    const iir_gbuffer *gb = &c->r->gb;
+    iir_vec3 E[SPAN];
+    for (int x0 = 0; x0 < gb->width; x0 += SPAN) {
+        int x1 = x0 + SPAN < gb->width ? x0 + SPAN : gb->width;
+        iir_filter_columns_avx2(fl, y, x0, x1, E);
+        for (int x = x0; x < x1; x++) {
+            size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
+            if (gb->prim[i] == IIR_NO_HIT) continue;
+            iir_vec3 *L = iir_image_at(out, x, y);
+            iir_vec3 k = gb->any_pbr ? iir_gb_demod(gb, i, c->receivers) : gb->albedo[i];
+            if (gb->any_chain) k = iir_mul(k, gb->through[i]);
+            *L = iir_add(*L, iir_mul(iir_scale(k, IIR_INV_PI), E[x - x0]));
+        }
+    }
+}
+
+/* The full-shading filter with the AVX2 passes (the scalar ones' image). */
+static void filter_lanes(const filter_ctx *c, iir_image *out)
+{
+    const iir_renderer *r = c->r;
+    iir_filter_lanes fl = {r->gb.width, r->gb.height,  c->n,
+                           c->h,        c->end_weight, r->fmask,
+                           c->live,     r->raw,        (float *)r->rows};
+    _Static_assert(sizeof(iir_filter_row) == 4 * sizeof(float), "rows hold the four planes");
+#pragma omp parallel
+    {
+#pragma omp for schedule(dynamic, 8)
+        for (int y = 0; y < fl.height; y++) iir_filter_rows_avx2(&fl, y);
+#pragma omp for schedule(dynamic, 8)
+        for (int y = 0; y < fl.height; y++) compose_row_lanes(c, &fl, y, out);
+    }
+}
+
 void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image *out)
 {
     filter_ctx c = make_ctx(r, p);
@@ -252,6 +290,17 @@ void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image 
     bool known = r->near_fine_gen == gen && r->near_fine_h == c.h;
     bool masked = r->fmask_serial == r->gb_serial && r->fmask_h == c.h;
     c.mask = r->fmask;
+#if defined(__x86_64__)
+    if (filter && !r->level && r->isa >= IIR_ISA_AVX2) {
+        if (!masked) {
+#pragma omp parallel for schedule(dynamic, 1)
+            for (int t = 0; t < tiles; t++) mask_tile(&c, t);
+        }
+        filter_lanes(&c, out);
+        r->fmask_serial = r->gb_serial, r->fmask_h = c.h;
+        return;
+    }
+#endif
 #pragma omp parallel
     {
         if (filter && !masked) {

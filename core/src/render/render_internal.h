@@ -199,6 +199,27 @@ iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_param
  * stoppable). */
 bool iir_render_compensate(iir_renderer *r, const iir_shade_job *job, iir_raystats *st);
 
+/* The filter's tap masks (render_filter.c): bit IIR_FILTER_MAX_H + d of a pixel's word says
+ * whether the tap d pixels along its row is similar to it, bit IIR_FILTER_COLUMN + IIR_FILTER_MAX_H
+ * + d the tap d pixels along its column. */
+enum { IIR_FILTER_MAX_H = IIR_MAX_INTERLEAVE / 2, IIR_FILTER_COLUMN = 16 };
+
+/* render_filter_avx2.c: the full-shading filter's passes 8 pixels a step, the same sums as the
+ * scalar passes in the same order (the same image). */
+typedef struct iir_filter_lanes {
+    int width, height, n, h;
+    float end_weight;     /* of the taps at +-h */
+    const uint32_t *mask; /* per pixel: the taps' similarity */
+    const int *live;      /* n x n: 1 for the subsets with VPLs */
+    const iir_vec3 *raw;  /* the demodulated indirect light */
+    float *planes; /* 4 planes of width x height: the row pass's sums (x, y, z) and weights */
+} iir_filter_lanes;
+/* The row pass of row y into planes. */
+void iir_filter_rows_avx2(const iir_filter_lanes *f, int y);
+/* The column pass of row y's pixels [x0, x1) (their rows' passes done): E[x - x0], the filtered
+ * light (0 where no tap counted). */
+void iir_filter_columns_avx2(const iir_filter_lanes *f, int y, int x0, int x1, iir_vec3 *E);
+
 /* render_filter.c: out += demod / pi * (filtered or raw) r->raw (iir_gb_demod: the glossy pixels',
  * which multires shades at full resolution); with r->level set only its level-0 pixels
  * are filtered (the others take their upsampled value, iir_multires_upsample_span, and count as
