@@ -241,6 +241,7 @@ static void compose_row(const filter_ctx *c, bool filter, int y, iir_image *out)
     }
 }
 
+#if defined(__x86_64__)
 /* Composes row y with the column pass 8 pixels a step (full shading, AVX2). */
 static void compose_row_lanes(const filter_ctx *c, const iir_filter_lanes *fl, int y,
                               iir_image *out)
@@ -278,6 +279,7 @@ static void filter_lanes(const filter_ctx *c, iir_image *out)
         for (int y = 0; y < fl.height; y++) compose_row_lanes(c, &fl, y, out);
     }
 }
+#endif
 
 void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image *out)
 {
