@@ -28,6 +28,8 @@ typedef struct direct_ctx {
     const iir_light *lights;
     uint32_t num_lights;
     const iir_light_eval *evals; /* lights[i] prepared, when the frame has few (else NULL) */
+    bool lean; /* AVX2, delta lights only (prepared), no glossy pixel, no specular chain: lean_block
+                */
     uint64_t seed;
     int samples; /* per pixel per area light (and for the emissive triangles) */
     float inv_samples;
@@ -299,8 +301,68 @@ static void load_block(const iir_gbuffer *gb, int x0, int y0, block *b)
     }
 }
 
+#if defined(__x86_64__)
+/* shade_block for the common frame (direct_ctx.lean): each pixel's position, normal, albedo and
+ * emission read once into lanes, each light's 8-lane sample straight into one packet -- the same
+ * sums as shade_block's (its f is albedo / pi and its chain's factor 1 here). */
+static void lean_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir_raystats *st)
+{
+    const iir_gbuffer *gb = &c->r->gb;
+    iir_light_lanes in;
+    iir_vec3 f[8], L[8];
+    bool shaded[8];
+    for (int k = 0; k < 8; k++) {
+        int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
+        bool inside = x < gb->width && y < gb->height;
+        size_t i = inside ? (size_t)y * (size_t)gb->width + (size_t)x : 0;
+        bool hit = inside && gb->prim[i] != IIR_NO_HIT;
+        shaded[k] = hit && !iir_is_black(gb->albedo[i]);
+        L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
+        f[k] = shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
+        iir_vec3 p = gb->position[i], n = gb->normal[i];
+        in.px[k] = p.x, in.py[k] = p.y, in.pz[k] = p.z;
+        in.nx[k] = n.x, in.ny[k] = n.y, in.nz[k] = n.z;
+    }
+    for (uint32_t l = 0; l < c->num_lights; l++) {
+        iir_light_delta_lanes o;
+        iir_light_sample_delta8_avx2(&c->evals[l], c->r->eps, &in, &o);
+        iir_ray8 rays;
+        iir_vec3 pending[8];
+        bool any = false;
+        for (int k = 0; k < 8; k++) {
+            rays.valid[k] = 0;
+            iir_vec3 E = iir_v3(o.Ex[k], o.Ey[k], o.Ez[k]);
+            if (!shaded[k] || iir_is_black(E)) continue;
+            pending[k] = iir_mul(iir_mul(f[k], iir_v3s(1.f)), E);
+            if (!(o.tmax[k] > 0.f)) {
+                L[k] = iir_add(L[k], pending[k]);
+                continue;
+            }
+            set_lane(&rays, k, iir_v3(o.ox[k], o.oy[k], o.oz[k]), iir_v3(o.dx[k], o.dy[k], o.dz[k]),
+                     o.tmax[k]);
+            any = true;
+        }
+        if (!any) continue;
+        bool occluded[8];
+        iir_rt_occluded8(c->r->rt, &rays, occluded, st, IIR_RAYS_SHADOW);
+        for (int k = 0; k < 8; k++)
+            if (rays.valid[k] && !occluded[k]) L[k] = iir_add(L[k], pending[k]);
+    }
+    for (int k = 0; k < 8; k++) {
+        int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
+        if (x < out->width && y < out->height) *iir_image_at(out, x, y) = L[k];
+    }
+}
+#endif
+
 static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir_raystats *st)
 {
+#if defined(__x86_64__)
+    if (c->lean) {
+        lean_block(c, x0, y0, out, st);
+        return;
+    }
+#endif
     block b;
     load_block(&c->r->gb, x0, y0, &b);
     for (uint32_t l = 0; l < c->num_lights; l++) shade_light(c, l, &b, st);
@@ -315,19 +377,18 @@ bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_rays
 {
     bool stopped = false;
     int n = job->p->area_samples;
-    direct_ctx c = {r,
-                    job->lights,
-                    job->num_lights,
-                    NULL,
-                    job->seed,
-                    n,
-                    1.f / (float)n,
-                    iir_camera_setup(&r->gb_camera, r->gb.width, r->gb.height)};
+    direct_ctx c = {
+        r,    job->lights,    job->num_lights,
+        NULL, false,          job->seed,
+        n,    1.f / (float)n, iir_camera_setup(&r->gb_camera, r->gb.width, r->gb.height)};
     iir_light_eval evals[MAX_PREPARED];
     if (c.num_lights <= MAX_PREPARED) {
         for (uint32_t l = 0; l < c.num_lights; l++) evals[l] = iir_light_prepare(&c.lights[l]);
         c.evals = evals;
     }
+    c.lean =
+        c.evals && r->isa >= IIR_ISA_AVX2 && !r->area_lights && !r->gb.any_pbr && !r->gb.any_chain;
+    for (uint32_t l = 0; l < c.num_lights && c.lean; l++) c.lean = iir_light_is_delta(&c.lights[l]);
     iir_image *out = job->out;
     /* bands of BLOCK_H whole rows: each per-pixel array streams through memory in long runs
        (16-pixel tile rows are a few cache lines each, too short for the prefetchers) */
