@@ -333,7 +333,7 @@ static void lean_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir_
             rays.valid[k] = 0;
             iir_vec3 E = iir_v3(o.Ex[k], o.Ey[k], o.Ez[k]);
             if (!shaded[k] || iir_is_black(E)) continue;
-            pending[k] = iir_mul(iir_mul(f[k], iir_v3s(1.f)), E);
+            pending[k] = iir_mul(f[k], E); /* shade_block's through is 1: x 1 is exact */
             if (!(o.tmax[k] > 0.f)) {
                 L[k] = iir_add(L[k], pending[k]);
                 continue;
