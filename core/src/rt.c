@@ -283,6 +283,37 @@ void iir_rt_occluded8(const iir_rt *rt, const iir_ray8 *rays, bool occluded[8], 
     for (int i = 0; i < 8; i++) occluded[i] = valid[i] && r.tfar[i] < 0.f;
 }
 
+/* Lanes 8 h .. 8 h + 7 of a 16-wide packet from p. */
+static void set_ray16_half(struct RTCRay16 *r, const iir_ray8 *p, int h, int valid[16])
+{
+    for (int k = 0; k < 8; k++) {
+        int i = 8 * h + k;
+        valid[i] = p->valid[k] ? -1 : 0;
+        r->org_x[i] = p->ox[k], r->org_y[i] = p->oy[k], r->org_z[i] = p->oz[k];
+        r->dir_x[i] = p->dx[k], r->dir_y[i] = p->dy[k], r->dir_z[i] = p->dz[k];
+        r->tnear[i] = p->tnear[k];
+        r->tfar[i] = p->tfar[k];
+        r->time[i] = 0.f;
+        r->mask[i] = UINT32_MAX;
+        r->id[i] = (unsigned)i;
+        r->flags[i] = 0;
+    }
+}
+
+void iir_rt_occluded16(const iir_rt *rt, const iir_ray8 halves[2], bool occluded[16],
+                       iir_raystats *st, iir_ray_kind kind)
+{
+    query_ctx ctx = plain_ctx();
+    ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    struct RTCRay16 r;
+    _Alignas(64) int valid[16];
+    set_ray16_half(&r, &halves[0], 0, valid);
+    set_ray16_half(&r, &halves[1], 1, valid);
+    rtcOccluded16(valid, rt->scene, &ctx.rtc, &r);
+    count(st, kind, count_valid(valid) + count_valid(valid + 8));
+    for (int i = 0; i < 16; i++) occluded[i] = valid[i] && r.tfar[i] < 0.f;
+}
+
 /* ---- counters ---- */
 
 const char *iir_ray_kind_name(iir_ray_kind kind)

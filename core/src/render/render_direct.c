@@ -11,9 +11,10 @@
  * every light; pt weights area-light samples by MIS against BSDF sampling, this uses the
  * light sample alone (weight 1), which is unbiased by itself. Shadow rays go out as 8-wide packets
  * over 4x2 pixel blocks (neighbouring pixels, one light: coherent rays); with AVX2 a point, spot
- * or sun is evaluated at the block's 8 pixels at once (iir_light_sample_delta8_avx2). Threads:
- * OpenMP over bands of two whole rows, each writing only its own pixels of the frame; ray counters
- * per thread, summed once. */
+ * or sun is evaluated at the block's 8 pixels at once (iir_light_sample_delta8_avx2), and a frame
+ * of such lights alone on diffuse surfaces (lean) goes in 4x4 blocks, one 16-wide packet each.
+ * Threads: OpenMP over bands of two (lean: four) whole rows, each writing only its own pixels of
+ * the frame; ray counters per thread, summed once. */
 #include <omp.h>
 
 #include "iir/rng.h"
@@ -302,56 +303,77 @@ static void load_block(const iir_gbuffer *gb, int x0, int y0, block *b)
 }
 
 #if defined(__x86_64__)
-/* shade_block for the common frame (direct_ctx.lean): each pixel's position, normal, albedo and
- * emission read once into lanes, each light's 8-lane sample straight into one packet -- the same
- * sums as shade_block's (its f is albedo / pi and its chain's factor 1 here). */
-static void lean_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir_raystats *st)
-{
-    const iir_gbuffer *gb = &c->r->gb;
+/* Lanes of the 4x2 half h (rows y0 + 2 h, y0 + 2 h + 1) of a lean 4x4 block, read once. */
+typedef struct lean_half {
     iir_light_lanes in;
-    iir_vec3 f[8], L[8];
+    iir_vec3 f[8], L[8], pending[8];
     bool shaded[8];
+} lean_half;
+
+static void lean_load(const iir_gbuffer *gb, int x0, int y0, lean_half *q)
+{
     for (int k = 0; k < 8; k++) {
         int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
         bool inside = x < gb->width && y < gb->height;
         size_t i = inside ? (size_t)y * (size_t)gb->width + (size_t)x : 0;
         bool hit = inside && gb->prim[i] != IIR_NO_HIT;
-        shaded[k] = hit && !iir_is_black(gb->albedo[i]);
-        L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
-        f[k] = shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
+        q->shaded[k] = hit && !iir_is_black(gb->albedo[i]);
+        q->L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
+        q->f[k] = q->shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
         iir_vec3 p = gb->position[i], n = gb->normal[i];
-        in.px[k] = p.x, in.py[k] = p.y, in.pz[k] = p.z;
-        in.nx[k] = n.x, in.ny[k] = n.y, in.nz[k] = n.z;
+        q->in.px[k] = p.x, q->in.py[k] = p.y, q->in.pz[k] = p.z;
+        q->in.nx[k] = n.x, q->in.ny[k] = n.y, q->in.nz[k] = n.z;
     }
-    for (uint32_t l = 0; l < c->num_lights; l++) {
-        iir_light_delta_lanes o;
-        iir_light_sample_delta8_avx2(&c->evals[l], c->r->eps, &in, &o);
-        iir_ray8 rays;
-        iir_vec3 pending[8];
-        bool any = false;
-        for (int k = 0; k < 8; k++) {
-            rays.valid[k] = 0;
-            iir_vec3 E = iir_v3(o.Ex[k], o.Ey[k], o.Ez[k]);
-            if (!shaded[k] || iir_is_black(E)) continue;
-            pending[k] = iir_mul(f[k], E); /* shade_block's through is 1: x 1 is exact */
-            if (!(o.tmax[k] > 0.f)) {
-                L[k] = iir_add(L[k], pending[k]);
-                continue;
-            }
-            set_lane(&rays, k, iir_v3(o.ox[k], o.oy[k], o.oz[k]), iir_v3(o.dx[k], o.dy[k], o.dz[k]),
-                     o.tmax[k]);
-            any = true;
-        }
-        if (!any) continue;
-        bool occluded[8];
-        iir_rt_occluded8(c->r->rt, &rays, occluded, st, IIR_RAYS_SHADOW);
-        for (int k = 0; k < 8; k++)
-            if (rays.valid[k] && !occluded[k]) L[k] = iir_add(L[k], pending[k]);
-    }
+}
+
+/* Light e's 8 samples of half q into rays (its pending light; added at once where the segment is
+ * too short to test). True when a lane has a ray. */
+static bool lean_samples(const direct_ctx *c, const iir_light_eval *e, lean_half *q, iir_ray8 *rays)
+{
+    iir_light_delta_lanes o;
+    iir_light_sample_delta8_avx2(e, c->r->eps, &q->in, &o);
+    bool any = false;
     for (int k = 0; k < 8; k++) {
-        int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
-        if (x < out->width && y < out->height) *iir_image_at(out, x, y) = L[k];
+        rays->valid[k] = 0;
+        iir_vec3 E = iir_v3(o.Ex[k], o.Ey[k], o.Ez[k]);
+        if (!q->shaded[k] || iir_is_black(E)) continue;
+        q->pending[k] = iir_mul(q->f[k], E); /* shade_block's through is 1: x 1 is exact */
+        if (!(o.tmax[k] > 0.f)) {
+            q->L[k] = iir_add(q->L[k], q->pending[k]);
+            continue;
+        }
+        set_lane(rays, k, iir_v3(o.ox[k], o.oy[k], o.oz[k]), iir_v3(o.dx[k], o.dy[k], o.dz[k]),
+                 o.tmax[k]);
+        any = true;
     }
+    return any;
+}
+
+/* shade_block for the common frame (direct_ctx.lean), over a 4x4 block: each pixel's position,
+ * normal, albedo and emission read once into lanes, each light's 16 samples in one 16-wide packet
+ * (Embree's AVX-512 traversal where the CPU has it) -- the same sums as shade_block's. */
+static void lean_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir_raystats *st)
+{
+    lean_half q[2];
+    lean_load(&c->r->gb, x0, y0, &q[0]);
+    lean_load(&c->r->gb, x0, y0 + BLOCK_H, &q[1]);
+    for (uint32_t l = 0; l < c->num_lights; l++) {
+        iir_ray8 rays[2];
+        bool any = lean_samples(c, &c->evals[l], &q[0], &rays[0]);
+        any |= lean_samples(c, &c->evals[l], &q[1], &rays[1]);
+        if (!any) continue;
+        bool occluded[16];
+        iir_rt_occluded16(c->r->rt, rays, occluded, st, IIR_RAYS_SHADOW);
+        for (int h = 0; h < 2; h++)
+            for (int k = 0; k < 8; k++)
+                if (rays[h].valid[k] && !occluded[8 * h + k])
+                    q[h].L[k] = iir_add(q[h].L[k], q[h].pending[k]);
+    }
+    for (int h = 0; h < 2; h++)
+        for (int k = 0; k < 8; k++) {
+            int x = x0 + k % BLOCK_W, y = y0 + BLOCK_H * h + k / BLOCK_W;
+            if (x < out->width && y < out->height) *iir_image_at(out, x, y) = q[h].L[k];
+        }
 }
 #endif
 
@@ -392,7 +414,8 @@ bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_rays
     iir_image *out = job->out;
     /* bands of BLOCK_H whole rows: each per-pixel array streams through memory in long runs
        (16-pixel tile rows are a few cache lines each, too short for the prefetchers) */
-    int w = out->width, h = out->height, bands = (h + BLOCK_H - 1) / BLOCK_H;
+    int w = out->width, h = out->height, band_h = c.lean ? 2 * BLOCK_H : BLOCK_H;
+    int bands = (h + band_h - 1) / band_h; /* lean blocks are 4x4 */
     iir_raystats total = {0};
 #pragma omp parallel
     {
@@ -404,7 +427,7 @@ bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_rays
                 stopped = true;
                 continue;
             }
-            for (int x = 0; x < w; x += BLOCK_W) shade_block(&c, x, t * BLOCK_H, out, &local);
+            for (int x = 0; x < w; x += BLOCK_W) shade_block(&c, x, t * band_h, out, &local);
         }
 #pragma omp critical(iir_direct_rays)
         iir_raystats_add(&total, &local);
