@@ -224,23 +224,21 @@ bool iir_rt_occluded_blend(const iir_rt *rt, const iir_ray *ray, uint64_t key, i
 
 /* ---- packets of 8 ---- */
 
+/* Lanes at .. at + 7 of Embree packet r (RTCRay8 or RTCRay16: the same fields) from p. */
+#define SET_LANES(r, p, at, valid)                                                                 \
+    for (int k_ = 0; k_ < 8; k_++) {                                                               \
+        int i_ = (at) + k_;                                                                        \
+        (valid)[i_] = (p)->valid[k_] ? -1 : 0;                                                     \
+        (r)->org_x[i_] = (p)->ox[k_], (r)->org_y[i_] = (p)->oy[k_], (r)->org_z[i_] = (p)->oz[k_];  \
+        (r)->dir_x[i_] = (p)->dx[k_], (r)->dir_y[i_] = (p)->dy[k_], (r)->dir_z[i_] = (p)->dz[k_];  \
+        (r)->tnear[i_] = (p)->tnear[k_], (r)->tfar[i_] = (p)->tfar[k_];                            \
+        (r)->time[i_] = 0.f, (r)->mask[i_] = UINT32_MAX;                                           \
+        (r)->id[i_] = (unsigned)i_, (r)->flags[i_] = 0;                                            \
+    }
+
 static void set_ray8(struct RTCRay8 *r, const iir_ray8 *p, int valid[8])
 {
-    for (int i = 0; i < 8; i++) {
-        valid[i] = p->valid[i] ? -1 : 0;
-        r->org_x[i] = p->ox[i];
-        r->org_y[i] = p->oy[i];
-        r->org_z[i] = p->oz[i];
-        r->dir_x[i] = p->dx[i];
-        r->dir_y[i] = p->dy[i];
-        r->dir_z[i] = p->dz[i];
-        r->tnear[i] = p->tnear[i];
-        r->tfar[i] = p->tfar[i];
-        r->time[i] = 0.f;
-        r->mask[i] = UINT32_MAX;
-        r->id[i] = (unsigned)i;
-        r->flags[i] = 0;
-    }
+    SET_LANES(r, p, 0, valid);
 }
 
 static uint64_t count_valid(const int valid[8])
@@ -283,23 +281,6 @@ void iir_rt_occluded8(const iir_rt *rt, const iir_ray8 *rays, bool occluded[8], 
     for (int i = 0; i < 8; i++) occluded[i] = valid[i] && r.tfar[i] < 0.f;
 }
 
-/* Lanes 8 h .. 8 h + 7 of a 16-wide packet from p. */
-static void set_ray16_half(struct RTCRay16 *r, const iir_ray8 *p, int h, int valid[16])
-{
-    for (int k = 0; k < 8; k++) {
-        int i = 8 * h + k;
-        valid[i] = p->valid[k] ? -1 : 0;
-        r->org_x[i] = p->ox[k], r->org_y[i] = p->oy[k], r->org_z[i] = p->oz[k];
-        r->dir_x[i] = p->dx[k], r->dir_y[i] = p->dy[k], r->dir_z[i] = p->dz[k];
-        r->tnear[i] = p->tnear[k];
-        r->tfar[i] = p->tfar[k];
-        r->time[i] = 0.f;
-        r->mask[i] = UINT32_MAX;
-        r->id[i] = (unsigned)i;
-        r->flags[i] = 0;
-    }
-}
-
 void iir_rt_occluded16(const iir_rt *rt, const iir_ray8 halves[2], bool occluded[16],
                        iir_raystats *st, iir_ray_kind kind)
 {
@@ -307,8 +288,8 @@ void iir_rt_occluded16(const iir_rt *rt, const iir_ray8 halves[2], bool occluded
     ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     struct RTCRay16 r;
     _Alignas(64) int valid[16];
-    set_ray16_half(&r, &halves[0], 0, valid);
-    set_ray16_half(&r, &halves[1], 1, valid);
+    SET_LANES(&r, &halves[0], 0, valid);
+    SET_LANES(&r, &halves[1], 8, valid);
     rtcOccluded16(valid, rt->scene, &ctx.rtc, &r);
     count(st, kind, count_valid(valid) + count_valid(valid + 8));
     for (int i = 0; i < 16; i++) occluded[i] = valid[i] && r.tfar[i] < 0.f;

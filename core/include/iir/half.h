@@ -7,23 +7,10 @@
 #define IIR_HALF_H
 
 #include <stdint.h>
-#include <string.h>
+
+#include "iir/vecmath.h"
 
 #define IIR_HALF_INF 0x7c00u
-
-static inline uint32_t iir_float_bits(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    return u;
-}
-
-static inline float iir_bits_float(uint32_t u)
-{
-    float f;
-    memcpy(&f, &u, sizeof f);
-    return f;
-}
 
 /* f >= 0 (or +infinity; NaN gives +infinity) to the nearest half; 65520 and beyond round to
  * +infinity, below 2^-24 to 0. */

@@ -5,6 +5,8 @@
 
 #include <math.h>
 #include <stdbool.h>
+#include <stdint.h>
+#include <string.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -31,6 +33,19 @@ typedef struct iir_frame {
 static inline float iir_sqr(float a)
 {
     return a * a;
+}
+/* A float's bits and back (IEEE 754 binary32). */
+static inline uint32_t iir_float_bits(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return u;
+}
+static inline float iir_bits_float(uint32_t u)
+{
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
 }
 static inline float iir_safe_sqrt(float a)
 {

@@ -103,19 +103,12 @@ static int srgb8_search(const float t[257], float v)
     return code;
 }
 
-static uint32_t float_bits(float v)
-{
-    uint32_t u;
-    memcpy(&u, &v, sizeof u);
-    return u;
-}
-
 static void srgb8_lut_init(srgb8_lut *L)
 {
     L->t[0] = -INFINITY;
     L->t[256] = INFINITY;
     for (int k = 1; k < 256; k++) L->t[k] = srgb8_threshold(k);
-    L->lo_bits = float_bits(ldexpf(1.f, -SRGB8_LO_EXP));
+    L->lo_bits = iir_float_bits(ldexpf(1.f, -SRGB8_LO_EXP));
     for (uint32_t i = 0; i < SRGB8_BUCKETS; i++) {
         uint32_t edge = L->lo_bits + (i << (23 - SRGB8_MANT_BITS));
         float v;
@@ -128,7 +121,7 @@ static uint8_t srgb8_encode(const srgb8_lut *L, float v)
 {
     if (!(v >= L->t[1])) return 0;
     if (v >= 1.f) return 255;
-    int code = L->bucket[(float_bits(v) - L->lo_bits) >> (23 - SRGB8_MANT_BITS)];
+    int code = L->bucket[(iir_float_bits(v) - L->lo_bits) >> (23 - SRGB8_MANT_BITS)];
     while (v >= L->t[code + 1]) code++;
     return (uint8_t)code;
 }

@@ -224,32 +224,54 @@ static void area_light_seen(const direct_ctx *c, const iir_light_eval *e, block 
 }
 
 #if defined(__x86_64__)
-/* A delta light at the block by iir_light_sample_delta8_avx2 (sample_lane's test and sum with the
- * light's arithmetic 8 lanes wide): one packet of shadow rays. */
+/* Lane k of a delta light's 8 receivers: point p, normal n. */
+static void set_receiver(iir_light_lanes *in, int k, iir_vec3 p, iir_vec3 n)
+{
+    in->px[k] = p.x, in->py[k] = p.y, in->pz[k] = p.z;
+    in->nx[k] = n.x, in->ny[k] = n.y, in->nz[k] = n.z;
+}
+
+/* A delta light's 8 lane samples o into pending light (f times each lane's E, f[k] the pixel's
+ * reflectance towards the light) and rays; a lane whose segment is too short to test adds its
+ * light to L at once. True when a lane has a ray. sample_lane's rule, 8 lanes at a time. */
+static bool lanes_into_rays(const iir_light_delta_lanes *o, const bool shaded[8],
+                            const iir_vec3 f[8], iir_vec3 pending[8], iir_vec3 L[8], iir_ray8 *rays)
+{
+    bool any = false;
+    for (int k = 0; k < 8; k++) {
+        rays->valid[k] = 0;
+        iir_vec3 E = iir_v3(o->Ex[k], o->Ey[k], o->Ez[k]);
+        if (!shaded[k] || iir_is_black(E)) continue;
+        pending[k] = iir_mul(f[k], E);
+        if (!(o->tmax[k] > 0.f)) {
+            L[k] = iir_add(L[k], pending[k]);
+            continue;
+        }
+        set_lane(rays, k, iir_v3(o->ox[k], o->oy[k], o->oz[k]),
+                 iir_v3(o->dx[k], o->dy[k], o->dz[k]), o->tmax[k]);
+        any = true;
+    }
+    return any;
+}
+
+/* A delta light at the block by iir_light_sample_delta8_avx2: one packet of shadow rays. */
 static void delta_lanes(const direct_ctx *c, const iir_light_eval *e, block *b, iir_raystats *st)
 {
     const iir_gbuffer *gb = &c->r->gb;
     iir_light_lanes in;
+    for (int k = 0; k < 8; k++)
+        set_receiver(&in, k, gb->position[b->index[k]], gb->normal[b->index[k]]);
+    iir_light_delta_lanes o;
+    iir_light_sample_delta8_avx2(e, c->r->eps, &in, &o);
+    iir_vec3 f[8]; /* the reflectance towards the light, through the pixel's chain */
     for (int k = 0; k < 8; k++) {
-        iir_vec3 x = gb->position[b->index[k]], n = gb->normal[b->index[k]];
-        in.px[k] = x.x, in.py[k] = x.y, in.pz[k] = x.z;
-        in.nx[k] = n.x, in.ny[k] = n.y, in.nz[k] = n.z;
+        iir_vec3 wi = iir_v3(o.wx[k], o.wy[k], o.wz[k]); /* 0 where no light arrives */
+        bool lit = b->shaded[k] && !iir_is_black(iir_v3(o.Ex[k], o.Ey[k], o.Ez[k]));
+        f[k] = !lit ? iir_v3s(0.f)
+                    : iir_mul(b->glossy[k] ? iir_bsdf_f(&b->bsdf[k], b->wo[k], wi) : b->f[k],
+                              b->through[k]);
     }
-    iir_light_delta_lanes out;
-    iir_light_sample_delta8_avx2(e, c->r->eps, &in, &out);
-    clear_rays(b);
-    for (int k = 0; k < 8; k++) {
-        iir_vec3 E = iir_v3(out.Ex[k], out.Ey[k], out.Ez[k]);
-        if (!b->shaded[k] || iir_is_black(E)) continue;
-        iir_vec3 wi = iir_v3(out.wx[k], out.wy[k], out.wz[k]);
-        iir_vec3 f = b->glossy[k] ? iir_bsdf_f(&b->bsdf[k], b->wo[k], wi) : b->f[k];
-        b->pending[k] = iir_mul(iir_mul(f, b->through[k]), E);
-        if (out.tmax[k] > 0.f)
-            set_lane(&b->rays, k, iir_v3(out.ox[k], out.oy[k], out.oz[k]),
-                     iir_v3(out.dx[k], out.dy[k], out.dz[k]), out.tmax[k]);
-        else
-            b->L[k] = iir_add(b->L[k], b->pending[k]);
-    }
+    lanes_into_rays(&o, b->shaded, f, b->pending, b->L, &b->rays);
     resolve(c->r, b, st);
 }
 #endif
@@ -319,34 +341,18 @@ static void lean_load(const iir_gbuffer *gb, int x0, int y0, lean_half *q)
         bool hit = inside && gb->prim[i] != IIR_NO_HIT;
         q->shaded[k] = hit && !iir_is_black(gb->albedo[i]);
         q->L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
+        /* shade_block's f, times its chain's 1 (exact) */
         q->f[k] = q->shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
-        iir_vec3 p = gb->position[i], n = gb->normal[i];
-        q->in.px[k] = p.x, q->in.py[k] = p.y, q->in.pz[k] = p.z;
-        q->in.nx[k] = n.x, q->in.ny[k] = n.y, q->in.nz[k] = n.z;
+        set_receiver(&q->in, k, gb->position[i], gb->normal[i]);
     }
 }
 
-/* Light e's 8 samples of half q into rays (its pending light; added at once where the segment is
- * too short to test). True when a lane has a ray. */
+/* Light e's 8 samples of half q into rays. True when a lane has a ray. */
 static bool lean_samples(const direct_ctx *c, const iir_light_eval *e, lean_half *q, iir_ray8 *rays)
 {
     iir_light_delta_lanes o;
     iir_light_sample_delta8_avx2(e, c->r->eps, &q->in, &o);
-    bool any = false;
-    for (int k = 0; k < 8; k++) {
-        rays->valid[k] = 0;
-        iir_vec3 E = iir_v3(o.Ex[k], o.Ey[k], o.Ez[k]);
-        if (!q->shaded[k] || iir_is_black(E)) continue;
-        q->pending[k] = iir_mul(q->f[k], E); /* shade_block's through is 1: x 1 is exact */
-        if (!(o.tmax[k] > 0.f)) {
-            q->L[k] = iir_add(q->L[k], q->pending[k]);
-            continue;
-        }
-        set_lane(rays, k, iir_v3(o.ox[k], o.oy[k], o.oz[k]), iir_v3(o.dx[k], o.dy[k], o.dz[k]),
-                 o.tmax[k]);
-        any = true;
-    }
-    return any;
+    return lanes_into_rays(&o, q->shaded, q->f, q->pending, q->L, rays);
 }
 
 /* shade_block for the common frame (direct_ctx.lean), over a 4x4 block: each pixel's position,
@@ -412,7 +418,7 @@ bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_rays
         c.evals && r->isa >= IIR_ISA_AVX2 && !r->area_lights && !r->gb.any_pbr && !r->gb.any_chain;
     for (uint32_t l = 0; l < c.num_lights && c.lean; l++) c.lean = iir_light_is_delta(&c.lights[l]);
     iir_image *out = job->out;
-    /* bands of BLOCK_H whole rows: each per-pixel array streams through memory in long runs
+    /* bands of whole rows, a block high: each per-pixel array streams through memory in long runs
        (16-pixel tile rows are a few cache lines each, too short for the prefetchers) */
     int w = out->width, h = out->height, band_h = c.lean ? 2 * BLOCK_H : BLOCK_H;
     int bands = (h + band_h - 1) / band_h; /* lean blocks are 4x4 */

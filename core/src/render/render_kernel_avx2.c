@@ -29,17 +29,25 @@ static inline void texel_pairs(const uint16_t *depth, __m256i idx, __m256 *left,
     *right = _mm256_cvtph_ps(_mm256_extracti128_si256(halves, 1));
 }
 
-/* iir_smap_pcf for 8 lanes (s, t already clamped to [0, max_st]). The 2x2 footprint's corner is
- * kept off the last row and column: there the weight of the texel beyond is 1 instead of the
- * scalar path's 0 on the texel before, the same blend of 0s and 1s exactly. */
-static inline __m256 pcf8(const iir_smap_probe *p, __m256 s, __m256 t, __m256 dmb)
+/* The 2x2 PCF footprint's corner texel (i0, j0) at 8 lanes (s, t already clamped to [0, max_st])
+ * as a texel index, and the blend weights fx, fy. The corner is kept off the last row and column:
+ * there the weight of the texel beyond is 1 instead of the scalar path's 0 on the texel before,
+ * the same blend of 0s and 1s exactly. */
+static inline __m256i corner8(const iir_smap_probe *p, __m256 s, __m256 t, __m256 *fx, __m256 *fy)
 {
     __m256i last = _mm256_set1_epi32(p->res - 2);
     __m256i i0 = _mm256_min_epi32(_mm256_cvttps_epi32(s), last);
     __m256i j0 = _mm256_min_epi32(_mm256_cvttps_epi32(t), last);
-    __m256 fx = _mm256_sub_ps(s, _mm256_cvtepi32_ps(i0));
-    __m256 fy = _mm256_sub_ps(t, _mm256_cvtepi32_ps(j0));
-    __m256i at = _mm256_add_epi32(_mm256_mullo_epi32(j0, _mm256_set1_epi32(p->res)), i0);
+    *fx = _mm256_sub_ps(s, _mm256_cvtepi32_ps(i0));
+    *fy = _mm256_sub_ps(t, _mm256_cvtepi32_ps(j0));
+    return _mm256_add_epi32(_mm256_mullo_epi32(j0, _mm256_set1_epi32(p->res)), i0);
+}
+
+/* iir_smap_pcf for 8 lanes (s, t already clamped to [0, max_st]). */
+static inline __m256 pcf8(const iir_smap_probe *p, __m256 s, __m256 t, __m256 dmb)
+{
+    __m256 fx, fy;
+    __m256i at = corner8(p, s, t, &fx, &fy);
     __m256 d00, d10, d01, d11;
     texel_pairs(p->depth, at, &d00, &d10);
     texel_pairs(p->depth, _mm256_add_epi32(at, _mm256_set1_epi32(p->res)), &d01, &d11);
@@ -78,12 +86,9 @@ static inline void lookup8(const iir_smap_probe *p, __m256 wx, __m256 wy, __m256
 /* Asks for the cache lines of the two texel rows pcf8 will read at (s, t). */
 static inline void prefetch8(const iir_smap_probe *p, __m256 s, __m256 t)
 {
-    __m256i last = _mm256_set1_epi32(p->res - 2);
-    __m256i i0 = _mm256_min_epi32(_mm256_cvttps_epi32(s), last);
-    __m256i j0 = _mm256_min_epi32(_mm256_cvttps_epi32(t), last);
+    __m256 fx, fy;
     _Alignas(32) int32_t at[8];
-    _mm256_store_si256((__m256i *)at,
-                       _mm256_add_epi32(_mm256_mullo_epi32(j0, _mm256_set1_epi32(p->res)), i0));
+    _mm256_store_si256((__m256i *)at, corner8(p, s, t, &fx, &fy));
     for (int l = 0; l < 8; l++) {
         _mm_prefetch((const char *)(p->depth + at[l]), _MM_HINT_T0);
         _mm_prefetch((const char *)(p->depth + at[l] + p->res), _MM_HINT_T0);
