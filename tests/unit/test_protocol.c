@@ -983,7 +983,7 @@ static void test_json_replies(void **state)
     }
     assert_int_equal(cJSON_GetArraySize(jp), rows);
     assert_string_equal(cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(jp, "weights")),
-                        "voronoi");
+                        "surface");
     assert_int_equal(num(jp, "vpls"), 256);
     assert_int_equal(num(jp, "width"), 512);
     assert_true(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(jp, "refine")));

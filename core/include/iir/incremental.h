@@ -106,13 +106,19 @@ struct iir_stri;
  * the domain's area / (pi N)) is a hole: a VPL moves there from the most crowded place. */
 #define IIR_INCR_HOLE 2.0
 
-typedef enum iir_weights { IIR_WEIGHTS_UNIFORM, IIR_WEIGHTS_VORONOI } iir_weights;
+/* A VPL's share of the light's flux: the domain's area over the count (the paper's), its clipped
+ * Voronoi cell, or that cell corrected where it reaches over another surface (surface_cells.h). */
+typedef enum iir_weights {
+    IIR_WEIGHTS_UNIFORM,
+    IIR_WEIGHTS_VORONOI,
+    IIR_WEIGHTS_SURFACE
+} iir_weights;
 
 typedef struct iir_incr_params {
     uint32_t target;       /* N, [1, IIR_INCR_MAX_TARGET], default 256 */
     uint32_t k_min, k_max; /* replacements per frame: k_max in [1, IIR_INCR_MAX_TARGET], k_min in
                               [0, k_max]; defaults 4 and 8 */
-    iir_weights weights;   /* default IIR_WEIGHTS_VORONOI */
+    iir_weights weights;   /* default IIR_WEIGHTS_SURFACE */
     float regen_threshold; /* regenerate when more than this fraction dies at once, (0, 1], 0.5 */
     uint64_t seed;         /* scrambles the Hammersley sets; default 1 */
     bool refill;           /* INSERT may exceed k_max to replace what this frame removed; false */
@@ -195,6 +201,10 @@ const struct iir_stri *iir_incr_stri(const iir_incr *inc);
  * included); *n gets their number, invalidated + deleted of that update. Valid until the next
  * update/destroy. */
 const double *iir_incr_removed(const iir_incr *inc, uint32_t *n);
+
+/* Bytes a step holds for a set of n VPLs besides the VPLs: its triangulation (~200 B a site), the
+ * Delaunay graph and the surface-aware weights' pattern (IIR_CELL_RAYS rays a VPL). */
+uint64_t iir_incr_memory(uint32_t n);
 
 /* Updates so far; the VPLs the last update created have birth == iir_incr_updates - 1. */
 uint32_t iir_incr_updates(const iir_incr *inc);

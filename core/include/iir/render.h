@@ -14,11 +14,11 @@
  *         G_i = max(0, n_i . w) max(0, -n_x . w) / d^2,
  *     D the scene's bounding-box diagonal, over the VPLs that are neither null samples nor of
  *     zero flux (N of them). Interleaved sampling, n = interleave: VPL i belongs to subset
- *     iir_vpl_subset(id, n^2), by id and never by array position, so a VPL keeps its subset while
- * the set around it changes; pixel (x, y) evaluates only subset (y mod n) n + (x mod n), its flux
- *     scaled by N / |subset|. Each subset is thus a sub-sample of the VPLs carrying their whole
- *     flux: an unbiased estimate of the same light when the VPLs are samples of the light's paths,
- *     even for unbalanced subsets. (Scaling by n^2 instead would keep the mean over every n x n
+ *     iir_vpl_subset_of(v, n^2), by key or id and never by array position, so a VPL keeps its
+ * subset while the set around it changes; pixel (x, y) evaluates only subset (y mod n) n + (x mod
+ * n), its flux scaled by N / |subset|. Each subset is thus a sub-sample of the VPLs carrying their
+ * whole flux: an unbiased estimate of the same light when the VPLs are samples of the light's
+ * paths, even for unbalanced subsets. (Scaling by n^2 instead would keep the mean over every n x n
  *     block exactly, but light unbalanced subsets unevenly.) For balanced subsets both agree. A
  *     subset with no VPL contributes nothing, and the filter does not count its pixels.
  *  4. Filter (interleave > 1, filter on): a geometry-aware box over the neighbourhood that holds
@@ -201,6 +201,15 @@ uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int
 static inline uint32_t iir_vpl_subset(uint32_t id, uint32_t n2)
 {
     return (uint32_t)(((uint64_t)(id * 2654435769u) * n2) >> 32);
+}
+
+/* VPL v's interleaving subset among n2: by its key, where it has one (iir spreads keys over
+ * neighbours in the light's domain, so that each subset is a stratified sample of a kept set),
+ * else by its id. */
+static inline uint32_t iir_vpl_subset_of(const iir_vpl *v, uint32_t n2)
+{
+    if (!v->key) return iir_vpl_subset(v->id, n2);
+    return (uint32_t)(((uint64_t)v->key * n2) >> 32);
 }
 
 /* IIR_ERR_INVALID naming the field and its range. */

@@ -85,6 +85,8 @@ typedef struct iir_vpl {
     iir_vec2 emit;      /* area light: where on the emitter its birth ray started, in light-local
                            coordinates [-1/2, 1/2]^2 (incremental step only) */
     uint32_t birth;     /* frame number it was created in */
+    uint32_t key;       /* interleave key: its subset is render.h's iir_vpl_subset_of; 0 (every
+                           set but iir's) for one from the id's hash */
     uint8_t generation; /* 0: lit by the light; k: k diffuse bounces further along its light path
                            (ir's later path vertices, iir's descendants: lineage.h) */
     iir_smap smap;      /* owned by whoever owns the VPL */

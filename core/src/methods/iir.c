@@ -42,7 +42,7 @@ typedef struct iir_options {
     iir_ism_options ism;
     int vpls;              /* N: the VPL set's size */
     int kmin, kmax;        /* replacements per frame */
-    iir_weights weights;   /* uniform or Voronoi cell areas */
+    iir_weights weights;   /* uniform, Voronoi or surface-aware cell areas */
     float regen_threshold; /* regenerate when more than this fraction dies */
     int bounces;           /* 2: the kept set alone; more: its VPLs carry descendants */
     float insert_ms;       /* > 0: time a frame for new VPLs and their maps (kmax caps, 0 none) */
@@ -50,7 +50,7 @@ typedef struct iir_options {
     iir_ctl_options ctl;   /* target_fps > 0: the controller sets vpls, interleave and sm_res */
 } iir_options;
 
-static const char *const WEIGHTS_CHOICES[] = {"uniform", "voronoi", NULL};
+static const char *const WEIGHTS_CHOICES[] = {"uniform", "voronoi", "surface", NULL};
 
 static const iir_param IIR_ROWS[] = {
     {"vpls", IIR_PARAM_INT, offsetof(iir_options, vpls), 256, 1, 16384, 4096, NULL, "VPLs",
@@ -63,8 +63,11 @@ static const iir_param IIR_ROWS[] = {
      "time per frame for new VPLs and their shadow maps: as many as fit at their measured cost "
      "(frames then depend on the machine's speed); 0 = kmax a frame",
      IIR_PARAM_LIVE},
-    {"weights", IIR_PARAM_ENUM, offsetof(iir_options, weights), IIR_WEIGHTS_VORONOI, 0, 1, 0,
-     WEIGHTS_CHOICES, "", "VPL flux by Voronoi cell area or uniform (the paper's)", IIR_PARAM_LIVE},
+    {"weights", IIR_PARAM_ENUM, offsetof(iir_options, weights), IIR_WEIGHTS_SURFACE, 0, 2, 0,
+     WEIGHTS_CHOICES, "",
+     "VPL flux by Voronoi cell area (surface: less the cell's reach over other surfaces, found by "
+     "16 rays a VPL) or uniform (the paper's)",
+     IIR_PARAM_LIVE},
     {"regen_threshold", IIR_PARAM_FLOAT, offsetof(iir_options, regen_threshold), 0.5, 1e-6, 1, 0,
      NULL, "", "regenerate the whole set when more than this fraction of it dies", IIR_PARAM_LIVE},
     {"refill", IIR_PARAM_BOOL, offsetof(iir_options, refill), 1, 0, 1, 0, NULL, "",
@@ -607,14 +610,15 @@ static void iir_m_update(void *state, const void *opts)
     iir_vplsets_set_bounces(s->sets, s->params.bounces); /* new: descendants traced anew */
 }
 
-/* The set, its Voronoi weights' triangulation (~200 B a site) and refinement's fresh sets. */
+/* The set, the step's triangulation, graph and surface weights' pattern, refinement's fresh sets.
+ */
 static uint64_t iir_m_memory(const void *opts, int width, int height)
 {
     const iir_options *o = opts;
     uint64_t N = (uint64_t)iir_ctl_vpls_bound(&o->ctl, o->vpls);
     uint64_t n = N * (uint64_t)(o->bounces > 2 ? o->bounces - 1 : 1);
-    return iir_vpl_memory(&o->vpl, (uint32_t)n, width, height) + n * (sizeof(iir_vpl) + 200) +
-           iir_ism_memory(&o->ism, o->vpl.visibility, (uint32_t)n);
+    return iir_vpl_memory(&o->vpl, (uint32_t)n, width, height) + n * sizeof(iir_vpl) +
+           iir_incr_memory((uint32_t)n) + iir_ism_memory(&o->ism, o->vpl.visibility, (uint32_t)n);
 }
 
 const iir_method_ops iir_method_iir = {

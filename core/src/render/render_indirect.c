@@ -114,7 +114,7 @@ iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num
     for (uint32_t i = 0; i < num_vpls; i++) {
         iir_status s = check_vpl(&vpls[i], p->visibility, err);
         if (s != IIR_OK) return s;
-        if (in_use(&vpls[i])) count[iir_vpl_subset(vpls[i].id, n2)]++, used++;
+        if (in_use(&vpls[i])) count[iir_vpl_subset_of(&vpls[i], n2)]++, used++;
     }
     iir_status s = reserve(r, used, err);
     if (s != IIR_OK) return s;
@@ -125,7 +125,7 @@ iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num
     for (uint32_t k = 0; k < n2; k++) next[k] = r->start[k];
     for (uint32_t i = 0; i < num_vpls; i++) {
         if (!in_use(&vpls[i])) continue;
-        uint32_t k = iir_vpl_subset(vpls[i].id, n2);
+        uint32_t k = iir_vpl_subset_of(&vpls[i], n2);
         float scale = exact_mean ? (float)n2 : (float)used / (float)count[k];
         r->vpl[next[k]++] = shade_vpl(&vpls[i], scale, r->eps);
     }

@@ -25,27 +25,31 @@
 #include "iir/scene.h"
 #include "iir/timer.h"
 #include "lights/domain_sites.h"
+#include "site_graph.h"
 #include "surface.h"
+#include "surface_cells.h"
 #include "vpl_lobe.h"
 
 struct iir_incr {
     const iir_scene *scene;
     const iir_rt *rt;
     iir_incr_params params;
-    iir_sites sites;      /* the domain points of the current set, ids as vertex info */
-    iir_vpl *vpls;        /* [count], ascending id */
-    double *xy;           /* [3 cap]: vpls[i]'s domain point in double, xy[3i .. 3i + 2] */
-    uint32_t *ids;        /* [cap] scratch: ids for the triangulation */
-    double *areas;        /* [cap] scratch: clipped cell areas */
-    unsigned char *alive; /* [cap] scratch: VPLs kept by the phase running */
-    double *removed;      /* [3 cap]: domain points of the VPLs the last update removed */
-    uint32_t num_removed; /* <= the count before that update <= cap */
-    uint32_t count, cap;  /* cap >= max(room(params), count) */
-    uint32_t next_id;     /* the id of the next VPL created */
-    uint32_t frame;       /* updates so far: the birth of the VPLs made now */
-    uint32_t generations; /* Hammersley sets made so far: the scramble's stream */
-    iir_domain_map map;   /* the last update's domain: another one regenerates the set */
-    uint32_t reached;     /* the largest count since the last regeneration, at most N */
+    iir_sites sites;         /* the domain points of the current set, ids as vertex info */
+    iir_vpl *vpls;           /* [count], ascending id */
+    double *xy;              /* [3 cap]: vpls[i]'s domain point in double, xy[3i .. 3i + 2] */
+    uint32_t *ids;           /* [cap] scratch: ids for the triangulation */
+    double *areas;           /* [cap] scratch: clipped cell areas */
+    unsigned char *alive;    /* [cap] scratch: VPLs kept by the phase running */
+    double *removed;         /* [3 cap]: domain points of the VPLs the last update removed */
+    uint32_t num_removed;    /* <= the count before that update <= cap */
+    uint32_t count, cap;     /* cap >= max(room(params), count) */
+    uint32_t next_id;        /* the id of the next VPL created */
+    uint32_t frame;          /* updates so far: the birth of the VPLs made now */
+    uint32_t generations;    /* Hammersley sets made so far: the scramble's stream */
+    iir_domain_map map;      /* the last update's domain: another one regenerates the set */
+    uint32_t reached;        /* the largest count since the last regeneration, at most N */
+    iir_site_graph graph;    /* the set's Delaunay neighbours, rebuilt each frame after INSERT */
+    iir_surface_cells cells; /* surface-aware weights' buffers */
 };
 
 /* The light's pose for one frame: its domain. */
@@ -68,7 +72,7 @@ iir_incr_params iir_incr_params_default(void)
         .target = 256,
         .k_min = 4,
         .k_max = 8,
-        .weights = IIR_WEIGHTS_VORONOI,
+        .weights = IIR_WEIGHTS_SURFACE,
         .regen_threshold = 0.5f,
         .seed = 1,
     };
@@ -86,9 +90,10 @@ iir_status iir_incr_params_validate(const iir_incr_params *p, iir_error *err)
     if (p->k_min > p->k_max)
         return iir_fail(err, IIR_ERR_INVALID, "incremental step: k_min %u is larger than k_max %u",
                         p->k_min, p->k_max);
-    if (p->weights != IIR_WEIGHTS_UNIFORM && p->weights != IIR_WEIGHTS_VORONOI)
+    if (p->weights != IIR_WEIGHTS_UNIFORM && p->weights != IIR_WEIGHTS_VORONOI &&
+        p->weights != IIR_WEIGHTS_SURFACE)
         return iir_fail(err, IIR_ERR_INVALID,
-                        "incremental step: weights %d is neither uniform nor voronoi",
+                        "incremental step: weights %d is not uniform, voronoi or surface",
                         (int)p->weights);
     if (!(p->regen_threshold > 0.f && p->regen_threshold <= 1.f))
         return iir_fail(err, IIR_ERR_INVALID,
@@ -160,6 +165,8 @@ void iir_incr_destroy(iir_incr *inc)
     if (!inc) return;
     for (uint32_t i = 0; i < inc->count; i++) iir_smap_release(&inc->vpls[i].smap);
     iir_sites_free(&inc->sites);
+    iir_site_graph_free(&inc->graph);
+    iir_surface_cells_free(&inc->cells);
     free(inc->vpls);
     free(inc->xy);
     free(inc->ids);
@@ -226,15 +233,22 @@ static void set_disk(iir_vpl *v, const double s[3])
 
 /* One closest-hit ray from o along unit w: a VPL on a reflecting surface facing the light, or a
  * null sample (miss, emitter, grazing hit). */
+static bool trace_surface(const iir_incr *inc, const pose *ps, iir_vec3 o, iir_vec3 w,
+                          iir_raystats *rays, iir_surface *sf)
+{
+    iir_ray ray = iir_make_ray(o, w, 0.f, INFINITY);
+    iir_hit hit;
+    if (!iir_rt_intersect(inc->rt, &ray, &hit, rays, IIR_RAYS_VPL)) return false;
+    *sf = iir_surface_at(inc->scene, &hit, iir_neg(w));
+    return iir_is_black(sf->Le) && iir_domain_faces(ps, sf->p, sf->ns);
+}
+
 static sample trace_sample(const iir_incr *inc, const pose *ps, iir_vec3 o, iir_vec3 w,
                            iir_raystats *rays)
 {
     sample sm = {.null_sample = true, .o = o, .w = w};
-    iir_ray ray = iir_make_ray(o, w, 0.f, INFINITY);
-    iir_hit hit;
-    if (!iir_rt_intersect(inc->rt, &ray, &hit, rays, IIR_RAYS_VPL)) return sm;
-    iir_surface sf = iir_surface_at(inc->scene, &hit, iir_neg(w));
-    if (!iir_is_black(sf.Le) || !iir_domain_faces(ps, sf.p, sf.ns)) return sm;
+    iir_surface sf;
+    if (!trace_surface(inc, ps, o, w, rays, &sf)) return sm;
     sm.null_sample = false;
     sm.x = sf.p;
     sm.n = sf.ns;
@@ -558,17 +572,43 @@ static void aim(const pose *light, iir_vpl *v)
     if (len > 0.f) v->wi = iir_scale(d, 1.f / len);
 }
 
-/* WEIGH: Phi_i = I rho_i A_i profile(s_i); A_i the clipped Voronoi cell or the domain's area /
- * count. *flux_in gets the luminance of sum I A_i profile(s_i) over the VPLs (null samples
- * excluded): the flux the light sends onto reflecting surfaces. */
-static iir_status phase_weigh(iir_incr *inc, const pose *ps, double *flux_in, iir_error *err)
+/* The light's ray for point j of the surface cells' pattern (surface_cells.h). */
+typedef struct cell_ctx {
+    const iir_incr *inc;
+    const pose *ps;
+} cell_ctx;
+
+static iir_cell_hit cell_trace(void *ctx, const double s[3], uint32_t j, iir_raystats *rays)
 {
-    bool voronoi = inc->params.weights == IIR_WEIGHTS_VORONOI;
+    const cell_ctx *c = ctx;
+    iir_vec3 o, w;
+    pose at = iir_domain_at_emitter(c->ps, iir_domain_emitter_stratum(c->ps, j));
+    iir_domain_ray(&at, s, &o, &w);
+    iir_surface sf;
+    iir_cell_hit h = {.null_sample = true};
+    if (!trace_surface(c->inc, &at, o, w, rays, &sf)) return h;
+    return (iir_cell_hit){.x = sf.p, .n = sf.ns, .dist = iir_length(iir_sub(sf.p, o))};
+}
+
+/* WEIGH: Phi_i = I rho_i A_i profile(s_i); A_i the clipped Voronoi cell (surface: corrected where
+ * it reaches over another surface, surface_cells.h) or the domain's area / count. *flux_in gets the
+ * luminance of sum I A_i profile(s_i) over the VPLs (null samples excluded): the flux the light
+ * sends onto reflecting surfaces. */
+static iir_status phase_weigh(iir_incr *inc, const pose *ps, double *flux_in, iir_raystats *rays,
+                              iir_error *err)
+{
+    bool voronoi = inc->params.weights != IIR_WEIGHTS_UNIFORM;
     if (voronoi) {
         size_t n = 0;
         iir_tri_status ts = iir_sites_cell_areas(&inc->sites, inc->ids, inc->areas, inc->cap, &n);
         if (ts != IIR_TRI_OK) return tri_fail(ts, "computing cell areas", err);
         assert(n == inc->count);
+    }
+    if (inc->params.weights == IIR_WEIGHTS_SURFACE) {
+        cell_ctx ctx = {inc, ps};
+        iir_status st = iir_surface_cells_apply(&inc->cells, ps, inc->vpls, inc->xy, &inc->graph,
+                                                cell_trace, &ctx, inc->areas, rays, err);
+        if (st != IIR_OK) return st;
     }
     double uniform = ps->area / (inc->count ? inc->count : 1);
     for (uint32_t i = 0; i < inc->count; i++) {
@@ -663,8 +703,11 @@ iir_status iir_incr_update(iir_incr *inc, const iir_light *light, iir_incr_stats
     c->deleted += trimmed;
     lap(&st, IIR_INCR_INSERT, &t);
 
-    /* 6. weigh */
-    if (status == IIR_OK) status = phase_weigh(inc, &ps, &st.flux_in, err);
+    /* 6. weigh, and the new VPLs' interleave keys */
+    if (status == IIR_OK)
+        status = iir_site_graph_build(&inc->graph, &inc->sites, inc->vpls, inc->count, err);
+    if (status == IIR_OK) status = phase_weigh(inc, &ps, &st.flux_in, &st.rays, err);
+    if (status == IIR_OK) iir_site_keys_assign(inc->vpls, &inc->graph);
     st.flux_in *= iir_luminance(iir_light_mean_emission(light));
     lap(&st, IIR_INCR_WEIGH, &t);
 
@@ -715,6 +758,15 @@ const double *iir_incr_removed(const iir_incr *inc, uint32_t *n)
 {
     *n = inc->num_removed;
     return inc->removed;
+}
+
+uint64_t iir_incr_memory(uint32_t n)
+{
+    uint64_t per_site = 200 + 3 * sizeof(double) + 4 * sizeof(uint32_t) + 1 + /* tri, xy, ids.. */
+                        14 * sizeof(uint32_t) +                               /* graph */
+                        IIR_CELL_RAYS * (sizeof(iir_cell_hit) + 3 * sizeof(double)) +
+                        sizeof(int32_t);
+    return per_site * n;
 }
 
 uint32_t iir_incr_updates(const iir_incr *inc)

@@ -1,0 +1,140 @@
+/* surface_cells.c -- surface-aware cell areas (surface_cells.h): a fixed jittered pattern of the
+ * light's rays, traced in parallel, then each ray's cell owner found by a walk over the Delaunay
+ * graph and the ray handed to the neighbour whose surface it landed on. */
+#include "surface_cells.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "iir/rng.h"
+
+/* A hit on v's surface: on its plane within IIR_CELL_PLANE of the ray's length, normals within
+ * ~25 degrees; a null sample for a null sample. */
+static bool on_surface(const iir_vpl *v, const iir_cell_hit *h)
+{
+    if (v->null_sample || h->null_sample) return v->null_sample == h->null_sample;
+    float off = fabsf(iir_dot(iir_sub(h->x, v->position), v->normal));
+    return off < IIR_CELL_PLANE * h->dist && iir_dot(h->n, v->normal) > 0.9f;
+}
+
+/* How badly v's surface explains the hit: 0 on it, else the hit's distance from v's plane over the
+ * ray's length, plus 1 when the normals are more than 60 degrees apart; a null sample and a
+ * surface never explain each other. */
+static double misfit(const iir_vpl *v, const iir_cell_hit *h)
+{
+    if (on_surface(v, h)) return 0.0;
+    if (v->null_sample || h->null_sample) return INFINITY;
+    double off = fabs((double)iir_dot(iir_sub(h->x, v->position), v->normal)) / h->dist;
+    return off + (iir_dot(h->n, v->normal) < 0.5f ? 1.0 : 0.0);
+}
+
+static double dist2(const double *a, const double *b)
+{
+    double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+    return dx * dx + dy * dy + dz * dz;
+}
+
+enum { CANDIDATES = 128 };
+
+/* Among `owner`, its neighbours and theirs, the VPL whose surface explains hit h (at domain point
+ * s) best, the nearest in the domain among equals; the owner when none does. */
+static uint32_t best_fit(const iir_vpl *vpls, const double *xyz, const iir_site_graph *g,
+                         uint32_t owner, const iir_cell_hit *h, const double s[3])
+{
+    uint32_t ring[CANDIDATES], ring1, n = iir_site_graph_rings(g, owner, ring, CANDIDATES, &ring1);
+    uint32_t best = owner;
+    double best_fit = misfit(&vpls[owner], h), best_d = dist2(&xyz[3 * owner], s);
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t c = ring[k];
+        double f = misfit(&vpls[c], h);
+        if (!(f <= best_fit)) continue;
+        double d = dist2(&xyz[3 * c], s);
+        if (f < best_fit || d < best_d) best = c, best_fit = f, best_d = d;
+    }
+    return best;
+}
+
+static bool reserve(iir_surface_cells *c, uint32_t m, uint32_t n)
+{
+    if (m > c->m_cap) {
+        iir_cell_hit *hit = realloc(c->hit, m * sizeof *hit);
+        if (hit) c->hit = hit;
+        double *s = realloc(c->s, 3 * (size_t)m * sizeof *s);
+        if (s) c->s = s;
+        if (!hit || !s) return false;
+        c->m_cap = m;
+    }
+    if (n > c->n_cap) {
+        int32_t *delta = realloc(c->delta, n * sizeof *delta);
+        if (!delta) return false;
+        c->delta = delta, c->n_cap = n;
+    }
+    return true;
+}
+
+void iir_surface_cells_free(iir_surface_cells *c)
+{
+    free(c->hit);
+    free(c->s);
+    free(c->delta);
+    *c = (iir_surface_cells){0};
+}
+
+/* The pattern: cell (x, y) of a g x g grid on [0, 1)^2 with a jitter hashed from its index (the
+ * same every frame), mapped onto the domain by area, rows in alternating directions so that
+ * consecutive points are neighbours. */
+static void make_pattern(const iir_light_domain *d, uint32_t g, double *s)
+{
+    for (uint32_t y = 0, j = 0; y < g; y++)
+        for (uint32_t k = 0; k < g; k++, j++) {
+            uint32_t x = y & 1 ? g - 1 - k : k;
+            uint64_t h = iir_mix64(0x5ce11ull << 32 | (uint64_t)(y * g + x));
+            float ux = ((float)x + (float)(h & 0xffffff) * 0x1p-24f) / (float)g;
+            float uy = ((float)y + (float)(h >> 40) * 0x1p-24f) / (float)g;
+            iir_vec2 u = iir_v2(fminf(ux, 0x1.fffffep-1f), fminf(uy, 0x1.fffffep-1f));
+            iir_domain_sample(d, u, 0.0, &s[3 * j]);
+        }
+}
+
+/* Every ray of the pattern, over the threads; the ray counts summed into *rays. */
+static void trace_pattern(iir_surface_cells *c, uint32_t m, iir_cell_trace_fn trace, void *ctx,
+                          iir_raystats *rays)
+{
+#pragma omp parallel
+    {
+        iir_raystats mine;
+        memset(&mine, 0, sizeof mine);
+#pragma omp for schedule(static)
+        for (uint32_t j = 0; j < m; j++) c->hit[j] = trace(ctx, &c->s[3 * j], j, &mine);
+#pragma omp critical
+        iir_raystats_add(rays, &mine);
+    }
+}
+
+iir_status iir_surface_cells_apply(iir_surface_cells *c, const iir_light_domain *d,
+                                   const iir_vpl *vpls, const double *xyz, const iir_site_graph *g,
+                                   iir_cell_trace_fn trace, void *ctx, double *areas,
+                                   iir_raystats *rays, iir_error *err)
+{
+    uint32_t n = g->n;
+    if (n < 2) return IIR_OK;
+    uint32_t side = (uint32_t)ceil(sqrt((double)IIR_CELL_RAYS * n)), m = side * side;
+    if (!reserve(c, m, n))
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the surface-aware cell areas");
+    make_pattern(d, side, c->s);
+    trace_pattern(c, m, trace, ctx, rays);
+    memset(c->delta, 0, n * sizeof *c->delta);
+    uint32_t owner = 0;
+    for (uint32_t j = 0; j < m; j++) {
+        const double *s = &c->s[3 * j];
+        owner = iir_site_graph_nearest(g, xyz, owner, s);
+        if (on_surface(&vpls[owner], &c->hit[j])) continue;
+        uint32_t to = best_fit(vpls, xyz, g, owner, &c->hit[j], s);
+        c->delta[owner]--;
+        c->delta[to]++;
+    }
+    double a = d->area / m;
+    for (uint32_t i = 0; i < n; i++) areas[i] = fmax(0.0, areas[i] + a * c->delta[i]);
+    return IIR_OK;
+}
