@@ -578,11 +578,12 @@ typedef struct cell_ctx {
     const pose *ps;
 } cell_ctx;
 
-static iir_cell_hit cell_trace(void *ctx, const double s[3], uint32_t j, iir_raystats *rays)
+static iir_cell_hit cell_trace(void *ctx, const double s[3], const iir_vpl *owner,
+                               iir_raystats *rays)
 {
     const cell_ctx *c = ctx;
     iir_vec3 o, w;
-    pose at = iir_domain_at_emitter(c->ps, iir_domain_emitter_stratum(c->ps, j));
+    pose at = iir_domain_at_emitter(c->ps, owner->emit);
     iir_domain_ray(&at, s, &o, &w);
     iir_surface sf;
     iir_cell_hit h = {.null_sample = true};

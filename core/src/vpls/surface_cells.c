@@ -62,7 +62,9 @@ static bool reserve(iir_surface_cells *c, uint32_t m, uint32_t n)
         if (hit) c->hit = hit;
         double *s = realloc(c->s, 3 * (size_t)m * sizeof *s);
         if (s) c->s = s;
-        if (!hit || !s) return false;
+        uint32_t *owner = realloc(c->owner, m * sizeof *owner);
+        if (owner) c->owner = owner;
+        if (!hit || !s || !owner) return false;
         c->m_cap = m;
     }
     if (n > c->n_cap) {
@@ -77,6 +79,7 @@ void iir_surface_cells_free(iir_surface_cells *c)
 {
     free(c->hit);
     free(c->s);
+    free(c->owner);
     free(c->delta);
     *c = (iir_surface_cells){0};
 }
@@ -97,16 +100,18 @@ static void make_pattern(const iir_light_domain *d, uint32_t g, double *s)
         }
 }
 
-/* Every ray of the pattern, over the threads; the ray counts summed into *rays. */
-static void trace_pattern(iir_surface_cells *c, uint32_t m, iir_cell_trace_fn trace, void *ctx,
-                          iir_raystats *rays)
+/* Every ray of the pattern (from its owner's point of an area light), over the threads; the ray
+ * counts summed into *rays. */
+static void trace_pattern(iir_surface_cells *c, uint32_t m, const iir_vpl *vpls,
+                          iir_cell_trace_fn trace, void *ctx, iir_raystats *rays)
 {
 #pragma omp parallel
     {
         iir_raystats mine;
         memset(&mine, 0, sizeof mine);
 #pragma omp for schedule(static)
-        for (uint32_t j = 0; j < m; j++) c->hit[j] = trace(ctx, &c->s[3 * j], j, &mine);
+        for (uint32_t j = 0; j < m; j++)
+            c->hit[j] = trace(ctx, &c->s[3 * j], &vpls[c->owner[j]], &mine);
 #pragma omp critical
         iir_raystats_add(rays, &mine);
     }
@@ -123,12 +128,13 @@ iir_status iir_surface_cells_apply(iir_surface_cells *c, const iir_light_domain 
     if (!reserve(c, m, n))
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the surface-aware cell areas");
     make_pattern(d, side, c->s);
-    trace_pattern(c, m, trace, ctx, rays);
+    for (uint32_t j = 0, at = 0; j < m; j++)
+        c->owner[j] = at = iir_site_graph_nearest(g, xyz, at, &c->s[3 * j]);
+    trace_pattern(c, m, vpls, trace, ctx, rays);
     memset(c->delta, 0, n * sizeof *c->delta);
-    uint32_t owner = 0;
     for (uint32_t j = 0; j < m; j++) {
         const double *s = &c->s[3 * j];
-        owner = iir_site_graph_nearest(g, xyz, owner, s);
+        uint32_t owner = c->owner[j];
         if (on_surface(&vpls[owner], &c->hit[j])) continue;
         uint32_t to = best_fit(vpls, xyz, g, owner, &c->hit[j], s);
         c->delta[owner]--;

@@ -28,15 +28,16 @@ typedef struct iir_cell_hit {
     bool null_sample;
 } iir_cell_hit;
 
-/* Traces the light's ray for domain point s, the j-th of the pattern (an area light's: from the
- * emitter's stratum j); called from several threads at once. */
-typedef iir_cell_hit (*iir_cell_trace_fn)(void *ctx, const double s[3], uint32_t j,
+/* Traces the light's ray for domain point s, whose cell is owner's (an area light's: from owner's
+ * point of the emitter, as its cell's directions are); called from several threads at once. */
+typedef iir_cell_hit (*iir_cell_trace_fn)(void *ctx, const double s[3], const iir_vpl *owner,
                                           iir_raystats *rays);
 
 /* Buffers kept across frames. */
 typedef struct iir_surface_cells {
     iir_cell_hit *hit;     /* [M] */
     double *s;             /* [3 M] the pattern's domain points */
+    uint32_t *owner;       /* [M] the index of each point's nearest site */
     int32_t *delta;        /* [n] samples gained minus samples owned */
     uint32_t m_cap, n_cap; /* capacities of the above */
 } iir_surface_cells;
