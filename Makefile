@@ -163,6 +163,8 @@ bench: build
 	    breakfast_room:lamp-shade conference:orbit,$(BENCH) $(word 1,$(subst :, ,$(k))) \
 	    --anim $(word 2,$(subst :, ,$(k))) --frames 0:60 --methods iir,ir --size 128x96 \
 	    --ref-spp 1024 --ref-every 10 --out out/bench/quiet-ref/$(subst :,-,$(k)) &&) true
+	$(BENCH) conference --anim orbit --frames 0:60 --methods iir --size 128x96 --ref-spp 1024 \
+	    --ref-every 10 --sweep weights=voronoi,surface --out out/bench/quiet-ref/conference-weights
 	$(foreach spp,64 2048,$(BENCH) conference_points --anim drift --frames 0:22 --size 128x96 \
 	    --methods iir,ir --ref-spp $(spp) --ref-every 10 \
 	    --out out/bench/flicker-ref/conference_points-drift-$(spp) &&) true
