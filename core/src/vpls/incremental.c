@@ -284,16 +284,7 @@ static bool unoccluded(const iir_incr *inc, const pose *ps, iir_vec3 x, iir_rays
 /* Index of the VPL with this id (the array is sorted by id); asserts that it exists. */
 static uint32_t index_of(const iir_incr *inc, uint32_t id)
 {
-    uint32_t lo = 0, hi = inc->count;
-    while (lo < hi) {
-        uint32_t mid = lo + (hi - lo) / 2;
-        if (inc->vpls[mid].id < id)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    assert(lo < inc->count && inc->vpls[lo].id == id);
-    return lo;
+    return iir_site_index(inc->vpls, inc->count, id);
 }
 
 /* Keeps the VPLs with alive[i] set, in order; releases the others' maps and, when `record`,

@@ -5,8 +5,7 @@
 #include <assert.h>
 #include <stdlib.h>
 
-/* The index of the VPL with this id in vpls[0 .. n) (ascending ids); asserts that it exists. */
-static uint32_t index_of(const iir_vpl *vpls, uint32_t n, uint32_t id)
+uint32_t iir_site_index(const iir_vpl *vpls, uint32_t n, uint32_t id)
 {
     uint32_t lo = 0, hi = n;
     while (lo < hi) {
@@ -56,7 +55,7 @@ iir_status iir_site_graph_build(iir_site_graph *g, const iir_sites *sites, const
                         iir_tri_status_name(ts));
     for (uint32_t i = 0; i < n + 2; i++) g->off[i] = 0;
     for (size_t e = 0; e < 2 * ne; e++) {
-        g->pairs[e] = index_of(vpls, n, g->pairs[e]);
+        g->pairs[e] = iir_site_index(vpls, n, g->pairs[e]);
         g->off[g->pairs[e] + 2]++;
     }
     for (uint32_t i = 2; i < n + 2; i++) g->off[i] += g->off[i - 1];

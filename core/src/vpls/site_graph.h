@@ -22,6 +22,10 @@ typedef struct iir_site_graph {
     uint32_t n_cap;
 } iir_site_graph;
 
+/* The index of the VPL with this id in vpls[0 .. n) (ascending ids, as a set keeps them); asserts
+ * that it exists. */
+uint32_t iir_site_index(const iir_vpl *vpls, uint32_t n, uint32_t id);
+
 /* The graph of the n VPLs of `vpls` (ascending ids, each a site of `sites`). */
 iir_status iir_site_graph_build(iir_site_graph *g, const iir_sites *sites, const iir_vpl *vpls,
                                 uint32_t n, iir_error *err);
