@@ -203,7 +203,7 @@ const struct iir_stri *iir_incr_stri(const iir_incr *inc);
 const double *iir_incr_removed(const iir_incr *inc, uint32_t *n);
 
 /* Bytes a step holds for a set of n VPLs besides the VPLs: its triangulation (~200 B a site), the
- * Delaunay graph and the surface-aware weights' pattern (IIR_CELL_RAYS rays a VPL). */
+ * Delaunay graph and the surface-aware weights' counts. */
 uint64_t iir_incr_memory(uint32_t n);
 
 /* Updates so far; the VPLs the last update created have birth == iir_incr_updates - 1. */

@@ -756,8 +756,7 @@ uint64_t iir_incr_memory(uint32_t n)
 {
     uint64_t per_site = 200 + 3 * sizeof(double) + 4 * sizeof(uint32_t) + 1 + /* tri, xy, ids.. */
                         14 * sizeof(uint32_t) +                               /* graph */
-                        IIR_CELL_RAYS * (sizeof(iir_cell_hit) + 3 * sizeof(double)) +
-                        sizeof(int32_t);
+                        sizeof(int32_t); /* surface weights' counts */
     return per_site * n;
 }
 

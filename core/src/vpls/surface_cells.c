@@ -55,67 +55,58 @@ static uint32_t best_fit(const iir_vpl *vpls, const double *xyz, const iir_site_
     return best;
 }
 
-static bool reserve(iir_surface_cells *c, uint32_t m, uint32_t n)
+static bool reserve(iir_surface_cells *c, uint32_t n)
 {
-    if (m > c->m_cap) {
-        iir_cell_hit *hit = realloc(c->hit, m * sizeof *hit);
-        if (hit) c->hit = hit;
-        double *s = realloc(c->s, 3 * (size_t)m * sizeof *s);
-        if (s) c->s = s;
-        uint32_t *owner = realloc(c->owner, m * sizeof *owner);
-        if (owner) c->owner = owner;
-        if (!hit || !s || !owner) return false;
-        c->m_cap = m;
-    }
-    if (n > c->n_cap) {
-        int32_t *delta = realloc(c->delta, n * sizeof *delta);
-        if (!delta) return false;
-        c->delta = delta, c->n_cap = n;
-    }
+    if (n <= c->n_cap) return true;
+    int32_t *delta = realloc(c->delta, n * sizeof *delta);
+    if (!delta) return false;
+    c->delta = delta, c->n_cap = n;
     return true;
 }
 
 void iir_surface_cells_free(iir_surface_cells *c)
 {
-    free(c->hit);
-    free(c->s);
-    free(c->owner);
     free(c->delta);
     *c = (iir_surface_cells){0};
 }
 
-/* The pattern: cell (x, y) of a g x g grid on [0, 1)^2 with a jitter hashed from its index (the
- * same every frame), mapped onto the domain by area, rows in alternating directions so that
- * consecutive points are neighbours. */
-static void make_pattern(const iir_light_domain *d, uint32_t g, double *s)
+/* Point k of row y of the pattern: cell (x, y) of a side x side grid on [0, 1)^2 with a jitter
+ * hashed from its index (the same every frame), mapped onto the domain by area; rows run in
+ * alternating directions so that consecutive points are neighbours. */
+static void pattern_point(const iir_light_domain *d, uint32_t side, uint32_t y, uint32_t k,
+                          double s[3])
 {
-    for (uint32_t y = 0, j = 0; y < g; y++)
-        for (uint32_t k = 0; k < g; k++, j++) {
-            uint32_t x = y & 1 ? g - 1 - k : k;
-            uint64_t h = iir_mix64(0x5ce11ull << 32 | (uint64_t)(y * g + x));
-            float ux = ((float)x + (float)(h & 0xffffff) * 0x1p-24f) / (float)g;
-            float uy = ((float)y + (float)(h >> 40) * 0x1p-24f) / (float)g;
-            iir_vec2 u = iir_v2(fminf(ux, 0x1.fffffep-1f), fminf(uy, 0x1.fffffep-1f));
-            iir_domain_sample(d, u, 0.0, &s[3 * j]);
+    uint32_t x = y & 1 ? side - 1 - k : k;
+    uint64_t h = iir_mix64(0x5ce11ull << 32 | (uint64_t)(y * side + x));
+    float ux = ((float)x + (float)(h & 0xffffff) * 0x1p-24f) / (float)side;
+    float uy = ((float)y + (float)(h >> 40) * 0x1p-24f) / (float)side;
+    iir_domain_sample(d, iir_v2(fminf(ux, 0x1.fffffep-1f), fminf(uy, 0x1.fffffep-1f)), 0.0, s);
+}
+
+/* The rays of pattern rows [y0, y1): each one's cell owner by a walk from the last one's (from
+ * site 0 for the first: the same whatever thread runs the rows), traced from the owner's point of
+ * an area light, and handed to the neighbour whose surface it hit when it missed the owner's. */
+static void rows(iir_surface_cells *c, const iir_light_domain *d, const iir_vpl *vpls,
+                 const double *xyz, const iir_site_graph *g, iir_cell_trace_fn trace, void *ctx,
+                 uint32_t side, uint32_t y0, uint32_t y1, iir_raystats *rays)
+{
+    uint32_t owner = 0;
+    for (uint32_t y = y0; y < y1; y++)
+        for (uint32_t k = 0; k < side; k++) {
+            double s[3];
+            pattern_point(d, side, y, k, s);
+            owner = iir_site_graph_nearest(g, xyz, owner, s);
+            iir_cell_hit h = trace(ctx, s, &vpls[owner], rays);
+            if (on_surface(&vpls[owner], &h)) continue;
+            uint32_t to = best_fit(vpls, xyz, g, owner, &h, s);
+#pragma omp atomic
+            c->delta[owner]--;
+#pragma omp atomic
+            c->delta[to]++;
         }
 }
 
-/* Every ray of the pattern (from its owner's point of an area light), over the threads; the ray
- * counts summed into *rays. */
-static void trace_pattern(iir_surface_cells *c, uint32_t m, const iir_vpl *vpls,
-                          iir_cell_trace_fn trace, void *ctx, iir_raystats *rays)
-{
-#pragma omp parallel
-    {
-        iir_raystats mine;
-        memset(&mine, 0, sizeof mine);
-#pragma omp for schedule(static)
-        for (uint32_t j = 0; j < m; j++)
-            c->hit[j] = trace(ctx, &c->s[3 * j], &vpls[c->owner[j]], &mine);
-#pragma omp critical
-        iir_raystats_add(rays, &mine);
-    }
-}
+enum { BAND_ROWS = 4 };
 
 iir_status iir_surface_cells_apply(iir_surface_cells *c, const iir_light_domain *d,
                                    const iir_vpl *vpls, const double *xyz, const iir_site_graph *g,
@@ -124,23 +115,24 @@ iir_status iir_surface_cells_apply(iir_surface_cells *c, const iir_light_domain 
 {
     uint32_t n = g->n;
     if (n < 2) return IIR_OK;
-    uint32_t side = (uint32_t)ceil(sqrt((double)IIR_CELL_RAYS * n)), m = side * side;
-    if (!reserve(c, m, n))
+    if (!reserve(c, n))
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the surface-aware cell areas");
-    make_pattern(d, side, c->s);
-    for (uint32_t j = 0, at = 0; j < m; j++)
-        c->owner[j] = at = iir_site_graph_nearest(g, xyz, at, &c->s[3 * j]);
-    trace_pattern(c, m, vpls, trace, ctx, rays);
+    uint32_t side = (uint32_t)ceil(sqrt((double)IIR_CELL_RAYS * n));
+    uint32_t bands = (side + BAND_ROWS - 1) / BAND_ROWS;
     memset(c->delta, 0, n * sizeof *c->delta);
-    for (uint32_t j = 0; j < m; j++) {
-        const double *s = &c->s[3 * j];
-        uint32_t owner = c->owner[j];
-        if (on_surface(&vpls[owner], &c->hit[j])) continue;
-        uint32_t to = best_fit(vpls, xyz, g, owner, &c->hit[j], s);
-        c->delta[owner]--;
-        c->delta[to]++;
+#pragma omp parallel
+    {
+        iir_raystats mine;
+        memset(&mine, 0, sizeof mine);
+#pragma omp for schedule(dynamic)
+        for (uint32_t b = 0; b < bands; b++) {
+            uint32_t y1 = (b + 1) * BAND_ROWS < side ? (b + 1) * BAND_ROWS : side;
+            rows(c, d, vpls, xyz, g, trace, ctx, side, b * BAND_ROWS, y1, &mine);
+        }
+#pragma omp critical
+        iir_raystats_add(rays, &mine);
     }
-    double a = d->area / m;
+    double a = d->area / ((double)side * side);
     for (uint32_t i = 0; i < n; i++) areas[i] = fmax(0.0, areas[i] + a * c->delta[i]);
     return IIR_OK;
 }

@@ -35,11 +35,8 @@ typedef iir_cell_hit (*iir_cell_trace_fn)(void *ctx, const double s[3], const ii
 
 /* Buffers kept across frames. */
 typedef struct iir_surface_cells {
-    iir_cell_hit *hit;     /* [M] */
-    double *s;             /* [3 M] the pattern's domain points */
-    uint32_t *owner;       /* [M] the index of each point's nearest site */
-    int32_t *delta;        /* [n] samples gained minus samples owned */
-    uint32_t m_cap, n_cap; /* capacities of the above */
+    int32_t *delta; /* [n] rays gained minus rays owned */
+    uint32_t n_cap;
 } iir_surface_cells;
 
 void iir_surface_cells_free(iir_surface_cells *c);
