@@ -8,6 +8,8 @@
  *  - the interleave keys: neighbours in the light's domain fall into the same subset far less
  *    often than a hash of the id puts them (which is what a random subset does: 1 / n^2), and a
  *    VPL's key never changes while it lives (its subset would jump: flicker);
+ *  - the weights are the same bits on one thread and on two (each band of the pattern walks from
+ *    the same site whatever thread runs it);
  *  - the set's total flux onto the box stays the light's (surface-aware weights only move area
  *    between cells, null samples' included).
  * Nothing here shares code with incremental.c or surface_cells.c. */
@@ -19,6 +21,7 @@
 #include <stdlib.h>
 
 #include <cmocka.h>
+#include <omp.h>
 
 #include "iir/incremental.h"
 #include "iir/render.h"
@@ -247,11 +250,36 @@ static void test_keys_spread_and_stay(void **state)
     iir_incr_destroy(inc);
 }
 
+/* 40 frames of the orbit on one thread and on two: every VPL's flux the same bits. */
+static void test_same_on_any_thread_count(void **state)
+{
+    const env *e = *state;
+    iir_vec3 flux[2][512];
+    uint32_t count[2];
+    for (int k = 0; k < 2; k++) {
+        omp_set_num_threads(k + 1);
+        iir_incr *inc = make_incr(e, IIR_WEIGHTS_SURFACE);
+        iir_light l = e->scene->lights[0];
+        for (int f = 0; f <= 40; f++) {
+            l = orbit(l, f);
+            update(inc, &l);
+        }
+        const iir_vpl *v = iir_incr_vpls(inc, &count[k]);
+        assert_true(count[k] <= 512);
+        for (uint32_t i = 0; i < count[k]; i++) flux[k][i] = v[i].flux;
+        iir_incr_destroy(inc);
+    }
+    omp_set_num_threads(2);
+    assert_int_equal(count[0], count[1]);
+    assert_memory_equal(flux[0], flux[1], count[0] * sizeof flux[0][0]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_planes_after_motion),
         cmocka_unit_test(test_keys_spread_and_stay),
+        cmocka_unit_test(test_same_on_any_thread_count),
     };
     return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }
