@@ -197,6 +197,34 @@ static void test_against_pt(void **state)
     iir_image_destroy(ref), iir_image_destroy(one), iir_image_destroy(iir4), iir_image_destroy(ir4);
 }
 
+/* At bounces 4 the descendants' shadow maps are half the set's resolution (sm_res 128: parents
+ * 128^2, descendants 64^2), and every VPL with light has one. */
+static void test_descendant_maps_half(void **state)
+{
+    const fixture *f = *state;
+    iir_params p = iir_params_default();
+    iir_test_set(&p, "bounces", 4);
+    iir_method *m = iir_test_method(f, "iir", &p);
+    iir_image *img = iir_image_create(48, 36);
+    iir_view view = {f->scene->lights, f->scene->num_lights, f->scene->camera};
+    iir_frame_stats fs;
+    for (int k = 0; k < 3; k++) iir_test_render(m, &view, img, &fs);
+    uint32_t n = 0, parents = 0, descendants = 0;
+    const iir_vpl *v = iir_method_vpls(m, &n);
+    for (uint32_t i = 0; i < n; i++) {
+        if (v[i].null_sample || iir_is_black(v[i].flux)) continue;
+        int want = v[i].generation ? 64 : 128;
+        if (v[i].smap.res != want)
+            fail_msg("VPL %u of generation %u: a %d^2 map, not %d^2", v[i].id, v[i].generation,
+                     v[i].smap.res, want);
+        v[i].generation ? descendants++ : parents++;
+    }
+    print_message("%u parents with 128^2 maps, %u descendants with 64^2\n", parents, descendants);
+    assert_true(parents > 100 && descendants > 50);
+    iir_image_destroy(img);
+    iir_method_destroy(m);
+}
+
 /* A kept glossy parent's lineage follows its light: the first step was sampled from its lobe for
  * the old wi; when wi turns, the same descendants stay and their flux becomes the parent's times
  * f(wi', d0) / f(wi, d0) of what it was (d0 toward the first descendant; the BRDF from glTF
@@ -321,6 +349,7 @@ int main(void)
         cmocka_unit_test(test_flux_follows_parent),
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_against_pt),
+        cmocka_unit_test(test_descendant_maps_half),
         cmocka_unit_test(test_glossy_parent_reweighs),
         cmocka_unit_test(test_glossy_paths_against_pt),
     };

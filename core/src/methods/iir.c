@@ -359,18 +359,17 @@ static void fill_counts(const iir_incr_stats *is, uint32_t maps, iir_vpl_counts 
 /* The maps (exact or ISMs) of v[0..n) that have none, of light k's set; *built = how many. With
  * refill (and not after a regeneration, whose maps are all new) beyond kmax at full resolution
  * the rest are coarse and rendered again later within kmax (iir_smaps_build_budget). */
-static iir_status maps_of(iir_state *s, uint32_t k, iir_vpl *v, uint32_t n, bool regenerated,
-                          iir_raystats *rays, uint32_t *built, iir_error *err)
+static iir_status maps_of(iir_state *s, uint32_t k, iir_vpl *v, uint32_t n, int res,
+                          bool regenerated, iir_raystats *rays, uint32_t *built, iir_error *err)
 {
     *built = 0;
     if (!n) return IIR_OK;
     if (s->params.vpl.visibility == IIR_VIS_SHADOWMAP) {
         const iir_options *o = &s->params;
-        *built =
-            o->refill && o->insert_ms <= 0.f && !regenerated && !s->maps_all
-                ? iir_smaps_build_budget(v, n, s->rt, o->vpl.sm_res, (uint32_t)o->kmax, rays,
-                                         s->stop, s->stop_ctx)
-                : iir_smaps_build_missing(v, n, s->rt, o->vpl.sm_res, rays, s->stop, s->stop_ctx);
+        *built = o->refill && o->insert_ms <= 0.f && !regenerated && !s->maps_all
+                     ? iir_smaps_build_budget(v, n, s->rt, res, (uint32_t)o->kmax, rays, s->stop,
+                                              s->stop_ctx)
+                     : iir_smaps_build_missing(v, n, s->rt, res, rays, s->stop, s->stop_ctx);
         return IIR_OK;
     }
     return iir_ism_maps_build(&s->ism, s->scene, s->rt, &s->params.ism, s->params.common.seed, k, v,
@@ -380,6 +379,15 @@ static iir_status maps_of(iir_state *s, uint32_t k, iir_vpl *v, uint32_t n, bool
 /* Shadow maps (exact or ISMs, as visibility says) for every set's new VPLs, on the sets' own
  * arrays (where maps live), until the stop hook says stop; *maps = how many were built. Fails
  * only when ISM's point set cannot be made. */
+/* A descendant's shadow map (bounces > 2): half the set's resolution, at least 8. Later bounces
+ * carry a fraction of the light and their shadows blur in the sum; on the Cornell orbit at 4
+ * bounces the half maps cut the frame by a quarter (the maps and the lookups' cache misses) and
+ * leave relMSE and flicker unchanged to 3 digits (docs/experiments.md). */
+static int descendant_res(int sm_res)
+{
+    return sm_res / 2 >= 8 ? sm_res / 2 : sm_res;
+}
+
 static iir_status build_maps(iir_state *s, const iir_incr_stats *is, iir_raystats *rays,
                              uint32_t *maps, iir_error *err)
 {
@@ -393,9 +401,10 @@ static iir_status build_maps(iir_state *s, const iir_incr_stats *is, iir_raystat
         iir_vpl *v = set ? iir_incr_vpls(set, &n) : NULL;
         iir_vpl *d = iir_vplsets_descendants(s->sets, k, &nd);
         bool regen = is->initial || is->vpl.regenerated;
-        st = maps_of(s, k, v, n, regen, rays, &built, err);
+        int res = s->params.vpl.sm_res;
+        st = maps_of(s, k, v, n, res, regen, rays, &built, err);
         *maps += built;
-        if (st == IIR_OK) st = maps_of(s, k, d, nd, regen, rays, &built, err);
+        if (st == IIR_OK) st = maps_of(s, k, d, nd, descendant_res(res), regen, rays, &built, err);
         *maps += built;
     }
     return st;
