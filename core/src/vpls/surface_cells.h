@@ -50,8 +50,10 @@ void iir_surface_cells_free(iir_surface_cells *c);
  * their cell's VPL (within IIR_CELL_PLANE of the ray's length, normals within ~25 degrees), or
  * that are null samples in a null sample's cell, stay; any other goes to the VPL among the cell's,
  * its neighbours' and theirs whose plane fits the hit best (nearest in the domain among equals).
- * Each area changes by the samples it gained minus those it had, times the sample's area: the exact
- * Voronoi areas stay where nothing moved, and the sum is unchanged. */
+ * Each area changes by the rays it gained minus those it handed over, times a ray's share of the
+ * domain: the exact Voronoi areas stay where nothing moved, and the sum is unchanged (but for an
+ * area that would fall below 0, which stays at 0). The rows of the pattern run in bands over the
+ * threads; the result does not depend on their number. */
 iir_status iir_surface_cells_apply(iir_surface_cells *c, const iir_light_domain *d,
                                    const iir_vpl *vpls, const double *xyz, const iir_site_graph *g,
                                    iir_cell_trace_fn trace, void *ctx, double *areas,
