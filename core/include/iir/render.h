@@ -200,7 +200,7 @@ uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int
  * stride (an id mod n2 rule would give each subset a band of a Hammersley-ordered set's disk). */
 static inline uint32_t iir_vpl_subset(uint32_t id, uint32_t n2)
 {
-    return (uint32_t)(((uint64_t)(id * 2654435769u) * n2) >> 32);
+    return iir_key_subset(iir_id_key(id), n2);
 }
 
 /* VPL v's interleaving subset among n2: by its key, where it has one (iir spreads keys over
@@ -208,8 +208,7 @@ static inline uint32_t iir_vpl_subset(uint32_t id, uint32_t n2)
  * else by its id. */
 static inline uint32_t iir_vpl_subset_of(const iir_vpl *v, uint32_t n2)
 {
-    if (!v->key) return iir_vpl_subset(v->id, n2);
-    return (uint32_t)(((uint64_t)v->key * n2) >> 32);
+    return iir_key_subset(v->key ? v->key : iir_id_key(v->id), n2);
 }
 
 /* IIR_ERR_INVALID naming the field and its range. */

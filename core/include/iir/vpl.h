@@ -92,6 +92,18 @@ typedef struct iir_vpl {
     iir_smap smap;      /* owned by whoever owns the VPL */
 } iir_vpl;
 
+/* The interleave key of VPL `id` when it has none of its own: Fibonacci hashing of the id. */
+static inline uint32_t iir_id_key(uint32_t id)
+{
+    return id * 2654435769u;
+}
+
+/* A key's interleaving subset among n2: the key scaled onto [0, n2). */
+static inline uint32_t iir_key_subset(uint32_t key, uint32_t n2)
+{
+    return (uint32_t)(((uint64_t)key * n2) >> 32);
+}
+
 /* Fills the frame from the normal. */
 static inline void iir_vpl_set_normal(iir_vpl *v, iir_vec3 n)
 {

@@ -99,6 +99,7 @@ uint32_t iir_site_graph_nearest(const iir_site_graph *g, const double *xyz, uint
 
 /* ---- interleave keys ---- */
 
+/* The keys balance 16 subsets (interleave 4, the default; and so 2). */
 enum { KEY_CANDIDATES = 64, RING_MAX = 128, BALANCE_SUBSETS = 16 };
 
 /* The distance of two keys on the circle of 2^32. */
@@ -124,12 +125,6 @@ uint32_t iir_site_graph_rings(const iir_site_graph *g, uint32_t i, uint32_t *rin
     return n;
 }
 
-/* The subset of `key` among BALANCE_SUBSETS (interleave 4, the default; and so 2). */
-static uint32_t balance_subset(uint32_t key)
-{
-    return (uint32_t)(((uint64_t)key * BALANCE_SUBSETS) >> 32);
-}
-
 /* The candidate key farthest from the keyed neighbours -- the nearest neighbour's distance plus
  * half the nearest second neighbour's -- among those whose subset of BALANCE_SUBSETS holds at most
  * one VPL more than the smallest. Candidates are KEY_CANDIDATES evenly spaced from the id's hash.
@@ -141,8 +136,8 @@ static uint32_t spread_key(const iir_vpl *vpls, uint32_t id, const uint32_t *rin
     for (uint32_t k = 0; k < BALANCE_SUBSETS; k++) least = count[k] < least ? count[k] : least;
     double best_score = -1.0;
     for (uint32_t c = 0; c < KEY_CANDIDATES; c++) {
-        uint32_t key = id * 2654435769u + c * (uint32_t)(0x100000000ull / KEY_CANDIDATES);
-        if (!key || count[balance_subset(key)] > least + 1) continue;
+        uint32_t key = iir_id_key(id) + c * (uint32_t)(0x100000000ull / KEY_CANDIDATES);
+        if (!key || count[iir_key_subset(key, BALANCE_SUBSETS)] > least + 1) continue;
         uint32_t near1 = UINT32_MAX, near2 = UINT32_MAX;
         for (uint32_t k = 0; k < n; k++) {
             uint32_t other = vpls[ring[k]].key;
@@ -161,11 +156,11 @@ void iir_site_keys_assign(iir_vpl *vpls, const iir_site_graph *g)
 {
     uint32_t ring[RING_MAX], ring1, count[BALANCE_SUBSETS] = {0};
     for (uint32_t i = 0; i < g->n; i++)
-        if (vpls[i].key) count[balance_subset(vpls[i].key)]++;
+        if (vpls[i].key) count[iir_key_subset(vpls[i].key, BALANCE_SUBSETS)]++;
     for (uint32_t i = 0; i < g->n; i++) {
         if (vpls[i].key) continue;
         uint32_t n = iir_site_graph_rings(g, i, ring, RING_MAX, &ring1);
         vpls[i].key = spread_key(vpls, vpls[i].id, ring, n, ring1, count);
-        count[balance_subset(vpls[i].key)]++;
+        count[iir_key_subset(vpls[i].key, BALANCE_SUBSETS)]++;
     }
 }
