@@ -5,7 +5,7 @@
  *    coarse voxel grid of the scene (3DDA, or a few probes along the ray) -- hier_light.h -- on a
  *    quadtree refined at depth and normal discontinuities and where the light at neighbouring
  *    corners differs (light_split), so cone edges, shadow edges and the spot's pool end at pixel
- *    resolution -- hier_tree.h;
+ *    resolution -- render/light_tree.h;
  *  - one-bounce indirect light gathered from the lights' reflective shadow maps without
  *    visibility, as rsm does (rsm_map.h), on the multiresolution hierarchy (multires.h: coarse
  *    where the surface is smooth, per pixel at discontinuities).
@@ -23,12 +23,12 @@
 #include <stdlib.h>
 
 #include "hier_light.h"
-#include "hier_tree.h"
 #include "iir/method.h"
 #include "iir/multires.h"
 #include "iir/timer.h"
 #include "iir/vplsets.h"
 #include "method_internal.h"
+#include "../render/light_tree.h"
 #include "../render/render_internal.h"
 #include "rsm_map.h"
 
@@ -43,7 +43,7 @@ typedef struct hier_options {
     int voxel_res; /* cells along the scene's longest side */
     hier_visibility vis;
     int vis_points;
-    float light_split; /* the direct light's tree: hier_tree.h's threshold t */
+    float light_split; /* the direct light's tree: light_tree.h's threshold t */
 } hier_options;
 
 static const char *const VIS_CHOICES[] = {"voxels", "points", "none", NULL};
@@ -82,7 +82,7 @@ typedef struct hier_state {
     iir_multires *mr;
     uint64_t gb_serial; /* G-buffers rendered: the hierarchy's key */
     hier_lights lights;
-    hier_tree tree; /* the direct light */
+    light_tree tree; /* the direct light */
     rsm_map maps[IIR_VPLSETS_MAX_LIGHTS];
     uint32_t num_maps;
     rsm_pattern pattern;
@@ -165,6 +165,18 @@ static void compose(const hier_state *s, const iir_gbuffer *gb, iir_image *out)
     }
 }
 
+/* The light tree's points: the lights' irradiance at their G-buffer samples (light_tree_eval_fn).
+ */
+static uint64_t tree_points(void *ctx, const uint32_t *px, int n, iir_vec3 *D)
+{
+    const hier_state *s = ctx;
+    const iir_gbuffer *gb = iir_renderer_gbuffer(s->renderer);
+    uint64_t evals = 0;
+    for (int i = 0; i < n; i++)
+        D[px[i]] = hier_direct(&s->lights, gb->position[px[i]], gb->normal[px[i]], &evals);
+    return evals;
+}
+
 /* Fills s->E (bounce light) for every pixel -- the hierarchy's levels, then the level-0 pixels --
  * and s->tree.D (direct light) on the tree refined from that hierarchy where the light changes;
  * times them as the indirect and direct phases. */
@@ -188,8 +200,8 @@ static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *s
     double t = iir_now_ms();
     stats->phase_ms[IIR_PHASE_INDIRECT] = t - t0;
     const iir_stop stop = {s->stop, s->stop_ctx};
-    hier_tree_input in = {gb, s->mr, &s->lights, s->o.mr.mr_levels, s->o.light_split};
-    st = hier_tree_shade(&s->tree, &in, &stop, &evals, err);
+    light_tree_input in = {gb, s->mr, tree_points, s, s->o.mr.mr_levels, s->o.light_split};
+    st = light_tree_shade(&s->tree, &in, &stop, &evals, err);
     if (st == IIR_OK && gb->any_pbr) evals += glossy_direct(s, gb);
     stats->phase_ms[IIR_PHASE_DIRECT] = iir_now_ms() - t;
     stats->vpl_evals = evals;
@@ -272,7 +284,7 @@ static void hier_destroy(void *state)
     for (uint32_t l = 0; l < IIR_VPLSETS_MAX_LIGHTS; l++) rsm_map_free(&s->maps[l]);
     rsm_pattern_free(&s->pattern);
     hier_lights_free(&s->lights);
-    hier_tree_free(&s->tree);
+    light_tree_free(&s->tree);
     iir_multires_destroy(s->mr);
     iir_voxels_destroy(s->grid);
     iir_renderer_destroy(s->renderer);
@@ -340,7 +352,7 @@ static uint64_t hier_memory(const void *opts, int width, int height)
     const hier_options *o = opts;
     uint64_t px = (uint64_t)width * (uint64_t)height;
     uint64_t texels = (uint64_t)o->rsm.res * (uint64_t)o->rsm.res;
-    return iir_renderer_memory(width, height) + px * (48 + 12) + hier_tree_memory(width, height) +
+    return iir_renderer_memory(width, height) + px * (48 + 12) + light_tree_memory(width, height) +
            texels * sizeof(iir_vpl) + iir_voxels_memory(iir_v3s(1.f), o->voxel_res) +
            (uint64_t)o->rsm.samples * 12;
 }

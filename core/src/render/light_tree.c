@@ -1,6 +1,7 @@
-/* hier_tree.c -- the quadtree of hier_tree.h: its arrays, the background blocks, the top corners,
- * each level's splits and fills, and the interpolation of the blocks that did not split. */
-#include "hier_tree.h"
+/* light_tree.c -- the quadtree of light_tree.h: its arrays, the background blocks, the top
+ * corners, each level's probes, splits and fills, the batches of points handed to the caller, and
+ * the interpolation of the blocks that did not split. */
+#include "light_tree.h"
 
 #include <assert.h>
 #include <math.h>
@@ -23,17 +24,17 @@ static const float DARK = 1.f / 20.f; /* Y_dark over the mean luminance of the t
 
 /* ---- arrays ---- */
 
-void hier_tree_free(hier_tree *t)
+void light_tree_free(light_tree *t)
 {
     free(t->D), free(t->have);
     for (int l = 0; l <= IIR_MR_MAX_LEVEL; l++) free(t->state[l]), free(t->empty[l]);
     memset(t, 0, sizeof *t);
 }
 
-static bool alloc_tree(hier_tree *t, int w, int h)
+static bool alloc_tree(light_tree *t, int w, int h)
 {
     if (t->width == w && t->height == h) return true;
-    hier_tree_free(t);
+    light_tree_free(t);
     size_t n = (size_t)w * (size_t)h;
     bool ok = (t->D = malloc(n * sizeof *t->D)) != NULL && (t->have = malloc(n)) != NULL;
     for (int l = 0; ok && l <= IIR_MR_MAX_LEVEL; l++) {
@@ -43,7 +44,7 @@ static bool alloc_tree(hier_tree *t, int w, int h)
              (l == 0 || (t->empty[l] = malloc(blocks)) != NULL);
     }
     if (!ok) {
-        hier_tree_free(t);
+        light_tree_free(t);
         return false;
     }
     t->width = w, t->height = h;
@@ -51,7 +52,7 @@ static bool alloc_tree(hier_tree *t, int w, int h)
     return true;
 }
 
-uint64_t hier_tree_memory(int width, int height)
+uint64_t light_tree_memory(int width, int height)
 {
     uint64_t px = (uint64_t)width * (uint64_t)height;
     return px * (sizeof(iir_vec3) + 1 + 2); /* D, have, the levels' states and empty flags */
@@ -59,17 +60,17 @@ uint64_t hier_tree_memory(int width, int height)
 
 /* ---- blocks ---- */
 
-static inline size_t pixel(const hier_tree *t, int x, int y)
+static inline size_t pixel(const light_tree *t, int x, int y)
 {
     return (size_t)y * (size_t)t->width + (size_t)x;
 }
 
-static inline uint8_t *block(const hier_tree *t, int l, int i, int j)
+static inline uint8_t *block(const light_tree *t, int l, int i, int j)
 {
     return &t->state[l][(size_t)j * (size_t)t->bw[l] + (size_t)i];
 }
 
-static inline uint8_t *empty_at(const hier_tree *t, int l, int i, int j)
+static inline uint8_t *empty_at(const light_tree *t, int l, int i, int j)
 {
     return &t->empty[l][(size_t)j * (size_t)t->bw[l] + (size_t)i];
 }
@@ -79,7 +80,7 @@ typedef struct corners {
     int x0, x1, y0, y1;
 } corners;
 
-static corners corners_of(const hier_tree *t, int l, int i, int j)
+static corners corners_of(const light_tree *t, int l, int i, int j)
 {
     int x0 = i << l, y0 = j << l;
     int x1 = x0 + (1 << l) < t->width - 1 ? x0 + (1 << l) : t->width - 1;
@@ -87,14 +88,27 @@ static corners corners_of(const hier_tree *t, int l, int i, int j)
     return (corners){x0, x1, y0, y1};
 }
 
-/* What a pass does to block (i, j) of level m; adds the light points it evaluated to *evals. It
- * writes only the block's own points and children (hier_tree.h). */
-typedef void (*block_fn)(hier_tree *t, const hier_tree_input *in, int m, int i, int j, float Y_dark,
-                         uint64_t *evals);
+/* A work item's points to evaluate, handed to the caller in batches. */
+typedef struct queue {
+    const light_tree_input *in;
+    uint32_t px[LIGHT_TREE_BATCH];
+    int n;
+    uint64_t evals;
+} queue;
 
-/* Runs fn on every block of level m whose state is `want`, CHUNK blocks of a row per item,
- * polling stop between items. true when stopped. */
-static bool for_blocks(hier_tree *t, const hier_tree_input *in, int m, uint8_t want, block_fn fn,
+static void flush(light_tree *t, queue *q)
+{
+    if (q->n) q->evals += q->in->eval(q->in->ctx, q->px, q->n, t->D);
+    q->n = 0;
+}
+
+/* What a pass does to block (i, j) of level m: its points to evaluate go to q. It writes only the
+ * block's own points and children (light_tree.h). */
+typedef void (*block_fn)(light_tree *t, int m, int i, int j, float Y_dark, queue *q);
+
+/* Runs fn on every block of level m whose state is `want`, CHUNK blocks of a row per item, whose
+ * points are evaluated when the item ends; polls stop between items. true when stopped. */
+static bool for_blocks(light_tree *t, const light_tree_input *in, int m, uint8_t want, block_fn fn,
                        float Y_dark, const iir_stop *stop, uint64_t *evals)
 {
     const int chunks = (t->bw[m] + CHUNK - 1) / CHUNK;
@@ -106,9 +120,12 @@ static bool for_blocks(hier_tree *t, const hier_tree_input *in, int m, uint8_t w
             stopped = 1;
             continue;
         }
+        queue q = {.in = in};
         int j = item / chunks, i0 = (item % chunks) * CHUNK;
         for (int i = i0; i < i0 + CHUNK && i < t->bw[m]; i++)
-            if (*block(t, m, i, j) == want) fn(t, in, m, i, j, Y_dark, &sum);
+            if (*block(t, m, i, j) == want) fn(t, m, i, j, Y_dark, &q);
+        flush(t, &q);
+        sum += q.evals;
     }
     *evals += sum;
     return stopped > 0;
@@ -118,7 +135,7 @@ static bool for_blocks(hier_tree *t, const hier_tree_input *in, int m, uint8_t w
 
 /* Whether every pixel of block (i, j) of level l >= 1 is background: from the G-buffer at level
  * 1, from the children above. */
-static uint8_t block_empty(const hier_tree *t, const iir_gbuffer *gb, int l, int i, int j)
+static uint8_t block_empty(const light_tree *t, const iir_gbuffer *gb, int l, int i, int j)
 {
     for (int b = 0; b < 2; b++)
         for (int a = 0; a < 2; a++) {
@@ -133,7 +150,7 @@ static uint8_t block_empty(const hier_tree *t, const iir_gbuffer *gb, int l, int
 
 /* The empty flags of levels 1 .. IIR_MR_MAX_LEVEL, when the multires hierarchy (so the G-buffer)
  * changed since they were made. */
-static void find_empty(hier_tree *t, const hier_tree_input *in)
+static void find_empty(light_tree *t, const light_tree_input *in)
 {
     uint64_t g = iir_multires_generation(in->mr);
     if (g == t->generation) return;
@@ -148,37 +165,38 @@ static void find_empty(hier_tree *t, const hier_tree_input *in)
 
 /* ---- evaluation ---- */
 
-/* D at pixel (x, y), unless evaluated already: the lights' irradiance at its G-buffer sample, 0 on
- * the background. */
-static void eval_point(hier_tree *t, const hier_tree_input *in, int x, int y, uint64_t *evals)
+/* D at pixel (x, y), unless evaluated already: queued for the caller's evaluation on a surface
+ * (evaluated when the work item ends), 0 on the background. */
+static void eval_point(light_tree *t, queue *q, int x, int y)
 {
     size_t p = pixel(t, x, y);
     if (t->have[p]) return;
-    const iir_gbuffer *gb = in->gb;
-    t->D[p] = isfinite(gb->depth[p]) ? hier_direct(in->hl, gb->position[p], gb->normal[p], evals)
-                                     : iir_v3s(0.f);
     t->have[p] = 1;
+    if (!isfinite(q->in->gb->depth[p])) {
+        t->D[p] = iir_v3s(0.f);
+        return;
+    }
+    if (q->n == LIGHT_TREE_BATCH) flush(t, q);
+    q->px[q->n++] = (uint32_t)p;
 }
 
 /* The top level's corners: each block evaluates its upper left one, the last column's blocks
  * their upper right one too, the last row's their lower ones. */
-static void top_corners(hier_tree *t, const hier_tree_input *in, int m, int i, int j, float Y_dark,
-                        uint64_t *evals)
+static void top_corners(light_tree *t, int m, int i, int j, float Y_dark, queue *q)
 {
     (void)Y_dark;
     corners c = corners_of(t, m, i, j);
     bool right = i == t->bw[m] - 1 && c.x1 > c.x0, low = j == t->bh[m] - 1 && c.y1 > c.y0;
-    eval_point(t, in, c.x0, c.y0, evals);
-    if (right) eval_point(t, in, c.x1, c.y0, evals);
-    if (low) eval_point(t, in, c.x0, c.y1, evals);
-    if (right && low) eval_point(t, in, c.x1, c.y1, evals);
+    eval_point(t, q, c.x0, c.y0);
+    if (right) eval_point(t, q, c.x1, c.y0);
+    if (low) eval_point(t, q, c.x0, c.y1);
+    if (right && low) eval_point(t, q, c.x1, c.y1);
 }
 
 /* A split block's children's corners: the lattice points x0, x0 + 2^(m-1), x1 by y0, y0 +
  * 2^(m-1), y1 not yet evaluated. An edge shared with a block that split as well is the left or
  * upper block's (the right or lower one leaves it), so every point has one writer. */
-static void fill_children(hier_tree *t, const hier_tree_input *in, int m, int i, int j,
-                          float Y_dark, uint64_t *evals)
+static void fill_children(light_tree *t, int m, int i, int j, float Y_dark, queue *q)
 {
     (void)Y_dark;
     corners c = corners_of(t, m, i, j);
@@ -189,7 +207,7 @@ static void fill_children(hier_tree *t, const hier_tree_input *in, int m, int i,
                            (c.y1 > c.y0)};
     for (int b = 0; b < 3; b++)
         for (int a = 0; a < 3; a++)
-            if (use_x[a] && use_y[b]) eval_point(t, in, xs[a], ys[b], evals);
+            if (use_x[a] && use_y[b]) eval_point(t, q, xs[a], ys[b]);
 }
 
 /* ---- the splits ---- */
@@ -199,11 +217,11 @@ static inline float lerpf(float a, float b, float f)
     return a + (b - a) * f;
 }
 
-/* Whether the light changes across the block of corners c (hier_tree.h): the luminances Y of its
+/* Whether the light changes across the block of corners c (light_tree.h): the luminances Y of its
  * corners and of the probe p inside it (NULL: none) differ by more than (3 + t) / 4 (max Y +
  * Y_dark), or Y(p) differs from the corners' bilinear interpolation at p by more than t (max Y +
  * Y_dark). */
-static bool light_changes(const hier_tree *t, const corners *c, const int *p_xy, float threshold,
+static bool light_changes(const light_tree *t, const corners *c, const int *p_xy, float threshold,
                           float Y_dark)
 {
     const size_t p[4] = {pixel(t, c->x0, c->y0), pixel(t, c->x1, c->y0), pixel(t, c->x0, c->y1),
@@ -233,7 +251,7 @@ static inline iir_vec3 lerp(iir_vec3 a, iir_vec3 b, float f)
 
 /* A leaf's own pixels [x0, x0 + 2^m) x [y0, y0 + 2^m) not evaluated: its corners' bilinear
  * interpolation. */
-static void interpolate(hier_tree *t, int m, const corners *c)
+static void interpolate(light_tree *t, int m, const corners *c)
 {
     const iir_vec3 *D = t->D;
     const iir_vec3 D00 = D[pixel(t, c->x0, c->y0)], D10 = D[pixel(t, c->x1, c->y0)];
@@ -252,7 +270,7 @@ static void interpolate(hier_tree *t, int m, const corners *c)
 
 /* A block of background: its own pixels not evaluated get no light (their albedo is 0 anyway; the
  * evaluated ones, corners that neighbours read, are 0 already). */
-static void clear(hier_tree *t, int m, const corners *c)
+static void clear(light_tree *t, int m, const corners *c)
 {
     const int xe = c->x0 + (1 << m) < t->width ? c->x0 + (1 << m) : t->width;
     const int ye = c->y0 + (1 << m) < t->height ? c->y0 + (1 << m) : t->height;
@@ -266,7 +284,7 @@ static void clear(hier_tree *t, int m, const corners *c)
 
 /* Whether a corner of c lies on the background (a silhouette that only touches the block's
  * texel diagonally, which multires.h's four-neighbour test does not mark). */
-static bool corner_on_background(const hier_tree *t, const iir_gbuffer *gb, const corners *c)
+static bool corner_on_background(const light_tree *t, const iir_gbuffer *gb, const corners *c)
 {
     return !isfinite(gb->depth[pixel(t, c->x0, c->y0)]) ||
            !isfinite(gb->depth[pixel(t, c->x1, c->y0)]) ||
@@ -274,12 +292,39 @@ static bool corner_on_background(const hier_tree *t, const iir_gbuffer *gb, cons
            !isfinite(gb->depth[pixel(t, c->x1, c->y1)]);
 }
 
+/* Whether block (i, j) of level m, corners c, splits by its geometry: its multires texel is
+ * marked, or a corner is background. */
+static bool geometry_splits(const light_tree *t, const light_tree_input *in, int m, int i, int j,
+                            const corners *c)
+{
+    return iir_multires_marked(in->mr, m, i, j) || corner_on_background(t, in->gb, c);
+}
+
+/* The centre probe of block c of level m (for m >= PROBE_MIN): its pixel (h = 2^(m-1)). */
+static void centre_of(const corners *c, int m, int xy[2])
+{
+    int h = 1 << (m - 1);
+    xy[0] = c->x0 + h < c->x1 ? c->x0 + h : c->x1;
+    xy[1] = c->y0 + h < c->y1 ? c->y0 + h : c->y1;
+}
+
+/* An undecided block of level m >= PROBE_MIN that the light alone may split: its centre, for the
+ * decision. */
+static void probe(light_tree *t, int m, int i, int j, float Y_dark, queue *q)
+{
+    (void)Y_dark;
+    corners c = corners_of(t, m, i, j);
+    if (m < PROBE_MIN || *empty_at(t, m, i, j) || geometry_splits(t, q->in, m, i, j, &c)) return;
+    int centre[2];
+    centre_of(&c, m, centre);
+    eval_point(t, q, centre[0], centre[1]);
+}
+
 /* An undecided block of level m >= 1: all background, it is a leaf without light; else it splits
- * (its multires texel is marked, a corner is background, or the light changes across it, judged
- * from its corners and, from level PROBE_MIN up, its centre, evaluated here) and puts its children
- * into level m - 1, or becomes a leaf and interpolates its pixels. */
-static void decide(hier_tree *t, const hier_tree_input *in, int m, int i, int j, float Y_dark,
-                   uint64_t *evals)
+ * (by its geometry, or where the light changes across it, judged from its corners and, from level
+ * PROBE_MIN up, its centre, probed before) and puts its children into level m - 1, or becomes a
+ * leaf and interpolates its pixels. */
+static void decide(light_tree *t, int m, int i, int j, float Y_dark, queue *q)
 {
     corners c = corners_of(t, m, i, j);
     if (*empty_at(t, m, i, j)) {
@@ -287,14 +332,13 @@ static void decide(hier_tree *t, const hier_tree_input *in, int m, int i, int j,
         clear(t, m, &c);
         return;
     }
-    bool split = iir_multires_marked(in->mr, m, i, j) || corner_on_background(t, in->gb, &c);
+    bool split = geometry_splits(t, q->in, m, i, j, &c);
     if (!split && m >= PROBE_MIN) {
-        int h = 1 << (m - 1);
-        int centre[2] = {c.x0 + h < c.x1 ? c.x0 + h : c.x1, c.y0 + h < c.y1 ? c.y0 + h : c.y1};
-        eval_point(t, in, centre[0], centre[1], evals);
-        split = light_changes(t, &c, centre, in->threshold, Y_dark);
+        int centre[2];
+        centre_of(&c, m, centre);
+        split = light_changes(t, &c, centre, q->in->threshold, Y_dark);
     } else if (!split) {
-        split = light_changes(t, &c, NULL, in->threshold, Y_dark);
+        split = light_changes(t, &c, NULL, q->in->threshold, Y_dark);
     }
     *block(t, m, i, j) = split ? SPLIT : LEAF;
     if (!split) interpolate(t, m, &c);
@@ -307,7 +351,7 @@ static void decide(hier_tree *t, const hier_tree_input *in, int m, int i, int j,
 /* ---- the frame ---- */
 
 /* Y_dark: the mean luminance of the top level's (upper left) corners on surfaces, times DARK. */
-static float dark_luminance(const hier_tree *t, const hier_tree_input *in)
+static float dark_luminance(const light_tree *t, const light_tree_input *in)
 {
     const int l = in->top;
     double sum = 0;
@@ -322,12 +366,12 @@ static float dark_luminance(const hier_tree *t, const hier_tree_input *in)
     return n ? DARK * (float)(sum / n) : 0.f;
 }
 
-iir_status hier_tree_shade(hier_tree *t, const hier_tree_input *in, const iir_stop *stop,
-                           uint64_t *evals, iir_error *err)
+iir_status light_tree_shade(light_tree *t, const light_tree_input *in, const iir_stop *stop,
+                            uint64_t *evals, iir_error *err)
 {
     assert(in->top >= 1 && in->top <= IIR_MR_MAX_LEVEL && in->threshold >= 0.f);
     if (!alloc_tree(t, in->gb->width, in->gb->height))
-        return iir_fail(err, IIR_ERR_NOMEM, "hier: out of memory for the direct light's tree");
+        return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the direct light's tree");
     const int top = in->top;
     find_empty(t, in);
     memset(t->have, 0, (size_t)t->width * (size_t)t->height);
@@ -336,7 +380,8 @@ iir_status hier_tree_shade(hier_tree *t, const hier_tree_input *in, const iir_st
     float Y_dark = stopped ? 0.f : dark_luminance(t, in);
     for (int m = top; m >= 1 && !stopped; m--) {
         memset(t->state[m - 1], ABSENT, (size_t)t->bw[m - 1] * (size_t)t->bh[m - 1]);
-        stopped = for_blocks(t, in, m, ACTIVE, decide, Y_dark, stop, evals) ||
+        stopped = for_blocks(t, in, m, ACTIVE, probe, Y_dark, stop, evals) ||
+                  for_blocks(t, in, m, ACTIVE, decide, Y_dark, stop, evals) ||
                   for_blocks(t, in, m, SPLIT, fill_children, Y_dark, stop, evals);
     }
     if (stopped) return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
