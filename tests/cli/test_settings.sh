@@ -16,7 +16,7 @@ settings() { echo "$2" | grep "^$1 settings: "; }
 out=$("$iird" render --method iir --size 32x24 --vpls 16 --sm-res 32 --refine-passes 2 \
     --out "$tmp/iir.png" 2>&1) || fail "render --method iir: $out"
 line=$(settings iir "$out")
-[ "$line" = "iir settings: bounces 2, vpls 16, kmin 4, kmax 8, insert-ms 0, weights surface, regen-threshold 0.5, refill true, visibility shadowmap, sm-res 32, sm-bias 0.005, interleave 4, area-samples 8, receiver-bsdf glossy, vpl-kind point, ism-points 16384, ism-res 32, ism-points-per-vpl 1024, clamp 100, shading full, clamp-compensation off, mr-levels 4, mr-depth 0.01, mr-normal 0.95, mr-window 16, target-fps 0, ctl-vpls-max 1024, ctl-vpls-min 64, ctl-sm-res-min 64, seed 1, refine-passes 2, jitter true" ] ||
+[ "$line" = "iir settings: bounces 2, vpls 16, kmin 4, kmax 8, insert-ms 0, weights surface, regen-threshold 0.5, refill true, visibility shadowmap, sm-res 32, sm-bias 0.005, interleave 4, area-samples 8, receiver-bsdf glossy, vpl-kind point, ism-points 16384, ism-res 32, ism-points-per-vpl 1024, clamp 100, shading full, clamp-compensation off, mr-levels 4, mr-depth 0.01, mr-normal 0.95, mr-window 16, mr-direct full, light-split 0.02, target-fps 0, ctl-vpls-max 1024, ctl-vpls-min 64, ctl-sm-res-min 64, seed 1, refine-passes 2, jitter true" ] ||
     fail "iir's settings line: $out"
 echo "$out" | grep -qE "spp" && fail "render --method iir prints settings iir does not read: $out"
 echo "$out" | grep -q "method iir, 2 refinement passes over 16 VPLs," || fail "iir's work: $out"

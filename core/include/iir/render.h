@@ -132,8 +132,13 @@ typedef enum iir_clamp_comp {
                                   weighted n, gathered by the filter */
 } iir_clamp_comp;
 
+/* Where shading multires evaluates the direct light of points, spots and suns on diffuse surfaces:
+ * at every pixel, or on the light tree (render/light_tree.h; render_direct.c). */
+typedef enum iir_mr_direct { IIR_MR_DIRECT_FULL, IIR_MR_DIRECT_TREE } iir_mr_direct;
+
 /* The multires hierarchy's knobs (multires.h), as the multires parameter table (mr_levels,
- * mr_depth, mr_normal, mr_window) binds them wherever a method keeps them. */
+ * mr_depth, mr_normal, mr_window, mr_direct, light_split) binds them wherever a method keeps them.
+ */
 typedef struct iir_mr_params {
     int mr_levels;   /* coarsest level (texels of 2^mr_levels pixels), [1, 6] */
     float mr_depth;  /* discontinuity where a neighbour lies off a pixel's tangent plane by more
@@ -142,6 +147,10 @@ typedef struct iir_mr_params {
     int mr_window;   /* pixels a level's interleave filter spans at most (level l of an n x n
                         lattice interleaves min(n, mr_window / 2^l); 1 there = every VPL at every
                         texel), [1, 1024] */
+    iir_mr_direct mr_direct; /* the point, spot and sun lights' direct light */
+    float light_split; /* the direct light's quadtree (render/light_tree.h): a block splits where
+                          its light is off its corners' interpolation by more than this fraction
+                          of the brightest, [0, 1] */
 } iir_mr_params;
 
 /* The geometry-aware filter's similarity (render_filter.c; multires's per-level filter): normals'

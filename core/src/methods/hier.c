@@ -43,7 +43,6 @@ typedef struct hier_options {
     int voxel_res; /* cells along the scene's longest side */
     hier_visibility vis;
     int vis_points;
-    float light_split; /* the direct light's tree: light_tree.h's threshold t */
 } hier_options;
 
 static const char *const VIS_CHOICES[] = {"voxels", "points", "none", NULL};
@@ -61,12 +60,6 @@ static const iir_param HIER_ROWS[] = {
      IIR_PARAM_LIVE},
     {"vis_points", IIR_PARAM_INT, offsetof(hier_options, vis_points), 4, 1, 64, 0, NULL, "points",
      "hier_visibility points: probes per shadow ray", IIR_PARAM_LIVE},
-    {"light_split", IIR_PARAM_FLOAT, offsetof(hier_options, light_split), 0.02, 0, 1, 0, NULL, "",
-     "direct light: split a texel where its light changes -- its centre off its corners' "
-     "interpolation by more than this fraction of the brightest, or a corner under (1 - this) / 4 "
-     "of the brightest (0: wherever the light is not linear; 1: only at depth and normal "
-     "discontinuities)",
-     IIR_PARAM_LIVE},
 };
 static const iir_param_table HIER_TABLE = {"hier: direct light and voxel visibility", HIER_ROWS,
                                            sizeof HIER_ROWS / sizeof HIER_ROWS[0], NULL};
@@ -167,8 +160,9 @@ static void compose(const hier_state *s, const iir_gbuffer *gb, iir_image *out)
 
 /* The light tree's points: the lights' irradiance at their G-buffer samples (light_tree_eval_fn).
  */
-static uint64_t tree_points(void *ctx, const uint32_t *px, int n, iir_vec3 *D)
+static uint64_t tree_points(void *ctx, const uint32_t *px, int n, iir_vec3 *D, iir_raystats *st)
 {
+    (void)st; /* hier's shadows are voxel walks, not rays */
     const hier_state *s = ctx;
     const iir_gbuffer *gb = iir_renderer_gbuffer(s->renderer);
     uint64_t evals = 0;
@@ -200,8 +194,8 @@ static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *s
     double t = iir_now_ms();
     stats->phase_ms[IIR_PHASE_INDIRECT] = t - t0;
     const iir_stop stop = {s->stop, s->stop_ctx};
-    light_tree_input in = {gb, s->mr, tree_points, s, s->o.mr.mr_levels, s->o.light_split};
-    st = light_tree_shade(&s->tree, &in, &stop, &evals, err);
+    light_tree_input in = {gb, s->mr, tree_points, s, s->o.mr.mr_levels, s->o.mr.light_split, true};
+    st = light_tree_shade(&s->tree, &in, &stop, &evals, &stats->rays, err);
     if (st == IIR_OK && gb->any_pbr) evals += glossy_direct(s, gb);
     stats->phase_ms[IIR_PHASE_DIRECT] = iir_now_ms() - t;
     stats->vpl_evals = evals;

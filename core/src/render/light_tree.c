@@ -94,11 +94,12 @@ typedef struct queue {
     uint32_t px[LIGHT_TREE_BATCH];
     int n;
     uint64_t evals;
+    iir_raystats rays;
 } queue;
 
 static void flush(light_tree *t, queue *q)
 {
-    if (q->n) q->evals += q->in->eval(q->in->ctx, q->px, q->n, t->D);
+    if (q->n) q->evals += q->in->eval(q->in->ctx, q->px, q->n, t->D, &q->rays);
     q->n = 0;
 }
 
@@ -109,12 +110,12 @@ typedef void (*block_fn)(light_tree *t, int m, int i, int j, float Y_dark, queue
 /* Runs fn on every block of level m whose state is `want`, CHUNK blocks of a row per item, whose
  * points are evaluated when the item ends; polls stop between items. true when stopped. */
 static bool for_blocks(light_tree *t, const light_tree_input *in, int m, uint8_t want, block_fn fn,
-                       float Y_dark, const iir_stop *stop, uint64_t *evals)
+                       float Y_dark, const iir_stop *stop, uint64_t *evals, iir_raystats *rays)
 {
     const int chunks = (t->bw[m] + CHUNK - 1) / CHUNK;
     int stopped = 0;
-    uint64_t sum = 0;
-#pragma omp parallel for schedule(dynamic, 4) reduction(+ : stopped, sum)
+    uint64_t sum = 0, n[IIR_RAY_KIND_COUNT] = {0};
+#pragma omp parallel for schedule(dynamic, 4) reduction(+ : stopped, sum, n[:IIR_RAY_KIND_COUNT])
     for (int item = 0; item < t->bh[m] * chunks; item++) {
         if (stopped || iir_stop_now(stop)) {
             stopped = 1;
@@ -126,8 +127,10 @@ static bool for_blocks(light_tree *t, const light_tree_input *in, int m, uint8_t
             if (*block(t, m, i, j) == want) fn(t, m, i, j, Y_dark, &q);
         flush(t, &q);
         sum += q.evals;
+        for (int k = 0; k < IIR_RAY_KIND_COUNT; k++) n[k] += q.rays.n[k];
     }
     *evals += sum;
+    for (int k = 0; k < IIR_RAY_KIND_COUNT; k++) rays->n[k] += n[k];
     return stopped > 0;
 }
 
@@ -180,8 +183,46 @@ static void eval_point(light_tree *t, queue *q, int x, int y)
     q->px[q->n++] = (uint32_t)p;
 }
 
-/* The top level's corners: each block evaluates its upper left one, the last column's blocks
- * their upper right one too, the last row's their lower ones. */
+/* Whether a corner of c lies on the background (a silhouette that only touches the block's
+ * texel diagonally, which multires.h's four-neighbour test does not mark). */
+static bool corner_on_background(const light_tree *t, const iir_gbuffer *gb, const corners *c)
+{
+    return !isfinite(gb->depth[pixel(t, c->x0, c->y0)]) ||
+           !isfinite(gb->depth[pixel(t, c->x1, c->y0)]) ||
+           !isfinite(gb->depth[pixel(t, c->x0, c->y1)]) ||
+           !isfinite(gb->depth[pixel(t, c->x1, c->y1)]);
+}
+
+/* Whether block (i, j) of level m, corners c, splits by its geometry: its multires texel is
+ * marked, or a corner is background. */
+static bool geometry_splits(const light_tree *t, const light_tree_input *in, int m, int i, int j,
+                            const corners *c)
+{
+    return iir_multires_marked(in->mr, m, i, j) || corner_on_background(t, in->gb, c);
+}
+
+/* The centre probe of block c of level m (for m >= PROBE_MIN): its pixel (h = 2^(m-1)). */
+static void centre_of(const corners *c, int m, int xy[2])
+{
+    int h = 1 << (m - 1);
+    xy[0] = c->x0 + h < c->x1 ? c->x0 + h : c->x1;
+    xy[1] = c->y0 + h < c->y1 ? c->y0 + h : c->y1;
+}
+
+/* Block (i, j) of level m, in the tree and undecided: when m >= PROBE_MIN and only the light may
+ * split it, its centre, for the decision. Queued with the block's corners, by whoever queues them
+ * (a clamped centre lies on the block's right or lower edge, its own). */
+static void probe(light_tree *t, int m, int i, int j, queue *q)
+{
+    corners c = corners_of(t, m, i, j);
+    if (m < PROBE_MIN || *empty_at(t, m, i, j) || geometry_splits(t, q->in, m, i, j, &c)) return;
+    int centre[2];
+    centre_of(&c, m, centre);
+    eval_point(t, q, centre[0], centre[1]);
+}
+
+/* The top level's corners -- each block evaluates its upper left one, the last column's blocks
+ * their upper right one too, the last row's their lower ones -- and its probe. */
 static void top_corners(light_tree *t, int m, int i, int j, float Y_dark, queue *q)
 {
     (void)Y_dark;
@@ -191,11 +232,13 @@ static void top_corners(light_tree *t, int m, int i, int j, float Y_dark, queue 
     if (right) eval_point(t, q, c.x1, c.y0);
     if (low) eval_point(t, q, c.x0, c.y1);
     if (right && low) eval_point(t, q, c.x1, c.y1);
+    probe(t, m, i, j, q);
 }
 
-/* A split block's children's corners: the lattice points x0, x0 + 2^(m-1), x1 by y0, y0 +
- * 2^(m-1), y1 not yet evaluated. An edge shared with a block that split as well is the left or
- * upper block's (the right or lower one leaves it), so every point has one writer. */
+/* A split block's children's corners -- the lattice points x0, x0 + 2^(m-1), x1 by y0, y0 +
+ * 2^(m-1), y1 not yet evaluated -- and their probes. An edge shared with a block that split as well
+ * is the left or upper block's (the right or lower one leaves it), so every point has one writer.
+ */
 static void fill_children(light_tree *t, int m, int i, int j, float Y_dark, queue *q)
 {
     (void)Y_dark;
@@ -208,6 +251,10 @@ static void fill_children(light_tree *t, int m, int i, int j, float Y_dark, queu
     for (int b = 0; b < 3; b++)
         for (int a = 0; a < 3; a++)
             if (use_x[a] && use_y[b]) eval_point(t, q, xs[a], ys[b]);
+    for (int b = 0; b < 2; b++)
+        for (int a = 0; a < 2; a++)
+            if (2 * i + a < t->bw[m - 1] && 2 * j + b < t->bh[m - 1])
+                probe(t, m - 1, 2 * i + a, 2 * j + b, q);
 }
 
 /* ---- the splits ---- */
@@ -253,17 +300,22 @@ static inline iir_vec3 lerp(iir_vec3 a, iir_vec3 b, float f)
  * interpolation. */
 static void interpolate(light_tree *t, int m, const corners *c)
 {
-    const iir_vec3 *D = t->D;
+    iir_vec3 *D = t->D;
     const iir_vec3 D00 = D[pixel(t, c->x0, c->y0)], D10 = D[pixel(t, c->x1, c->y0)];
     const iir_vec3 D01 = D[pixel(t, c->x0, c->y1)], D11 = D[pixel(t, c->x1, c->y1)];
     const int xe = c->x0 + (1 << m) < t->width ? c->x0 + (1 << m) : t->width;
     const int ye = c->y0 + (1 << m) < t->height ? c->y0 + (1 << m) : t->height;
+    float fx[1 << IIR_MR_MAX_LEVEL];
+    for (int x = c->x0; x < xe; x++)
+        fx[x - c->x0] = c->x1 > c->x0 ? (float)(x - c->x0) / (float)(c->x1 - c->x0) : 0.f;
     for (int y = c->y0; y < ye; y++) {
         float fy = c->y1 > c->y0 ? (float)(y - c->y0) / (float)(c->y1 - c->y0) : 0.f;
+        const uint8_t *have = &t->have[pixel(t, 0, y)];
+        iir_vec3 *row = &D[pixel(t, 0, y)];
         for (int x = c->x0; x < xe; x++) {
-            if (t->have[pixel(t, x, y)]) continue;
-            float fx = c->x1 > c->x0 ? (float)(x - c->x0) / (float)(c->x1 - c->x0) : 0.f;
-            t->D[pixel(t, x, y)] = lerp(lerp(D00, D10, fx), lerp(D01, D11, fx), fy);
+            if (have[x]) continue;
+            float f = fx[x - c->x0];
+            row[x] = lerp(lerp(D00, D10, f), lerp(D01, D11, f), fy);
         }
     }
 }
@@ -280,44 +332,6 @@ static void clear(light_tree *t, int m, const corners *c)
             t->D[pixel(t, x, y)] = iir_v3s(0.f);
             t->have[pixel(t, x, y)] = 1;
         }
-}
-
-/* Whether a corner of c lies on the background (a silhouette that only touches the block's
- * texel diagonally, which multires.h's four-neighbour test does not mark). */
-static bool corner_on_background(const light_tree *t, const iir_gbuffer *gb, const corners *c)
-{
-    return !isfinite(gb->depth[pixel(t, c->x0, c->y0)]) ||
-           !isfinite(gb->depth[pixel(t, c->x1, c->y0)]) ||
-           !isfinite(gb->depth[pixel(t, c->x0, c->y1)]) ||
-           !isfinite(gb->depth[pixel(t, c->x1, c->y1)]);
-}
-
-/* Whether block (i, j) of level m, corners c, splits by its geometry: its multires texel is
- * marked, or a corner is background. */
-static bool geometry_splits(const light_tree *t, const light_tree_input *in, int m, int i, int j,
-                            const corners *c)
-{
-    return iir_multires_marked(in->mr, m, i, j) || corner_on_background(t, in->gb, c);
-}
-
-/* The centre probe of block c of level m (for m >= PROBE_MIN): its pixel (h = 2^(m-1)). */
-static void centre_of(const corners *c, int m, int xy[2])
-{
-    int h = 1 << (m - 1);
-    xy[0] = c->x0 + h < c->x1 ? c->x0 + h : c->x1;
-    xy[1] = c->y0 + h < c->y1 ? c->y0 + h : c->y1;
-}
-
-/* An undecided block of level m >= PROBE_MIN that the light alone may split: its centre, for the
- * decision. */
-static void probe(light_tree *t, int m, int i, int j, float Y_dark, queue *q)
-{
-    (void)Y_dark;
-    corners c = corners_of(t, m, i, j);
-    if (m < PROBE_MIN || *empty_at(t, m, i, j) || geometry_splits(t, q->in, m, i, j, &c)) return;
-    int centre[2];
-    centre_of(&c, m, centre);
-    eval_point(t, q, centre[0], centre[1]);
 }
 
 /* An undecided block of level m >= 1: all background, it is a leaf without light; else it splits
@@ -341,7 +355,7 @@ static void decide(light_tree *t, int m, int i, int j, float Y_dark, queue *q)
         split = light_changes(t, &c, NULL, q->in->threshold, Y_dark);
     }
     *block(t, m, i, j) = split ? SPLIT : LEAF;
-    if (!split) interpolate(t, m, &c);
+    if (!split && q->in->fill) interpolate(t, m, &c);
     for (int b = 0; split && b < 2; b++)
         for (int a = 0; a < 2; a++)
             if (2 * i + a < t->bw[m - 1] && 2 * j + b < t->bh[m - 1])
@@ -367,23 +381,64 @@ static float dark_luminance(const light_tree *t, const light_tree_input *in)
 }
 
 iir_status light_tree_shade(light_tree *t, const light_tree_input *in, const iir_stop *stop,
-                            uint64_t *evals, iir_error *err)
+                            uint64_t *evals, iir_raystats *rays, iir_error *err)
 {
     assert(in->top >= 1 && in->top <= IIR_MR_MAX_LEVEL && in->threshold >= 0.f);
     if (!alloc_tree(t, in->gb->width, in->gb->height))
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the direct light's tree");
-    const int top = in->top;
+    const int top = t->top = in->top;
     find_empty(t, in);
     memset(t->have, 0, (size_t)t->width * (size_t)t->height);
     memset(t->state[top], ACTIVE, (size_t)t->bw[top] * (size_t)t->bh[top]);
-    bool stopped = for_blocks(t, in, top, ACTIVE, top_corners, 0.f, stop, evals);
+    bool stopped = for_blocks(t, in, top, ACTIVE, top_corners, 0.f, stop, evals, rays);
     float Y_dark = stopped ? 0.f : dark_luminance(t, in);
     for (int m = top; m >= 1 && !stopped; m--) {
         memset(t->state[m - 1], ABSENT, (size_t)t->bw[m - 1] * (size_t)t->bh[m - 1]);
-        stopped = for_blocks(t, in, m, ACTIVE, probe, Y_dark, stop, evals) ||
-                  for_blocks(t, in, m, ACTIVE, decide, Y_dark, stop, evals) ||
-                  for_blocks(t, in, m, SPLIT, fill_children, Y_dark, stop, evals);
+        stopped = for_blocks(t, in, m, ACTIVE, decide, Y_dark, stop, evals, rays) ||
+                  for_blocks(t, in, m, SPLIT, fill_children, Y_dark, stop, evals, rays);
     }
     if (stopped) return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     return IIR_OK;
+}
+
+/* ---- spans of the leaves ---- */
+
+/* The leaf holding pixel (x, y): its level (0: the pixel itself, evaluated). */
+static int leaf_level(const light_tree *t, int x, int y)
+{
+    int m = t->top;
+    while (m > 0 && *block(t, m, x >> m, y >> m) == SPLIT) m--;
+    return m;
+}
+
+void light_tree_span(const light_tree *t, int y, int x0, int x1, iir_vec3 *D)
+{
+    const uint8_t *have = &t->have[pixel(t, 0, y)];
+    const iir_vec3 *Dy = &t->D[pixel(t, 0, y)];
+    for (int x = x0; x < x1;) {
+        int m = leaf_level(t, x, y);
+        corners c = corners_of(t, m, x >> m, y >> m);
+        int xe = c.x0 + (1 << m) < x1 ? c.x0 + (1 << m) : x1;
+        if (m == 0) { /* a pixel of a split block of level 1: evaluated */
+            D[x - x0] = Dy[x];
+            x++;
+            continue;
+        }
+        const iir_vec3 D00 = t->D[pixel(t, c.x0, c.y0)], D10 = t->D[pixel(t, c.x1, c.y0)];
+        const iir_vec3 D01 = t->D[pixel(t, c.x0, c.y1)], D11 = t->D[pixel(t, c.x1, c.y1)];
+        float fy = c.y1 > c.y0 ? (float)(y - c.y0) / (float)(c.y1 - c.y0) : 0.f;
+        /* a whole block's fractions are k / 2^m: the product by 2^-m is the quotient, exactly */
+        const bool whole = c.x1 - c.x0 == 1 << m;
+        const float inv = 1.f / (float)(1 << m);
+        for (; x < xe; x++) { /* a background leaf's pixels are all evaluated (0) */
+            if (have[x]) {
+                D[x - x0] = Dy[x];
+                continue;
+            }
+            float f = whole         ? (float)(x - c.x0) * inv
+                      : c.x1 > c.x0 ? (float)(x - c.x0) / (float)(c.x1 - c.x0)
+                                    : 0.f;
+            D[x - x0] = lerp(lerp(D00, D10, f), lerp(D01, D11, f), fy);
+        }
+    }
 }

@@ -152,6 +152,12 @@ iir_status iir_mr_params_validate(const iir_mr_params *p, int interleave, iir_er
     if (p->mr_window < 1 || p->mr_window > 1024)
         return iir_fail(err, IIR_ERR_INVALID, "multires window %d is outside [1, 1024]",
                         p->mr_window);
+    if (p->mr_direct != IIR_MR_DIRECT_FULL && p->mr_direct != IIR_MR_DIRECT_TREE)
+        return iir_fail(err, IIR_ERR_INVALID, "multires direct %d is neither full nor tree",
+                        (int)p->mr_direct);
+    if (!(p->light_split >= 0.f && p->light_split <= 1.f))
+        return iir_fail(err, IIR_ERR_INVALID, "multires light_split %g is outside [0, 1]",
+                        (double)p->light_split);
     return IIR_OK;
 }
 

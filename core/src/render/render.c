@@ -78,6 +78,7 @@ void iir_renderer_destroy(iir_renderer *r)
     iir_lightset_destroy(r->area_lights);
     iir_lightset_destroy(r->comp_lights);
     iir_multires_destroy(r->mr);
+    light_tree_free(&r->dtree);
     iir_gbuffer_free(&r->gb);
     free(r->raw);
     free(r->rows);

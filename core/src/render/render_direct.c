@@ -14,7 +14,13 @@
  * or sun is evaluated at the block's 8 pixels at once (iir_light_sample_delta8_avx2), and a frame
  * of such lights alone on diffuse surfaces (lean) goes in 4x4 blocks, one 16-wide packet each.
  * Threads: OpenMP over bands of two (lean: four) whole rows, each writing only its own pixels of
- * the frame; ray counters per thread, summed once. */
+ * the frame; ray counters per thread, summed once.
+ *
+ * Shading multires with mr_direct tree: a frame of points, spots and suns alone on diffuse surfaces
+ * seen directly interpolates their irradiance over the light tree (light_tree.h: blocks split at
+ * the multires hierarchy's discontinuities and where the light changes), its points evaluated 8 at
+ * a time as above; then every pixel takes its emission plus its albedo / pi times the irradiance. A
+ * pixel the tree evaluates gets full shading's value (the same sums). */
 #include <omp.h>
 
 #include "iir/rng.h"
@@ -35,6 +41,7 @@ typedef struct direct_ctx {
     int samples; /* per pixel per area light (and for the emissive triangles) */
     float inv_samples;
     iir_camera_frame cam; /* the G-buffer's camera: its rays through r->gb_shift */
+    iir_mr_direct mr_direct;
 } direct_ctx;
 
 /* ---- stratified samples: a shuffled, Owen-scrambled 2D Sobol sequence per pixel and light ---- */
@@ -401,14 +408,129 @@ static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir
     }
 }
 
-bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_raystats *st)
+/* ---- shading multires: the delta lights' irradiance on the light tree ---- */
+
+/* Whether the frame's direct light goes on the light tree: multires asking for it, and the lean
+ * frame's lights and surfaces (any instruction set). */
+static bool tree_frame(const direct_ctx *c)
+{
+    const iir_renderer *r = c->r;
+    if (!r->level || !c->evals || r->area_lights || r->gb.any_pbr || r->gb.any_chain) return false;
+    if (c->mr_direct != IIR_MR_DIRECT_TREE) return false;
+    for (uint32_t l = 0; l < c->num_lights; l++)
+        if (!iir_light_is_delta(&c->lights[l])) return false;
+    return true;
+}
+
+/* Delta light e's sample at the m <= 8 pixels px into rays, E where no ray is needed and pending
+ * (Li cos / pdf) where one is: lanes_into_rays's rule with f = 1. True when a lane has a ray. */
+static bool tree_samples(const direct_ctx *c, const iir_light_eval *e, const uint32_t *px, int m,
+                         iir_vec3 pending[8], iir_vec3 E[8], iir_ray8 *rays)
+{
+    const iir_gbuffer *gb = &c->r->gb;
+    bool lane[8], any = false;
+    iir_vec3 one[8];
+    for (int k = 0; k < 8; k++) lane[k] = k < m, one[k] = iir_v3s(1.f), rays->valid[k] = 0;
+#if defined(__x86_64__)
+    if (c->r->isa >= IIR_ISA_AVX2) {
+        iir_light_lanes in;
+        for (int k = 0; k < 8; k++) {
+            uint32_t i = px[k < m ? k : m - 1];
+            set_receiver(&in, k, gb->position[i], gb->normal[i]);
+        }
+        iir_light_delta_lanes o;
+        iir_light_sample_delta8_avx2(e, c->r->eps, &in, &o);
+        return lanes_into_rays(&o, lane, one, pending, E, rays);
+    }
+#endif
+    for (int k = 0; k < m; k++) {
+        iir_light_ctx ctx = {gb->position[px[k]], gb->normal[px[k]], c->r->eps};
+        iir_light_sample ls = iir_light_sample_li(e, &ctx, iir_v2(0.f, 0.f));
+        float cos_theta = iir_dot(ctx.n, ls.wi);
+        if (ls.pdf <= 0.f || iir_is_black(ls.Li) || cos_theta <= 0.f) continue;
+        pending[k] = iir_scale(ls.Li, cos_theta / ls.pdf);
+        if (ls.shadow.tmax > 0.f) {
+            set_lane(rays, k, ls.shadow.org, ls.shadow.dir, ls.shadow.tmax);
+            any = true;
+        } else {
+            E[k] = iir_add(E[k], pending[k]);
+        }
+    }
+    return any;
+}
+
+/* The light tree's points (light_tree_eval_fn): every delta light's unoccluded Li cos / pdf,
+ * summed over the lights, 8 pixels a packet. */
+static uint64_t tree_points(void *ctx, const uint32_t *px, int n, iir_vec3 *D, iir_raystats *st)
+{
+    const direct_ctx *c = ctx;
+    for (int i = 0; i < n; i += 8) {
+        int m = n - i < 8 ? n - i : 8;
+        iir_vec3 E[8], pending[8];
+        for (int k = 0; k < 8; k++) E[k] = iir_v3s(0.f);
+        for (uint32_t l = 0; l < c->num_lights; l++) {
+            iir_ray8 rays;
+            if (!tree_samples(c, &c->evals[l], px + i, m, pending, E, &rays)) continue;
+            bool occluded[8];
+            iir_rt_occluded8(c->r->rt, &rays, occluded, st, IIR_RAYS_SHADOW);
+            for (int k = 0; k < m; k++)
+                if (rays.valid[k] && !occluded[k]) E[k] = iir_add(E[k], pending[k]);
+        }
+        for (int k = 0; k < m; k++) D[px[i + k]] = E[k];
+    }
+    return (uint64_t)n * c->num_lights;
+}
+
+/* Every pixel: its emission plus, on a surface, its albedo / pi times the tree's irradiance. */
+static void tree_compose(const iir_renderer *r, iir_image *out)
+{
+    const iir_gbuffer *gb = &r->gb;
+    const int w = gb->width, seg = IIR_RENDER_TILE * 4;
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < gb->height; y++)
+        for (int x0 = 0; x0 < w; x0 += seg) {
+            int x1 = x0 + seg < w ? x0 + seg : w;
+            iir_vec3 D[IIR_RENDER_TILE * 4];
+            light_tree_span(&r->dtree, y, x0, x1, D);
+            for (int x = x0; x < x1; x++) {
+                size_t p = (size_t)y * (size_t)w + (size_t)x;
+                iir_vec3 L = gb->emission[p];
+                if (gb->prim[p] != IIR_NO_HIT && !iir_is_black(gb->albedo[p]))
+                    L = iir_add(L, iir_mul(iir_scale(gb->albedo[p], IIR_INV_PI), D[x - x0]));
+                out->pixels[p] = L;
+            }
+        }
+}
+
+/* The frame's direct light on the light tree; IIR_ERR_NOMEM when its arrays cannot grow (the
+ * caller then shades every pixel), IIR_ERR_INTERRUPTED when r->stop said so. */
+static iir_status tree_direct(iir_renderer *r, direct_ctx *c, const iir_shade_job *job,
+                              iir_raystats *st)
+{
+    const iir_mr_params *mp = &job->p->mr;
+    light_tree_input in = {&r->gb, r->mr, tree_points, c, mp->mr_levels, mp->light_split, false};
+    const iir_stop stop = {r->stop, r->stop_ctx};
+    uint64_t evals = 0;
+    iir_error err;
+    iir_status s = light_tree_shade(&r->dtree, &in, &stop, &evals, st, &err);
+    if (s == IIR_OK) tree_compose(r, job->out);
+    return s;
+}
+
+bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_raystats *st)
 {
     bool stopped = false;
     int n = job->p->area_samples;
-    direct_ctx c = {
-        r,    job->lights,    job->num_lights,
-        NULL, false,          job->seed,
-        n,    1.f / (float)n, iir_camera_setup(&r->gb_camera, r->gb.width, r->gb.height)};
+    direct_ctx c = {r,
+                    job->lights,
+                    job->num_lights,
+                    NULL,
+                    false,
+                    job->seed,
+                    n,
+                    1.f / (float)n,
+                    iir_camera_setup(&r->gb_camera, r->gb.width, r->gb.height),
+                    job->p->mr.mr_direct};
     iir_light_eval evals[MAX_PREPARED];
     if (c.num_lights <= MAX_PREPARED) {
         for (uint32_t l = 0; l < c.num_lights; l++) evals[l] = iir_light_prepare(&c.lights[l]);
@@ -417,6 +539,10 @@ bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_rays
     c.lean =
         c.evals && r->isa >= IIR_ISA_AVX2 && !r->area_lights && !r->gb.any_pbr && !r->gb.any_chain;
     for (uint32_t l = 0; l < c.num_lights && c.lean; l++) c.lean = iir_light_is_delta(&c.lights[l]);
+    if (tree_frame(&c)) {
+        iir_status s = tree_direct(r, &c, job, st);
+        if (s != IIR_ERR_NOMEM) return s == IIR_ERR_INTERRUPTED;
+    }
     iir_image *out = job->out;
     /* bands of whole rows, a block high: each per-pixel array streams through memory in long runs
        (16-pixel tile rows are a few cache lines each, too short for the prefetchers) */

@@ -9,6 +9,7 @@
 #include "iir/multires.h"
 #include "iir/render.h"
 #include "iir/scene.h"
+#include "light_tree.h"
 
 /* Tiles of the G-buffer, direct and filter phases; the indirect phase uses larger ones so that a
  * subset has more pixels per tile to share each VPL's map texels. */
@@ -45,21 +46,22 @@ struct iir_renderer {
                                   compensation; NULL when it is off */
 
     iir_gbuffer gb;
-    int specular_depth;     /* iir_renderer_follow_specular: 0 = gather at the first hit */
-    bool gb_valid;          /* gb matches gb_camera, the frame size and specular_depth */
-    iir_camera gb_camera;   /* the camera gb was rendered with */
-    iir_vec2 gb_shift;      /* gb's rays went through (x + 0.5, y + 0.5) + gb_shift, and
-                               render_direct.c shoots them again at the area lights (not in the BVH):
-                               (0, 0) for frames; a jittered pass (pass_gbuffer) sets it and
-                               gb_camera */
-    uint64_t gb_serial;     /* G-buffers rendered so far: multires keeps its hierarchy per one */
-    iir_multires *mr;       /* shading = multires: the hierarchy (created on first use) */
-    const uint8_t *level;   /* this frame's per-pixel multires level (multires.h; 0 = shaded at full
-                               resolution), or NULL when every pixel is (shading = full) */
-    iir_vec3 *raw;          /* per pixel: demodulated indirect (without rho / pi), unfiltered */
-    iir_filter_row *rows;   /* per pixel: the filter's horizontal pass */
-    uint8_t *near_fine;     /* per filter tile (IIR_RENDER_TILE), multires: a level-0 pixel lies
-                               within the filter's reach (render_filter.c) */
+    int specular_depth;   /* iir_renderer_follow_specular: 0 = gather at the first hit */
+    bool gb_valid;        /* gb matches gb_camera, the frame size and specular_depth */
+    iir_camera gb_camera; /* the camera gb was rendered with */
+    iir_vec2 gb_shift;    /* gb's rays went through (x + 0.5, y + 0.5) + gb_shift, and
+                             render_direct.c shoots them again at the area lights (not in the BVH):
+                             (0, 0) for frames; a jittered pass (pass_gbuffer) sets it and
+                             gb_camera */
+    uint64_t gb_serial;   /* G-buffers rendered so far: multires keeps its hierarchy per one */
+    iir_multires *mr;     /* shading = multires: the hierarchy (created on first use) */
+    light_tree dtree;     /* shading = multires: the delta lights' direct light (render_direct.c) */
+    const uint8_t *level; /* this frame's per-pixel multires level (multires.h; 0 = shaded at full
+                             resolution), or NULL when every pixel is (shading = full) */
+    iir_vec3 *raw;        /* per pixel: demodulated indirect (without rho / pi), unfiltered */
+    iir_filter_row *rows; /* per pixel: the filter's horizontal pass */
+    uint8_t *near_fine;   /* per filter tile (IIR_RENDER_TILE), multires: a level-0 pixel lies
+                             within the filter's reach (render_filter.c) */
     uint64_t near_fine_gen; /* the multires generation near_fine was computed for; 0 = none */
     int near_fine_h;        /* and the filter's half-width */
     uint32_t *fmask;       /* per pixel: which of the filter's taps are similar (render_filter.c) */
@@ -169,7 +171,7 @@ bool iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *r
 /* render_direct.c: out = emission + direct light (every pixel written). Each tile first polls
  * r->stop (when set) and is skipped once it said stop; returns true when that happened (out is then
  * incomplete). */
-bool iir_render_direct(const iir_renderer *r, const iir_shade_job *job, iir_raystats *st);
+bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_raystats *st);
 
 /* render_indirect.c: builds the per-subset VPL lists (checking the VPLs), a subset's flux scaled
  * by N / |subset| (frames) or by n^2 (refinement passes: exact_mean), then fills r->raw, pixel
