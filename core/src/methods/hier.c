@@ -194,7 +194,7 @@ static iir_status shade(hier_state *s, const iir_gbuffer *gb, iir_frame_stats *s
     double t = iir_now_ms();
     stats->phase_ms[IIR_PHASE_INDIRECT] = t - t0;
     const iir_stop stop = {s->stop, s->stop_ctx};
-    light_tree_input in = {gb, s->mr, tree_points, s, s->o.mr.mr_levels, s->o.mr.light_split, true};
+    light_tree_input in = {gb, s->mr, tree_points, s, s->o.mr.mr_levels, s->o.mr.light_split};
     st = light_tree_shade(&s->tree, &in, &stop, &evals, &stats->rays, err);
     if (st == IIR_OK && gb->any_pbr) evals += glossy_direct(s, gb);
     stats->phase_ms[IIR_PHASE_DIRECT] = iir_now_ms() - t;

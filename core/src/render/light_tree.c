@@ -355,7 +355,7 @@ static void decide(light_tree *t, int m, int i, int j, float Y_dark, queue *q)
         split = light_changes(t, &c, NULL, q->in->threshold, Y_dark);
     }
     *block(t, m, i, j) = split ? SPLIT : LEAF;
-    if (!split && q->in->fill) interpolate(t, m, &c);
+    if (!split) interpolate(t, m, &c);
     for (int b = 0; split && b < 2; b++)
         for (int a = 0; a < 2; a++)
             if (2 * i + a < t->bw[m - 1] && 2 * j + b < t->bh[m - 1])
@@ -386,7 +386,7 @@ iir_status light_tree_shade(light_tree *t, const light_tree_input *in, const iir
     assert(in->top >= 1 && in->top <= IIR_MR_MAX_LEVEL && in->threshold >= 0.f);
     if (!alloc_tree(t, in->gb->width, in->gb->height))
         return iir_fail(err, IIR_ERR_NOMEM, "out of memory for the direct light's tree");
-    const int top = t->top = in->top;
+    const int top = in->top;
     find_empty(t, in);
     memset(t->have, 0, (size_t)t->width * (size_t)t->height);
     memset(t->state[top], ACTIVE, (size_t)t->bw[top] * (size_t)t->bh[top]);
@@ -399,46 +399,4 @@ iir_status light_tree_shade(light_tree *t, const light_tree_input *in, const iir
     }
     if (stopped) return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     return IIR_OK;
-}
-
-/* ---- spans of the leaves ---- */
-
-/* The leaf holding pixel (x, y): its level (0: the pixel itself, evaluated). */
-static int leaf_level(const light_tree *t, int x, int y)
-{
-    int m = t->top;
-    while (m > 0 && *block(t, m, x >> m, y >> m) == SPLIT) m--;
-    return m;
-}
-
-void light_tree_span(const light_tree *t, int y, int x0, int x1, iir_vec3 *D)
-{
-    const uint8_t *have = &t->have[pixel(t, 0, y)];
-    const iir_vec3 *Dy = &t->D[pixel(t, 0, y)];
-    for (int x = x0; x < x1;) {
-        int m = leaf_level(t, x, y);
-        corners c = corners_of(t, m, x >> m, y >> m);
-        int xe = c.x0 + (1 << m) < x1 ? c.x0 + (1 << m) : x1;
-        if (m == 0) { /* a pixel of a split block of level 1: evaluated */
-            D[x - x0] = Dy[x];
-            x++;
-            continue;
-        }
-        const iir_vec3 D00 = t->D[pixel(t, c.x0, c.y0)], D10 = t->D[pixel(t, c.x1, c.y0)];
-        const iir_vec3 D01 = t->D[pixel(t, c.x0, c.y1)], D11 = t->D[pixel(t, c.x1, c.y1)];
-        float fy = c.y1 > c.y0 ? (float)(y - c.y0) / (float)(c.y1 - c.y0) : 0.f;
-        /* a whole block's fractions are k / 2^m: the product by 2^-m is the quotient, exactly */
-        const bool whole = c.x1 - c.x0 == 1 << m;
-        const float inv = 1.f / (float)(1 << m);
-        for (; x < xe; x++) { /* a background leaf's pixels are all evaluated (0) */
-            if (have[x]) {
-                D[x - x0] = Dy[x];
-                continue;
-            }
-            float f = whole         ? (float)(x - c.x0) * inv
-                      : c.x1 > c.x0 ? (float)(x - c.x0) / (float)(c.x1 - c.x0)
-                                    : 0.f;
-            D[x - x0] = lerp(lerp(D00, D10, f), lerp(D01, D11, f), fy);
-        }
-    }
 }

@@ -41,7 +41,6 @@
 #ifndef IIR_LIGHT_TREE_H
 #define IIR_LIGHT_TREE_H
 
-#include <stdbool.h>
 #include <stdint.h>
 
 #include "iir/multires.h"
@@ -56,7 +55,6 @@ typedef struct light_tree {
     uint8_t *empty[IIR_MR_MAX_LEVEL + 1]; /* per level >= 1, per block: all background */
     uint64_t generation;                  /* the multires hierarchy's the empty flags are of */
     int bw[IIR_MR_MAX_LEVEL + 1], bh[IIR_MR_MAX_LEVEL + 1]; /* blocks per row and column */
-    int top;                                                /* the last frame's top level */
 } light_tree;
 
 /* The most pixels one call of a light_tree_eval_fn gets. */
@@ -79,20 +77,13 @@ typedef struct light_tree_input {
     void *ctx;
     int top;
     float threshold;
-    bool fill; /* D at every pixel (the leaves interpolated into it); false: only at the points
-                  evaluated, the rest by light_tree_span */
 } light_tree_input;
 
-/* Fills t->D for every pixel of the G-buffer (0 on the background) -- with in->fill, else at the
- * points evaluated -- adds the evaluations to *evals and the rays to *rays.
- * Errors: IIR_ERR_NOMEM when the arrays cannot grow (t is then empty), IIR_ERR_INTERRUPTED when
- * stop said so (polled every few points; D is then incomplete). */
+/* Fills t->D for every pixel of the G-buffer (0 on the background), adds the evaluations to *evals
+ * and the rays to *rays. Errors: IIR_ERR_NOMEM when the arrays cannot grow (t is then empty),
+ * IIR_ERR_INTERRUPTED when stop said so (polled every few points; D is then incomplete). */
 iir_status light_tree_shade(light_tree *t, const light_tree_input *in, const iir_stop *stop,
                             uint64_t *evals, iir_raystats *rays, iir_error *err);
-
-/* D at pixels [x0, x1) of row y after a complete light_tree_shade: an evaluated point's value, or
- * its leaf's interpolation (the values in->fill would have written), without touching t->D. */
-void light_tree_span(const light_tree *t, int y, int x0, int x1, iir_vec3 *D);
 
 void light_tree_free(light_tree *t);
 

@@ -485,21 +485,14 @@ static uint64_t tree_points(void *ctx, const uint32_t *px, int n, iir_vec3 *D, i
 static void tree_compose(const iir_renderer *r, iir_image *out)
 {
     const iir_gbuffer *gb = &r->gb;
-    const int w = gb->width, seg = IIR_RENDER_TILE * 4;
+    const size_t n = (size_t)gb->width * (size_t)gb->height;
 #pragma omp parallel for schedule(static)
-    for (int y = 0; y < gb->height; y++)
-        for (int x0 = 0; x0 < w; x0 += seg) {
-            int x1 = x0 + seg < w ? x0 + seg : w;
-            iir_vec3 D[IIR_RENDER_TILE * 4];
-            light_tree_span(&r->dtree, y, x0, x1, D);
-            for (int x = x0; x < x1; x++) {
-                size_t p = (size_t)y * (size_t)w + (size_t)x;
-                iir_vec3 L = gb->emission[p];
-                if (gb->prim[p] != IIR_NO_HIT && !iir_is_black(gb->albedo[p]))
-                    L = iir_add(L, iir_mul(iir_scale(gb->albedo[p], IIR_INV_PI), D[x - x0]));
-                out->pixels[p] = L;
-            }
-        }
+    for (size_t p = 0; p < n; p++) {
+        iir_vec3 L = gb->emission[p];
+        if (gb->prim[p] != IIR_NO_HIT && !iir_is_black(gb->albedo[p]))
+            L = iir_add(L, iir_mul(iir_scale(gb->albedo[p], IIR_INV_PI), r->dtree.D[p]));
+        out->pixels[p] = L;
+    }
 }
 
 /* The frame's direct light on the light tree; IIR_ERR_NOMEM when its arrays cannot grow (the
@@ -508,7 +501,7 @@ static iir_status tree_direct(iir_renderer *r, direct_ctx *c, const iir_shade_jo
                               iir_raystats *st)
 {
     const iir_mr_params *mp = &job->p->mr;
-    light_tree_input in = {&r->gb, r->mr, tree_points, c, mp->mr_levels, mp->light_split, false};
+    light_tree_input in = {&r->gb, r->mr, tree_points, c, mp->mr_levels, mp->light_split};
     const iir_stop stop = {r->stop, r->stop_ctx};
     uint64_t evals = 0;
     iir_error err;

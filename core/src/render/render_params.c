@@ -8,6 +8,7 @@
 
 #include "iir/render.h"
 #include "iir/vpl.h"
+#include "light_tree.h"
 
 static const char *const VISIBILITY_CHOICES[] = {"shadowmap", "rays", "ism", NULL};
 
@@ -175,6 +176,8 @@ uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int
     /* multires.c: per pixel a level, a flag, an order and a class entry; per texel of the coarser
        levels (a third of the pixels) a flag, a sample, a depth, E, F and an order entry */
     if (o->shading == IIR_SHADING_MULTIRES) bytes += px * (1 + 1 + 4 + 4) + px / 3 * 69;
+    if (o->shading == IIR_SHADING_MULTIRES && o->mr.mr_direct == IIR_MR_DIRECT_TREE)
+        bytes += light_tree_memory(width, height);
     bytes += px * (24 + 12); /* refinement: double sum + pass image */
     uint64_t map = o->visibility == IIR_VIS_SHADOWMAP ? 2ull * (uint64_t)o->sm_res * o->sm_res : 0;
     return bytes + (uint64_t)n * (sizeof(iir_vpl) + map);
