@@ -9,24 +9,24 @@
 
 #include "iir/rng.h"
 
-/* A hit on v's surface: on its plane within IIR_CELL_PLANE of the ray's length, normals within
+/* A hit on the surface of plane v: on it within IIR_CELL_PLANE of the ray's length, normals within
  * ~25 degrees; a null sample for a null sample. */
-static bool on_surface(const iir_vpl *v, const iir_cell_hit *h)
+static bool on_surface(const iir_cell_plane *v, const iir_cell_hit *h)
 {
     if (v->null_sample || h->null_sample) return v->null_sample == h->null_sample;
-    float off = fabsf(iir_dot(iir_sub(h->x, v->position), v->normal));
-    return off < IIR_CELL_PLANE * h->dist && iir_dot(h->n, v->normal) > 0.9f;
+    float off = fabsf(iir_dot(iir_sub(h->x, v->p), v->n));
+    return off < IIR_CELL_PLANE * h->dist && iir_dot(h->n, v->n) > 0.9f;
 }
 
 /* How badly v's surface explains the hit: 0 on it, else the hit's distance from v's plane over the
  * ray's length, plus 1 when the normals are more than 60 degrees apart; a null sample and a
  * surface never explain each other. */
-static double misfit(const iir_vpl *v, const iir_cell_hit *h)
+static double misfit(const iir_cell_plane *v, const iir_cell_hit *h)
 {
     if (on_surface(v, h)) return 0.0;
     if (v->null_sample || h->null_sample) return INFINITY;
-    double off = fabs((double)iir_dot(iir_sub(h->x, v->position), v->normal)) / h->dist;
-    return off + (iir_dot(h->n, v->normal) < 0.5f ? 1.0 : 0.0);
+    double off = fabs((double)iir_dot(iir_sub(h->x, v->p), v->n)) / h->dist;
+    return off + (iir_dot(h->n, v->n) < 0.5f ? 1.0 : 0.0);
 }
 
 static double dist2(const double *a, const double *b)
@@ -35,23 +35,33 @@ static double dist2(const double *a, const double *b)
     return dx * dx + dy * dy + dz * dz;
 }
 
+/* The VPL that explains hit h (at domain point s) best: `best` with misfit *fit and distance *d
+ * so far, replaced by candidate c when c fits better, or as well and nearer in the domain. */
+static void consider(const iir_cell_plane *planes, const double *xyz, uint32_t c,
+                     const iir_cell_hit *h, const double s[3], uint32_t *best, double *fit,
+                     double *d)
+{
+    double f = misfit(&planes[c], h);
+    if (!(f <= *fit)) return;
+    double dc = dist2(&xyz[3 * c], s);
+    if (f < *fit || dc < *d) *best = c, *fit = f, *d = dc;
+}
+
 enum { CANDIDATES = 128 };
 
 /* Among `owner`, its neighbours and theirs, the VPL whose surface explains hit h (at domain point
- * s) best, the nearest in the domain among equals; the owner when none does. */
-static uint32_t best_fit(const iir_vpl *vpls, const double *xyz, const iir_site_graph *g,
+ * s) best, the nearest in the domain among equals; when none of them lies on the hit's surface,
+ * the best of the whole set (a crowded surface's cells can reach over another's farther than two
+ * rings: the conference table's over the floor); the owner when none explains it better. */
+static uint32_t best_fit(const iir_cell_plane *planes, const double *xyz, const iir_site_graph *g,
                          uint32_t owner, const iir_cell_hit *h, const double s[3])
 {
     uint32_t ring[CANDIDATES], ring1, n = iir_site_graph_rings(g, owner, ring, CANDIDATES, &ring1);
     uint32_t best = owner;
-    double best_fit = misfit(&vpls[owner], h), best_d = dist2(&xyz[3 * owner], s);
-    for (uint32_t k = 0; k < n; k++) {
-        uint32_t c = ring[k];
-        double f = misfit(&vpls[c], h);
-        if (!(f <= best_fit)) continue;
-        double d = dist2(&xyz[3 * c], s);
-        if (f < best_fit || d < best_d) best = c, best_fit = f, best_d = d;
-    }
+    double fit = misfit(&planes[owner], h), d = dist2(&xyz[3 * owner], s);
+    for (uint32_t k = 0; k < n; k++) consider(planes, xyz, ring[k], h, s, &best, &fit, &d);
+    if (fit > 0.0)
+        for (uint32_t c = 0; c < g->n; c++) consider(planes, xyz, c, h, s, &best, &fit, &d);
     return best;
 }
 
@@ -59,14 +69,18 @@ static bool reserve(iir_surface_cells *c, uint32_t n)
 {
     if (n <= c->n_cap) return true;
     int32_t *delta = realloc(c->delta, n * sizeof *delta);
-    if (!delta) return false;
-    c->delta = delta, c->n_cap = n;
+    if (delta) c->delta = delta;
+    iir_cell_plane *planes = realloc(c->planes, n * sizeof *planes);
+    if (planes) c->planes = planes;
+    if (!delta || !planes) return false;
+    c->n_cap = n;
     return true;
 }
 
 void iir_surface_cells_free(iir_surface_cells *c)
 {
     free(c->delta);
+    free(c->planes);
     *c = (iir_surface_cells){0};
 }
 
@@ -97,8 +111,8 @@ static void rows(iir_surface_cells *c, const iir_light_domain *d, const iir_vpl 
             pattern_point(d, side, y, k, s);
             owner = iir_site_graph_nearest(g, xyz, owner, s);
             iir_cell_hit h = trace(ctx, s, &vpls[owner], rays);
-            if (on_surface(&vpls[owner], &h)) continue;
-            uint32_t to = best_fit(vpls, xyz, g, owner, &h, s);
+            if (on_surface(&c->planes[owner], &h)) continue;
+            uint32_t to = best_fit(c->planes, xyz, g, owner, &h, s);
 #pragma omp atomic
             c->delta[owner]--;
 #pragma omp atomic
@@ -120,6 +134,8 @@ iir_status iir_surface_cells_apply(iir_surface_cells *c, const iir_light_domain 
     uint32_t side = (uint32_t)ceil(sqrt((double)IIR_CELL_RAYS * n));
     uint32_t bands = (side + BAND_ROWS - 1) / BAND_ROWS;
     memset(c->delta, 0, n * sizeof *c->delta);
+    for (uint32_t i = 0; i < n; i++)
+        c->planes[i] = (iir_cell_plane){vpls[i].position, vpls[i].normal, vpls[i].null_sample};
 #pragma omp parallel
     {
         iir_raystats mine;

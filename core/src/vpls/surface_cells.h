@@ -33,9 +33,16 @@ typedef struct iir_cell_hit {
 typedef iir_cell_hit (*iir_cell_trace_fn)(void *ctx, const double s[3], const iir_vpl *owner,
                                           iir_raystats *rays);
 
+/* A VPL's surface as the hand-over reads it, packed for scans of the whole set. */
+typedef struct iir_cell_plane {
+    iir_vec3 p, n;
+    bool null_sample;
+} iir_cell_plane;
+
 /* Buffers kept across frames. */
 typedef struct iir_surface_cells {
-    int32_t *delta; /* [n] rays gained minus rays owned */
+    int32_t *delta;         /* [n] rays gained minus rays owned */
+    iir_cell_plane *planes; /* [n] the VPLs' planes */
     uint32_t n_cap;
 } iir_surface_cells;
 
@@ -49,7 +56,8 @@ void iir_surface_cells_free(iir_surface_cells *c);
  * on another surface than the cell's VPL stands for: the pattern's rays that land on the plane of
  * their cell's VPL (within IIR_CELL_PLANE of the ray's length, normals within ~25 degrees), or
  * that are null samples in a null sample's cell, stay; any other goes to the VPL among the cell's,
- * its neighbours' and theirs whose plane fits the hit best (nearest in the domain among equals).
+ * its neighbours' and theirs whose plane fits the hit best (nearest in the domain among equals),
+ * or, when none of those lies on the hit's surface, the best of the whole set.
  * Each area changes by the rays it gained minus those it handed over, times a ray's share of the
  * domain: the exact Voronoi areas stay where nothing moved, and the sum is unchanged (but for an
  * area that would fall below 0, which stays at 0). The rows of the pattern run in bands over the
