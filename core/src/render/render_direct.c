@@ -339,8 +339,31 @@ typedef struct lean_half {
     bool shaded[8];
 } lean_half;
 
+/* lean_load for a half wholly inside the image: each row's 4 pixels read as runs. */
+static void lean_load_inside(const iir_gbuffer *gb, int x0, int y0, lean_half *q)
+{
+    for (int r = 0; r < BLOCK_H; r++) {
+        size_t i0 = (size_t)(y0 + r) * (size_t)gb->width + (size_t)x0;
+        const iir_vec3 *P = gb->position + i0, *N = gb->normal + i0, *A = gb->albedo + i0;
+        const iir_vec3 *E = gb->emission + i0;
+        const uint32_t *prim = gb->prim + i0;
+        for (int j = 0; j < BLOCK_W; j++) {
+            int k = r * BLOCK_W + j;
+            bool shaded = prim[j] != IIR_NO_HIT && !iir_is_black(A[j]);
+            q->shaded[k] = shaded;
+            q->L[k] = E[j];
+            q->f[k] = shaded ? iir_scale(A[j], IIR_INV_PI) : iir_v3s(0.f);
+            set_receiver(&q->in, k, P[j], N[j]);
+        }
+    }
+}
+
 static void lean_load(const iir_gbuffer *gb, int x0, int y0, lean_half *q)
 {
+    if (x0 + BLOCK_W <= gb->width && y0 + BLOCK_H <= gb->height) {
+        lean_load_inside(gb, x0, y0, q);
+        return;
+    }
     for (int k = 0; k < 8; k++) {
         int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
         bool inside = x < gb->width && y < gb->height;
