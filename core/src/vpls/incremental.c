@@ -563,18 +563,19 @@ static void aim(const pose *light, iir_vpl *v)
     if (len > 0.f) v->wi = iir_scale(d, 1.f / len);
 }
 
-/* The light's ray for point j of the surface cells' pattern (surface_cells.h). */
+/* The light's ray for point j of the surface cells' pattern (surface_cells.h): an area light's
+ * from the emitter's point of a hash of j, not the cell owner's. */
 typedef struct cell_ctx {
     const iir_incr *inc;
     const pose *ps;
 } cell_ctx;
 
-static iir_cell_hit cell_trace(void *ctx, const double s[3], const iir_vpl *owner,
-                               iir_raystats *rays)
+static iir_cell_hit cell_trace(void *ctx, const double s[3], uint32_t j, iir_raystats *rays)
 {
     const cell_ctx *c = ctx;
     iir_vec3 o, w;
-    pose at = iir_domain_at_emitter(c->ps, owner->emit);
+    uint32_t k = (uint32_t)iir_mix64(0x5ce11ull << 32 | j); /* independent of the cells */
+    pose at = iir_domain_at_emitter(c->ps, iir_domain_emitter_stratum(c->ps, k));
     iir_domain_ray(&at, s, &o, &w);
     iir_surface sf;
     iir_cell_hit h = {.null_sample = true};

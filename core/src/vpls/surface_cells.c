@@ -98,11 +98,11 @@ static void pattern_point(const iir_light_domain *d, uint32_t side, uint32_t y, 
 }
 
 /* The rays of pattern rows [y0, y1): each one's cell owner by a walk from the last one's (from
- * site 0 for the first: the same whatever thread runs the rows), traced from the owner's point of
- * an area light, and handed to the neighbour whose surface it hit when it missed the owner's. */
-static void rows(iir_surface_cells *c, const iir_light_domain *d, const iir_vpl *vpls,
-                 const double *xyz, const iir_site_graph *g, iir_cell_trace_fn trace, void *ctx,
-                 uint32_t side, uint32_t y0, uint32_t y1, iir_raystats *rays)
+ * site 0 for the first: the same whatever thread runs the rows), traced, and handed to the
+ * neighbour whose surface it hit when it missed the owner's. */
+static void rows(iir_surface_cells *c, const iir_light_domain *d, const double *xyz,
+                 const iir_site_graph *g, iir_cell_trace_fn trace, void *ctx, uint32_t side,
+                 uint32_t y0, uint32_t y1, iir_raystats *rays)
 {
     uint32_t owner = 0;
     for (uint32_t y = y0; y < y1; y++)
@@ -110,7 +110,7 @@ static void rows(iir_surface_cells *c, const iir_light_domain *d, const iir_vpl 
             double s[3];
             pattern_point(d, side, y, k, s);
             owner = iir_site_graph_nearest(g, xyz, owner, s);
-            iir_cell_hit h = trace(ctx, s, &vpls[owner], rays);
+            iir_cell_hit h = trace(ctx, s, y * side + k, rays);
             if (on_surface(&c->planes[owner], &h)) continue;
             uint32_t to = best_fit(c->planes, xyz, g, owner, &h, s);
 #pragma omp atomic
@@ -143,7 +143,7 @@ iir_status iir_surface_cells_apply(iir_surface_cells *c, const iir_light_domain 
 #pragma omp for schedule(dynamic)
         for (uint32_t b = 0; b < bands; b++) {
             uint32_t y1 = (b + 1) * BAND_ROWS < side ? (b + 1) * BAND_ROWS : side;
-            rows(c, d, vpls, xyz, g, trace, ctx, side, b * BAND_ROWS, y1, &mine);
+            rows(c, d, xyz, g, trace, ctx, side, b * BAND_ROWS, y1, &mine);
         }
 #pragma omp critical
         iir_raystats_add(rays, &mine);

@@ -28,9 +28,11 @@ typedef struct iir_cell_hit {
     bool null_sample;
 } iir_cell_hit;
 
-/* Traces the light's ray for domain point s, whose cell is owner's (an area light's: from owner's
- * point of the emitter, as its cell's directions are); called from several threads at once. */
-typedef iir_cell_hit (*iir_cell_trace_fn)(void *ctx, const double s[3], const iir_vpl *owner,
+/* Traces the light's ray for point j of the pattern, at domain point s (an area light's from a
+ * point of the emitter fixed for j, drawn independently of the cells: a cell's owner's own point
+ * is not one -- owners are the VPLs that survived, and which of them survive depends on their
+ * points); called from several threads at once. */
+typedef iir_cell_hit (*iir_cell_trace_fn)(void *ctx, const double s[3], uint32_t j,
                                           iir_raystats *rays);
 
 /* A VPL's surface as the hand-over reads it, packed for scans of the whole set. */
