@@ -47,21 +47,59 @@ static void consider(const iir_cell_plane *planes, const double *xyz, uint32_t c
     if (f < *fit || dc < *d) *best = c, *fit = f, *d = dc;
 }
 
-enum { CANDIDATES = 128 };
+enum { CANDIDATES = 128, CHUNK = 64 };
+
+/* A lower bound of misfit(v, h) for the non-null hit h and every VPL c of [c0, c0 + m), from the
+ * packed planes in float (a null sample: infinite): on_surface's test, else the offset over the
+ * ray's length plus the normals' penalty. A loop without branches, so the compiler vectors it. */
+static void misfit_bounds(const iir_surface_cells *c, uint32_t c0, uint32_t m,
+                          const iir_cell_hit *h, float *lb)
+{
+    const float *px = c->soa, *py = px + c->n_cap, *pz = py + c->n_cap, *nx = pz + c->n_cap,
+                *ny = nx + c->n_cap, *nz = ny + c->n_cap, *pen = nz + c->n_cap;
+    float inv = 1.f / h->dist, plane = IIR_CELL_PLANE * h->dist;
+    for (uint32_t k = c0; k < c0 + m; k++) {
+        float off =
+            fabsf((h->x.x - px[k]) * nx[k] + (h->x.y - py[k]) * ny[k] + (h->x.z - pz[k]) * nz[k]);
+        float nd = h->n.x * nx[k] + h->n.y * ny[k] + h->n.z * nz[k];
+        float f = off * inv + (nd < 0.5f ? 1.f : 0.f);
+        lb[k - c0] = (off < plane && nd > 0.9f ? 0.f : f) + pen[k];
+    }
+}
+
+/* The whole set's best for hit h, after the rings gave *best (misfit *fit): null samples for a
+ * null hit; else the VPLs whose bound does not rule them out, checked exactly by consider. */
+static void scan_all(const iir_surface_cells *c, const double *xyz, uint32_t n,
+                     const iir_cell_hit *h, const double s[3], uint32_t *best, double *fit,
+                     double *d)
+{
+    if (h->null_sample) {
+        for (uint32_t k = 0; k < c->n_null; k++)
+            consider(c->planes, xyz, c->nulls[k], h, s, best, fit, d);
+        return;
+    }
+    float lb[CHUNK];
+    for (uint32_t c0 = 0; c0 < n; c0 += CHUNK) {
+        uint32_t m = n - c0 < CHUNK ? n - c0 : CHUNK;
+        misfit_bounds(c, c0, m, h, lb);
+        for (uint32_t k = 0; k < m; k++) /* the slack covers float against double rounding */
+            if (lb[k] <= *fit * (1.0 + 1e-4) + 1e-6)
+                consider(c->planes, xyz, c0 + k, h, s, best, fit, d);
+    }
+}
 
 /* Among `owner`, its neighbours and theirs, the VPL whose surface explains hit h (at domain point
  * s) best, the nearest in the domain among equals; when none of them lies on the hit's surface,
  * the best of the whole set (a crowded surface's cells can reach over another's farther than two
  * rings: the conference table's over the floor); the owner when none explains it better. */
-static uint32_t best_fit(const iir_cell_plane *planes, const double *xyz, const iir_site_graph *g,
+static uint32_t best_fit(const iir_surface_cells *c, const double *xyz, const iir_site_graph *g,
                          uint32_t owner, const iir_cell_hit *h, const double s[3])
 {
     uint32_t ring[CANDIDATES], ring1, n = iir_site_graph_rings(g, owner, ring, CANDIDATES, &ring1);
     uint32_t best = owner;
-    double fit = misfit(&planes[owner], h), d = dist2(&xyz[3 * owner], s);
-    for (uint32_t k = 0; k < n; k++) consider(planes, xyz, ring[k], h, s, &best, &fit, &d);
-    if (fit > 0.0)
-        for (uint32_t c = 0; c < g->n; c++) consider(planes, xyz, c, h, s, &best, &fit, &d);
+    double fit = misfit(&c->planes[owner], h), d = dist2(&xyz[3 * owner], s);
+    for (uint32_t k = 0; k < n; k++) consider(c->planes, xyz, ring[k], h, s, &best, &fit, &d);
+    if (fit > 0.0) scan_all(c, xyz, g->n, h, s, &best, &fit, &d);
     return best;
 }
 
@@ -72,7 +110,11 @@ static bool reserve(iir_surface_cells *c, uint32_t n)
     if (delta) c->delta = delta;
     iir_cell_plane *planes = realloc(c->planes, n * sizeof *planes);
     if (planes) c->planes = planes;
-    if (!delta || !planes) return false;
+    float *soa = realloc(c->soa, 7 * (size_t)n * sizeof *soa);
+    if (soa) c->soa = soa;
+    uint32_t *nulls = realloc(c->nulls, n * sizeof *nulls);
+    if (nulls) c->nulls = nulls;
+    if (!delta || !planes || !soa || !nulls) return false;
     c->n_cap = n;
     return true;
 }
@@ -81,6 +123,8 @@ void iir_surface_cells_free(iir_surface_cells *c)
 {
     free(c->delta);
     free(c->planes);
+    free(c->soa);
+    free(c->nulls);
     *c = (iir_surface_cells){0};
 }
 
@@ -112,12 +156,28 @@ static void rows(iir_surface_cells *c, const iir_light_domain *d, const double *
             owner = iir_site_graph_nearest(g, xyz, owner, s);
             iir_cell_hit h = trace(ctx, s, y * side + k, rays);
             if (on_surface(&c->planes[owner], &h)) continue;
-            uint32_t to = best_fit(c->planes, xyz, g, owner, &h, s);
+            uint32_t to = best_fit(c, xyz, g, owner, &h, s);
 #pragma omp atomic
             c->delta[owner]--;
 #pragma omp atomic
             c->delta[to]++;
         }
+}
+
+/* The VPLs' planes, packed twice: for the rings' exact tests and, by coordinate, for the scans. */
+static void pack(iir_surface_cells *c, const iir_vpl *vpls, uint32_t n)
+{
+    float *px = c->soa, *py = px + c->n_cap, *pz = py + c->n_cap, *nx = pz + c->n_cap,
+          *ny = nx + c->n_cap, *nz = ny + c->n_cap, *pen = nz + c->n_cap;
+    c->n_null = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        const iir_vpl *v = &vpls[i];
+        c->planes[i] = (iir_cell_plane){v->position, v->normal, v->null_sample};
+        px[i] = v->position.x, py[i] = v->position.y, pz[i] = v->position.z;
+        nx[i] = v->normal.x, ny[i] = v->normal.y, nz[i] = v->normal.z;
+        pen[i] = v->null_sample ? INFINITY : 0.f;
+        if (v->null_sample) c->nulls[c->n_null++] = i;
+    }
 }
 
 enum { BAND_ROWS = 4 };
@@ -134,8 +194,7 @@ iir_status iir_surface_cells_apply(iir_surface_cells *c, const iir_light_domain 
     uint32_t side = (uint32_t)ceil(sqrt((double)IIR_CELL_RAYS * n));
     uint32_t bands = (side + BAND_ROWS - 1) / BAND_ROWS;
     memset(c->delta, 0, n * sizeof *c->delta);
-    for (uint32_t i = 0; i < n; i++)
-        c->planes[i] = (iir_cell_plane){vpls[i].position, vpls[i].normal, vpls[i].null_sample};
+    pack(c, vpls, n);
 #pragma omp parallel
     {
         iir_raystats mine;

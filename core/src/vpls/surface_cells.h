@@ -45,6 +45,9 @@ typedef struct iir_cell_plane {
 typedef struct iir_surface_cells {
     int32_t *delta;         /* [n] rays gained minus rays owned */
     iir_cell_plane *planes; /* [n] the VPLs' planes */
+    float *soa;      /* [7 n_cap] the same by coordinate (p, n) and a null sample's penalty */
+    uint32_t *nulls; /* [n_null] the null samples */
+    uint32_t n_null;
     uint32_t n_cap;
 } iir_surface_cells;
 
