@@ -76,6 +76,26 @@ iir_bsdf iir_bsdf_make_f0(iir_vec3 n, iir_vec3 base_color, float metallic, float
  * material: no specular lobe at all). */
 iir_bsdf iir_bsdf_make_lambert(iir_vec3 n, iir_vec3 albedo);
 
+/* ---- 8 metallic-roughness BSDFs at once (bsdf_lanes_avx2.c): the direct-light kernel ---- */
+
+/* 8 lanes' BSDFs as iir_bsdf_make_f0 makes them (clamped), structure of arrays, with each lane's
+ * shading normal n and unit wo; no tangent frame: the model is isotropic, so the lanes evaluate it
+ * from dot products with n. A lane left zeroed is black. */
+typedef struct iir_bsdf_lanes {
+    _Alignas(32) float nx[8], ny[8], nz[8], wox[8], woy[8], woz[8];
+    float f0x[8], f0y[8], f0z[8], cx[8], cy[8], cz[8], alpha[8];
+} iir_bsdf_lanes;
+
+/* Lane k: unit shading normal n (on wo's side), unit wo, and iir_bsdf_make_f0's parameters. */
+void iir_bsdf_lanes_set(iir_bsdf_lanes *L, int k, iir_vec3 n, iir_vec3 wo, iir_vec3 base_color,
+                        float metallic, float roughness, float dielectric_f0);
+
+/* f(wo, wi) of the 8 lanes for unit wi (w*[k]; 0 where no light arrives), with AVX2 and FMA:
+ * only where iir_isa_supported(IIR_ISA_AVX2). iir_bsdf_f's value up to float rounding (test_bsdf:
+ * lane by lane against it); 0 where wo or wi is below the surface. */
+void iir_bsdf_f8_avx2(const iir_bsdf_lanes *L, const float *wx, const float *wy, const float *wz,
+                      float *fx, float *fy, float *fz);
+
 /* Whether a metallic-roughness surface counts as glossy: every metal, and a dielectric smoother
  * than IIR_GLOSSY_ROUGHNESS (rougher ones reflect nearly as a Lambertian surface of albedo c_diff
  * does). The scene's notes name the glossy materials; the VPL methods' gather evaluates the full

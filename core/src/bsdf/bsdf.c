@@ -110,6 +110,18 @@ iir_bsdf iir_bsdf_make(iir_vec3 n, iir_vec3 base_color, float metallic, float ro
     return iir_bsdf_make_f0(n, base_color, metallic, roughness, 0.04f);
 }
 
+/* make_f0's parameters, clamped, and what it derives from them. */
+static void set_params(iir_bsdf *b, iir_vec3 base_color, float metallic, float roughness,
+                       float dielectric_f0)
+{
+    b->base_color = clamp01(base_color);
+    b->metallic = iir_clampf(metallic, 0.f, 1.f);
+    b->alpha = iir_sqr(iir_clampf(roughness, 0.f, 1.f));
+    b->f0 = mix3(iir_v3s(iir_clampf(dielectric_f0, 0.f, 1.f)), b->base_color, b->metallic);
+    b->c_diff = mix3(b->base_color, iir_v3s(0.f), b->metallic);
+    b->lambert = false;
+}
+
 iir_bsdf iir_bsdf_make_f0(iir_vec3 n, iir_vec3 base_color, float metallic, float roughness,
                           float dielectric_f0)
 {
@@ -117,13 +129,20 @@ iir_bsdf iir_bsdf_make_f0(iir_vec3 n, iir_vec3 base_color, float metallic, float
     assert(!isnan(base_color.x + base_color.y + base_color.z + metallic + roughness));
     iir_bsdf b;
     b.frame = iir_frame_from_normal(n);
-    b.base_color = clamp01(base_color);
-    b.metallic = iir_clampf(metallic, 0.f, 1.f);
-    b.alpha = iir_sqr(iir_clampf(roughness, 0.f, 1.f));
-    b.f0 = mix3(iir_v3s(iir_clampf(dielectric_f0, 0.f, 1.f)), b.base_color, b.metallic);
-    b.c_diff = mix3(b.base_color, iir_v3s(0.f), b.metallic);
-    b.lambert = false;
+    set_params(&b, base_color, metallic, roughness, dielectric_f0);
     return b;
+}
+
+void iir_bsdf_lanes_set(iir_bsdf_lanes *L, int k, iir_vec3 n, iir_vec3 wo, iir_vec3 base_color,
+                        float metallic, float roughness, float dielectric_f0)
+{
+    iir_bsdf b;
+    set_params(&b, base_color, metallic, roughness, dielectric_f0);
+    L->nx[k] = n.x, L->ny[k] = n.y, L->nz[k] = n.z;
+    L->wox[k] = wo.x, L->woy[k] = wo.y, L->woz[k] = wo.z;
+    L->f0x[k] = b.f0.x, L->f0y[k] = b.f0.y, L->f0z[k] = b.f0.z;
+    L->cx[k] = b.c_diff.x, L->cy[k] = b.c_diff.y, L->cz[k] = b.c_diff.z;
+    L->alpha[k] = b.alpha;
 }
 
 iir_bsdf iir_bsdf_make_lambert(iir_vec3 n, iir_vec3 albedo)

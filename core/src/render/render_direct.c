@@ -12,7 +12,8 @@
  * light sample alone (weight 1), which is unbiased by itself. Shadow rays go out as 8-wide packets
  * over 4x2 pixel blocks (neighbouring pixels, one light: coherent rays); with AVX2 a point, spot
  * or sun is evaluated at the block's 8 pixels at once (iir_light_sample_delta8_avx2), and a frame
- * of such lights alone on diffuse surfaces (lean) goes in 4x4 blocks, one 16-wide packet each.
+ * of such lights alone (lean) goes in 4x4 blocks, one 16-wide packet each, a metallic-roughness
+ * pixel's BSDF evaluated 8 lanes at once (iir_bsdf_f8_avx2).
  * Threads: OpenMP over bands of two (lean: four) whole rows, each writing only its own pixels of
  * the frame; ray counters per thread, summed once.
  *
@@ -22,6 +23,8 @@
  * a time as above; then every pixel takes its emission plus its albedo / pi times the irradiance. A
  * pixel the tree evaluates gets full shading's value (the same sums). */
 #include <omp.h>
+
+#include <string.h>
 
 #include "iir/rng.h"
 #include "iir/bsdf.h"
@@ -35,8 +38,8 @@ typedef struct direct_ctx {
     const iir_light *lights;
     uint32_t num_lights;
     const iir_light_eval *evals; /* lights[i] prepared, when the frame has few (else NULL) */
-    bool lean; /* AVX2, delta lights only (prepared), no glossy pixel, no specular chain: lean_block
-                */
+    bool lean; /* AVX2, delta lights only (prepared), no specular chain: lean_block (glossy pixels
+                  by iir_bsdf_f8_avx2) */
     uint64_t seed;
     int samples; /* per pixel per area light (and for the emissive triangles) */
     float inv_samples;
@@ -337,7 +340,27 @@ typedef struct lean_half {
     iir_light_lanes in;
     iir_vec3 f[8], L[8], pending[8];
     bool shaded[8];
+    bool any_glossy; /* a metallic-roughness lane: its f is its BSDF's, per light */
+    bool glossy[8];
+    iir_bsdf_lanes bsdf; /* the glossy lanes' BSDFs (the others zeroed) */
 } lean_half;
+
+/* Lane k's metallic-roughness BSDF (pixel i), when it has one. */
+static void lean_glossy(const iir_gbuffer *gb, size_t i, int k, lean_half *q)
+{
+    iir_vec3 m = gb->mr[i];
+    iir_bsdf_lanes_set(&q->bsdf, k, gb->normal[i], gb->wo[i], gb->base[i], m.x, m.y, m.z);
+    q->glossy[k] = true;
+    q->any_glossy = true;
+}
+
+/* Starts a half: no glossy lane yet. */
+static void lean_begin(lean_half *q)
+{
+    q->any_glossy = false;
+    memset(q->glossy, 0, sizeof q->glossy);
+    memset(&q->bsdf, 0, sizeof q->bsdf);
+}
 
 /* lean_load for a half wholly inside the image: each row's 4 pixels read as runs. */
 static void lean_load_inside(const iir_gbuffer *gb, int x0, int y0, lean_half *q)
@@ -349,7 +372,9 @@ static void lean_load_inside(const iir_gbuffer *gb, int x0, int y0, lean_half *q
         const uint32_t *prim = gb->prim + i0;
         for (int j = 0; j < BLOCK_W; j++) {
             int k = r * BLOCK_W + j;
-            bool shaded = prim[j] != IIR_NO_HIT && !iir_is_black(A[j]);
+            bool glossy = gb->any_pbr && prim[j] != IIR_NO_HIT && gb->mr[i0 + j].y >= 0.f;
+            if (glossy) lean_glossy(gb, i0 + j, k, q);
+            bool shaded = prim[j] != IIR_NO_HIT && (glossy || !iir_is_black(A[j]));
             q->shaded[k] = shaded;
             q->L[k] = E[j];
             q->f[k] = shaded ? iir_scale(A[j], IIR_INV_PI) : iir_v3s(0.f);
@@ -360,6 +385,7 @@ static void lean_load_inside(const iir_gbuffer *gb, int x0, int y0, lean_half *q
 
 static void lean_load(const iir_gbuffer *gb, int x0, int y0, lean_half *q)
 {
+    lean_begin(q);
     if (x0 + BLOCK_W <= gb->width && y0 + BLOCK_H <= gb->height) {
         lean_load_inside(gb, x0, y0, q);
         return;
@@ -369,9 +395,11 @@ static void lean_load(const iir_gbuffer *gb, int x0, int y0, lean_half *q)
         bool inside = x < gb->width && y < gb->height;
         size_t i = inside ? (size_t)y * (size_t)gb->width + (size_t)x : 0;
         bool hit = inside && gb->prim[i] != IIR_NO_HIT;
-        q->shaded[k] = hit && !iir_is_black(gb->albedo[i]);
+        bool glossy = hit && gb->any_pbr && gb->mr[i].y >= 0.f;
+        if (glossy) lean_glossy(gb, i, k, q);
+        q->shaded[k] = hit && (glossy || !iir_is_black(gb->albedo[i]));
         q->L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
-        /* shade_block's f, times its chain's 1 (exact) */
+        /* shade_block's f, times its chain's 1 (exact); a glossy lane's per light */
         q->f[k] = q->shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
         set_receiver(&q->in, k, gb->position[i], gb->normal[i]);
     }
@@ -382,7 +410,12 @@ static bool lean_samples(const direct_ctx *c, const iir_light_eval *e, lean_half
 {
     iir_light_delta_lanes o;
     iir_light_sample_delta8_avx2(e, c->r->eps, &q->in, &o);
-    return lanes_into_rays(&o, q->shaded, q->f, q->pending, q->L, rays);
+    if (!q->any_glossy) return lanes_into_rays(&o, q->shaded, q->f, q->pending, q->L, rays);
+    _Alignas(32) float fx[8], fy[8], fz[8];
+    iir_bsdf_f8_avx2(&q->bsdf, o.wx, o.wy, o.wz, fx, fy, fz);
+    iir_vec3 f[8];
+    for (int k = 0; k < 8; k++) f[k] = q->glossy[k] ? iir_v3(fx[k], fy[k], fz[k]) : q->f[k];
+    return lanes_into_rays(&o, q->shaded, f, q->pending, q->L, rays);
 }
 
 /* shade_block for the common frame (direct_ctx.lean), over a 4x4 block: each pixel's position,
@@ -552,8 +585,7 @@ bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_raystats *
         for (uint32_t l = 0; l < c.num_lights; l++) evals[l] = iir_light_prepare(&c.lights[l]);
         c.evals = evals;
     }
-    c.lean =
-        c.evals && r->isa >= IIR_ISA_AVX2 && !r->area_lights && !r->gb.any_pbr && !r->gb.any_chain;
+    c.lean = c.evals && r->isa >= IIR_ISA_AVX2 && !r->area_lights && !r->gb.any_chain;
     for (uint32_t l = 0; l < c.num_lights && c.lean; l++) c.lean = iir_light_is_delta(&c.lights[l]);
     if (tree_frame(&c)) {
         iir_status s = tree_direct(r, &c, job, st);
