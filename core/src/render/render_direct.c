@@ -354,54 +354,44 @@ static void lean_glossy(const iir_gbuffer *gb, size_t i, int k, lean_half *q)
     q->any_glossy = true;
 }
 
-/* Starts a half: no glossy lane yet. */
-static void lean_begin(lean_half *q)
+/* Starts a half: no glossy lane yet (the BSDF lanes zeroed only in frames that can have one). */
+static void lean_begin(const iir_gbuffer *gb, lean_half *q)
 {
     q->any_glossy = false;
     memset(q->glossy, 0, sizeof q->glossy);
-    memset(&q->bsdf, 0, sizeof q->bsdf);
+    if (gb->any_pbr) memset(&q->bsdf, 0, sizeof q->bsdf);
 }
 
-/* lean_load for a half wholly inside the image: each row's 4 pixels read as runs. */
-static void lean_load_inside(const iir_gbuffer *gb, int x0, int y0, lean_half *q)
+/* Lane k from pixel i of the image: shade_block's f (times its chain's 1, exact; a glossy lane's
+ * is its BSDF's, per light), emission and receiver; i's pixel outside the image (inside false) is
+ * a lane of no light. */
+static void lean_pixel(const iir_gbuffer *gb, size_t i, bool inside, int k, lean_half *q)
 {
-    for (int r = 0; r < BLOCK_H; r++) {
-        size_t i0 = (size_t)(y0 + r) * (size_t)gb->width + (size_t)x0;
-        const iir_vec3 *P = gb->position + i0, *N = gb->normal + i0, *A = gb->albedo + i0;
-        const iir_vec3 *E = gb->emission + i0;
-        const uint32_t *prim = gb->prim + i0;
-        for (int j = 0; j < BLOCK_W; j++) {
-            int k = r * BLOCK_W + j;
-            bool glossy = gb->any_pbr && prim[j] != IIR_NO_HIT && gb->mr[i0 + j].y >= 0.f;
-            if (glossy) lean_glossy(gb, i0 + j, k, q);
-            bool shaded = prim[j] != IIR_NO_HIT && (glossy || !iir_is_black(A[j]));
-            q->shaded[k] = shaded;
-            q->L[k] = E[j];
-            q->f[k] = shaded ? iir_scale(A[j], IIR_INV_PI) : iir_v3s(0.f);
-            set_receiver(&q->in, k, P[j], N[j]);
-        }
-    }
+    bool hit = inside && gb->prim[i] != IIR_NO_HIT;
+    bool glossy = hit && gb->any_pbr && gb->mr[i].y >= 0.f;
+    if (glossy) lean_glossy(gb, i, k, q);
+    q->shaded[k] = hit && (glossy || !iir_is_black(gb->albedo[i]));
+    q->L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
+    q->f[k] = q->shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
+    set_receiver(&q->in, k, gb->position[i], gb->normal[i]);
 }
 
+/* Half q of a lean block: a half wholly inside the image reads its rows' 4 pixels as runs. */
 static void lean_load(const iir_gbuffer *gb, int x0, int y0, lean_half *q)
 {
-    lean_begin(q);
+    lean_begin(gb, q);
     if (x0 + BLOCK_W <= gb->width && y0 + BLOCK_H <= gb->height) {
-        lean_load_inside(gb, x0, y0, q);
+        for (int r = 0; r < BLOCK_H; r++) {
+            size_t i0 = (size_t)(y0 + r) * (size_t)gb->width + (size_t)x0;
+            for (int j = 0; j < BLOCK_W; j++)
+                lean_pixel(gb, i0 + (size_t)j, true, r * BLOCK_W + j, q);
+        }
         return;
     }
     for (int k = 0; k < 8; k++) {
         int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
         bool inside = x < gb->width && y < gb->height;
-        size_t i = inside ? (size_t)y * (size_t)gb->width + (size_t)x : 0;
-        bool hit = inside && gb->prim[i] != IIR_NO_HIT;
-        bool glossy = hit && gb->any_pbr && gb->mr[i].y >= 0.f;
-        if (glossy) lean_glossy(gb, i, k, q);
-        q->shaded[k] = hit && (glossy || !iir_is_black(gb->albedo[i]));
-        q->L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
-        /* shade_block's f, times its chain's 1 (exact); a glossy lane's per light */
-        q->f[k] = q->shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
-        set_receiver(&q->in, k, gb->position[i], gb->normal[i]);
+        lean_pixel(gb, inside ? (size_t)y * (size_t)gb->width + (size_t)x : 0, inside, k, q);
     }
 }
 
