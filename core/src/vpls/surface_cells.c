@@ -9,9 +9,32 @@
 
 #include "iir/rng.h"
 
+/* The VPLs' planes by coordinate (iir_surface_cells.soa): column k of VPL i is soa[k n_cap + i];
+ * PEN is a null sample's penalty, infinite for one and 0 otherwise. */
+enum { PX, PY, PZ, NX, NY, NZ, PEN, COLUMNS };
+
+static const float *column(const iir_surface_cells *c, int k)
+{
+    return c->soa + (size_t)k * c->n_cap;
+}
+
+/* A VPL's surface as the hand-over's exact tests read it. */
+typedef struct cell_plane {
+    iir_vec3 p, n;
+    bool null_sample;
+} cell_plane;
+
+static cell_plane plane_at(const iir_surface_cells *c, uint32_t i)
+{
+    const float *s = c->soa + i;
+    size_t w = c->n_cap;
+    return (cell_plane){iir_v3(s[PX * w], s[PY * w], s[PZ * w]),
+                        iir_v3(s[NX * w], s[NY * w], s[NZ * w]), isinf(s[PEN * w])};
+}
+
 /* A hit on the surface of plane v: on it within IIR_CELL_PLANE of the ray's length, normals within
  * ~25 degrees; a null sample for a null sample. */
-static bool on_surface(const iir_cell_plane *v, const iir_cell_hit *h)
+static bool on_surface(const cell_plane *v, const iir_cell_hit *h)
 {
     if (v->null_sample || h->null_sample) return v->null_sample == h->null_sample;
     float off = fabsf(iir_dot(iir_sub(h->x, v->p), v->n));
@@ -21,7 +44,7 @@ static bool on_surface(const iir_cell_plane *v, const iir_cell_hit *h)
 /* How badly v's surface explains the hit: 0 on it, else the hit's distance from v's plane over the
  * ray's length, plus 1 when the normals are more than 60 degrees apart; a null sample and a
  * surface never explain each other. */
-static double misfit(const iir_cell_plane *v, const iir_cell_hit *h)
+static double misfit(const cell_plane *v, const iir_cell_hit *h)
 {
     if (on_surface(v, h)) return 0.0;
     if (v->null_sample || h->null_sample) return INFINITY;
@@ -37,11 +60,12 @@ static double dist2(const double *a, const double *b)
 
 /* The VPL that explains hit h (at domain point s) best: `best` with misfit *fit and distance *d
  * so far, replaced by candidate c when c fits better, or as well and nearer in the domain. */
-static void consider(const iir_cell_plane *planes, const double *xyz, uint32_t c,
+static void consider(const iir_surface_cells *cells, const double *xyz, uint32_t c,
                      const iir_cell_hit *h, const double s[3], uint32_t *best, double *fit,
                      double *d)
 {
-    double f = misfit(&planes[c], h);
+    cell_plane v = plane_at(cells, c);
+    double f = misfit(&v, h);
     if (!(f <= *fit)) return;
     double dc = dist2(&xyz[3 * c], s);
     if (f < *fit || dc < *d) *best = c, *fit = f, *d = dc;
@@ -55,8 +79,8 @@ enum { CANDIDATES = 128, CHUNK = 64 };
 static void misfit_bounds(const iir_surface_cells *c, uint32_t c0, uint32_t m,
                           const iir_cell_hit *h, float *lb)
 {
-    const float *px = c->soa, *py = px + c->n_cap, *pz = py + c->n_cap, *nx = pz + c->n_cap,
-                *ny = nx + c->n_cap, *nz = ny + c->n_cap, *pen = nz + c->n_cap;
+    const float *px = column(c, PX), *py = column(c, PY), *pz = column(c, PZ), *nx = column(c, NX),
+                *ny = column(c, NY), *nz = column(c, NZ), *pen = column(c, PEN);
     float inv = 1.f / h->dist, plane = IIR_CELL_PLANE * h->dist;
     for (uint32_t k = c0; k < c0 + m; k++) {
         float off =
@@ -74,8 +98,7 @@ static void scan_all(const iir_surface_cells *c, const double *xyz, uint32_t n,
                      double *d)
 {
     if (h->null_sample) {
-        for (uint32_t k = 0; k < c->n_null; k++)
-            consider(c->planes, xyz, c->nulls[k], h, s, best, fit, d);
+        for (uint32_t k = 0; k < c->n_null; k++) consider(c, xyz, c->nulls[k], h, s, best, fit, d);
         return;
     }
     float lb[CHUNK];
@@ -83,8 +106,7 @@ static void scan_all(const iir_surface_cells *c, const double *xyz, uint32_t n,
         uint32_t m = n - c0 < CHUNK ? n - c0 : CHUNK;
         misfit_bounds(c, c0, m, h, lb);
         for (uint32_t k = 0; k < m; k++) /* the slack covers float against double rounding */
-            if (lb[k] <= *fit * (1.0 + 1e-4) + 1e-6)
-                consider(c->planes, xyz, c0 + k, h, s, best, fit, d);
+            if (lb[k] <= *fit * (1.0 + 1e-4) + 1e-6) consider(c, xyz, c0 + k, h, s, best, fit, d);
     }
 }
 
@@ -97,8 +119,9 @@ static uint32_t best_fit(const iir_surface_cells *c, const double *xyz, const ii
 {
     uint32_t ring[CANDIDATES], ring1, n = iir_site_graph_rings(g, owner, ring, CANDIDATES, &ring1);
     uint32_t best = owner;
-    double fit = misfit(&c->planes[owner], h), d = dist2(&xyz[3 * owner], s);
-    for (uint32_t k = 0; k < n; k++) consider(c->planes, xyz, ring[k], h, s, &best, &fit, &d);
+    cell_plane v = plane_at(c, owner);
+    double fit = misfit(&v, h), d = dist2(&xyz[3 * owner], s);
+    for (uint32_t k = 0; k < n; k++) consider(c, xyz, ring[k], h, s, &best, &fit, &d);
     if (fit > 0.0) scan_all(c, xyz, g->n, h, s, &best, &fit, &d);
     return best;
 }
@@ -108,13 +131,11 @@ static bool reserve(iir_surface_cells *c, uint32_t n)
     if (n <= c->n_cap) return true;
     int32_t *delta = realloc(c->delta, n * sizeof *delta);
     if (delta) c->delta = delta;
-    iir_cell_plane *planes = realloc(c->planes, n * sizeof *planes);
-    if (planes) c->planes = planes;
-    float *soa = realloc(c->soa, 7 * (size_t)n * sizeof *soa);
+    float *soa = realloc(c->soa, COLUMNS * (size_t)n * sizeof *soa);
     if (soa) c->soa = soa;
     uint32_t *nulls = realloc(c->nulls, n * sizeof *nulls);
     if (nulls) c->nulls = nulls;
-    if (!delta || !planes || !soa || !nulls) return false;
+    if (!delta || !soa || !nulls) return false;
     c->n_cap = n;
     return true;
 }
@@ -122,7 +143,6 @@ static bool reserve(iir_surface_cells *c, uint32_t n)
 void iir_surface_cells_free(iir_surface_cells *c)
 {
     free(c->delta);
-    free(c->planes);
     free(c->soa);
     free(c->nulls);
     *c = (iir_surface_cells){0};
@@ -155,7 +175,8 @@ static void rows(iir_surface_cells *c, const iir_light_domain *d, const double *
             pattern_point(d, side, y, k, s);
             owner = iir_site_graph_nearest(g, xyz, owner, s);
             iir_cell_hit h = trace(ctx, s, y * side + k, rays);
-            if (on_surface(&c->planes[owner], &h)) continue;
+            cell_plane v = plane_at(c, owner);
+            if (on_surface(&v, &h)) continue;
             uint32_t to = best_fit(c, xyz, g, owner, &h, s);
 #pragma omp atomic
             c->delta[owner]--;
@@ -164,18 +185,17 @@ static void rows(iir_surface_cells *c, const iir_light_domain *d, const double *
         }
 }
 
-/* The VPLs' planes, packed twice: for the rings' exact tests and, by coordinate, for the scans. */
+/* The VPLs' planes into the columns, and the null samples' list. */
 static void pack(iir_surface_cells *c, const iir_vpl *vpls, uint32_t n)
 {
-    float *px = c->soa, *py = px + c->n_cap, *pz = py + c->n_cap, *nx = pz + c->n_cap,
-          *ny = nx + c->n_cap, *nz = ny + c->n_cap, *pen = nz + c->n_cap;
+    float *col[COLUMNS];
+    for (int k = 0; k < COLUMNS; k++) col[k] = c->soa + (size_t)k * c->n_cap;
     c->n_null = 0;
     for (uint32_t i = 0; i < n; i++) {
         const iir_vpl *v = &vpls[i];
-        c->planes[i] = (iir_cell_plane){v->position, v->normal, v->null_sample};
-        px[i] = v->position.x, py[i] = v->position.y, pz[i] = v->position.z;
-        nx[i] = v->normal.x, ny[i] = v->normal.y, nz[i] = v->normal.z;
-        pen[i] = v->null_sample ? INFINITY : 0.f;
+        col[PX][i] = v->position.x, col[PY][i] = v->position.y, col[PZ][i] = v->position.z;
+        col[NX][i] = v->normal.x, col[NY][i] = v->normal.y, col[NZ][i] = v->normal.z;
+        col[PEN][i] = v->null_sample ? INFINITY : 0.f;
         if (v->null_sample) c->nulls[c->n_null++] = i;
     }
 }

@@ -35,17 +35,10 @@ typedef struct iir_cell_hit {
 typedef iir_cell_hit (*iir_cell_trace_fn)(void *ctx, const double s[3], uint32_t j,
                                           iir_raystats *rays);
 
-/* A VPL's surface as the hand-over reads it, packed for scans of the whole set. */
-typedef struct iir_cell_plane {
-    iir_vec3 p, n;
-    bool null_sample;
-} iir_cell_plane;
-
 /* Buffers kept across frames. */
 typedef struct iir_surface_cells {
-    int32_t *delta;         /* [n] rays gained minus rays owned */
-    iir_cell_plane *planes; /* [n] the VPLs' planes */
-    float *soa;      /* [7 n_cap] the same by coordinate (p, n) and a null sample's penalty */
+    int32_t *delta; /* [n] rays gained minus rays owned */
+    float *soa; /* [7 n_cap] the VPLs' planes by coordinate (p, n) and a null sample's penalty */
     uint32_t *nulls; /* [n_null] the null samples */
     uint32_t n_null;
     uint32_t n_cap;
