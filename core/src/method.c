@@ -60,6 +60,7 @@ void iir_render_timing_to_stats(const iir_render_timing *t, iir_frame_stats *sta
     stats->phase_ms[IIR_PHASE_INDIRECT] = t->indirect_ms;
     stats->phase_ms[IIR_PHASE_FILTER] = t->filter_ms;
     stats->vpl_evals = t->vpl_evals;
+    stats->vpl_reused = t->vpl_reused;
 }
 
 iir_refine_params iir_refine_params_of(const iir_method_common *c, const iir_indirect_params *v,

@@ -79,10 +79,11 @@ typedef struct iir_frame_stats {
     bool whole_sweeps;          /* refinement: the passes so far give every interleaved VPL
                                    subset equal weight, so the image shows no subset pattern
                                    (always true for pt and for frames) */
-    iir_vpl_counts vpl; /* VPL bookkeeping (vpl.h), zero for methods without VPLs; refinement:
-                           count = the size of the pass's VPL set */
-    uint64_t vpl_evals; /* VPL evaluations: pixel-VPL pairs shaded (multires: texel-VPL pairs
-                           too; iir_render_timing), 0 for methods without VPLs */
+    iir_vpl_counts vpl;  /* VPL bookkeeping (vpl.h), zero for methods without VPLs; refinement:
+                            count = the size of the pass's VPL set */
+    uint64_t vpl_evals;  /* VPL evaluations: pixel-VPL pairs shaded (multires: texel-VPL pairs
+                            too; iir_render_timing), 0 for methods without VPLs */
+    uint64_t vpl_reused; /* of those, pairs a kept VPL's column held (iir_render_timing) */
     double counter[IIR_MAX_COUNTERS]; /* the method's own counters (iir_method_counters), in
                                          the order it declares them */
     bool controlled;    /* target_fps set: ctl is the frame-time controller's state after the

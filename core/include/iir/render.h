@@ -203,6 +203,10 @@ extern const iir_param_table iir_multires_table;
 /* Bytes of the VPL renderer (G-buffer, scratch, refinement buffers) for a frame, and of n VPLs
  * with their shadow maps under these settings: the VPL methods' memory estimates share them. */
 uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int height);
+/* Bytes of the columns a renderer keeps for n VPLs kept from frame to frame (full shading with
+ * shadow maps: a float per VPL and pixel of its subset), at most the renderer's budget for them
+ * (256 MB): what a method whose VPLs outlive a frame (iir) adds to iir_vpl_memory. */
+uint64_t iir_gv_memory(const iir_indirect_params *o, uint32_t n, int width, int height);
 
 /* The interleaving subset of VPL `id` among n2 subsets: Fibonacci hashing of the id, so
  * consecutive ids spread evenly over the subsets while a subset's ids follow no power-of-two
@@ -228,6 +232,8 @@ typedef struct iir_render_timing {
     bool gbuffer_cached; /* the G-buffer of the previous frame was reused */
     uint64_t vpl_evals;  /* pixel-VPL pairs shaded (multires: texel-VPL pairs and pixel-VPL
                             pairs of the full-resolution pixels) */
+    uint64_t vpl_reused; /* of those, the pairs whose geometry and visibility a kept VPL's column
+                            held from an earlier frame (full shading with shadow maps, AVX2) */
 } iir_render_timing;
 
 typedef struct iir_renderer iir_renderer;

@@ -80,6 +80,11 @@ static inline float iir_smap_depth_at(const iir_smap *m, int i, int j)
     return iir_half_to_float(m->depth[(size_t)j * (size_t)m->res + (size_t)i]) * m->scale;
 }
 
+/* A stamp no map rendering has had yet (thread-safe; never 0): what iir_smap.stamp says of the
+ * texels a renderer last wrote, so that work derived from them (the renderer's per-pixel columns,
+ * render/gv_columns.h) is reused only while they are the same. */
+uint64_t iir_smap_next_stamp(void);
+
 /* Renders v's map at res x res (1 <= res <= IIR_SMAP_MAX_RES): (re)allocates m->depth with malloc
  * when it has no texels or another resolution, then traces one ray per texel centre from the VPL's
  * position lifted by iir_rt_epsilon(rt) along its normal, 8 adjacent texels of a row per packet,

@@ -31,6 +31,8 @@ typedef struct iir_smap {
     uint16_t *depth; /* per texel, the distance to the first hit over scale as a half float
                         (half.h), +infinity where the ray escaped */
     float scale;     /* a power of two (iir_smap_scale): depth[i] * scale is the distance */
+    uint64_t stamp;  /* which rendering the texels are: unique to each (iir_smap_next_stamp); 0 for
+                        maps filled by other means, which the renderer never reuses work for */
     bool coarse;     /* rendered below the asked resolution to bound a frame's cost, to be rendered
                         again at it when a frame has room (iir_smaps_build_budget) */
 } iir_smap;

@@ -626,7 +626,8 @@ static uint64_t iir_m_memory(const void *opts, int width, int height)
     const iir_options *o = opts;
     uint64_t N = (uint64_t)iir_ctl_vpls_bound(&o->ctl, o->vpls);
     uint64_t n = N * (uint64_t)(o->bounces > 2 ? o->bounces - 1 : 1);
-    return iir_vpl_memory(&o->vpl, (uint32_t)n, width, height) + n * sizeof(iir_vpl) +
+    return iir_vpl_memory(&o->vpl, (uint32_t)n, width, height) +
+           iir_gv_memory(&o->vpl, (uint32_t)n, width, height) + n * sizeof(iir_vpl) +
            iir_incr_memory((uint32_t)n) + iir_ism_memory(&o->ism, o->vpl.visibility, (uint32_t)n);
 }
 

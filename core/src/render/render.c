@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gv_columns.h"
 #include "render_internal.h"
 #include "iir/timer.h"
 
@@ -85,6 +86,7 @@ void iir_renderer_destroy(iir_renderer *r)
     free(r->near_fine);
     free(r->fmask);
     free(r->vpl);
+    iir_gv_free(r->gv);
     free(r);
 }
 
@@ -194,7 +196,8 @@ static bool shade(iir_renderer *r, const iir_shade_job *job, iir_render_timing *
     if (!stopped && r->level)
         stopped = iir_render_indirect_coarse(r, job->p, true, rays, &tm->vpl_evals);
     else if (!stopped)
-        stopped = iir_render_indirect(r, job->p, job->shift, true, rays, &tm->vpl_evals);
+        stopped =
+            iir_render_indirect(r, job->p, job->shift, true, rays, &tm->vpl_evals, &tm->vpl_reused);
     if (!stopped && r->comp_lights) stopped = iir_render_compensate(r, job, rays);
     double t2 = iir_now_ms();
     if (!stopped) iir_render_filter(r, job->p, job->out);

@@ -18,7 +18,8 @@ enum {
 };
 
 typedef struct iir_pixel_batch {
-    int m; /* pixels; the arrays are valid up to m rounded up to IIR_BATCH_LANES */
+    int m;        /* pixels; the arrays are valid up to m rounded up to IIR_BATCH_LANES */
+    uint32_t ord; /* where its pixels begin in their class's columns (gv_columns.h) */
     uint32_t index[IIR_BATCH];
     _Alignas(32) float px[IIR_BATCH], py[IIR_BATCH], pz[IIR_BATCH]; /* position */
     _Alignas(32) float nx[IIR_BATCH], ny[IIR_BATCH], nz[IIR_BATCH]; /* normal, facing the camera */
@@ -48,17 +49,33 @@ typedef struct iir_kernel_args {
     float g_max, rel_bias, eps;
 } iir_kernel_args;
 
-/* Adds power G V of VPLs v[0 .. count) (each map's visibility) to every pixel of the batch, up
- * to iir_batch_padded(b->m). */
-typedef void (*iir_smap_kernel)(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
-                                iir_pixel_batch *b);
+/* A VPL's column of G V (gv_columns.h) as a kernel uses it: none (evaluate G V), write (evaluate
+ * it and store it at col[b->ord + j] for batch pixel j < b->m) or read (take it from there). */
+typedef enum { IIR_GV_NONE, IIR_GV_WRITE, IIR_GV_READ } iir_gv_mode;
+typedef struct iir_gv_ref {
+    float *col;
+    iir_gv_mode mode;
+} iir_gv_ref;
 
-void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
-                           iir_pixel_batch *b);
-void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
-                         iir_pixel_batch *b);
-void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
-                         iir_pixel_batch *b);
+/* Adds power G V of VPLs v[0 .. count) (each map's visibility) to every pixel of the batch, up
+ * to iir_batch_padded(b->m); gv[i] is VPL i's column (gv NULL: none). Only the AVX2 kernel takes
+ * columns (the renderer uses them with it alone); the others require gv NULL. */
+typedef void (*iir_smap_kernel)(const iir_kernel_args *a, const iir_shade_vpl *v,
+                                const iir_gv_ref *gv, uint32_t count, iir_pixel_batch *b);
+
+void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, const iir_gv_ref *gv,
+                           uint32_t count, iir_pixel_batch *b);
+void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, const iir_gv_ref *gv,
+                         uint32_t count, iir_pixel_batch *b);
+void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, const iir_gv_ref *gv,
+                         uint32_t count, iir_pixel_batch *b);
+
+/* The AVX2 kernel's sums for a run of m pixels whose every VPL of v[0 .. count) reads its column
+ * (gv[i].mode IIR_GV_READ), none of them glossy nor any pixel: power G V from the columns from
+ * ord on, into E (x, y, z planes of IIR_BATCH floats; m <= IIR_BATCH) -- the kernel's sums to the
+ * bit without its batch. */
+void iir_columns_sum_avx2(const iir_shade_vpl *v, const iir_gv_ref *gv, uint32_t count,
+                          uint32_t ord, int m, float (*E)[IIR_BATCH]);
 
 /* A vector kernel's lanes j .. j + lanes - 1 with G V in g: those through a BSDF (a glossy pixel,
  * or every lane for a glossy VPL) are added by iir_batch_add_lit and zeroed in g; the caller adds

@@ -17,6 +17,7 @@
 #include "iir/bsdf.h"
 #include "iir/rng.h"
 #include "iir/shadowmap.h"
+#include "gv_columns.h"
 #include "render_batch.h"
 #include "../vpls/vpl_lobe.h"
 
@@ -151,7 +152,10 @@ typedef struct indirect_ctx {
     iir_kernel_args args;   /* g_max: clamp / D^2, or INFINITY; rel_bias: sm_bias */
     iir_smap_kernel kernel; /* the renderer's instruction set's (r->isa) */
     int n;                  /* multires: the interleave n (subset k sits at (k mod n, k / n)) */
-    iir_receiver_bsdf receivers; /* which pixels reflect by their full BSDF (iir_gb_glossy) */
+    iir_receiver_bsdf receivers;     /* which pixels reflect by their full BSDF (iir_gb_glossy) */
+    iir_gv_frame gv;                 /* the kept VPLs' columns (none: gv.ref NULL) */
+    bool read_all[IIR_MAX_SUBSETS];  /* every VPL of subset k reads its column, none glossy */
+    uint32_t reads[IIR_MAX_SUBSETS]; /* subset k's VPLs that read their columns */
 } indirect_ctx;
 
 typedef iir_pixel_batch pixel_batch;
@@ -410,18 +414,46 @@ static bool collect(const indirect_ctx *c, const iir_tile *tl, int x_first, int 
 }
 
 /* Adds power G V of VPLs v[0 .. count) to every pixel of the batch: V from their maps by the
- * kernel, or by rays. */
-static void apply_vpls(const indirect_ctx *c, const iir_shade_vpl *v, uint32_t count,
-                       pixel_batch *b, iir_raystats *st)
+ * kernel (gv: their columns, or NULL), or by rays. */
+static void apply_vpls(const indirect_ctx *c, const iir_shade_vpl *v, const iir_gv_ref *gv,
+                       uint32_t count, pixel_batch *b, iir_raystats *st)
 {
     if (c->use_smap)
-        c->kernel(&c->args, v, count, b);
+        c->kernel(&c->args, v, gv, count, b);
     else
         for (uint32_t i = 0; i < count; i++) apply_vpl_rays(c, &v[i], b, st);
 }
 
-/* Shades one tile; returns the pixel-VPL pairs shaded. */
-static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *b, iir_raystats *st)
+/* Subset k's sums at the tile's pixels of class cls from the columns alone (c->read_all[k], no
+ * glossy pixel): the kernel's sums without collecting the pixels (gv_columns.h). */
+static void columns_only(const indirect_ctx *c, int t, uint32_t k, uint32_t cls, int count)
+{
+    const iir_renderer *r = c->r;
+    uint32_t n2 = r->num_subsets, ord = c->gv.ord[(size_t)t * n2 + cls];
+    const uint32_t *pixel = c->gv.pixel + c->gv.base[cls];
+    float E[3][IIR_BATCH];
+    for (int q0 = 0; q0 < count; q0 += IIR_BATCH) {
+        int m = count - q0 < IIR_BATCH ? count - q0 : IIR_BATCH;
+        iir_columns_sum_avx2(&r->vpl[r->start[k]], &c->gv.ref[r->start[k]],
+                             r->start[k + 1] - r->start[k], ord + (uint32_t)q0, m, E);
+        for (int q = 0; q < m; q++)
+            r->raw[pixel[ord + (uint32_t)q0 + (uint32_t)q]] = iir_v3(E[0][q], E[1][q], E[2][q]);
+    }
+}
+
+/* Hit pixels of class cls in tile t (columns: their ord's difference). */
+static int class_count(const indirect_ctx *c, int t, uint32_t cls, int tiles)
+{
+    uint32_t n2 = c->r->num_subsets;
+    uint32_t end = t + 1 < tiles ? c->gv.ord[(size_t)(t + 1) * n2 + cls]
+                                 : c->gv.base[cls + 1] - c->gv.base[cls];
+    return (int)(end - c->gv.ord[(size_t)t * n2 + cls]);
+}
+
+/* Shades one tile; returns the pixel-VPL pairs shaded, and adds those read from columns to
+ * *reused. */
+static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, int tiles, pixel_batch *b,
+                              iir_raystats *st, uint64_t *reused)
 {
     uint64_t evals = 0;
     const iir_renderer *r = c->r;
@@ -437,10 +469,22 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, pixel_batch *
                          (uint32_t)(n * n);
             int x = tl.x0 + i, y = tl.y0 + j;
             if (r->start[k] == r->start[k + 1]) continue;
+            uint32_t cls = (uint32_t)(((tl.y0 + j) % n) * n + (tl.x0 + i) % n);
+            if (c->gv.ref && c->read_all[k] && !c->gv.glossy[(size_t)t * r->num_subsets + cls]) {
+                int count = class_count(c, t, cls, tiles);
+                evals += (uint64_t)count * (r->start[k + 1] - r->start[k]);
+                *reused += (uint64_t)count * c->reads[k];
+                columns_only(c, t, k, cls, count);
+                continue;
+            }
+            uint32_t ord = c->gv.ref ? c->gv.ord[(size_t)t * (size_t)(n * n) + cls] : 0;
+            const iir_gv_ref *gv = c->gv.ref ? &c->gv.ref[r->start[k]] : NULL;
             while (collect(c, &tl, tl.x0 + i, n, &x, &y, b)) {
                 int m = b->m;
+                b->ord = ord, ord += (uint32_t)m;
                 evals += (uint64_t)m * (r->start[k + 1] - r->start[k]);
-                apply_vpls(c, &r->vpl[r->start[k]], r->start[k + 1] - r->start[k], b, st);
+                *reused += (uint64_t)m * c->reads[k];
+                apply_vpls(c, &r->vpl[r->start[k]], gv, r->start[k + 1] - r->start[k], b, st);
                 for (int q = 0; q < m; q++)
                     r->raw[b->index[q]] = iir_v3(b->Ex[q], b->Ey[q], b->Ez[q]);
             }
@@ -464,14 +508,23 @@ static indirect_ctx make_ctx(const iir_renderer *r, const iir_indirect_params *p
 }
 
 bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t shift,
-                         bool stoppable, iir_raystats *st, uint64_t *evals)
+                         bool stoppable, iir_raystats *st, uint64_t *evals, uint64_t *reused)
 {
     indirect_ctx c = make_ctx(r, p, shift, stoppable);
     int tiles = iir_tile_count(r->gb.width, r->gb.height, IIR_INDIRECT_TILE), n = p->interleave;
+    bool columns = c.use_smap && r->isa >= IIR_ISA_AVX2; /* the AVX2 kernel's (render_batch.h) */
+    if (columns) c.gv = iir_gv_begin(r, &c.args, n, shift, c.receivers);
+    for (uint32_t k = 0; k < r->num_subsets && c.gv.ref; k++) {
+        c.read_all[k] = true;
+        for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++) {
+            c.read_all[k] &= c.gv.ref[i].mode == IIR_GV_READ && !r->vpl[i].glossy;
+            c.reads[k] += c.gv.ref[i].mode == IIR_GV_READ;
+        }
+    }
     iir_raystats total = {0};
     int skipped = 0;
-    uint64_t sum = 0;
-#pragma omp parallel reduction(+ : skipped, sum)
+    uint64_t sum = 0, read = 0;
+#pragma omp parallel reduction(+ : skipped, sum, read)
     {
         iir_raystats local = {0};
         pixel_batch b; /* on the stack: no allocation */
@@ -481,13 +534,15 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
                 skipped = 1; /* this thread's remaining tiles are skipped without asking again */
                 continue;
             }
-            sum += indirect_tile(&c, n, t, &b, &local);
+            sum += indirect_tile(&c, n, t, tiles, &b, &local, &read);
         }
 #pragma omp critical(iir_indirect_rays)
         iir_raystats_add(&total, &local);
     }
     iir_raystats_add(st, &total);
+    if (columns) iir_gv_end(r, !skipped);
     *evals += sum;
+    *reused += read;
     return skipped > 0;
 }
 
@@ -529,7 +584,7 @@ static void apply_subset(const indirect_ctx *c, uint32_t k, int count, pixel_bat
 {
     const iir_renderer *r = c->r;
     for (int q = 0; q < iir_batch_padded(count); q++) b->Ex[q] = b->Ey[q] = b->Ez[q] = 0.f;
-    apply_vpls(c, &r->vpl[r->start[k]], r->start[k + 1] - r->start[k], b, st);
+    apply_vpls(c, &r->vpl[r->start[k]], NULL, r->start[k + 1] - r->start[k], b, st);
 }
 
 /* Shades samples of class cls of an m x m lattice: the union U of the subsets k whose lattice

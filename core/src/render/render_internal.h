@@ -74,6 +74,8 @@ struct iir_renderer {
     uint32_t num_subsets; /* n^2 */
     uint32_t start[IIR_MAX_SUBSETS + 1];
 
+    struct iir_gv_columns *gv; /* the kept VPLs' columns of G V (gv_columns.h); NULL until used */
+
     iir_isa isa;      /* the shading kernels' instruction set (iir_renderer_set_isa) */
     iir_stop_fn stop; /* refinement passes poll it; NULL = never */
     void *stop_ctx;
@@ -179,10 +181,10 @@ bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_raystats *
 iir_status iir_render_subsets(iir_renderer *r, const iir_vpl *vpls, uint32_t num_vpls,
                               const iir_indirect_params *p, bool exact_mean, iir_error *err);
 /* With `stoppable`, each tile first polls r->stop and is skipped once it said stop; returns true
- * when tiles were skipped (r->raw is then incomplete). Adds the pixel-VPL pairs shaded to *evals.
- */
+ * when tiles were skipped (r->raw is then incomplete). Adds the pixel-VPL pairs shaded to *evals,
+ * and those of them whose G V a kept VPL's column held (gv_columns.h) to *reused. */
 bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t shift,
-                         bool stoppable, iir_raystats *st, uint64_t *evals);
+                         bool stoppable, iir_raystats *st, uint64_t *evals, uint64_t *reused);
 /* Multires (r->mr built for this frame's G-buffer): the VPL sum as multires.h's client -- level-0
  * pixels into r->raw as iir_render_indirect shades them (pixel (x, y) evaluating subset
  * (y mod n) n + (x mod n)), coarse texels by their level's lattice into r->mr (multires.h), whose

@@ -2,6 +2,8 @@
  * the vector kernels are tested against, and the choice of kernel by instruction set. */
 #include "render_batch.h"
 
+#include <assert.h>
+
 static void apply_one(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b)
 {
     iir_smap_probe probe = iir_smap_probe_make(v->smap, a->rel_bias, a->eps);
@@ -21,9 +23,11 @@ static void apply_one(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixe
     }
 }
 
-void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
-                           iir_pixel_batch *b)
+void iir_apply_smap_scalar(const iir_kernel_args *a, const iir_shade_vpl *v, const iir_gv_ref *gv,
+                           uint32_t count, iir_pixel_batch *b)
 {
+    assert(!gv && "the scalar kernel takes no columns");
+    (void)gv;
     for (uint32_t i = 0; i < count; i++) apply_one(a, &v[i], b);
 }
 

@@ -151,44 +151,116 @@ static void geometry_pass(const iir_kernel_args *a, const iir_shade_vpl *v,
     }
 }
 
-/* One VPL's lookups (its geometry pass in L): power G V into the batch. */
+/* Lanes j.. of the batch (those below b->m) of a column at col (the batch's first pixel's). */
+static inline __m256i below_m(const iir_pixel_batch *b, int j)
+{
+    __m256i lane =
+        _mm256_add_epi32(_mm256_set1_epi32(j), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    return _mm256_cmpgt_epi32(_mm256_set1_epi32(b->m), lane);
+}
+static inline void store_column(float *col, const iir_pixel_batch *b, int j, __m256 GV)
+{
+    if (j + 8 <= b->m)
+        _mm256_storeu_ps(col + j, GV);
+    else
+        _mm256_maskstore_ps(col + j, below_m(b, j), GV);
+}
+static inline __m256 load_column(const float *col, const iir_pixel_batch *b, int j)
+{
+    return j + 8 <= b->m ? _mm256_loadu_ps(col + j) : _mm256_maskload_ps(col + j, below_m(b, j));
+}
+
+/* Power times G V (lanes j..j+7) into the batch, the glossy lanes through their BSDFs. */
+static inline void add_power(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b,
+                             int j, __m256 GV)
+{
+    if (b->glossy[j >> 3] || v->glossy) GV = glossy_lanes(a, v, b, j, GV);
+    _mm256_store_ps(b->Ex + j,
+                    _mm256_fmadd_ps(_mm256_set1_ps(v->power.x), GV, _mm256_load_ps(b->Ex + j)));
+    _mm256_store_ps(b->Ey + j,
+                    _mm256_fmadd_ps(_mm256_set1_ps(v->power.y), GV, _mm256_load_ps(b->Ey + j)));
+    _mm256_store_ps(b->Ez + j,
+                    _mm256_fmadd_ps(_mm256_set1_ps(v->power.z), GV, _mm256_load_ps(b->Ez + j)));
+}
+
+/* One VPL's lookups (its geometry pass in L): power G V into the batch, and G V into its column
+ * when col is not NULL (0 where no lane is lit). */
 static void lookup_pass(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b,
-                        const lookups *L)
+                        const lookups *L, float *col)
 {
     iir_smap_probe probe = iir_smap_probe_make(v->smap, a->rel_bias, a->eps);
-    __m256 Px = _mm256_set1_ps(v->power.x), Py = _mm256_set1_ps(v->power.y),
-           Pz = _mm256_set1_ps(v->power.z);
     for (int j = 0, end = iir_batch_padded(b->m); j < end; j += 8) {
-        if (!L->any[j >> 3]) continue;
+        if (!L->any[j >> 3]) {
+            if (col) store_column(col, b, j, _mm256_setzero_ps());
+            continue;
+        }
         __m256 V = pcf8(&probe, _mm256_load_ps(L->S + j), _mm256_load_ps(L->T + j),
                         _mm256_load_ps(L->DMB + j));
         __m256 GV = _mm256_mul_ps(_mm256_load_ps(L->G + j), V); /* G is 0 on unlit lanes */
-        if (b->glossy[j >> 3] || v->glossy) GV = glossy_lanes(a, v, b, j, GV);
-        _mm256_store_ps(b->Ex + j, _mm256_fmadd_ps(Px, GV, _mm256_load_ps(b->Ex + j)));
-        _mm256_store_ps(b->Ey + j, _mm256_fmadd_ps(Py, GV, _mm256_load_ps(b->Ey + j)));
-        _mm256_store_ps(b->Ez + j, _mm256_fmadd_ps(Pz, GV, _mm256_load_ps(b->Ez + j)));
+        if (col) store_column(col, b, j, GV);
+        add_power(a, v, b, j, GV);
+    }
+}
+
+/* One VPL's G V read from its column: the same sums as lookup_pass's (a group of 0s adds
+ * nothing either way). */
+static void column_pass(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixel_batch *b,
+                        const float *col)
+{
+    for (int j = 0, end = iir_batch_padded(b->m); j < end; j += 8) {
+        __m256 GV = load_column(col, b, j);
+        if (_mm256_movemask_ps(_mm256_cmp_ps(GV, _mm256_setzero_ps(), _CMP_NEQ_UQ)))
+            add_power(a, v, b, j, GV);
+    }
+}
+
+void iir_columns_sum_avx2(const iir_shade_vpl *v, const iir_gv_ref *gv, uint32_t count,
+                          uint32_t ord, int m, float (*E)[IIR_BATCH])
+{
+    for (int j = 0; j < m; j += 8) {
+        __m256i in =
+            _mm256_cmpgt_epi32(_mm256_set1_epi32(m - j), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        __m256 x = _mm256_setzero_ps(), y = x, z = x;
+        for (uint32_t i = 0; i < count; i++) {
+            const float *col = gv[i].col + ord + j;
+            __m256 GV = j + 8 <= m ? _mm256_loadu_ps(col) : _mm256_maskload_ps(col, in);
+            x = _mm256_fmadd_ps(_mm256_set1_ps(v[i].power.x), GV, x);
+            y = _mm256_fmadd_ps(_mm256_set1_ps(v[i].power.y), GV, y);
+            z = _mm256_fmadd_ps(_mm256_set1_ps(v[i].power.z), GV, z);
+        }
+        _mm256_storeu_ps(E[0] + j, x), _mm256_storeu_ps(E[1] + j, y), _mm256_storeu_ps(E[2] + j, z);
     }
 }
 
 /* Software-pipelined over the VPLs: VPL i's geometry pass (asking for its texels) runs before VPL
- * i - 1's lookups, so each VPL's lines have a whole pass's time to arrive. */
-void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
-                         iir_pixel_batch *b)
+ * i - 1's lookups, so each VPL's lines have a whole pass's time to arrive; a VPL whose column is
+ * read waits for the one before it, so that every pixel adds the VPLs in their order. */
+void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, const iir_gv_ref *gv,
+                         uint32_t count, iir_pixel_batch *b)
 {
     lookups L[2];
     int cur = 0;
     const iir_shade_vpl *pending = NULL; /* its geometry pass is in L[1 - cur] */
+    float *pending_col = NULL;
     for (uint32_t i = 0; i < count; i++) {
-        if (v[i].smap->res < 2) { /* pcf8's footprint needs two texels a side */
-            iir_apply_smap_scalar(a, &v[i], 1, b);
+        iir_gv_mode mode = gv ? gv[i].mode : IIR_GV_NONE;
+        if (v[i].smap->res < 2) { /* pcf8's footprint needs two texels a side (no column) */
+            iir_apply_smap_scalar(a, &v[i], NULL, 1, b);
+            continue;
+        }
+        if (mode == IIR_GV_READ) {
+            if (pending) lookup_pass(a, pending, b, &L[1 - cur], pending_col);
+            pending = NULL;
+            column_pass(a, &v[i], b, gv[i].col + b->ord);
             continue;
         }
         geometry_pass(a, &v[i], b, &L[cur]);
-        if (pending) lookup_pass(a, pending, b, &L[1 - cur]);
+        if (pending) lookup_pass(a, pending, b, &L[1 - cur], pending_col);
         pending = &v[i];
+        pending_col = mode == IIR_GV_WRITE ? gv[i].col + b->ord : NULL;
         cur = 1 - cur;
     }
-    if (pending) lookup_pass(a, pending, b, &L[1 - cur]);
+    if (pending) lookup_pass(a, pending, b, &L[1 - cur], pending_col);
 }
 
 #endif

@@ -2,6 +2,8 @@
  * every x86-64 CPU (render_batch.h): the texel loads are scalar (SSE2 has no gather). */
 #include "render_batch.h"
 
+#include <assert.h>
+
 #if defined(__x86_64__)
 #include <emmintrin.h>
 
@@ -117,9 +119,11 @@ static void apply_one(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pixe
     }
 }
 
-void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, uint32_t count,
-                         iir_pixel_batch *b)
+void iir_apply_smap_sse2(const iir_kernel_args *a, const iir_shade_vpl *v, const iir_gv_ref *gv,
+                         uint32_t count, iir_pixel_batch *b)
 {
+    assert(!gv && "the SSE2 kernel takes no columns");
+    (void)gv;
     for (uint32_t i = 0; i < count; i++) apply_one(a, &v[i], b);
 }
 

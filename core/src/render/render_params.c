@@ -8,6 +8,7 @@
 
 #include "iir/render.h"
 #include "iir/vpl.h"
+#include "gv_columns.h"
 #include "light_tree.h"
 
 static const char *const VISIBILITY_CHOICES[] = {"shadowmap", "rays", "ism", NULL};
@@ -167,6 +168,15 @@ iir_indirect_params iir_indirect_params_default(void)
     iir_params_defaults(&iir_multires_table, &p.mr);
     p.bounces = 2;
     return p;
+}
+
+uint64_t iir_gv_memory(const iir_indirect_params *o, uint32_t n, int width, int height)
+{
+    if (o->shading != IIR_SHADING_FULL || o->visibility == IIR_VIS_RAYS) return 0;
+    uint64_t n2 = (uint64_t)o->interleave * (uint64_t)o->interleave;
+    uint64_t column = ((uint64_t)width * (uint64_t)height + n2 - 1) / n2 * sizeof(float);
+    uint64_t bytes = (uint64_t)n * column;
+    return bytes < IIR_GV_BUDGET ? bytes : IIR_GV_BUDGET;
 }
 
 uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int height)

@@ -43,6 +43,12 @@ static void trace_run(const iir_rt *rt, const iir_vpl *v, iir_vec3 org, int i0, 
         row[i0 + k] = iir_half_from_float(hits[k].t * inv_scale);
 }
 
+uint64_t iir_smap_next_stamp(void)
+{
+    static _Atomic uint64_t next = 1;
+    return next++;
+}
+
 bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, iir_raystats *st)
 {
     assert(res >= 1 && res <= IIR_SMAP_MAX_RES && "iir_smap_render: resolution out of range");
@@ -59,6 +65,7 @@ bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, i
                       st);
     m->res = res;
     m->coarse = false;
+    m->stamp = iir_smap_next_stamp();
     return true;
 }
 

@@ -156,6 +156,7 @@ bool iir_ism_render(iir_smap *m, const iir_ism_points *pts, const iir_vpl *v,
     m->scale = iir_smap_scale(eps);
     for (size_t k = 0; k < texels; k++) m->depth[k] = iir_half_from_float(depth[k] / m->scale);
     m->res = p->res;
+    m->stamp = iir_smap_next_stamp();
     return true;
 }
 
