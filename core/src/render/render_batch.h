@@ -72,10 +72,10 @@ void iir_apply_smap_avx2(const iir_kernel_args *a, const iir_shade_vpl *v, const
 
 /* The AVX2 kernel's sums for a run of m pixels whose every VPL of v[0 .. count) reads its column
  * (gv[i].mode IIR_GV_READ), none of them glossy nor any pixel: power G V from the columns from
- * ord on, into E (x, y, z planes of IIR_BATCH floats; m <= IIR_BATCH) -- the kernel's sums to the
- * bit without its batch. */
+ * ord on, into Ex, Ey, Ez (set, up to m rounded up to whole lanes, 0 beyond m; m <= IIR_BATCH)
+ * -- the kernel's sums to the bit without its batch. */
 void iir_columns_sum_avx2(const iir_shade_vpl *v, const iir_gv_ref *gv, uint32_t count,
-                          uint32_t ord, int m, float (*E)[IIR_BATCH]);
+                          uint32_t ord, int m, float *Ex, float *Ey, float *Ez);
 
 /* A vector kernel's lanes j .. j + lanes - 1 with G V in g: those through a BSDF (a glossy pixel,
  * or every lane for a glossy VPL) are added by iir_batch_add_lit and zeroed in g; the caller adds

@@ -152,10 +152,11 @@ typedef struct indirect_ctx {
     iir_kernel_args args;   /* g_max: clamp / D^2, or INFINITY; rel_bias: sm_bias */
     iir_smap_kernel kernel; /* the renderer's instruction set's (r->isa) */
     int n;                  /* multires: the interleave n (subset k sits at (k mod n, k / n)) */
-    iir_receiver_bsdf receivers;     /* which pixels reflect by their full BSDF (iir_gb_glossy) */
-    iir_gv_frame gv;                 /* the kept VPLs' columns (none: gv.ref NULL) */
-    bool read_all[IIR_MAX_SUBSETS];  /* every VPL of subset k reads its column, none glossy */
-    uint32_t reads[IIR_MAX_SUBSETS]; /* subset k's VPLs that read their columns */
+    iir_receiver_bsdf receivers;      /* which pixels reflect by their full BSDF (iir_gb_glossy) */
+    iir_gv_frame gv;                  /* the kept VPLs' columns (none: gv.ref NULL) */
+    uint32_t prefix[IIR_MAX_SUBSETS]; /* subset k's leading VPLs that read their columns and are
+                                         not glossy (all of them: the columns alone shade it) */
+    uint32_t reads[IIR_MAX_SUBSETS];  /* subset k's VPLs that read their columns */
 } indirect_ctx;
 
 typedef iir_pixel_batch pixel_batch;
@@ -424,18 +425,20 @@ static void apply_vpls(const indirect_ctx *c, const iir_shade_vpl *v, const iir_
         for (uint32_t i = 0; i < count; i++) apply_vpl_rays(c, &v[i], b, st);
 }
 
-/* Subset k's sums at the tile's pixels of class cls from the columns alone (c->read_all[k], no
- * glossy pixel): the kernel's sums without collecting the pixels (gv_columns.h). */
+/* Subset k's sums at the tile's pixels of class cls from the columns alone (every VPL of it in
+ * c->prefix[k], no glossy pixel): the kernel's sums without collecting the pixels
+ * (gv_columns.h). */
 static void columns_only(const indirect_ctx *c, int t, uint32_t k, uint32_t cls, int count)
 {
     const iir_renderer *r = c->r;
     uint32_t n2 = r->num_subsets, ord = c->gv.ord[(size_t)t * n2 + cls];
     const uint32_t *pixel = c->gv.pixel + c->gv.base[cls];
-    float E[3][IIR_BATCH];
+    _Alignas(32) float E[3][IIR_BATCH];
     for (int q0 = 0; q0 < count; q0 += IIR_BATCH) {
         int m = count - q0 < IIR_BATCH ? count - q0 : IIR_BATCH;
         iir_columns_sum_avx2(&r->vpl[r->start[k]], &c->gv.ref[r->start[k]],
-                             r->start[k + 1] - r->start[k], ord + (uint32_t)q0, m, E);
+                             r->start[k + 1] - r->start[k], ord + (uint32_t)q0, m, E[0], E[1],
+                             E[2]);
         for (int q = 0; q < m; q++)
             r->raw[pixel[ord + (uint32_t)q0 + (uint32_t)q]] = iir_v3(E[0][q], E[1][q], E[2][q]);
     }
@@ -470,11 +473,14 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, int tiles, pi
             int x = tl.x0 + i, y = tl.y0 + j;
             if (r->start[k] == r->start[k + 1]) continue;
             uint32_t cls = (uint32_t)(((tl.y0 + j) % n) * n + (tl.x0 + i) % n);
-            if (c->gv.ref && c->read_all[k] && !c->gv.glossy[(size_t)t * r->num_subsets + cls]) {
-                int count = class_count(c, t, cls, tiles);
-                evals += (uint64_t)count * (r->start[k + 1] - r->start[k]);
-                *reused += (uint64_t)count * c->reads[k];
-                columns_only(c, t, k, cls, count);
+            uint32_t count = r->start[k + 1] - r->start[k];
+            bool plain = c->gv.ref && !c->gv.glossy[(size_t)t * r->num_subsets + cls];
+            uint32_t lead = plain ? c->prefix[k] : 0; /* VPLs summed from columns alone */
+            if (lead == count) {
+                int pixels = class_count(c, t, cls, tiles);
+                evals += (uint64_t)pixels * count;
+                *reused += (uint64_t)pixels * c->reads[k];
+                columns_only(c, t, k, cls, pixels);
                 continue;
             }
             uint32_t ord = c->gv.ref ? c->gv.ord[(size_t)t * (size_t)(n * n) + cls] : 0;
@@ -482,9 +488,13 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, int tiles, pi
             while (collect(c, &tl, tl.x0 + i, n, &x, &y, b)) {
                 int m = b->m;
                 b->ord = ord, ord += (uint32_t)m;
-                evals += (uint64_t)m * (r->start[k + 1] - r->start[k]);
+                evals += (uint64_t)m * count;
                 *reused += (uint64_t)m * c->reads[k];
-                apply_vpls(c, &r->vpl[r->start[k]], gv, r->start[k + 1] - r->start[k], b, st);
+                if (lead)
+                    iir_columns_sum_avx2(&r->vpl[r->start[k]], gv, lead, b->ord, m, b->Ex, b->Ey,
+                                         b->Ez);
+                apply_vpls(c, &r->vpl[r->start[k] + lead], gv ? gv + lead : NULL, count - lead, b,
+                           st);
                 for (int q = 0; q < m; q++)
                     r->raw[b->index[q]] = iir_v3(b->Ex[q], b->Ey[q], b->Ez[q]);
             }
@@ -515,9 +525,10 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
     bool columns = c.use_smap && r->isa >= IIR_ISA_AVX2; /* the AVX2 kernel's (render_batch.h) */
     if (columns) c.gv = iir_gv_begin(r, &c.args, n, shift, c.receivers);
     for (uint32_t k = 0; k < r->num_subsets && c.gv.ref; k++) {
-        c.read_all[k] = true;
+        bool leading = true;
         for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++) {
-            c.read_all[k] &= c.gv.ref[i].mode == IIR_GV_READ && !r->vpl[i].glossy;
+            leading &= c.gv.ref[i].mode == IIR_GV_READ && !r->vpl[i].glossy;
+            c.prefix[k] += leading;
             c.reads[k] += c.gv.ref[i].mode == IIR_GV_READ;
         }
     }

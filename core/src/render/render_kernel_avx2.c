@@ -215,7 +215,7 @@ static void column_pass(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pi
 }
 
 void iir_columns_sum_avx2(const iir_shade_vpl *v, const iir_gv_ref *gv, uint32_t count,
-                          uint32_t ord, int m, float (*E)[IIR_BATCH])
+                          uint32_t ord, int m, float *Ex, float *Ey, float *Ez)
 {
     for (int j = 0; j < m; j += 8) {
         __m256i in =
@@ -228,7 +228,7 @@ void iir_columns_sum_avx2(const iir_shade_vpl *v, const iir_gv_ref *gv, uint32_t
             y = _mm256_fmadd_ps(_mm256_set1_ps(v[i].power.y), GV, y);
             z = _mm256_fmadd_ps(_mm256_set1_ps(v[i].power.z), GV, z);
         }
-        _mm256_storeu_ps(E[0] + j, x), _mm256_storeu_ps(E[1] + j, y), _mm256_storeu_ps(E[2] + j, z);
+        _mm256_storeu_ps(Ex + j, x), _mm256_storeu_ps(Ey + j, y), _mm256_storeu_ps(Ez + j, z);
     }
 }
 
