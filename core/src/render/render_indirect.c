@@ -462,16 +462,23 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, int tiles, pi
     const iir_renderer *r = c->r;
     const iir_gbuffer *gb = &r->gb;
     iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_INDIRECT_TILE, t);
-    for (int y = tl.y0; y < tl.y1; y++)
-        for (int x = tl.x0; x < tl.x1; x++)
-            r->raw[(size_t)y * (size_t)gb->width + (size_t)x] = iir_v3s(0.f);
+    for (int y = tl.y0; y < tl.y1; y++) /* the background (every other pixel is written) */
+        for (int x = tl.x0; x < tl.x1; x++) {
+            size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
+            if (gb->prim[i] == IIR_NO_HIT) r->raw[i] = iir_v3s(0.f);
+        }
     /* The lattice through (x0 + i, y0 + j) is one subset. */
     for (int j = 0; j < n && tl.y0 + j < tl.y1; j++)
         for (int i = 0; i < n && tl.x0 + i < tl.x1; i++) {
             uint32_t k = ((uint32_t)(((tl.y0 + j) % n) * n + (tl.x0 + i) % n) + c->shift) %
                          (uint32_t)(n * n);
             int x = tl.x0 + i, y = tl.y0 + j;
-            if (r->start[k] == r->start[k + 1]) continue;
+            if (r->start[k] == r->start[k + 1]) { /* no light on its lattice */
+                for (int yy = y; yy < tl.y1; yy += n)
+                    for (int xx = x; xx < tl.x1; xx += n)
+                        r->raw[(size_t)yy * (size_t)gb->width + (size_t)xx] = iir_v3s(0.f);
+                continue;
+            }
             uint32_t cls = (uint32_t)(((tl.y0 + j) % n) * n + (tl.x0 + i) % n);
             uint32_t count = r->start[k + 1] - r->start[k];
             bool plain = c->gv.ref && !c->gv.glossy[(size_t)t * r->num_subsets + cls];
