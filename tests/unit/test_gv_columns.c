@@ -1,10 +1,10 @@
 /* test_gv_columns.c -- the kept VPLs' columns (render/gv_columns.h): a renderer that keeps them
  * from frame to frame gives, to the bit, the frames of a renderer that evaluates every pixel-VPL
  * pair anew -- while an iir set follows a moving light (Cornell box, interleave 3, a brass corner
- * with glossy receivers and VPLs, virtual spherical lights), after VPLs' maps are rendered again, a
- * VPL moved under its old map, the camera moved, fluxes changed and a frame stopped half-way -- and
- * it does read most pairs from them once the set is kept. The columns are the AVX2 kernel's: on a
- * machine without AVX2 the tests are skipped. */
+ * with glossy receivers and VPLs, virtual spherical lights, multires shading), after VPLs' maps are
+ * rendered again, a VPL moved under its old map, the camera moved, fluxes changed and a frame
+ * stopped half-way -- and it does read most pairs from them once the set is kept. The columns are
+ * the AVX2 kernel's: on a machine without AVX2 the tests are skipped. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -93,6 +93,19 @@ static void test_cornell(void **state)
     follow_light(*state, &p, "cornell");
     p.interleave = 3; /* lattices that do not tile the 64-pixel tiles */
     follow_light(*state, &p, "cornell, interleave 3");
+}
+
+/* Multires: the columns run over the hierarchy's work items (its coarse texels and the pixels it
+ * leaves at full resolution). */
+static void test_multires(void **state)
+{
+    if (!have_avx2()) skip();
+    iir_indirect_params p = iir_indirect_params_default();
+    p.shading = IIR_SHADING_MULTIRES;
+    follow_light(*state, &p, "cornell, multires");
+    iir_test_cornell f = iir_test_brass_corner();
+    follow_light(&f, &p, "brass corner, multires");
+    iir_test_unload(&f);
 }
 
 static void test_glossy(void **state)
@@ -237,9 +250,8 @@ static void test_stopped_frame(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_cornell),
-        cmocka_unit_test(test_glossy),
-        cmocka_unit_test(test_invalidation),
+        cmocka_unit_test(test_cornell),       cmocka_unit_test(test_glossy),
+        cmocka_unit_test(test_multires),      cmocka_unit_test(test_invalidation),
         cmocka_unit_test(test_stopped_frame),
     };
     return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);

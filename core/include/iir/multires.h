@@ -65,10 +65,13 @@ typedef struct iir_mr_sample {
 /* Evaluates count (<= IIR_MR_BATCH) samples of class cls = cy m + cx of an m x m lattice (m
  * divides nothing in particular: the class unites the caller's n x n classes (kx, ky) with
  * kx mod m = cx and ky mod m = cy; m = 1: all of them) into E[0 .. count) and returns the
- * evaluations it made (the VPL sum: sample-VPL pairs). Called from several threads at once with
- * the same ctx (which it must only read) and the calling thread's own ray counters st. */
-typedef uint64_t (*iir_mr_shade_fn)(void *ctx, int m, uint32_t cls, const iir_mr_sample *s,
-                                    int count, iir_vec3 *E, iir_raystats *st);
+ * evaluations it made (the VPL sum: sample-VPL pairs). The samples are work item `item` of the
+ * hierarchy (iir_multires_item): the same ones, in the same order, every frame of one generation.
+ * Called from several threads at once with the same ctx (which it must only read) and the calling
+ * thread's own ray counters st. */
+typedef uint64_t (*iir_mr_shade_fn)(void *ctx, int item, int m, uint32_t cls,
+                                    const iir_mr_sample *s, int count, iir_vec3 *E,
+                                    iir_raystats *st);
 
 typedef struct iir_multires iir_multires;
 
@@ -94,6 +97,11 @@ const uint8_t *iir_multires_levels(const iir_multires *mr);
 /* How many times the hierarchy was (re)built: it changes exactly when the levels may have, so a
  * caller can keep what it derives from them (0 before the first build). */
 uint64_t iir_multires_generation(const iir_multires *mr);
+
+/* The hierarchy's work items (coarse levels' first, then level 0's): how many; and item u's
+ * lattice m, class cls and sample count, as iir_mr_shade_fn gets them. */
+int iir_multires_items(const iir_multires *mr);
+void iir_multires_item(const iir_multires *mr, int u, int *m, uint32_t *cls, int *count);
 
 /* Level l's size in texels (l = 0: pixels); 0 x 0 before a build. */
 void iir_multires_level_size(const iir_multires *mr, int l, int *w, int *h);

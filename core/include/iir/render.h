@@ -22,7 +22,8 @@
  *     block exactly, but light unbalanced subsets unevenly.) For balanced subsets both agree. A
  *     subset with no VPL contributes nothing, and the filter does not count its pixels.
  *     A VPL kept from frame to frame under a still camera (iir's) keeps its min(G_i, ...) V_i
- *     at its subset's pixels in a column (render/gv_columns.h: AVX2, full shading, shadow maps):
+ *     at its subset's pixels in a column (render/gv_columns.h: AVX2, shadow maps; multires: at
+ *     the hierarchy's samples):
  *     from its third frame on, the sum takes them from there and multiplies by this frame's
  *     flux -- the same floats in the same order, so the same frame to the bit.
  *  4. Filter (interleave > 1, filter on): a geometry-aware box over the neighbourhood that holds
@@ -207,9 +208,10 @@ extern const iir_param_table iir_multires_table;
 /* Bytes of the VPL renderer (G-buffer, scratch, refinement buffers) for a frame, and of n VPLs
  * with their shadow maps under these settings: the VPL methods' memory estimates share them. */
 uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int height);
-/* Bytes of the columns a renderer keeps for n VPLs kept from frame to frame (full shading with
- * shadow maps: a float per VPL and pixel of its subset), at most the renderer's budget for them
- * (256 MB): what a method whose VPLs outlive a frame (iir) adds to iir_vpl_memory. */
+/* Bytes of the columns a renderer keeps for n VPLs kept from frame to frame (shadow maps: a float
+ * per VPL and pixel of its subset, or multires sample it is evaluated at), at most the renderer's
+ * budget for them (256 MB): what a method whose VPLs outlive a frame (iir) adds to
+ * iir_vpl_memory. */
 uint64_t iir_gv_memory(const iir_indirect_params *o, uint32_t n, int width, int height);
 
 /* The interleaving subset of VPL `id` among n2 subsets: Fibonacci hashing of the id, so

@@ -99,10 +99,10 @@ static iir_vec3 bounce_point(const hier_state *s, const rsm_receiver *q, uint64_
 }
 
 /* multires.h's callback: every sample evaluates everything (no interleaving). */
-static uint64_t shade_samples(void *ctx, int m, uint32_t cls, const iir_mr_sample *smp, int count,
-                              iir_vec3 *E, iir_raystats *st)
+static uint64_t shade_samples(void *ctx, int item, int m, uint32_t cls, const iir_mr_sample *smp,
+                              int count, iir_vec3 *E, iir_raystats *st)
 {
-    (void)m, (void)cls, (void)st;
+    (void)item, (void)m, (void)cls, (void)st;
     const hier_state *s = ctx;
     uint64_t evals = 0;
     for (int i = 0; i < count; i++) {

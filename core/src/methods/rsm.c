@@ -254,10 +254,10 @@ static iir_status shade_lowres(rsm_state *s, const iir_gbuffer *gb, iir_image *o
 /* ---- shading on the hierarchy (shading = multires) ---- */
 
 /* multires.h's callback: every sample gathers from every map (no interleaving). */
-static uint64_t gather_samples(void *ctx, int m, uint32_t cls, const iir_mr_sample *smp, int count,
-                               iir_vec3 *E, iir_raystats *st)
+static uint64_t gather_samples(void *ctx, int item, int m, uint32_t cls, const iir_mr_sample *smp,
+                               int count, iir_vec3 *E, iir_raystats *st)
 {
-    (void)m, (void)cls, (void)st;
+    (void)item, (void)m, (void)cls, (void)st;
     const rsm_state *s = ctx;
     for (int i = 0; i < count; i++) {
         E[i] = iir_v3s(0.f);

@@ -19,7 +19,7 @@ typedef struct slot {
 
 /* What every column depends on besides its VPL. */
 typedef struct epoch {
-    uint64_t gb_serial;
+    uint64_t gb_serial, mr_generation; /* multires: the hierarchy's (its items); full: 0 */
     int width, height, n;
     float g_max, rel_bias, eps;
     iir_receiver_bsdf receivers;
@@ -31,7 +31,8 @@ struct iir_gv_columns {
     uint32_t *pixel; /* per hit pixel, by class: gv_columns.h's pixel */
     uint8_t *glossy; /* per (tile, class) */
     uint32_t base[IIR_MAX_SUBSETS + 1];
-    uint32_t len; /* the longest class's hit pixels: every column's length */
+    uint32_t len;                    /* the longest slot's samples: every column's length */
+    uint32_t total[IIR_MAX_SUBSETS]; /* per slot (class or subset): its samples */
     slot *slots;
     uint32_t num_slots, slot_cap;
     uint32_t *hash; /* open addressing by stamp: slot index + 1, 0 empty */
@@ -101,6 +102,7 @@ static bool count_pixels(iir_gv_columns *c, const iir_gbuffer *gb, int n)
     c->base[0] = 0;
     for (uint32_t k = 0; k < n2; k++) {
         c->len = next[k] > c->len ? next[k] : c->len;
+        c->total[k] = next[k];
         c->base[k + 1] = c->base[k] + next[k];
         next[k] = 0;
     }
@@ -112,9 +114,9 @@ static bool count_pixels(iir_gv_columns *c, const iir_gbuffer *gb, int n)
 
 static bool same_epoch(const epoch *a, const epoch *b)
 {
-    return a->gb_serial == b->gb_serial && a->width == b->width && a->height == b->height &&
-           a->n == b->n && a->g_max == b->g_max && a->rel_bias == b->rel_bias && a->eps == b->eps &&
-           a->receivers == b->receivers;
+    return a->gb_serial == b->gb_serial && a->mr_generation == b->mr_generation &&
+           a->width == b->width && a->height == b->height && a->n == b->n && a->g_max == b->g_max &&
+           a->rel_bias == b->rel_bias && a->eps == b->eps && a->receivers == b->receivers;
 }
 
 static uint32_t hash_of(uint64_t stamp, uint32_t cap)
@@ -221,27 +223,62 @@ static iir_gv_ref assign(iir_gv_columns *c, const iir_shade_vpl *v, uint32_t cls
     return (iir_gv_ref){s->col, IIR_GV_WRITE};
 }
 
-/* The epoch of r's G-buffer and the frame's constants; a new one drops every column. */
-static bool enter_epoch(iir_gv_columns *c, const iir_renderer *r, const iir_kernel_args *a, int n,
-                        iir_receiver_bsdf receivers)
+/* ord and len for multires's work items: item u's samples in the columns of every subset its
+ * class unites (the other entries unused). */
+static bool count_items(iir_gv_columns *c, const iir_multires *mr, int n)
 {
-    epoch e = {r->gb_serial, r->gb.width, r->gb.height, n,
-               a->g_max,     a->rel_bias, a->eps,       receivers};
+    uint32_t n2 = (uint32_t)(n * n), total[IIR_MAX_SUBSETS] = {0};
+    int items = iir_multires_items(mr);
+    free(c->ord), free(c->pixel), free(c->glossy);
+    c->pixel = NULL, c->glossy = NULL;
+    c->ord = malloc(sizeof *c->ord * ((size_t)items * n2 + 1));
+    if (!c->ord) return false;
+    for (int u = 0; u < items; u++) {
+        int m, count;
+        uint32_t cls;
+        iir_multires_item(mr, u, &m, &cls, &count);
+        for (uint32_t k = 0; k < n2; k++) {
+            bool united = k % (uint32_t)n % (uint32_t)m == cls % (uint32_t)m &&
+                          k / (uint32_t)n % (uint32_t)m == cls / (uint32_t)m;
+            c->ord[(size_t)u * n2 + k] = total[k];
+            if (united) total[k] += (uint32_t)count;
+        }
+    }
+    c->len = 0;
+    for (uint32_t k = 0; k < n2; k++) c->len = total[k] > c->len ? total[k] : c->len;
+    memcpy(c->total, total, sizeof total);
+    return true;
+}
+
+/* The epoch of r's G-buffer (and hierarchy, mr not NULL) and the frame's constants; a new one
+ * drops every column. */
+static bool enter_epoch(iir_gv_columns *c, const iir_renderer *r, const iir_kernel_args *a, int n,
+                        iir_receiver_bsdf receivers, const iir_multires *mr)
+{
+    epoch e = {r->gb_serial,
+               mr ? iir_multires_generation(mr) : 0,
+               r->gb.width,
+               r->gb.height,
+               n,
+               a->g_max,
+               a->rel_bias,
+               a->eps,
+               receivers};
     if (c->ord && same_epoch(&e, &c->at)) return true;
     drop_all(c);
     c->at = e;
-    return count_pixels(c, &r->gb, n);
+    return mr ? count_items(c, mr, n) : count_pixels(c, &r->gb, n);
 }
 
-iir_gv_frame iir_gv_begin(iir_renderer *r, const iir_kernel_args *a, int n, uint32_t shift,
-                          iir_receiver_bsdf receivers)
+iir_gv_frame iir_gv_begin(iir_renderer *r, iir_gv_columns **cp, const iir_kernel_args *a, int n,
+                          uint32_t shift, iir_receiver_bsdf receivers, const iir_multires *mr)
 {
     iir_gv_frame none = {0};
-    if (!r->gv && !(r->gv = calloc(1, sizeof *r->gv))) return none;
-    iir_gv_columns *c = r->gv;
+    if (!*cp && !(*cp = calloc(1, sizeof **cp))) return none;
+    iir_gv_columns *c = *cp;
     uint32_t n2 = (uint32_t)(n * n), used = r->start[r->num_subsets];
     c->frame++;
-    if (!enter_epoch(c, r, a, n, receivers) || !keep_recent(c, used)) {
+    if (!enter_epoch(c, r, a, n, receivers, mr) || !keep_recent(c, used)) {
         drop_all(c);
         free(c->ord), c->ord = NULL; /* a new epoch next time */
         return none;
@@ -254,12 +291,11 @@ iir_gv_frame iir_gv_begin(iir_renderer *r, const iir_kernel_args *a, int n, uint
     for (uint32_t k = 0; k < r->num_subsets; k++)
         for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++)
             c->ref[i] = assign(c, &r->vpl[i], (k + n2 - shift % n2) % n2);
-    return (iir_gv_frame){c->ref, c->ord, c->pixel, c->base, c->glossy};
+    return (iir_gv_frame){c->ref, c->ord, c->pixel, c->base, c->glossy, c->total};
 }
 
-void iir_gv_end(iir_renderer *r, bool complete)
+void iir_gv_end(iir_gv_columns *c, bool complete)
 {
-    iir_gv_columns *c = r->gv;
     if (!c) return;
     for (uint32_t i = 0; i < c->num_slots; i++) {
         slot *s = &c->slots[i];

@@ -522,6 +522,17 @@ iir_status iir_multires_build(iir_multires *mr, const iir_gbuffer *gb, uint64_t 
 
 /* ---- queries ---- */
 
+int iir_multires_items(const iir_multires *mr)
+{
+    return mr->valid ? mr->num_coarse + mr->num_fine : 0;
+}
+
+void iir_multires_item(const iir_multires *mr, int u, int *m, uint32_t *cls, int *count)
+{
+    const mr_item *it = &mr->items[u];
+    *m = mr->lv[it->l].n, *cls = it->cls, *count = (int)(it->end - it->begin);
+}
+
 uint64_t iir_multires_generation(const iir_multires *mr)
 {
     return mr->generation;
@@ -570,16 +581,17 @@ static iir_mr_sample pixel_sample(const iir_gbuffer *gb, uint32_t i)
     return (iir_mr_sample){gb->position[i], gb->normal[i], gb->albedo[i], i};
 }
 
-/* Evaluates one item into its level's E (level 0: into out); returns the evaluations. */
-static uint64_t shade_item(const shade_ctx *c, const mr_item *it, texel_batch *b, iir_raystats *st)
+/* Evaluates item u into its level's E (level 0: into out); returns the evaluations. */
+static uint64_t shade_item(const shade_ctx *c, int u, texel_batch *b, iir_raystats *st)
 {
+    const mr_item *it = &c->mr->items[u];
     mr_level *v = &c->mr->lv[it->l];
     int m = 0;
     for (uint32_t q = it->begin; q < it->end; q++)
         b->s[m++] = it->l ? v->s[v->order[q]] : pixel_sample(c->gb, v->order[q]);
     uint64_t evals = 0;
     if ((c->live[it->l] >> it->cls) & 1)
-        evals = c->fn(c->ctx, v->n, it->cls, b->s, m, b->E, st);
+        evals = c->fn(c->ctx, u, v->n, it->cls, b->s, m, b->E, st);
     else
         for (int q = 0; q < m; q++) b->E[q] = iir_v3s(0.f);
     iir_vec3 *E = it->l ? v->E : c->out;
@@ -604,7 +616,7 @@ static bool evaluate(const shade_ctx *c, int first, int last, iir_stop_fn stop, 
                 skipped = 1;
                 continue;
             }
-            sum += shade_item(c, &c->mr->items[t], &b, &local);
+            sum += shade_item(c, t, &b, &local);
         }
 #pragma omp critical(iir_multires_rays)
         iir_raystats_add(&rays, &local);

@@ -87,6 +87,7 @@ void iir_renderer_destroy(iir_renderer *r)
     free(r->fmask);
     free(r->vpl);
     iir_gv_free(r->gv);
+    iir_gv_free(r->gv_mr);
     free(r);
 }
 
@@ -194,7 +195,8 @@ static bool shade(iir_renderer *r, const iir_shade_job *job, iir_render_timing *
     bool stopped = iir_render_direct(r, job, rays);
     double t1 = iir_now_ms();
     if (!stopped && r->level)
-        stopped = iir_render_indirect_coarse(r, job->p, true, rays, &tm->vpl_evals);
+        stopped =
+            iir_render_indirect_coarse(r, job->p, true, rays, &tm->vpl_evals, &tm->vpl_reused);
     else if (!stopped)
         stopped =
             iir_render_indirect(r, job->p, job->shift, true, rays, &tm->vpl_evals, &tm->vpl_reused);

@@ -530,7 +530,10 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
     indirect_ctx c = make_ctx(r, p, shift, stoppable);
     int tiles = iir_tile_count(r->gb.width, r->gb.height, IIR_INDIRECT_TILE), n = p->interleave;
     bool columns = c.use_smap && r->isa >= IIR_ISA_AVX2; /* the AVX2 kernel's (render_batch.h) */
-    if (columns) c.gv = iir_gv_begin(r, &c.args, n, shift, c.receivers);
+    if (columns) {
+        iir_gv_free(r->gv_mr), r->gv_mr = NULL; /* one set of columns at a time */
+        c.gv = iir_gv_begin(r, &r->gv, &c.args, n, shift, c.receivers, NULL);
+    }
     for (uint32_t k = 0; k < r->num_subsets && c.gv.ref; k++) {
         bool leading = true;
         for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++) {
@@ -558,7 +561,7 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
         iir_raystats_add(&total, &local);
     }
     iir_raystats_add(st, &total);
-    if (columns) iir_gv_end(r, !skipped);
+    if (columns) iir_gv_end(r->gv, !skipped);
     *evals += sum;
     *reused += read;
     return skipped > 0;
@@ -596,20 +599,23 @@ iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_param
 
 _Static_assert((int)IIR_MR_BATCH <= (int)IIR_BATCH, "a multires batch must fit a pixel batch");
 
-/* Adds subset k's power G V to every sample of the batch (its E zeroed first). */
-static void apply_subset(const indirect_ctx *c, uint32_t k, int count, pixel_batch *b,
-                         iir_raystats *st)
+/* Adds subset k's power G V to every sample of the batch (its E zeroed first), the batch being
+ * work item `item`, which lattice class j unites (its columns' place: gv_columns.h). */
+static void apply_subset(const indirect_ctx *c, uint32_t k, uint32_t j, int item, int count,
+                         pixel_batch *b, iir_raystats *st)
 {
     const iir_renderer *r = c->r;
     for (int q = 0; q < iir_batch_padded(count); q++) b->Ex[q] = b->Ey[q] = b->Ez[q] = 0.f;
-    apply_vpls(c, &r->vpl[r->start[k]], NULL, r->start[k + 1] - r->start[k], b, st);
+    const iir_gv_ref *gv = c->gv.ref ? &c->gv.ref[r->start[k]] : NULL;
+    if (gv) b->ord = c->gv.ord[(size_t)item * r->num_subsets + j];
+    apply_vpls(c, &r->vpl[r->start[k]], gv, r->start[k + 1] - r->start[k], b, st);
 }
 
 /* Shades samples of class cls of an m x m lattice: the union U of the subsets k whose lattice
  * position is cls's mod m, subset k's estimate weighted |k| / |U| (so U's VPLs carry
  * Phi_i N / |U|: m = n is subset cls alone, m = 1 every VPL with its own flux). */
-static uint64_t coarse_samples(void *ctx, int m, uint32_t cls, const iir_mr_sample *s, int count,
-                               iir_vec3 *E, iir_raystats *st)
+static uint64_t coarse_samples(void *ctx, int item, int m, uint32_t cls, const iir_mr_sample *s,
+                               int count, iir_vec3 *E, iir_raystats *st)
 {
     const indirect_ctx *c = ctx;
     const iir_renderer *r = c->r;
@@ -630,23 +636,42 @@ static uint64_t coarse_samples(void *ctx, int m, uint32_t cls, const iir_mr_samp
     for (uint32_t k = 0; k < r->num_subsets && union_size; k++) {
         uint32_t size = r->start[k + 1] - r->start[k];
         if (!size || k % n % (uint32_t)m != cx || k / n % (uint32_t)m != cy) continue;
-        apply_subset(c, (k + c->shift) % r->num_subsets, count, &b, st);
+        apply_subset(c, (k + c->shift) % r->num_subsets, k, item, count, &b, st);
         float w = (float)size / (float)union_size;
         for (int q = 0; q < count; q++) E[q] = iir_madd(E[q], iir_v3(b.Ex[q], b.Ey[q], b.Ez[q]), w);
     }
     return (uint64_t)count * union_size;
 }
 
+/* The pairs of a multires frame whose G V came from columns: each subset's reading VPLs times
+ * the samples of its columns. */
+static uint64_t reused_pairs(const indirect_ctx *c)
+{
+    const iir_renderer *r = c->r;
+    uint64_t pairs = 0;
+    for (uint32_t k = 0; k < r->num_subsets && c->gv.ref; k++)
+        for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++)
+            pairs += c->gv.ref[i].mode == IIR_GV_READ ? c->gv.total[k] : 0;
+    return pairs;
+}
+
 bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, bool stoppable,
-                                iir_raystats *st, uint64_t *evals)
+                                iir_raystats *st, uint64_t *evals, uint64_t *reused)
 {
     indirect_ctx c = make_ctx(r, p, 0, stoppable); /* coarse texels: diffuse (coarse_samples) */
     uint64_t live = 0;
     for (uint32_t k = 0; k < r->num_subsets; k++)
         if (r->start[k] < r->start[k + 1]) live |= 1ull << k;
-    if (iir_multires_shade_fine(r->mr, &r->gb, coarse_samples, &c, live, r->raw, c.stop,
-                                r->stop_ctx, st, evals))
-        return true;
-    return iir_multires_shade(r->mr, coarse_samples, &c, live, NULL, c.stop, r->stop_ctx, st,
-                              evals); /* the filter phase upsamples (render_filter.c) */
+    bool columns = c.use_smap && r->isa >= IIR_ISA_AVX2; /* the AVX2 kernel's (render_batch.h) */
+    if (columns) {
+        iir_gv_free(r->gv), r->gv = NULL; /* one set of columns at a time */
+        c.gv = iir_gv_begin(r, &r->gv_mr, &c.args, c.n, 0, c.receivers, r->mr);
+    }
+    bool stopped = iir_multires_shade_fine(r->mr, &r->gb, coarse_samples, &c, live, r->raw, c.stop,
+                                           r->stop_ctx, st, evals) ||
+                   iir_multires_shade(r->mr, coarse_samples, &c, live, NULL, c.stop, r->stop_ctx,
+                                      st, evals); /* the filter phase upsamples (render_filter.c) */
+    if (columns) iir_gv_end(r->gv_mr, !stopped);
+    *reused += stopped ? 0 : reused_pairs(&c);
+    return stopped;
 }

@@ -74,7 +74,8 @@ struct iir_renderer {
     uint32_t num_subsets; /* n^2 */
     uint32_t start[IIR_MAX_SUBSETS + 1];
 
-    struct iir_gv_columns *gv; /* the kept VPLs' columns of G V (gv_columns.h); NULL until used */
+    struct iir_gv_columns *gv;    /* the kept VPLs' columns of G V (gv_columns.h), full shading */
+    struct iir_gv_columns *gv_mr; /* and over the multires hierarchy's items; NULL until used */
 
     iir_isa isa;      /* the shading kernels' instruction set (iir_renderer_set_isa) */
     iir_stop_fn stop; /* refinement passes poll it; NULL = never */
@@ -190,7 +191,7 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
  * (y mod n) n + (x mod n)), coarse texels by their level's lattice into r->mr (multires.h), whose
  * upsampled values the filter phase reads. Same stop rule and counts as iir_render_indirect. */
 bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, bool stoppable,
-                                iir_raystats *st, uint64_t *evals);
+                                iir_raystats *st, uint64_t *evals, uint64_t *reused);
 
 /* render_indirect.c, one point: the light of subset k's VPLs of generation <= max_generation at x
  * (normal n), as a pixel of that subset gets it (flux scaled, G clamped, the frame's visibility);

@@ -172,9 +172,11 @@ iir_indirect_params iir_indirect_params_default(void)
 
 uint64_t iir_gv_memory(const iir_indirect_params *o, uint32_t n, int width, int height)
 {
-    if (o->shading != IIR_SHADING_FULL || o->visibility == IIR_VIS_RAYS) return 0;
+    if (o->visibility == IIR_VIS_RAYS) return 0;
     uint64_t n2 = (uint64_t)o->interleave * (uint64_t)o->interleave;
-    uint64_t column = ((uint64_t)width * (uint64_t)height + n2 - 1) / n2 * sizeof(float);
+    uint64_t px = (uint64_t)width * (uint64_t)height, samples = (px + n2 - 1) / n2;
+    if (o->shading == IIR_SHADING_MULTIRES) samples += px / 3; /* a coarse texel may be in all */
+    uint64_t column = samples * sizeof(float);
     uint64_t bytes = (uint64_t)n * column;
     return bytes < IIR_GV_BUDGET ? bytes : IIR_GV_BUDGET;
 }
