@@ -24,6 +24,7 @@ typedef struct run_summary {
     double rays[IIR_RAY_KIND_COUNT], rays_total;  /* per frame */
     double inserted, deleted, invalidated, smaps; /* per frame */
     double vpl_evals;                             /* per frame: pixel-VPL pairs shaded */
+    double vpl_reused; /* per frame: of those, pairs kept VPLs' columns held */
     int regenerations, scored;
     double rss_peak_mb, method_mb;
     double min_lum; /* darkest frame's mean luminance: a black frame shows as 0 */
@@ -71,6 +72,7 @@ static run_summary summarise(const iird_bench *b, int r, double *tmp)
         s.invalidated += st->vpl.invalidated / n;
         s.smaps += st->vpl.shadowmaps / n;
         s.vpl_evals += (double)st->vpl_evals / n;
+        s.vpl_reused += (double)st->vpl_reused / n;
         s.regenerations += (int)st->vpl.regenerated;
         s.method_mb += row->method_mb / n;
     }
@@ -152,7 +154,7 @@ static void csv_header(FILE *f, const csv_columns *cols)
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",rays_%s", iir_ray_kind_name((iir_ray_kind)k));
     fprintf(f, ",vpls,vpls_valid,vpls_invalidated,vpls_deleted,vpls_inserted,vpls_null,"
-               "regenerated,shadowmaps,vpls_desc,vpl_evals");
+               "regenerated,shadowmaps,vpls_desc,vpl_evals,vpl_reused");
     for (int k = 0; k < cols->num_counters; k++) fprintf(f, ",%s", cols->counter[k]);
     fprintf(f, ",ctl_target_ms,ctl_vpls,ctl_interleave,ctl_sm_res,rss_mb,method_mb,mean_lum,rmse,"
                "relmse,flicker\n");
@@ -198,9 +200,9 @@ static void csv_row(FILE *f, const csv_columns *cols, const iird_bench_run *run,
     csv_declared(f, cols, run->method, s, false);
     for (int k = 0; k < IIR_RAY_KIND_COUNT; k++)
         fprintf(f, ",%llu", (unsigned long long)s->rays.n[k]);
-    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%u,%llu", c->count, c->valid, c->invalidated, c->deleted,
-            c->inserted, c->null_samples, c->regenerated, c->shadowmaps, c->descendants,
-            (unsigned long long)s->vpl_evals);
+    fprintf(f, ",%u,%u,%u,%u,%u,%u,%u,%u,%u,%llu,%llu", c->count, c->valid, c->invalidated,
+            c->deleted, c->inserted, c->null_samples, c->regenerated, c->shadowmaps, c->descendants,
+            (unsigned long long)s->vpl_evals, (unsigned long long)s->vpl_reused);
     csv_declared(f, cols, run->method, s, true);
     const iir_ctl_report *k = &s->ctl; /* zero without target_fps */
     fprintf(f, ",%.3f,%d,%d,%d,%.2f,%.3f,%.6g,", k->target_ms, k->setting.vpls,
@@ -294,6 +296,7 @@ static cJSON *run_json(const iird_bench_run *run, const run_summary *s)
     cJSON_AddItemToObject(o, "vpl_churn_per_frame", churn);
     cJSON_AddNumberToObject(o, "regenerations", s->regenerations);
     add_num(o, "vpl_evals_per_frame", s->vpl_evals);
+    add_num(o, "vpl_reused_per_frame", s->vpl_reused);
     add_num(o, "rss_peak_mb", s->rss_peak_mb);
     add_num(o, "method_mb", s->method_mb);
     add_num(o, "min_mean_lum", s->min_lum);

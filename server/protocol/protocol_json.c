@@ -452,6 +452,7 @@ char *iird_json_stats(const iird_stats_view *v)
               add_item(o, "vpl", iird_json_vpl_counts(&st->vpl)) &&
               add_item(o, "rays", iird_json_rays(&st->rays)) &&
               iird_json_add_u64(o, "vpl_evals", st->vpl_evals) &&
+              iird_json_add_u64(o, "vpl_reused", st->vpl_reused) &&
               add_item(o, "counters", iird_json_counters(v->method, st)) &&
               add_item(o, "ctl", iird_json_ctl(st)) &&
               iird_json_add_u64(o, "dropped", v->dropped) &&

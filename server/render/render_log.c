@@ -235,6 +235,7 @@ void iird_render_log_frame(iird_render_log *l, int f, double time_s, const char 
     cJSON_AddItemToObject(e, "rays", iird_json_rays(&fs->rays));
     cJSON_AddItemToObject(e, "vpls", iird_json_vpl_counts(&fs->vpl));
     cJSON_AddNumberToObject(e, "vpl_evals", (double)fs->vpl_evals);
+    cJSON_AddNumberToObject(e, "vpl_reused", (double)fs->vpl_reused);
     cJSON_AddNumberToObject(e, "spp", (double)fs->samples_per_pixel);
     if (fs->controlled) cJSON_AddItemToObject(e, "ctl", iird_json_ctl(fs));
     cJSON_Delete(l->by_frame[f]);

@@ -44,7 +44,8 @@ need = ["method", "setting", "frame", "total_ms", "trace_ms", "vpls_ms", "shadow
         "gbuffer_ms", "direct_ms", "indirect_ms", "filter_ms", "rays_camera", "rays_shadow",
         "rays_bounce", "rays_vpl", "rays_shadowmap", "rays_visibility", "vpls", "vpls_valid",
         "vpls_invalidated", "vpls_deleted", "vpls_inserted", "vpls_null", "regenerated",
-        "shadowmaps", "rss_mb", "method_mb", "mean_lum", "rmse", "relmse", "flicker"]
+        "shadowmaps", "vpl_evals", "vpl_reused", "rss_mb", "method_mb", "mean_lum", "rmse",
+        "relmse", "flicker"]
 missing = [c for c in need if c not in rows[0]]
 assert not missing, missing
 runs = sorted({(r["method"], r["setting"]) for r in rows})
@@ -71,6 +72,12 @@ for r in rows:
         assert float(r["method_mb"]) > 0, r
 iir = [r for r in rows if r["method"] == "iir" and r["setting"] == "vpls=48"]
 assert int(iir[0]["shadowmaps"]) > int(iir[1]["shadowmaps"]), "iir rebuilt every map"
+# the kept VPLs' columns: written at a VPL's second frame, read from its third; ir keeps none
+for r in rows:
+    assert int(r["vpl_reused"]) <= int(r["vpl_evals"]), r
+    if r["method"] != "iir" or r["frame"] in ("10", "11"):
+        assert int(r["vpl_reused"]) == 0, r
+assert all(int(r["vpl_reused"]) > 0.5 * int(r["vpl_evals"]) for r in iir[2:]), iir
 assert int(iir[0]["vpls"]) == 48, iir[0]["vpls"]
 
 s = json.load(open(d + "/summary.json"))

@@ -121,22 +121,46 @@ static void test_glossy(void **state)
     iir_test_unload(&f);
 }
 
-/* A warm iir set's VPLs, copied (their maps shared, owned by the method). */
-static iir_vpl *warm_copy(const iir_test_cornell *f, iir_method **m, iir_view *v, iir_light *light,
-                          uint32_t *n)
+/* A warm iir set (3 frames) and its VPLs copied (their maps shared, owned by the method), with a
+ * renderer that keeps columns and the default shading. Not to be moved: view.lights is &light. */
+typedef struct warm {
+    iir_method *m;
+    iir_light light;
+    iir_view view;
+    uint32_t n;
+    iir_vpl *vpls;
+    iir_indirect_params p;
+    iir_renderer *kept;
+} warm;
+
+static void warm_up(const iir_test_cornell *f, warm *w)
 {
     iir_params mp = iir_params_default();
-    *m = iir_test_method(f, "iir", &mp);
+    w->m = iir_test_method(f, "iir", &mp);
     iir_image *img = iir_image_create(W, H);
-    *light = f->scene->lights[0];
-    *v = (iir_view){light, 1, f->scene->camera};
+    w->light = f->scene->lights[0];
+    w->view = (iir_view){&w->light, 1, f->scene->camera};
     iir_frame_stats fs;
-    for (int frame = 0; frame < 3; frame++) iir_test_render(*m, v, img, &fs);
+    for (int frame = 0; frame < 3; frame++) iir_test_render(w->m, &w->view, img, &fs);
     iir_image_destroy(img);
-    const iir_vpl *vpls = iir_method_vpls(*m, n);
-    iir_vpl *copy = malloc(sizeof *copy * *n);
-    memcpy(copy, vpls, sizeof *copy * *n);
-    return copy;
+    const iir_vpl *vpls = iir_method_vpls(w->m, &w->n);
+    w->vpls = malloc(sizeof *w->vpls * w->n);
+    memcpy(w->vpls, vpls, sizeof *w->vpls * w->n);
+    w->p = iir_indirect_params_default();
+    w->kept = iir_renderer_create(f->scene, f->rt);
+}
+
+static void warm_free(warm *w)
+{
+    free(w->vpls);
+    iir_renderer_destroy(w->kept);
+    iir_method_destroy(w->m);
+}
+
+/* same_as_fresh on w's renderer, view and VPLs. */
+static double warm_frame(const iir_test_cornell *f, warm *w)
+{
+    return same_as_fresh(f, w->kept, &w->view, w->vpls, w->n, &w->p);
 }
 
 /* The lit VPLs k with k % every == 0. */
@@ -150,46 +174,40 @@ static void test_invalidation(void **state)
 {
     if (!have_avx2()) skip();
     const iir_test_cornell *f = *state;
-    iir_method *m;
-    iir_view v;
-    iir_light light;
-    uint32_t n;
-    iir_vpl *vpls = warm_copy(f, &m, &v, &light, &n);
-    iir_indirect_params p = iir_indirect_params_default();
-    iir_renderer *kept = iir_renderer_create(f->scene, f->rt);
-    for (int k = 0; k < 2; k++) same_as_fresh(f, kept, &v, vpls, n, &p);
-    assert_true(same_as_fresh(f, kept, &v, vpls, n, &p) > 0.99);
+    warm w;
+    warm_up(f, &w);
+    iir_vpl *vpls = w.vpls;
+    for (int k = 0; k < 2; k++) warm_frame(f, &w);
+    assert_true(warm_frame(f, &w) > 0.99);
 
-    for (uint32_t k = 0; k < n; k++) /* flux is not in a column: still read */
+    for (uint32_t k = 0; k < w.n; k++) /* flux is not in a column: still read */
         vpls[k].flux = iir_scale(vpls[k].flux, 1.f + 0.1f * (float)(k % 3));
-    assert_true(same_as_fresh(f, kept, &v, vpls, n, &p) > 0.99);
+    assert_true(warm_frame(f, &w) > 0.99);
 
     /* maps rendered again, at another resolution: new stamps */
     iir_smap maps[64] = {{0}};
     uint32_t remapped = 0;
-    for (uint32_t k = 0; k < n && remapped < 64; k++)
+    for (uint32_t k = 0; k < w.n && remapped < 64; k++)
         if (picked(&vpls[k], k, 5)) {
             assert_true(iir_smap_render(&maps[remapped], f->rt, &vpls[k], 32, NULL));
             vpls[k].smap = maps[remapped++];
         }
     assert_true(remapped > 10);
-    double share = same_as_fresh(f, kept, &v, vpls, n, &p);
+    double share = warm_frame(f, &w);
     print_message("after %u maps rendered again: %.1f%% from columns\n", remapped, 100 * share);
     assert_true(share < 0.95);
 
     /* VPLs moved 1 cm along their normals under the same maps (a stale map: no column fits) */
-    for (uint32_t k = 0; k < n; k++)
+    for (uint32_t k = 0; k < w.n; k++)
         if (picked(&vpls[k], k, 7))
             vpls[k].position = iir_madd(vpls[k].position, vpls[k].normal, 0.01f);
-    same_as_fresh(f, kept, &v, vpls, n, &p);
+    warm_frame(f, &w);
 
     /* the camera moves: a new G-buffer, every column dropped */
-    v.camera.position = iir_add(v.camera.position, iir_v3(0.1f, 0.f, 0.f));
-    assert_true(same_as_fresh(f, kept, &v, vpls, n, &p) == 0.0);
+    w.view.camera.position = iir_add(w.view.camera.position, iir_v3(0.1f, 0.f, 0.f));
+    assert_true(warm_frame(f, &w) == 0.0);
     for (uint32_t k = 0; k < remapped; k++) iir_smap_release(&maps[k]);
-    free(vpls);
-    iir_renderer_destroy(kept);
-    iir_method_destroy(m);
+    warm_free(&w);
 }
 
 /* A stop that says stop after `limit` polls, counting them. */
@@ -223,28 +241,22 @@ static void test_stopped_frame(void **state)
 {
     if (!have_avx2()) skip();
     const iir_test_cornell *f = *state;
-    iir_method *m;
-    iir_view v;
-    iir_light light;
-    uint32_t n;
-    iir_vpl *vpls = warm_copy(f, &m, &v, &light, &n);
-    iir_indirect_params p = iir_indirect_params_default();
-    int total = polls_of_frame(f, &v, vpls, n, &p);
-    iir_renderer *kept = iir_renderer_create(f->scene, f->rt);
-    same_as_fresh(f, kept, &v, vpls, n, &p); /* first sight: no column */
+    warm w;
+    warm_up(f, &w);
+    int total = polls_of_frame(f, &w.view, w.vpls, w.n, &w.p);
+    warm_frame(f, &w); /* first sight: no column */
     polls q = {0, total - 2};
-    iir_renderer_set_stop(kept, stop_after, &q);
+    iir_renderer_set_stop(w.kept, stop_after, &q);
     iir_image *img = iir_image_create(W, H);
     iir_error err = {0};
-    iir_render_input in = {&v.camera, v.lights, v.num_lights, vpls, n, 1};
-    assert_int_equal(iir_renderer_frame(kept, &in, &p, img, NULL, NULL, &err), IIR_ERR_INTERRUPTED);
-    iir_renderer_set_stop(kept, NULL, NULL);
-    assert_true(same_as_fresh(f, kept, &v, vpls, n, &p) == 0.0); /* written again */
-    assert_true(same_as_fresh(f, kept, &v, vpls, n, &p) > 0.99);
+    iir_render_input in = {&w.view.camera, w.view.lights, 1, w.vpls, w.n, 1};
+    assert_int_equal(iir_renderer_frame(w.kept, &in, &w.p, img, NULL, NULL, &err),
+                     IIR_ERR_INTERRUPTED);
+    iir_renderer_set_stop(w.kept, NULL, NULL);
+    assert_true(warm_frame(f, &w) == 0.0); /* written again */
+    assert_true(warm_frame(f, &w) > 0.99);
     iir_image_destroy(img);
-    free(vpls);
-    iir_renderer_destroy(kept);
-    iir_method_destroy(m);
+    warm_free(&w);
 }
 
 int main(void)

@@ -1067,6 +1067,8 @@ static void test_json_replies(void **state)
     fs.rays.n[IIR_RAYS_VPL] = 5000000000ull;
     fs.vpl.count = 256;
     fs.vpl.null_samples = 3;
+    fs.vpl_evals = 3145728;
+    fs.vpl_reused = 3047424;
     iird_stats_view sv = {.frame = 12,
                           .seq = 40,
                           .method = "iir",
@@ -1089,6 +1091,8 @@ static void test_json_replies(void **state)
     assert_int_equal(num(o, "bytes"), 41234);
     assert_int_equal(num(o, "dropped"), 1);
     assert_int_equal(num(o, "memory_bytes"), 12582912);
+    assert_int_equal(num(o, "vpl_evals"), 3145728);
+    assert_int_equal(num(o, "vpl_reused"), 3047424);
     /* iir's declared phases, in its order, and no counters */
     const cJSON *ph = cJSON_GetObjectItemCaseSensitive(o, "phases");
     const iir_phase *declared;
