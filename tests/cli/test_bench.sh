@@ -72,7 +72,8 @@ for r in rows:
         assert float(r["method_mb"]) > 0, r
 iir = [r for r in rows if r["method"] == "iir" and r["setting"] == "vpls=48"]
 assert int(iir[0]["shadowmaps"]) > int(iir[1]["shadowmaps"]), "iir rebuilt every map"
-# the kept VPLs' columns: written at a VPL's second frame, read from its third; ir keeps none
+# the kept VPLs' columns: written at a VPL's second frame while the set is new (its first after),
+# read from the next; ir keeps none
 for r in rows:
     assert int(r["vpl_reused"]) <= int(r["vpl_evals"]), r
     if r["method"] != "iir" or r["frame"] in ("10", "11"):

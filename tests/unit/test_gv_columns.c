@@ -61,7 +61,8 @@ static bool have_avx2(void)
 }
 
 /* iir's set over 8 frames of a light moving 5 cm a frame, each frame rendered by one kept renderer
- * and by a fresh one. From the third frame on (written the second) most pairs come from columns. */
+ * and by a fresh one. From the third frame on (written the second; then a new VPL's in its first)
+ * most pairs come from columns. */
 static void follow_light(const iir_test_cornell *f, const iir_indirect_params *p, const char *what)
 {
     iir_params mp = iir_params_default();

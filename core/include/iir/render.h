@@ -23,9 +23,9 @@
  *     subset with no VPL contributes nothing, and the filter does not count its pixels.
  *     A VPL kept from frame to frame under a still camera (iir's) keeps its min(G_i, ...) V_i
  *     at its subset's pixels in a column (render/gv_columns.h: AVX2, shadow maps; multires: at
- *     the hierarchy's samples):
- *     from its third frame on, the sum takes them from there and multiplies by this frame's
- *     flux -- the same floats in the same order, so the same frame to the bit.
+ *     the hierarchy's samples), written in its first frame (its second while the set is new, none
+ *     for a set made anew every frame); from then on the sum takes them from there and multiplies
+ *     by this frame's flux -- the same floats in the same order, so the same frame to the bit.
  *  4. Filter (interleave > 1, filter on): a geometry-aware box over the neighbourhood that holds
  *     every subset with equal weight: offsets -h..h on each axis, h = floor(n / 2), weight 1 per
  *     axis except 1/2 at +-h when n is even (the two ends are the same subset and share one

@@ -40,6 +40,8 @@ struct iir_gv_columns {
     float **spare; /* columns of slots that left, for new ones */
     uint32_t num_spare, spare_cap, columns;
     uint64_t frame;
+    uint32_t known; /* this frame's VPLs shaded the frame before as well */
+    bool kept_last; /* most of the last frame's VPLs had been shaded the frame before it */
     iir_gv_ref *ref;
     uint32_t ref_cap;
 };
@@ -201,8 +203,9 @@ static bool same_vpl(const slot *s, const iir_shade_vpl *v, uint32_t cls)
            s->p.z == v->p.z && s->n.x == v->n.x && s->n.y == v->n.y && s->n.z == v->n.z;
 }
 
-/* VPL v's use of its column this frame: read when it is ready, write when v was shaded last
- * frame as well (and a column is to be had), else none. */
+/* VPL v's use of its column this frame: read when it is ready; write when v was shaded last
+ * frame as well, or is new to a set that keeps its VPLs (kept_last: iir's, not ir's), and a
+ * column is to be had; else none. */
 static iir_gv_ref assign(iir_gv_columns *c, const iir_shade_vpl *v, uint32_t cls)
 {
     iir_gv_ref none = {NULL, IIR_GV_NONE};
@@ -217,8 +220,9 @@ static iir_gv_ref assign(iir_gv_columns *c, const iir_shade_vpl *v, uint32_t cls
     if (!known) s->ready = false;
     s->p = v->p, s->n = v->n, s->radius = v->radius, s->cls = cls, s->last = c->frame;
     s->writing = false;
+    c->known += known;
     if (s->ready) return (iir_gv_ref){s->col, IIR_GV_READ};
-    if (!known || !take_column(c, s)) return none;
+    if (!(known || c->kept_last) || !take_column(c, s)) return none;
     s->writing = true;
     return (iir_gv_ref){s->col, IIR_GV_WRITE};
 }
@@ -288,9 +292,11 @@ iir_gv_frame iir_gv_begin(iir_renderer *r, iir_gv_columns **cp, const iir_kernel
         if (!grown) return none;
         c->ref = grown, c->ref_cap = used;
     }
+    c->known = 0;
     for (uint32_t k = 0; k < r->num_subsets; k++)
         for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++)
             c->ref[i] = assign(c, &r->vpl[i], (k + n2 - shift % n2) % n2);
+    c->kept_last = 2 * c->known >= used && used > 0;
     return (iir_gv_frame){c->ref, c->ord, c->pixel, c->base, c->glossy, c->total};
 }
 

@@ -14,10 +14,12 @@
  * A column depends on the VPL's map (iir_smap.stamp: a new rendering is a new column), position,
  * normal and sphere radius, on the pixel class its subset shades, and on the frame's G-buffer (and
  * hierarchy), interleave and kernel constants (the epoch: any change drops every column). A VPL's
- * column is written the second frame it is shaded in a row (a set regenerated every frame, ir's,
- * writes none) and read from the third on; a frame stopped early leaves the columns it was
- * writing unwritten. Columns take at most IIR_GV_BUDGET bytes (a VPL beyond them is evaluated every
- * frame): 48 KB a VPL at 512x384 with 4x4 interleave, 192 KB at 1024x768. */
+ * column is written the first frame it is shaded when most of the last frame's VPLs had been
+ * shaded the frame before it (a set that keeps its VPLs, iir's), else the second frame in a row
+ * (a set regenerated every frame, ir's, writes none), and read from the next frame on; a frame
+ * stopped early leaves the columns it was writing unwritten. Columns take at most IIR_GV_BUDGET
+ * bytes (a VPL beyond them is evaluated every frame): 48 KB a VPL at 512x384 with 4x4 interleave,
+ * 192 KB at 1024x768. */
 #ifndef IIR_GV_COLUMNS_H
 #define IIR_GV_COLUMNS_H
 
