@@ -210,8 +210,8 @@ extern const iir_param_table iir_multires_table;
 uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int height);
 /* Bytes of the columns a renderer keeps for n VPLs kept from frame to frame (shadow maps: a float
  * per VPL and pixel of its subset, or multires sample it is evaluated at), at most the renderer's
- * budget for them (256 MB): what a method whose VPLs outlive a frame (iir) adds to
- * iir_vpl_memory. */
+ * budget for them (256 MB), and of the pixels' copy they keep with them (full shading: 28 bytes a
+ * pixel): what a method whose VPLs outlive a frame (iir) adds to iir_vpl_memory. */
 uint64_t iir_gv_memory(const iir_indirect_params *o, uint32_t n, int width, int height);
 
 /* The interleaving subset of VPL `id` among n2 subsets: Fibonacci hashing of the id, so

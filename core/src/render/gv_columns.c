@@ -29,6 +29,7 @@ struct iir_gv_columns {
     epoch at;
     uint32_t *ord;   /* per (tile, class): gv_columns.h's ord */
     uint32_t *pixel; /* per hit pixel, by class: gv_columns.h's pixel */
+    float *soa;      /* per hit pixel, by class: its position and normal, 6 planes */
     uint8_t *glossy; /* per (tile, class) */
     uint32_t base[IIR_MAX_SUBSETS + 1];
     uint32_t len;                    /* the longest slot's samples: every column's length */
@@ -51,7 +52,7 @@ void iir_gv_free(iir_gv_columns *c)
     if (!c) return;
     for (uint32_t i = 0; i < c->num_slots; i++) free(c->slots[i].col);
     for (uint32_t i = 0; i < c->num_spare; i++) free(c->spare[i]);
-    free(c->ord), free(c->pixel), free(c->glossy);
+    free(c->ord), free(c->pixel), free(c->glossy), free(c->soa);
     free(c->slots), free(c->hash), free(c->spare), free(c->ref);
     free(c);
 }
@@ -62,6 +63,16 @@ static void drop_all(iir_gv_columns *c)
     for (uint32_t i = 0; i < c->num_slots; i++) free(c->slots[i].col);
     for (uint32_t i = 0; i < c->num_spare; i++) free(c->spare[i]);
     c->num_slots = c->num_spare = c->columns = 0;
+}
+
+/* Hit pixel p of the G-buffer as the o-th of the tiles' pixels by class. */
+static void put_pixel(iir_gv_columns *c, const iir_gbuffer *gb, uint32_t o, size_t p)
+{
+    size_t plane = c->base[c->at.n * c->at.n];
+    c->pixel[o] = (uint32_t)p;
+    const float v[6] = {gb->position[p].x, gb->position[p].y, gb->position[p].z,
+                        gb->normal[p].x,   gb->normal[p].y,   gb->normal[p].z};
+    for (int q = 0; q < 6; q++) c->soa[(size_t)q * plane + o] = v[q];
 }
 
 /* Tile t's hit pixels by class, in the order render_indirect.c collects them (rows of the class's
@@ -78,7 +89,7 @@ static void tile_pixels(iir_gv_columns *c, const iir_gbuffer *gb, int n, int t, 
                 for (int x = tl.x0 + i; x < tl.x1; x += n) {
                     size_t p = (size_t)y * (size_t)gb->width + (size_t)x;
                     if (gb->prim[p] == IIR_NO_HIT) continue;
-                    if (c->pixel) c->pixel[c->base[k] + next[k]] = (uint32_t)p;
+                    if (c->pixel) put_pixel(c, gb, c->base[k] + next[k], p);
                     next[k]++;
                     glossy |= gb->any_pbr && iir_gb_glossy(gb, p, c->at.receivers);
                 }
@@ -91,8 +102,8 @@ static bool count_pixels(iir_gv_columns *c, const iir_gbuffer *gb, int n)
 {
     uint32_t n2 = (uint32_t)(n * n), next[IIR_MAX_SUBSETS] = {0};
     int tiles = iir_tile_count(gb->width, gb->height, IIR_INDIRECT_TILE);
-    free(c->ord), free(c->pixel), free(c->glossy);
-    c->pixel = NULL;
+    free(c->ord), free(c->pixel), free(c->glossy), free(c->soa);
+    c->pixel = NULL, c->soa = NULL;
     c->ord = malloc(sizeof *c->ord * (size_t)tiles * n2);
     c->glossy = malloc((size_t)tiles * n2);
     if (!c->ord || !c->glossy) return false;
@@ -109,7 +120,11 @@ static bool count_pixels(iir_gv_columns *c, const iir_gbuffer *gb, int n)
         next[k] = 0;
     }
     c->pixel = malloc(sizeof *c->pixel * (c->base[n2] ? c->base[n2] : 1));
-    if (!c->pixel) return false;
+    c->soa = malloc(sizeof *c->soa * 6 * (c->base[n2] ? c->base[n2] : 1));
+    if (!c->pixel || !c->soa) {
+        free(c->pixel), c->pixel = NULL;
+        return false;
+    }
     for (int t = 0; t < tiles; t++) tile_pixels(c, gb, n, t, next);
     return true;
 }
@@ -233,8 +248,8 @@ static bool count_items(iir_gv_columns *c, const iir_multires *mr, int n)
 {
     uint32_t n2 = (uint32_t)(n * n), total[IIR_MAX_SUBSETS] = {0};
     int items = iir_multires_items(mr);
-    free(c->ord), free(c->pixel), free(c->glossy);
-    c->pixel = NULL, c->glossy = NULL;
+    free(c->ord), free(c->pixel), free(c->glossy), free(c->soa);
+    c->pixel = NULL, c->glossy = NULL, c->soa = NULL;
     c->ord = malloc(sizeof *c->ord * ((size_t)items * n2 + 1));
     if (!c->ord) return false;
     for (int u = 0; u < items; u++) {
@@ -297,7 +312,8 @@ iir_gv_frame iir_gv_begin(iir_renderer *r, iir_gv_columns **cp, const iir_kernel
         for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++)
             c->ref[i] = assign(c, &r->vpl[i], (k + n2 - shift % n2) % n2);
     c->kept_last = 2 * c->known >= used && used > 0;
-    return (iir_gv_frame){c->ref, c->ord, c->pixel, c->base, c->glossy, c->total};
+    size_t plane = c->base[n2];
+    return (iir_gv_frame){c->ref, c->ord, c->pixel, c->base, c->glossy, c->total, c->soa, plane};
 }
 
 void iir_gv_end(iir_gv_columns *c, bool complete)

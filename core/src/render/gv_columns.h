@@ -7,7 +7,9 @@
  * the columns. Not the kernels (render_batch.h) and not the choice of VPL subsets
  * (render_indirect.c). Internal to libiircore.
  *
- * Full shading's columns run over the pixels of the VPL's subset, tile by tile; multires's over
+ * Full shading's columns run over the pixels of the VPL's subset, tile by tile, and keep a copy of
+ * those pixels' positions and normals in that order (so that a batch holding a VPL without a
+ * column is copied, not gathered from the G-buffer: 24 bytes a pixel); multires's over
  * the samples of the hierarchy's work items whose class unites the subset (its coarse texels and
  * the pixels it shades at full resolution). A renderer keeps one of the two at a time.
  *
@@ -45,6 +47,9 @@ typedef struct iir_gv_frame {
     const uint32_t *base;  /* per class */
     const uint8_t *glossy; /* glossy[t n^2 + c]: tile t has a glossy pixel of class c */
     const uint32_t *total; /* per class (multires: subset): the samples in its columns */
+    const float *soa;      /* soa[q plane + base[c] + o]: class c's o-th pixel's position (q 0-2)
+                              and normal (q 3-5); full shading only */
+    size_t plane;
 } iir_gv_frame;
 
 /* The frame's columns *cp (created on first use) for r's VPLs (r->vpl, sorted by subset; subset k

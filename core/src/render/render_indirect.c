@@ -444,6 +444,21 @@ static void columns_only(const indirect_ctx *c, int t, uint32_t k, uint32_t cls,
     }
 }
 
+/* The batch of class cls's pixels [ord, ord + m) from the columns' copy of their positions and
+ * normals (none of them glossy): collect's batch without reading the G-buffer. */
+static void fill_batch(const indirect_ctx *c, uint32_t cls, uint32_t ord, int m, pixel_batch *b)
+{
+    size_t at = c->gv.base[cls] + ord, bytes = sizeof(float) * (size_t)m;
+    float *plane[6] = {b->px, b->py, b->pz, b->nx, b->ny, b->nz};
+    for (int q = 0; q < 6; q++) memcpy(plane[q], c->gv.soa + (size_t)q * c->gv.plane + at, bytes);
+    memcpy(b->index, c->gv.pixel + at, sizeof(uint32_t) * (size_t)m);
+    memset(b->Ex, 0, bytes), memset(b->Ey, 0, bytes), memset(b->Ez, 0, bytes);
+    memset(b->glossy, 0, sizeof b->glossy);
+    b->m = m;
+    while (b->m % IIR_BATCH_LANES) batch_push(b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
+    b->m = m;
+}
+
 /* Hit pixels of class cls in tile t (columns: their ord's difference). */
 static int class_count(const indirect_ctx *c, int t, uint32_t cls, int tiles)
 {
@@ -451,6 +466,22 @@ static int class_count(const indirect_ctx *c, int t, uint32_t cls, int tiles)
     uint32_t end = t + 1 < tiles ? c->gv.ord[(size_t)(t + 1) * n2 + cls]
                                  : c->gv.base[cls + 1] - c->gv.base[cls];
     return (int)(end - c->gv.ord[(size_t)t * n2 + cls]);
+}
+
+/* Subset k's light at batch b's pixels into r->raw, its first `lead` VPLs from their columns
+ * alone; returns the pairs shaded and adds those read from columns to *reused. */
+static uint64_t shade_batch(const indirect_ctx *c, uint32_t k, uint32_t lead, pixel_batch *b,
+                            iir_raystats *st, uint64_t *reused)
+{
+    const iir_renderer *r = c->r;
+    uint32_t count = r->start[k + 1] - r->start[k];
+    const iir_gv_ref *gv = c->gv.ref ? &c->gv.ref[r->start[k]] : NULL;
+    int m = b->m;
+    *reused += (uint64_t)m * c->reads[k];
+    if (lead) iir_columns_sum_avx2(&r->vpl[r->start[k]], gv, lead, b->ord, m, b->Ex, b->Ey, b->Ez);
+    apply_vpls(c, &r->vpl[r->start[k] + lead], gv ? gv + lead : NULL, count - lead, b, st);
+    for (int q = 0; q < m; q++) r->raw[b->index[q]] = iir_v3(b->Ex[q], b->Ey[q], b->Ez[q]);
+    return (uint64_t)m * count;
 }
 
 /* Shades one tile; returns the pixel-VPL pairs shaded, and adds those read from columns to
@@ -491,19 +522,19 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, int tiles, pi
                 continue;
             }
             uint32_t ord = c->gv.ref ? c->gv.ord[(size_t)t * (size_t)(n * n) + cls] : 0;
-            const iir_gv_ref *gv = c->gv.ref ? &c->gv.ref[r->start[k]] : NULL;
+            if (plain) { /* the pixels from the columns' copy */
+                int pixels = class_count(c, t, cls, tiles);
+                for (int q0 = 0; q0 < pixels; q0 += IIR_BATCH) {
+                    int m = pixels - q0 < IIR_BATCH ? pixels - q0 : IIR_BATCH;
+                    fill_batch(c, cls, ord + (uint32_t)q0, m, b);
+                    b->ord = ord + (uint32_t)q0;
+                    evals += shade_batch(c, k, lead, b, st, reused);
+                }
+                continue;
+            }
             while (collect(c, &tl, tl.x0 + i, n, &x, &y, b)) {
-                int m = b->m;
-                b->ord = ord, ord += (uint32_t)m;
-                evals += (uint64_t)m * count;
-                *reused += (uint64_t)m * c->reads[k];
-                if (lead)
-                    iir_columns_sum_avx2(&r->vpl[r->start[k]], gv, lead, b->ord, m, b->Ex, b->Ey,
-                                         b->Ez);
-                apply_vpls(c, &r->vpl[r->start[k] + lead], gv ? gv + lead : NULL, count - lead, b,
-                           st);
-                for (int q = 0; q < m; q++)
-                    r->raw[b->index[q]] = iir_v3(b->Ex[q], b->Ey[q], b->Ez[q]);
+                b->ord = ord, ord += (uint32_t)b->m;
+                evals += shade_batch(c, k, lead, b, st, reused);
             }
         }
     return evals;

@@ -178,7 +178,10 @@ uint64_t iir_gv_memory(const iir_indirect_params *o, uint32_t n, int width, int 
     if (o->shading == IIR_SHADING_MULTIRES) samples += px / 3; /* a coarse texel may be in all */
     uint64_t column = samples * sizeof(float);
     uint64_t bytes = (uint64_t)n * column;
-    return bytes < IIR_GV_BUDGET ? bytes : IIR_GV_BUDGET;
+    /* full shading: each pixel's index, position and normal by class, for the tiles' batches */
+    uint64_t pixels =
+        o->shading == IIR_SHADING_FULL ? px * (sizeof(uint32_t) + 6 * sizeof(float)) : 0;
+    return (bytes < IIR_GV_BUDGET ? bytes : IIR_GV_BUDGET) + pixels;
 }
 
 uint64_t iir_vpl_memory(const iir_indirect_params *o, uint32_t n, int width, int height)
