@@ -91,6 +91,7 @@ typedef struct iir_gbuffer {
     iir_vec3 *wo;      /* unit, from the surface toward the viewer (the chain's last ray back) */
     bool any_chain;    /* some pixel's through is not 1: shading reads through only then */
     bool any_pbr;      /* some pixel is metallic-roughness (mr.y >= 0): its BSDF may be read */
+    bool any_emission; /* some pixel's emission is not 0: direct light reads emission only then */
 } iir_gbuffer;
 
 typedef enum iir_visibility {

@@ -12,8 +12,9 @@
  * light sample alone (weight 1), which is unbiased by itself. Shadow rays go out as 8-wide packets
  * over 4x2 pixel blocks (neighbouring pixels, one light: coherent rays); with AVX2 a point, spot
  * or sun is evaluated at the block's 8 pixels at once (iir_light_sample_delta8_avx2), and a frame
- * of such lights alone (lean) goes in 4x4 blocks, one 16-wide packet each, a metallic-roughness
- * pixel's BSDF evaluated 8 lanes at once (iir_bsdf_f8_avx2).
+ * of such lights alone (lean) goes in 4x4 blocks held in registers, one 16-wide packet each, a
+ * metallic-roughness pixel's BSDF evaluated 8 lanes at once (iir_bsdf_f8_avx2;
+ * render_direct_avx2.c), emission read only when some pixel has it.
  * Threads: OpenMP over bands of two (lean: four) whole rows, each writing only its own pixels of
  * the frame; ray counters per thread, summed once.
  *
@@ -38,8 +39,8 @@ typedef struct direct_ctx {
     const iir_light *lights;
     uint32_t num_lights;
     const iir_light_eval *evals; /* lights[i] prepared, when the frame has few (else NULL) */
-    bool lean; /* AVX2, delta lights only (prepared), no specular chain: lean_block (glossy pixels
-                  by iir_bsdf_f8_avx2) */
+    bool lean; /* AVX2, delta lights only (prepared), no specular chain: iir_direct_lean_block_avx2
+                  (glossy pixels by iir_bsdf_f8_avx2) */
     uint64_t seed;
     int samples; /* per pixel per area light (and for the emissive triangles) */
     float inv_samples;
@@ -334,143 +335,12 @@ static void load_block(const iir_gbuffer *gb, int x0, int y0, block *b)
     }
 }
 
-#if defined(__x86_64__)
-/* Lanes of the 4x2 half h (rows y0 + 2 h, y0 + 2 h + 1) of a lean 4x4 block, read once: their
- * surfaces first, their materials only when a light reaches one of them. */
-typedef struct lean_half {
-    int x0, y0; /* its first pixel */
-    iir_light_lanes in;
-    iir_vec3 f[8], L[8], pending[8];
-    bool hit[8], shaded[8];
-    bool loaded;     /* the materials (f, shaded, the BSDF lanes) are read */
-    bool any_glossy; /* a metallic-roughness lane: its f is its BSDF's, per light */
-    bool glossy[8];
-    iir_bsdf_lanes bsdf; /* the glossy lanes' BSDFs (the others zeroed) */
-} lean_half;
-
-/* Lane k's metallic-roughness BSDF (pixel i), when it has one. */
-static void lean_glossy(const iir_gbuffer *gb, size_t i, int k, lean_half *q)
-{
-    iir_vec3 m = gb->mr[i];
-    iir_bsdf_lanes_set(&q->bsdf, k, gb->normal[i], gb->wo[i], gb->base[i], m.x, m.y, m.z);
-    q->glossy[k] = true;
-    q->any_glossy = true;
-}
-
-/* Lane k's surface from pixel i of the image: the light's receiver, whether it is geometry, and
- * its emission; i's pixel outside the image (inside false) is a lane of no light. */
-static void lean_surface(const iir_gbuffer *gb, size_t i, bool inside, int k, lean_half *q)
-{
-    q->hit[k] = inside && gb->prim[i] != IIR_NO_HIT;
-    q->L[k] = inside ? gb->emission[i] : iir_v3s(0.f);
-    set_receiver(&q->in, k, gb->position[i], gb->normal[i]);
-}
-
-/* Lane k's material: shade_block's f (times its chain's 1, exact; a glossy lane's is its BSDF's,
- * per light) and whether it is shaded. */
-static void lean_material(const iir_gbuffer *gb, size_t i, bool inside, int k, lean_half *q)
-{
-    (void)inside; /* q->hit says it */
-    bool glossy = q->hit[k] && gb->any_pbr && gb->mr[i].y >= 0.f;
-    if (glossy) lean_glossy(gb, i, k, q);
-    q->shaded[k] = q->hit[k] && (glossy || !iir_is_black(gb->albedo[i]));
-    q->f[k] = q->shaded[k] ? iir_scale(gb->albedo[i], IIR_INV_PI) : iir_v3s(0.f);
-}
-
-typedef void (*lean_read_fn)(const iir_gbuffer *gb, size_t i, bool inside, int k, lean_half *q);
-
-/* read(pixel, lane) over half q's pixels: a half wholly inside the image reads its rows' 4
- * pixels as runs. */
-static inline void lean_each(const iir_gbuffer *gb, lean_half *q, lean_read_fn read)
-{
-    int x0 = q->x0, y0 = q->y0;
-    if (x0 + BLOCK_W <= gb->width && y0 + BLOCK_H <= gb->height) {
-        for (int r = 0; r < BLOCK_H; r++) {
-            size_t i0 = (size_t)(y0 + r) * (size_t)gb->width + (size_t)x0;
-            for (int j = 0; j < BLOCK_W; j++) read(gb, i0 + (size_t)j, true, r * BLOCK_W + j, q);
-        }
-        return;
-    }
-    for (int k = 0; k < 8; k++) {
-        int x = x0 + k % BLOCK_W, y = y0 + k / BLOCK_W;
-        bool inside = x < gb->width && y < gb->height;
-        read(gb, inside ? (size_t)y * (size_t)gb->width + (size_t)x : 0, inside, k, q);
-    }
-}
-
-/* Half q's materials, once (the BSDF lanes zeroed only in frames that can have one). */
-static void lean_materials(const iir_gbuffer *gb, lean_half *q)
-{
-    if (q->loaded) return;
-    q->any_glossy = false;
-    memset(q->glossy, 0, sizeof q->glossy);
-    if (gb->any_pbr) memset(&q->bsdf, 0, sizeof q->bsdf);
-    lean_each(gb, q, lean_material);
-    q->loaded = true;
-}
-
-/* Whether a lane of o receives light (lanes_into_rays's test). */
-static bool any_light(const iir_light_delta_lanes *o)
-{
-    for (int k = 0; k < 8; k++)
-        if (!iir_is_black(iir_v3(o->Ex[k], o->Ey[k], o->Ez[k]))) return true;
-    return false;
-}
-
-/* Light e's 8 samples of half q into rays. True when a lane has a ray. A half the light does not
- * reach needs no material: its lanes add nothing either way. */
-static bool lean_samples(const direct_ctx *c, const iir_light_eval *e, lean_half *q, iir_ray8 *rays)
-{
-    iir_light_delta_lanes o;
-    iir_light_sample_delta8_avx2(e, c->r->eps, &q->in, &o);
-    if (!any_light(&o)) {
-        memset(rays->valid, 0, sizeof rays->valid);
-        return false;
-    }
-    lean_materials(&c->r->gb, q);
-    if (!q->any_glossy) return lanes_into_rays(&o, q->shaded, q->f, q->pending, q->L, rays);
-    _Alignas(32) float fx[8], fy[8], fz[8];
-    iir_bsdf_f8_avx2(&q->bsdf, o.wx, o.wy, o.wz, fx, fy, fz);
-    iir_vec3 f[8];
-    for (int k = 0; k < 8; k++) f[k] = q->glossy[k] ? iir_v3(fx[k], fy[k], fz[k]) : q->f[k];
-    return lanes_into_rays(&o, q->shaded, f, q->pending, q->L, rays);
-}
-
-/* shade_block for the common frame (direct_ctx.lean), over a 4x4 block: each pixel's position,
- * normal, albedo and emission read once into lanes, each light's 16 samples in one 16-wide packet
- * (Embree's AVX-512 traversal where the CPU has it) -- the same sums as shade_block's. */
-static void lean_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir_raystats *st)
-{
-    lean_half q[2];
-    for (int h = 0; h < 2; h++) {
-        q[h].x0 = x0, q[h].y0 = y0 + BLOCK_H * h, q[h].loaded = false;
-        lean_each(&c->r->gb, &q[h], lean_surface);
-    }
-    for (uint32_t l = 0; l < c->num_lights; l++) {
-        iir_ray8 rays[2];
-        bool any = lean_samples(c, &c->evals[l], &q[0], &rays[0]);
-        any |= lean_samples(c, &c->evals[l], &q[1], &rays[1]);
-        if (!any) continue;
-        bool occluded[16];
-        iir_rt_occluded16(c->r->rt, rays, occluded, st, IIR_RAYS_SHADOW);
-        for (int h = 0; h < 2; h++)
-            for (int k = 0; k < 8; k++)
-                if (rays[h].valid[k] && !occluded[8 * h + k])
-                    q[h].L[k] = iir_add(q[h].L[k], q[h].pending[k]);
-    }
-    for (int h = 0; h < 2; h++)
-        for (int k = 0; k < 8; k++) {
-            int x = x0 + k % BLOCK_W, y = y0 + BLOCK_H * h + k / BLOCK_W;
-            if (x < out->width && y < out->height) *iir_image_at(out, x, y) = q[h].L[k];
-        }
-}
-#endif
-
 static void shade_block(const direct_ctx *c, int x0, int y0, iir_image *out, iir_raystats *st)
 {
 #if defined(__x86_64__)
     if (c->lean) {
-        lean_block(c, x0, y0, out, st);
+        iir_direct_lean lean = {&c->r->gb, c->r->rt, c->evals, c->num_lights, c->r->eps};
+        iir_direct_lean_block_avx2(&lean, x0, y0, out, st);
         return;
     }
 #endif

@@ -263,14 +263,46 @@ static void compose_row_lanes(const filter_ctx *c, const iir_filter_lanes *fl, i
     }
 }
 
-/* The full-shading filter with the AVX2 passes (the scalar ones' image). */
+/* Rows [y0, y1) of the full-shading filter: each row's row pass into the thread's ring (fl) as
+ * soon as a column pass of the band needs it, then the band's rows composed in order -- the row
+ * sums stay in the cache instead of going through memory between two passes over the image. */
+static void filter_band(const filter_ctx *c, const iir_filter_lanes *fl, int y0, int y1,
+                        iir_image *out)
+{
+    int next = y0 - fl->h > 0 ? y0 - fl->h : 0; /* the next row to pass */
+    for (int y = y0; y < y1; y++) {
+        int last = y + fl->h < fl->height ? y + fl->h : fl->height - 1;
+        for (; next <= last; next++) iir_filter_rows_avx2(fl, next);
+        compose_row_lanes(c, fl, y, out);
+    }
+}
+
+/* The full-shading filter with the AVX2 passes (the scalar ones' image): OpenMP over bands of rows,
+ * a thread's row sums in its own ring of 2 h + 1 rows of r->rows (the rows at a band's edges are
+ * passed by both bands that read them); where the threads' rings do not fit in r->rows, one row
+ * pass over the image and then one column pass. */
 static void filter_lanes(const filter_ctx *c, iir_image *out)
 {
+    enum { BAND = 32 };
     const iir_renderer *r = c->r;
-    iir_filter_lanes fl = {r->gb.width, r->gb.height,  c->n,
-                           c->h,        c->end_weight, r->fmask,
-                           c->live,     r->raw,        (float *)r->rows};
+    iir_filter_lanes fl = {r->gb.width,      r->gb.height, c->n,    c->h,
+                           c->end_weight,    r->fmask,     c->live, r->raw,
+                           (float *)r->rows, r->gb.height};
     _Static_assert(sizeof(iir_filter_row) == 4 * sizeof(float), "rows hold the four planes");
+    int ring = 2 * c->h + 1, bands = (fl.height + BAND - 1) / BAND;
+    if ((size_t)omp_get_max_threads() * (size_t)ring <= (size_t)fl.height) {
+#pragma omp parallel
+        {
+            iir_filter_lanes own = fl;
+            own.ring = ring;
+            own.planes += (size_t)omp_get_thread_num() * 4 * (size_t)ring * (size_t)fl.width;
+#pragma omp for schedule(dynamic, 1)
+            for (int b = 0; b < bands; b++)
+                filter_band(c, &own, b * BAND,
+                            b * BAND + BAND < fl.height ? b * BAND + BAND : fl.height, out);
+        }
+        return;
+    }
 #pragma omp parallel
     {
 #pragma omp for schedule(dynamic, 8)

@@ -38,25 +38,50 @@ static void chunk_planes(const iir_filter_lanes *f, int y, int x0, float *R, flo
 {
     const iir_vec3 *raw = f->raw + (size_t)y * (size_t)f->width;
     const int *live = f->live + (y % f->n) * f->n;
-    for (int k = 0, xx = x0 - f->h; k < CHUNK + 2 * IIR_FILTER_MAX_H + 8; k++, xx++) {
-        bool in = xx >= 0 && xx < f->width;
-        R[k] = in ? raw[xx].x : 0.f, G[k] = in ? raw[xx].y : 0.f, B[k] = in ? raw[xx].z : 0.f;
-        L[k] = in && live[xx % f->n] ? 1.f : 0.f;
+    int xx = x0 - f->h, end = CHUNK + 2 * IIR_FILTER_MAX_H + 8, k = 0;
+    for (; k < end && xx < 0; k++, xx++) R[k] = G[k] = B[k] = L[k] = 0.f;
+    for (int sx = xx % f->n; k < end && xx < f->width;
+         k++, xx++, sx = sx + 1 == f->n ? 0 : sx + 1) {
+        R[k] = raw[xx].x, G[k] = raw[xx].y, B[k] = raw[xx].z;
+        L[k] = live[sx] ? 1.f : 0.f;
     }
+    for (; k < end; k++) R[k] = G[k] = B[k] = L[k] = 0.f;
+}
+
+/* Lanes `in` of v stored at p (load_*: loaded from p); `all`: the 8 lanes, with a plain store or
+ * load (the masked moves are slow). */
+static inline void store_lanes(float *p, __m256i in, bool all, __m256 v)
+{
+    if (all)
+        _mm256_storeu_ps(p, v);
+    else
+        _mm256_maskstore_ps(p, in, v);
+}
+
+static inline __m256i load_masks(const uint32_t *p, __m256i in, bool all)
+{
+    return all ? _mm256_loadu_si256((const __m256i *)p) : _mm256_maskload_epi32((const int *)p, in);
+}
+
+static inline __m256 load_lanes(const float *p, __m256i in, bool all)
+{
+    return all ? _mm256_loadu_ps(p) : _mm256_maskload_ps(p, in);
 }
 
 void iir_filter_rows_avx2(const iir_filter_lanes *f, int y)
 {
     _Alignas(32) float R[CHUNK + 2 * IIR_FILTER_MAX_H + 8], G[sizeof R / sizeof *R],
         B[sizeof R / sizeof *R], L[sizeof R / sizeof *R];
-    size_t plane = (size_t)f->width * (size_t)f->height, row = (size_t)y * (size_t)f->width;
+    size_t plane = (size_t)f->width * (size_t)f->ring, row = (size_t)y * (size_t)f->width;
+    size_t slot = (size_t)(y % f->ring) * (size_t)f->width;
     __m256 zero = _mm256_setzero_ps();
     for (int x0 = 0; x0 < f->width; x0 += CHUNK) {
         chunk_planes(f, y, x0, R, G, B, L);
         int x1 = x0 + CHUNK < f->width ? x0 + CHUNK : f->width;
         for (int x = x0; x < x1; x += 8) {
             __m256i in = lanes_below(x, f->width);
-            __m256i masks = _mm256_maskload_epi32((const int *)(f->mask + row + (size_t)x), in);
+            bool all = x + 8 <= f->width;
+            __m256i masks = load_masks(f->mask + row + (size_t)x, in, all);
             __m256 r = zero, g = zero, b = zero, w = zero;
             for (int d = -f->h; d <= f->h; d++) {
                 int k = x - x0 + d + f->h; /* the taps' offset in the chunk's planes */
@@ -68,32 +93,33 @@ void iir_filter_rows_avx2(const iir_filter_lanes *f, int y)
                 b = _mm256_add_ps(b, _mm256_mul_ps(_mm256_loadu_ps(B + k), wt));
                 w = _mm256_add_ps(w, wt);
             }
-            float *out = f->planes + row + (size_t)x;
-            _mm256_maskstore_ps(out, in, r);
-            _mm256_maskstore_ps(out + plane, in, g);
-            _mm256_maskstore_ps(out + 2 * plane, in, b);
-            _mm256_maskstore_ps(out + 3 * plane, in, w);
+            float *out = f->planes + slot + (size_t)x;
+            store_lanes(out, in, all, r);
+            store_lanes(out + plane, in, all, g);
+            store_lanes(out + 2 * plane, in, all, b);
+            store_lanes(out + 3 * plane, in, all, w);
         }
     }
 }
 
 void iir_filter_columns_avx2(const iir_filter_lanes *f, int y, int x0, int x1, iir_vec3 *E)
 {
-    size_t plane = (size_t)f->width * (size_t)f->height, row = (size_t)y * (size_t)f->width;
+    size_t plane = (size_t)f->width * (size_t)f->ring, row = (size_t)y * (size_t)f->width;
     __m256 zero = _mm256_setzero_ps();
     for (int x = x0; x < x1; x += 8) {
         __m256i in = lanes_below(x, x1);
-        __m256i masks = _mm256_maskload_epi32((const int *)(f->mask + row + (size_t)x), in);
+        bool all = x + 8 <= x1;
+        __m256i masks = load_masks(f->mask + row + (size_t)x, in, all);
         __m256 r = zero, g = zero, b = zero, w = zero;
         for (int d = -f->h; d <= f->h; d++) {
             if (y + d < 0 || y + d >= f->height) continue;
             __m256 wt =
                 tap_weights(masks, IIR_FILTER_COLUMN + IIR_FILTER_MAX_H + d, end_weight(f, d));
-            const float *p = f->planes + (size_t)(y + d) * (size_t)f->width + (size_t)x;
-            r = _mm256_add_ps(r, _mm256_mul_ps(_mm256_maskload_ps(p, in), wt));
-            g = _mm256_add_ps(g, _mm256_mul_ps(_mm256_maskload_ps(p + plane, in), wt));
-            b = _mm256_add_ps(b, _mm256_mul_ps(_mm256_maskload_ps(p + 2 * plane, in), wt));
-            w = _mm256_add_ps(w, _mm256_mul_ps(wt, _mm256_maskload_ps(p + 3 * plane, in)));
+            const float *p = f->planes + (size_t)((y + d) % f->ring) * (size_t)f->width + (size_t)x;
+            r = _mm256_add_ps(r, _mm256_mul_ps(load_lanes(p, in, all), wt));
+            g = _mm256_add_ps(g, _mm256_mul_ps(load_lanes(p + plane, in, all), wt));
+            b = _mm256_add_ps(b, _mm256_mul_ps(load_lanes(p + 2 * plane, in, all), wt));
+            w = _mm256_add_ps(w, _mm256_mul_ps(wt, load_lanes(p + 3 * plane, in, all)));
         }
         __m256 any = _mm256_cmp_ps(w, zero, _CMP_GT_OQ);
         __m256 inv = _mm256_and_ps(any, _mm256_div_ps(_mm256_set1_ps(1.f), w));

@@ -178,11 +178,12 @@ static void render_block(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *
 /* The flags that let shading skip reading what every pixel has the same of. */
 static void summarize(iir_gbuffer *gb)
 {
-    gb->any_chain = gb->any_pbr = false;
+    gb->any_chain = gb->any_pbr = gb->any_emission = false;
     for (size_t i = 0, n = (size_t)gb->width * (size_t)gb->height; i < n; i++) {
         iir_vec3 t = gb->through[i];
         gb->any_chain |= gb->prim[i] != IIR_NO_HIT && (t.x != 1.f || t.y != 1.f || t.z != 1.f);
         gb->any_pbr |= gb->mr[i].y >= 0.f;
+        gb->any_emission |= !iir_is_black(gb->emission[i]);
     }
 }
 

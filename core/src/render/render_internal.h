@@ -209,20 +209,35 @@ bool iir_render_compensate(iir_renderer *r, const iir_shade_job *job, iir_raysta
  * + d the tap d pixels along its column. */
 enum { IIR_FILTER_MAX_H = IIR_MAX_INTERLEAVE / 2, IIR_FILTER_COLUMN = 16 };
 
+/* render_direct_avx2.c: direct light's lean 4x4 block at (x0, y0) -- a frame of points, spots and
+ * suns alone (evals, prepared) without specular chains -- into out, the same sums as
+ * render_direct.c's general block (the same image). */
+typedef struct iir_direct_lean {
+    const iir_gbuffer *gb;
+    const iir_rt *rt;
+    const iir_light_eval *evals;
+    uint32_t num_lights;
+    float eps; /* the renderer's: shadow rays' offset */
+} iir_direct_lean;
+void iir_direct_lean_block_avx2(const iir_direct_lean *c, int x0, int y0, iir_image *out,
+                                iir_raystats *st);
+
 /* render_filter_avx2.c: the full-shading filter's passes 8 pixels a step, the same sums as the
- * scalar passes in the same order (the same image). */
+ * scalar passes in the same order (the same image). The row pass of row y lives in slot y mod
+ * ring of planes: ring = height keeps every row, ring >= 2 h + 1 only those a column pass reads. */
 typedef struct iir_filter_lanes {
     int width, height, n, h;
     float end_weight;     /* of the taps at +-h */
     const uint32_t *mask; /* per pixel: the taps' similarity */
     const int *live;      /* n x n: 1 for the subsets with VPLs */
     const iir_vec3 *raw;  /* the demodulated indirect light */
-    float *planes; /* 4 planes of width x height: the row pass's sums (x, y, z) and weights */
+    float *planes;        /* 4 planes of width x ring: the row pass's sums (x, y, z) and weights */
+    int ring;             /* rows a plane holds */
 } iir_filter_lanes;
-/* The row pass of row y into planes. */
+/* The row pass of row y into its slot of planes. */
 void iir_filter_rows_avx2(const iir_filter_lanes *f, int y);
-/* The column pass of row y's pixels [x0, x1) (their rows' passes done): E[x - x0], the filtered
- * light (0 where no tap counted). */
+/* The column pass of row y's pixels [x0, x1) (rows y - h .. y + h passed, in their slots): E[x -
+ * x0], the filtered light (0 where no tap counted). */
 void iir_filter_columns_avx2(const iir_filter_lanes *f, int y, int x0, int x1, iir_vec3 *E);
 
 /* render_filter.c: out += demod / pi * (filtered or raw) r->raw (iir_gb_demod: the glossy pixels',

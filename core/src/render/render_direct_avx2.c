@@ -1,0 +1,270 @@
+/* render_direct_avx2.c -- direct light's lean block with AVX2 (render_internal.h:
+ * iir_direct_lean_block_avx2): the common frame's 4x4 pixels -- points, spots and suns alone, no
+ * specular chain -- as two halves of 8 lanes held in registers from the G-buffer's rows to the
+ * frame's, each light's 16 shadow rays in one packet. Its sums are render_direct.c's shade_block's,
+ * product for product and in the same order (this file is built with -mavx2 alone: no FMA), so the
+ * frame is the same bit for bit. Called only where the CPU has AVX2. */
+#include "render_internal.h"
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#include <string.h>
+
+#include "iir/bsdf.h"
+
+enum { HALF_W = 4, HALF_H = 2 }; /* a half's pixels: lane r * HALF_W + j is (x0 + j, y0 + r) */
+
+typedef struct v3 {
+    __m256 x, y, z;
+} v3;
+
+/* The 8 lanes of a half of a lean block. */
+typedef struct lean_half {
+    int x0, y0;
+    bool whole; /* every pixel inside the image */
+    size_t row[HALF_H];
+    v3 p, n, L;          /* receivers; radiance so far (from the emission) */
+    __m256 hit;          /* lane masks: geometry */
+    bool loaded;         /* the materials below are read */
+    __m256 shaded;       /* geometry that reflects: non-zero albedo, or glossy */
+    v3 f;                /* a Lambertian lane's BRDF rho / pi (0 where not shaded) */
+    bool any_glossy;     /* a metallic-roughness lane: its f is its BSDF's, per light */
+    __m256 glossy;       /* which */
+    iir_bsdf_lanes bsdf; /* the glossy lanes' BSDFs */
+    v3 pending;          /* a light's contribution, kept where its ray is unoccluded */
+} lean_half;
+
+static inline __m256 zero(void)
+{
+    return _mm256_setzero_ps();
+}
+static inline v3 mul3(v3 a, v3 b)
+{
+    return (v3){_mm256_mul_ps(a.x, b.x), _mm256_mul_ps(a.y, b.y), _mm256_mul_ps(a.z, b.z)};
+}
+static inline v3 add3(v3 a, v3 b)
+{
+    return (v3){_mm256_add_ps(a.x, b.x), _mm256_add_ps(a.y, b.y), _mm256_add_ps(a.z, b.z)};
+}
+static inline v3 and3(v3 a, __m256 m)
+{
+    return (v3){_mm256_and_ps(a.x, m), _mm256_and_ps(a.y, m), _mm256_and_ps(a.z, m)};
+}
+static inline v3 blend3(v3 a, v3 b, __m256 m) /* b where m, else a */
+{
+    return (v3){_mm256_blendv_ps(a.x, b.x, m), _mm256_blendv_ps(a.y, b.y, m),
+                _mm256_blendv_ps(a.z, b.z, m)};
+}
+static inline v3 load_planes(const float *x, const float *y, const float *z)
+{
+    return (v3){_mm256_load_ps(x), _mm256_load_ps(y), _mm256_load_ps(z)};
+}
+/* Lanes where a is not black (iir_is_black false: a NaN component counts as light). */
+static inline __m256 not_black(v3 a)
+{
+    return _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(a.x, zero(), _CMP_NEQ_UQ),
+                                     _mm256_cmp_ps(a.y, zero(), _CMP_NEQ_UQ)),
+                        _mm256_cmp_ps(a.z, zero(), _CMP_NEQ_UQ));
+}
+
+/* 4 iir_vec3 at each of two rows as lanes 0..3 (row a) and 4..7 (row b). */
+static v3 load_aos(const iir_vec3 *ra, const iir_vec3 *rb)
+{
+    const float *fa = &ra->x, *fb = &rb->x;
+    __m256 a = _mm256_set_m128(_mm_loadu_ps(fb), _mm_loadu_ps(fa));         /* x0 y0 z0 x1 */
+    __m256 b = _mm256_set_m128(_mm_loadu_ps(fb + 4), _mm_loadu_ps(fa + 4)); /* y1 z1 x2 y2 */
+    __m256 c = _mm256_set_m128(_mm_loadu_ps(fb + 8), _mm_loadu_ps(fa + 8)); /* z2 x3 y3 z3 */
+    __m256 xy = _mm256_shuffle_ps(b, c, _MM_SHUFFLE(2, 1, 3, 2));           /* x2 y2 x3 y3 */
+    __m256 yz = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 2, 1));           /* y0 z0 y1 z1 */
+    return (v3){_mm256_shuffle_ps(a, xy, _MM_SHUFFLE(2, 0, 3, 0)),
+                _mm256_shuffle_ps(yz, xy, _MM_SHUFFLE(3, 1, 2, 0)),
+                _mm256_shuffle_ps(yz, c, _MM_SHUFFLE(3, 0, 3, 1))};
+}
+
+/* load_aos's inverse: lanes 0..3 to row a, 4..7 to row b. */
+static void store_aos(v3 v, iir_vec3 *ra, iir_vec3 *rb)
+{
+    __m256 lo = _mm256_unpacklo_ps(v.x, v.y), hi = _mm256_unpackhi_ps(v.x, v.y); /* x0y0x1y1 */
+    __m256 zx = _mm256_shuffle_ps(v.z, v.x, _MM_SHUFFLE(1, 1, 0, 0));            /* z0z0x1x1 */
+    __m256 yz = _mm256_shuffle_ps(v.y, v.z, _MM_SHUFFLE(1, 1, 1, 1));            /* y1y1z1z1 */
+    __m256 zx2 = _mm256_shuffle_ps(v.z, v.x, _MM_SHUFFLE(3, 3, 2, 2));           /* z2z2x3x3 */
+    __m256 yzz = _mm256_shuffle_ps(hi, v.z, _MM_SHUFFLE(3, 3, 3, 2));            /* x3y3z3z3 */
+    __m256 a = _mm256_shuffle_ps(lo, zx, _MM_SHUFFLE(2, 0, 1, 0));               /* x0y0z0x1 */
+    __m256 b = _mm256_shuffle_ps(yz, hi, _MM_SHUFFLE(1, 0, 2, 0));               /* y1z1x2y2 */
+    __m256 c = _mm256_shuffle_ps(zx2, yzz, _MM_SHUFFLE(2, 1, 2, 0));             /* z2x3y3z3 */
+    float *fa = &ra->x, *fb = &rb->x;
+    _mm_storeu_ps(fa, _mm256_castps256_ps128(a));
+    _mm_storeu_ps(fa + 4, _mm256_castps256_ps128(b));
+    _mm_storeu_ps(fa + 8, _mm256_castps256_ps128(c));
+    _mm_storeu_ps(fb, _mm256_extractf128_ps(a, 1));
+    _mm_storeu_ps(fb + 4, _mm256_extractf128_ps(b, 1));
+    _mm_storeu_ps(fb + 8, _mm256_extractf128_ps(c, 1));
+}
+
+/* Array a's values at the half's pixels (0 outside the image). */
+static v3 half_vec3(const lean_half *q, const iir_gbuffer *gb, const iir_vec3 *a)
+{
+    if (q->whole) return load_aos(a + q->row[0], a + q->row[1]);
+    _Alignas(32) float x[8], y[8], z[8];
+    for (int k = 0; k < 8; k++) {
+        int px = q->x0 + k % HALF_W, py = q->y0 + k / HALF_W;
+        bool in = px < gb->width && py < gb->height;
+        iir_vec3 v = in ? a[(size_t)py * (size_t)gb->width + (size_t)px] : iir_v3s(0.f);
+        x[k] = v.x, y[k] = v.y, z[k] = v.z;
+    }
+    return load_planes(x, y, z);
+}
+
+/* Lanes whose pixel is geometry. */
+static __m256 half_hit(const lean_half *q, const iir_gbuffer *gb)
+{
+    _Alignas(32) int32_t prim[8];
+    for (int k = 0; k < 8; k++) {
+        int px = q->x0 + k % HALF_W, py = q->y0 + k / HALF_W;
+        bool in = px < gb->width && py < gb->height;
+        prim[k] = in ? (int32_t)gb->prim[(size_t)py * (size_t)gb->width + (size_t)px]
+                     : (int32_t)IIR_NO_HIT;
+    }
+    __m256i none = _mm256_cmpeq_epi32(_mm256_load_si256((const __m256i *)prim),
+                                      _mm256_set1_epi32((int32_t)IIR_NO_HIT));
+    return _mm256_castsi256_ps(_mm256_xor_si256(none, _mm256_set1_epi32(-1)));
+}
+
+/* The half's surfaces: receivers, geometry, emission. */
+static void half_surface(lean_half *q, const iir_gbuffer *gb, int x0, int y0)
+{
+    q->x0 = x0, q->y0 = y0, q->loaded = false;
+    q->whole = x0 + HALF_W <= gb->width && y0 + HALF_H <= gb->height;
+    for (int r = 0; r < HALF_H; r++) q->row[r] = (size_t)(y0 + r) * (size_t)gb->width + (size_t)x0;
+    q->p = half_vec3(q, gb, gb->position);
+    q->n = half_vec3(q, gb, gb->normal);
+    q->L = gb->any_emission ? half_vec3(q, gb, gb->emission) : (v3){zero(), zero(), zero()};
+    q->hit = half_hit(q, gb);
+}
+
+/* The glossy lanes' BSDFs (metallic-roughness pixels), lane by lane. */
+static void half_glossy(lean_half *q, const iir_gbuffer *gb)
+{
+    _Alignas(32) int32_t glossy[8] = {0};
+    int hit = _mm256_movemask_ps(q->hit);
+    memset(&q->bsdf, 0, sizeof q->bsdf);
+    for (int k = 0; k < 8; k++) {
+        if (!(hit >> k & 1)) continue;
+        size_t i = q->row[k / HALF_W] + (size_t)(k % HALF_W);
+        iir_vec3 m = gb->mr[i];
+        if (!(m.y >= 0.f)) continue;
+        iir_bsdf_lanes_set(&q->bsdf, k, gb->normal[i], gb->wo[i], gb->base[i], m.x, m.y, m.z);
+        glossy[k] = -1;
+    }
+    q->glossy = _mm256_castsi256_ps(_mm256_load_si256((const __m256i *)glossy));
+    q->any_glossy = _mm256_movemask_ps(q->glossy) != 0;
+}
+
+/* The half's materials, once: shade_block's f and which lanes are shaded. */
+static void half_materials(lean_half *q, const iir_gbuffer *gb)
+{
+    if (q->loaded) return;
+    q->loaded = true;
+    q->any_glossy = false;
+    q->glossy = zero();
+    if (gb->any_pbr) half_glossy(q, gb);
+    v3 albedo = half_vec3(q, gb, gb->albedo);
+    q->shaded = _mm256_and_ps(q->hit, _mm256_or_ps(q->glossy, not_black(albedo)));
+    __m256 inv_pi = _mm256_set1_ps(IIR_INV_PI);
+    v3 f = {_mm256_mul_ps(albedo.x, inv_pi), _mm256_mul_ps(albedo.y, inv_pi),
+            _mm256_mul_ps(albedo.z, inv_pi)};
+    q->f = and3(f, q->shaded);
+}
+
+/* Light e's 8 samples of half q into rays (lanes_into_rays's rule: a shaded lane that receives
+ * light gets its pending f E, added at once when its segment is too short to test). True when a
+ * lane has a ray. A half the light does not reach reads no material. */
+static bool half_samples(const iir_direct_lean *c, const iir_light_eval *e, lean_half *q,
+                         iir_ray8 *rays)
+{
+    iir_light_lanes in;
+    _mm256_store_ps(in.px, q->p.x), _mm256_store_ps(in.py, q->p.y);
+    _mm256_store_ps(in.pz, q->p.z), _mm256_store_ps(in.nx, q->n.x);
+    _mm256_store_ps(in.ny, q->n.y), _mm256_store_ps(in.nz, q->n.z);
+    iir_light_delta_lanes o;
+    iir_light_sample_delta8_avx2(e, c->eps, &in, &o);
+    v3 E = load_planes(o.Ex, o.Ey, o.Ez);
+    __m256 lit = not_black(E);
+    if (!_mm256_movemask_ps(lit)) {
+        memset(rays->valid, 0, sizeof rays->valid);
+        return false;
+    }
+    half_materials(q, c->gb);
+    v3 f = q->f;
+    if (q->any_glossy) {
+        _Alignas(32) float fx[8], fy[8], fz[8];
+        iir_bsdf_f8_avx2(&q->bsdf, o.wx, o.wy, o.wz, fx, fy, fz);
+        f = blend3(f, load_planes(fx, fy, fz), q->glossy);
+    }
+    lit = _mm256_and_ps(lit, q->shaded);
+    q->pending = mul3(f, E);
+    __m256 tmax = _mm256_loadu_ps(o.tmax);
+    __m256 traced = _mm256_and_ps(lit, _mm256_cmp_ps(tmax, zero(), _CMP_GT_OQ));
+    q->L = blend3(q->L, add3(q->L, q->pending), _mm256_andnot_ps(traced, lit));
+    _mm256_storeu_si256((__m256i *)rays->valid,
+                        _mm256_and_si256(_mm256_castps_si256(traced), _mm256_set1_epi32(1)));
+    _mm256_storeu_ps(rays->ox, _mm256_loadu_ps(o.ox)),
+        _mm256_storeu_ps(rays->oy, _mm256_loadu_ps(o.oy));
+    _mm256_storeu_ps(rays->oz, _mm256_loadu_ps(o.oz)),
+        _mm256_storeu_ps(rays->dx, _mm256_loadu_ps(o.dx));
+    _mm256_storeu_ps(rays->dy, _mm256_loadu_ps(o.dy)),
+        _mm256_storeu_ps(rays->dz, _mm256_loadu_ps(o.dz));
+    _mm256_storeu_ps(rays->tnear, zero());
+    _mm256_storeu_ps(rays->tfar, tmax);
+    return _mm256_movemask_ps(traced) != 0;
+}
+
+/* Lanes of 8 bools. */
+static inline __m256 bool_lanes(const bool *b)
+{
+    uint64_t bytes;
+    memcpy(&bytes, b, sizeof bytes);
+    __m256i v = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)bytes));
+    return _mm256_castsi256_ps(
+        _mm256_xor_si256(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()), _mm256_set1_epi32(-1)));
+}
+
+/* The half's radiance into the frame (its pixels inside it). */
+static void half_store(const lean_half *q, iir_image *out)
+{
+    if (q->whole) {
+        store_aos(q->L, iir_image_at(out, q->x0, q->y0), iir_image_at(out, q->x0, q->y0 + 1));
+        return;
+    }
+    _Alignas(32) float x[8], y[8], z[8];
+    _mm256_store_ps(x, q->L.x), _mm256_store_ps(y, q->L.y), _mm256_store_ps(z, q->L.z);
+    for (int k = 0; k < 8; k++) {
+        int px = q->x0 + k % HALF_W, py = q->y0 + k / HALF_W;
+        if (px < out->width && py < out->height)
+            *iir_image_at(out, px, py) = iir_v3(x[k], y[k], z[k]);
+    }
+}
+
+void iir_direct_lean_block_avx2(const iir_direct_lean *c, int x0, int y0, iir_image *out,
+                                iir_raystats *st)
+{
+    lean_half q[2];
+    for (int h = 0; h < 2; h++) half_surface(&q[h], c->gb, x0, y0 + HALF_H * h);
+    for (uint32_t l = 0; l < c->num_lights; l++) {
+        iir_ray8 rays[2];
+        bool any = half_samples(c, &c->evals[l], &q[0], &rays[0]);
+        any |= half_samples(c, &c->evals[l], &q[1], &rays[1]);
+        if (!any) continue;
+        bool occluded[16];
+        iir_rt_occluded16(c->rt, rays, occluded, st, IIR_RAYS_SHADOW);
+        for (int h = 0; h < 2; h++) {
+            __m256 valid = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                _mm256_loadu_si256((const __m256i *)rays[h].valid), _mm256_setzero_si256()));
+            __m256 keep = _mm256_andnot_ps(bool_lanes(occluded + 8 * h), valid);
+            q[h].L = blend3(q[h].L, add3(q[h].L, q[h].pending), keep);
+        }
+    }
+    for (int h = 0; h < 2; h++) half_store(&q[h], out);
+}
+
+#endif
