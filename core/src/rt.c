@@ -248,6 +248,16 @@ static uint64_t count_valid(const int valid[8])
     return n;
 }
 
+/* hits[0 .. n) from Embree packet rh (RTCRayHit8 or RTCRayHit16: the same fields). */
+#define GET_HITS(rh, valid, n, hits)                                                               \
+    for (int i_ = 0; i_ < (n); i_++) {                                                             \
+        bool found_ = (valid)[i_] && (rh)->hit.geomID[i_] != RTC_INVALID_GEOMETRY_ID;              \
+        (hits)[i_].t = found_ ? (rh)->ray.tfar[i_] : INFINITY;                                     \
+        (hits)[i_].prim = found_ ? (rh)->hit.primID[i_] : IIR_NO_HIT;                              \
+        (hits)[i_].u = (rh)->hit.u[i_];                                                            \
+        (hits)[i_].v = (rh)->hit.v[i_];                                                            \
+    }
+
 void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], iir_raystats *st,
                        iir_ray_kind kind)
 {
@@ -259,13 +269,22 @@ void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], 
     for (int i = 0; i < 8; i++) rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect8(valid, rt->scene, &ctx.rtc, &rh);
     count(st, kind, count_valid(valid));
-    for (int i = 0; i < 8; i++) {
-        bool found = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
-        hits[i].t = found ? rh.ray.tfar[i] : INFINITY;
-        hits[i].prim = found ? rh.hit.primID[i] : IIR_NO_HIT;
-        hits[i].u = rh.hit.u[i];
-        hits[i].v = rh.hit.v[i];
-    }
+    GET_HITS(&rh, valid, 8, hits);
+}
+
+void iir_rt_intersect16(const iir_rt *rt, const iir_ray8 halves[2], iir_hit hits[16],
+                        iir_raystats *st, iir_ray_kind kind)
+{
+    query_ctx ctx = plain_ctx();
+    ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    struct RTCRayHit16 rh;
+    _Alignas(64) int valid[16];
+    SET_LANES(&rh.ray, &halves[0], 0, valid);
+    SET_LANES(&rh.ray, &halves[1], 8, valid);
+    for (int i = 0; i < 16; i++) rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect16(valid, rt->scene, &ctx.rtc, &rh);
+    count(st, kind, count_valid(valid) + count_valid(valid + 8));
+    GET_HITS(&rh, valid, 16, hits);
 }
 
 void iir_rt_occluded8(const iir_rt *rt, const iir_ray8 *rays, bool occluded[8], iir_raystats *st,

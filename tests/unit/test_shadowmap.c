@@ -1,6 +1,7 @@
 /* test_shadowmap.c -- VPL paraboloid shadow maps: the parametrisation's round trips, a map's depths
  * against the known Cornell box geometry, lookups against exact rays, and which maps
- * iir_smaps_build renders. Agreement over whole frames is in test_render.c. */
+ * iir_smaps_build renders, and the AVX2 rays against the scalar ones. Agreement over whole frames
+ * is in test_render.c. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -11,6 +12,7 @@
 #include <cmocka.h>
 #include <omp.h>
 
+#include "iir/isa.h"
 #include "iir/rng.h"
 #include "iir/rt.h"
 #include "iir/scene.h"
@@ -234,6 +236,45 @@ static void test_budget(void **state)
     }
 }
 
+/* The maps' rays with AVX2 (iir_smap_texel_rays_avx2) are the scalar ones to the bit, so a map is
+ * the same whichever set renders it: VPLs facing every axis and between, resolutions that are and
+ * are not multiples of the 8 lanes, IIR_ISA capping the choice to scalar for the reference. */
+static void test_avx2_rays_are_scalar(void **state)
+{
+    const iir_test_cornell *c = *state;
+    if (!iir_isa_supported(IIR_ISA_AVX2)) {
+        print_message("no AVX2 here: nothing to compare\n");
+        return;
+    }
+    const int res_list[] = {1, 5, 32, 37, 128};
+    const iir_vec3 normals[] = {iir_v3(0, 1, 0),  iir_v3(0, -1, 0), iir_v3(1, 0, 0),
+                                iir_v3(0, 0, -1), iir_v3(1, 2, -3), iir_v3(-0.3f, 0.2f, 0.9f)};
+    const char *cap = getenv("IIR_ISA");
+    char *saved = cap ? strdup(cap) : NULL;
+    for (size_t r = 0; r < sizeof res_list / sizeof *res_list; r++)
+        for (size_t k = 0; k < sizeof normals / sizeof *normals; k++) {
+            int res = res_list[r];
+            iir_vpl v = vpl_at(7, iir_v3(0.1f, 1.f, -0.4f), normals[k]);
+            iir_smap scalar = {0}, avx2 = {0};
+            setenv("IIR_ISA", "scalar", 1);
+            assert_true(iir_smap_render(&scalar, c->rt, &v, res, NULL));
+            unsetenv("IIR_ISA");
+            assert_true(iir_smap_render(&avx2, c->rt, &v, res, NULL));
+            assert_memory_equal(scalar.depth, avx2.depth,
+                                sizeof *scalar.depth * (size_t)res * (size_t)res);
+            /* and the rays themselves, lane by lane */
+            for (int j = 0; j < res; j += 3)
+                for (int i0 = 0; i0 < res; i0 += 8) {
+                    iir_ray8 rays;
+                    iir_smap_texel_rays_avx2(&v.frame, v.position, i0, j, res, &rays);
+                    for (int q = 0; q < 8; q++) assert_int_equal(rays.valid[q] != 0, i0 + q < res);
+                }
+            iir_smap_release(&scalar), iir_smap_release(&avx2);
+        }
+    if (saved) setenv("IIR_ISA", saved, 1);
+    free(saved);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -242,6 +283,7 @@ int main(void)
         cmocka_unit_test(test_floor_vpl_sees_ceiling),
         cmocka_unit_test(test_lookup_matches_rays),
         cmocka_unit_test(test_build_only_what_is_missing),
+        cmocka_unit_test(test_avx2_rays_are_scalar),
     };
     return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);
 }

@@ -91,8 +91,10 @@ void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], 
                        iir_ray_kind kind);
 void iir_rt_occluded8(const iir_rt *rt, const iir_ray8 *rays, bool occluded[8], iir_raystats *st,
                       iir_ray_kind kind);
-/* Two packets of 8 as one of 16 (occluded[8 h + k]: halves[h] lane k): Embree's 16-wide traversal
- * where the CPU has AVX-512. */
+/* Two packets of 8 as one of 16 (hits/occluded[8 h + k]: halves[h] lane k): Embree's 16-wide
+ * traversal where the CPU has AVX-512. */
+void iir_rt_intersect16(const iir_rt *rt, const iir_ray8 halves[2], iir_hit hits[16],
+                        iir_raystats *st, iir_ray_kind kind);
 void iir_rt_occluded16(const iir_rt *rt, const iir_ray8 halves[2], bool occluded[16],
                        iir_raystats *st, iir_ray_kind kind);
 

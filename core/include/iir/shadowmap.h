@@ -92,6 +92,11 @@ uint64_t iir_smap_next_stamp(void);
  * (iir_vpl_set_normal). Returns false, with the map released (res 0), only when allocation fails.
  * m is usually &v->smap but need not be. Thread-safe for distinct maps. */
 bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, iir_raystats *st);
+/* The rays of texels i0 .. i0 + 7 of row j of a res x res map seen from org in frame fr (lanes at
+ * i >= res invalid), with AVX2: only where iir_isa_supported(IIR_ISA_AVX2). The rays
+ * iir_smap_render traces, to the bit. */
+void iir_smap_texel_rays_avx2(const iir_frame *fr, iir_vec3 org, int i0, int j, int res,
+                              iir_ray8 *rays);
 
 /* Renders the maps of the non-null VPLs whose smap.res != res (new VPLs, or maps of another
  * resolution), in parallel over VPLs (OpenMP), adding the rays to *st (may be NULL). Null samples'

@@ -11,12 +11,9 @@
 #include <string.h>
 
 #include "iir/bsdf.h"
+#include "render_lanes_avx2.h"
 
 enum { HALF_W = 4, HALF_H = 2 }; /* a half's pixels: lane r * HALF_W + j is (x0 + j, y0 + r) */
-
-typedef struct v3 {
-    __m256 x, y, z;
-} v3;
 
 /* The 8 lanes of a half of a lean block. */
 typedef struct lean_half {
@@ -33,73 +30,6 @@ typedef struct lean_half {
     iir_bsdf_lanes bsdf; /* the glossy lanes' BSDFs */
     v3 pending;          /* a light's contribution, kept where its ray is unoccluded */
 } lean_half;
-
-static inline __m256 zero(void)
-{
-    return _mm256_setzero_ps();
-}
-static inline v3 mul3(v3 a, v3 b)
-{
-    return (v3){_mm256_mul_ps(a.x, b.x), _mm256_mul_ps(a.y, b.y), _mm256_mul_ps(a.z, b.z)};
-}
-static inline v3 add3(v3 a, v3 b)
-{
-    return (v3){_mm256_add_ps(a.x, b.x), _mm256_add_ps(a.y, b.y), _mm256_add_ps(a.z, b.z)};
-}
-static inline v3 and3(v3 a, __m256 m)
-{
-    return (v3){_mm256_and_ps(a.x, m), _mm256_and_ps(a.y, m), _mm256_and_ps(a.z, m)};
-}
-static inline v3 blend3(v3 a, v3 b, __m256 m) /* b where m, else a */
-{
-    return (v3){_mm256_blendv_ps(a.x, b.x, m), _mm256_blendv_ps(a.y, b.y, m),
-                _mm256_blendv_ps(a.z, b.z, m)};
-}
-static inline v3 load_planes(const float *x, const float *y, const float *z)
-{
-    return (v3){_mm256_load_ps(x), _mm256_load_ps(y), _mm256_load_ps(z)};
-}
-/* Lanes where a is not black (iir_is_black false: a NaN component counts as light). */
-static inline __m256 not_black(v3 a)
-{
-    return _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(a.x, zero(), _CMP_NEQ_UQ),
-                                     _mm256_cmp_ps(a.y, zero(), _CMP_NEQ_UQ)),
-                        _mm256_cmp_ps(a.z, zero(), _CMP_NEQ_UQ));
-}
-
-/* 4 iir_vec3 at each of two rows as lanes 0..3 (row a) and 4..7 (row b). */
-static v3 load_aos(const iir_vec3 *ra, const iir_vec3 *rb)
-{
-    const float *fa = &ra->x, *fb = &rb->x;
-    __m256 a = _mm256_set_m128(_mm_loadu_ps(fb), _mm_loadu_ps(fa));         /* x0 y0 z0 x1 */
-    __m256 b = _mm256_set_m128(_mm_loadu_ps(fb + 4), _mm_loadu_ps(fa + 4)); /* y1 z1 x2 y2 */
-    __m256 c = _mm256_set_m128(_mm_loadu_ps(fb + 8), _mm_loadu_ps(fa + 8)); /* z2 x3 y3 z3 */
-    __m256 xy = _mm256_shuffle_ps(b, c, _MM_SHUFFLE(2, 1, 3, 2));           /* x2 y2 x3 y3 */
-    __m256 yz = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 2, 1));           /* y0 z0 y1 z1 */
-    return (v3){_mm256_shuffle_ps(a, xy, _MM_SHUFFLE(2, 0, 3, 0)),
-                _mm256_shuffle_ps(yz, xy, _MM_SHUFFLE(3, 1, 2, 0)),
-                _mm256_shuffle_ps(yz, c, _MM_SHUFFLE(3, 0, 3, 1))};
-}
-
-/* load_aos's inverse: lanes 0..3 to row a, 4..7 to row b. */
-static void store_aos(v3 v, iir_vec3 *ra, iir_vec3 *rb)
-{
-    __m256 lo = _mm256_unpacklo_ps(v.x, v.y), hi = _mm256_unpackhi_ps(v.x, v.y); /* x0y0x1y1 */
-    __m256 zx = _mm256_shuffle_ps(v.z, v.x, _MM_SHUFFLE(1, 1, 0, 0));            /* z0z0x1x1 */
-    __m256 yz = _mm256_shuffle_ps(v.y, v.z, _MM_SHUFFLE(1, 1, 1, 1));            /* y1y1z1z1 */
-    __m256 zx2 = _mm256_shuffle_ps(v.z, v.x, _MM_SHUFFLE(3, 3, 2, 2));           /* z2z2x3x3 */
-    __m256 yzz = _mm256_shuffle_ps(hi, v.z, _MM_SHUFFLE(3, 3, 3, 2));            /* x3y3z3z3 */
-    __m256 a = _mm256_shuffle_ps(lo, zx, _MM_SHUFFLE(2, 0, 1, 0));               /* x0y0z0x1 */
-    __m256 b = _mm256_shuffle_ps(yz, hi, _MM_SHUFFLE(1, 0, 2, 0));               /* y1z1x2y2 */
-    __m256 c = _mm256_shuffle_ps(zx2, yzz, _MM_SHUFFLE(2, 1, 2, 0));             /* z2x3y3z3 */
-    float *fa = &ra->x, *fb = &rb->x;
-    _mm_storeu_ps(fa, _mm256_castps256_ps128(a));
-    _mm_storeu_ps(fa + 4, _mm256_castps256_ps128(b));
-    _mm_storeu_ps(fa + 8, _mm256_castps256_ps128(c));
-    _mm_storeu_ps(fb, _mm256_extractf128_ps(a, 1));
-    _mm_storeu_ps(fb + 4, _mm256_extractf128_ps(b, 1));
-    _mm_storeu_ps(fb + 8, _mm256_extractf128_ps(c, 1));
-}
 
 /* Array a's values at the half's pixels (0 outside the image). */
 static v3 half_vec3(const lean_half *q, const iir_gbuffer *gb, const iir_vec3 *a)

@@ -248,6 +248,10 @@ static void compose_row_lanes(const filter_ctx *c, const iir_filter_lanes *fl, i
 {
     enum { SPAN = 256 };
     const iir_gbuffer *gb = &c->r->gb;
+    if (!gb->any_pbr && !gb->any_chain) {
+        iir_filter_compose_avx2(fl, gb, y, out);
+        return;
+    }
     iir_vec3 E[SPAN];
     for (int x0 = 0; x0 < gb->width; x0 += SPAN) {
         int x1 = x0 + SPAN < gb->width ? x0 + SPAN : gb->width;

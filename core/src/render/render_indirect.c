@@ -555,6 +555,21 @@ static indirect_ctx make_ctx(const iir_renderer *r, const iir_indirect_params *p
     return c;
 }
 
+/* Each subset's VPLs that read their columns (c->reads), and the leading ones of them that are
+ * not glossy (c->prefix: summed from the columns alone at non-glossy samples). */
+static void count_readers(indirect_ctx *c)
+{
+    const iir_renderer *r = c->r;
+    for (uint32_t k = 0; k < r->num_subsets && c->gv.ref; k++) {
+        bool leading = true;
+        for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++) {
+            leading &= c->gv.ref[i].mode == IIR_GV_READ && !r->vpl[i].glossy;
+            c->prefix[k] += leading;
+            c->reads[k] += c->gv.ref[i].mode == IIR_GV_READ;
+        }
+    }
+}
+
 bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t shift,
                          bool stoppable, iir_raystats *st, uint64_t *evals, uint64_t *reused)
 {
@@ -565,14 +580,7 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
         iir_gv_free(r->gv_mr), r->gv_mr = NULL; /* one set of columns at a time */
         c.gv = iir_gv_begin(r, &r->gv, &c.args, n, shift, c.receivers, NULL);
     }
-    for (uint32_t k = 0; k < r->num_subsets && c.gv.ref; k++) {
-        bool leading = true;
-        for (uint32_t i = r->start[k]; i < r->start[k + 1]; i++) {
-            leading &= c.gv.ref[i].mode == IIR_GV_READ && !r->vpl[i].glossy;
-            c.prefix[k] += leading;
-            c.reads[k] += c.gv.ref[i].mode == IIR_GV_READ;
-        }
-    }
+    count_readers(&c);
     iir_raystats total = {0};
     int skipped = 0;
     uint64_t sum = 0, read = 0;
@@ -631,43 +639,72 @@ iir_vec3 iir_render_vpl_light_at(const iir_renderer *r, const iir_indirect_param
 _Static_assert((int)IIR_MR_BATCH <= (int)IIR_BATCH, "a multires batch must fit a pixel batch");
 
 /* Adds subset k's power G V to every sample of the batch (its E zeroed first), the batch being
- * work item `item`, which lattice class j unites (its columns' place: gv_columns.h). */
-static void apply_subset(const indirect_ctx *c, uint32_t k, uint32_t j, int item, int count,
-                         pixel_batch *b, iir_raystats *st)
+ * work item `item`, which lattice class j unites (its columns' place: gv_columns.h); `plain`: no
+ * sample is glossy, so the subset's leading readers are summed from their columns alone (the
+ * kernel's sums: shade_batch's rule). */
+static void apply_subset(const indirect_ctx *c, uint32_t k, uint32_t j, int item, bool plain,
+                         int count, pixel_batch *b, iir_raystats *st)
 {
     const iir_renderer *r = c->r;
     for (int q = 0; q < iir_batch_padded(count); q++) b->Ex[q] = b->Ey[q] = b->Ez[q] = 0.f;
     const iir_gv_ref *gv = c->gv.ref ? &c->gv.ref[r->start[k]] : NULL;
+    uint32_t size = r->start[k + 1] - r->start[k], lead = gv && plain ? c->prefix[k] : 0;
     if (gv) b->ord = c->gv.ord[(size_t)item * r->num_subsets + j];
-    apply_vpls(c, &r->vpl[r->start[k]], gv, r->start[k + 1] - r->start[k], b, st);
+    if (lead)
+        iir_columns_sum_avx2(&r->vpl[r->start[k]], gv, lead, b->ord, count, b->Ex, b->Ey, b->Ez);
+    if (lead < size)
+        apply_vpls(c, &r->vpl[r->start[k] + lead], gv ? gv + lead : NULL, size - lead, b, st);
+}
+
+/* Whether subset k is in the union of class (cx, cy) of an m x m lattice (coarse_samples). */
+static inline bool in_union(uint32_t k, uint32_t n, uint32_t m, uint32_t cx, uint32_t cy)
+{
+    return k % n % m == cx && k / n % m == cy;
+}
+
+/* The samples as a batch (glossy pixels marked); false when none of them is glossy. */
+static bool coarse_batch(const indirect_ctx *c, const iir_mr_sample *s, int count, pixel_batch *b)
+{
+    const iir_renderer *r = c->r;
+    bool glossy = false;
+    b->m = 0;
+    for (int q = 0; q < count; q++) {
+        bool pixel = s[q].pixel != IIR_MR_TEXEL; /* its index seeds a sphere's directions */
+        batch_push(b, pixel ? s[q].pixel : (uint32_t)q, s[q].position, s[q].normal);
+        if (pixel && r->gb.any_pbr) batch_mark_glossy(b, &r->gb, s[q].pixel, c->receivers);
+        glossy |= iir_batch_is_glossy(b, b->m - 1);
+    }
+    while (b->m % IIR_BATCH_LANES) batch_push(b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
+    b->m = count;
+    return glossy;
 }
 
 /* Shades samples of class cls of an m x m lattice: the union U of the subsets k whose lattice
  * position is cls's mod m, subset k's estimate weighted |k| / |U| (so U's VPLs carry
- * Phi_i N / |U|: m = n is subset cls alone, m = 1 every VPL with its own flux). */
+ * Phi_i N / |U|: m = n is subset cls alone, m = 1 every VPL with its own flux). A union whose every
+ * VPL is summed from its columns (no pixel of it can be glossy) skips the batch. */
 static uint64_t coarse_samples(void *ctx, int item, int m, uint32_t cls, const iir_mr_sample *s,
                                int count, iir_vec3 *E, iir_raystats *st)
 {
     const indirect_ctx *c = ctx;
     const iir_renderer *r = c->r;
     uint32_t n = (uint32_t)c->n, cx = cls % (uint32_t)m, cy = cls / (uint32_t)m, union_size = 0;
-    for (uint32_t k = 0; k < r->num_subsets; k++)
-        if (k % n % (uint32_t)m == cx && k / n % (uint32_t)m == cy)
-            union_size += r->start[k + 1] - r->start[k];
-    pixel_batch b;
-    b.m = 0;
-    for (int q = 0; q < count; q++) {
-        bool pixel = s[q].pixel != IIR_MR_TEXEL; /* its index seeds a sphere's directions */
-        batch_push(&b, pixel ? s[q].pixel : (uint32_t)q, s[q].position, s[q].normal);
-        if (pixel && r->gb.any_pbr) batch_mark_glossy(&b, &r->gb, s[q].pixel, c->receivers);
+    bool columns = c->gv.ref && !r->gb.any_pbr;
+    for (uint32_t k = 0; k < r->num_subsets; k++) {
+        if (!in_union(k, n, (uint32_t)m, cx, cy)) continue;
+        uint32_t j = (k + c->shift) % r->num_subsets; /* apply_subset's */
+        union_size += r->start[k + 1] - r->start[k];
+        columns &= c->prefix[j] == r->start[j + 1] - r->start[j];
     }
-    while (b.m % IIR_BATCH_LANES) batch_push(&b, 0, iir_v3s(0.f), iir_v3s(0.f)); /* never lit */
+    pixel_batch b;
+    bool plain = true;
+    if (!columns) plain = !coarse_batch(c, s, count, &b);
     b.m = count;
     for (int q = 0; q < count; q++) E[q] = iir_v3s(0.f);
     for (uint32_t k = 0; k < r->num_subsets && union_size; k++) {
         uint32_t size = r->start[k + 1] - r->start[k];
-        if (!size || k % n % (uint32_t)m != cx || k / n % (uint32_t)m != cy) continue;
-        apply_subset(c, (k + c->shift) % r->num_subsets, k, item, count, &b, st);
+        if (!size || !in_union(k, n, (uint32_t)m, cx, cy)) continue;
+        apply_subset(c, (k + c->shift) % r->num_subsets, k, item, plain, count, &b, st);
         float w = (float)size / (float)union_size;
         for (int q = 0; q < count; q++) E[q] = iir_madd(E[q], iir_v3(b.Ex[q], b.Ey[q], b.Ez[q]), w);
     }
@@ -698,6 +735,7 @@ bool iir_render_indirect_coarse(iir_renderer *r, const iir_indirect_params *p, b
         iir_gv_free(r->gv), r->gv = NULL; /* one set of columns at a time */
         c.gv = iir_gv_begin(r, &r->gv_mr, &c.args, c.n, 0, c.receivers, r->mr);
     }
+    count_readers(&c);
     bool stopped = iir_multires_shade_fine(r->mr, &r->gb, coarse_samples, &c, live, r->raw, c.stop,
                                            r->stop_ctx, st, evals) ||
                    iir_multires_shade(r->mr, coarse_samples, &c, live, NULL, c.stop, r->stop_ctx,

@@ -239,6 +239,11 @@ void iir_filter_rows_avx2(const iir_filter_lanes *f, int y);
 /* The column pass of row y's pixels [x0, x1) (rows y - h .. y + h passed, in their slots): E[x -
  * x0], the filtered light (0 where no tap counted). */
 void iir_filter_columns_avx2(const iir_filter_lanes *f, int y, int x0, int x1, iir_vec3 *E);
+/* Row y composed: out += albedo / pi * E (E: the column pass) at its pixels with geometry -- for
+ * frames without metallic-roughness pixels or specular chains (render_filter.c's compose, the same
+ * sums). */
+void iir_filter_compose_avx2(const iir_filter_lanes *f, const iir_gbuffer *gb, int y,
+                             iir_image *out);
 
 /* render_filter.c: out += demod / pi * (filtered or raw) r->raw (iir_gb_demod: the glossy pixels',
  * which multires shades at full resolution); with r->level set only its level-0 pixels

@@ -8,6 +8,8 @@
 #include <assert.h>
 #include <stdlib.h>
 
+#include "iir/isa.h"
+
 /* Local direction of the centre of texel (i, j); corners outside the parametrisation's unit disk
  * go to the horizon direction of their angle. */
 static iir_vec3 texel_dir(int i, int j, int res)
@@ -22,24 +24,39 @@ static iir_vec3 texel_dir(int i, int j, int res)
     return iir_paraboloid_dir(iir_v2(0.5f * (x + 1.f), 0.5f * (y + 1.f)));
 }
 
-/* Traces texels i0 .. i0+7 of row j (those < res) as one packet, storing each distance times
- * inv_scale as a half float. */
-static void trace_run(const iir_rt *rt, const iir_vpl *v, iir_vec3 org, int i0, int j, int res,
-                      float inv_scale, uint16_t *row, iir_raystats *st)
+/* Texels i0 .. i0+7 of row j (those < res) as packet rays. */
+static void texel_rays(const iir_vpl *v, iir_vec3 org, int i0, int j, int res, iir_ray8 *rays)
 {
-    iir_ray8 rays;
     for (int k = 0; k < 8; k++) {
         int i = i0 + k < res ? i0 + k : res - 1;
         iir_vec3 d = iir_frame_to_world(&v->frame, texel_dir(i, j, res));
-        rays.ox[k] = org.x, rays.oy[k] = org.y, rays.oz[k] = org.z;
-        rays.dx[k] = d.x, rays.dy[k] = d.y, rays.dz[k] = d.z;
-        rays.tnear[k] = 0.f;
-        rays.tfar[k] = INFINITY;
-        rays.valid[k] = i0 + k < res;
+        rays->ox[k] = org.x, rays->oy[k] = org.y, rays->oz[k] = org.z;
+        rays->dx[k] = d.x, rays->dy[k] = d.y, rays->dz[k] = d.z;
+        rays->tnear[k] = 0.f;
+        rays->tfar[k] = INFINITY;
+        rays->valid[k] = i0 + k < res;
     }
-    iir_hit hits[8];
-    iir_rt_intersect8(rt, &rays, hits, st, IIR_RAYS_SHADOWMAP);
-    for (int k = 0; k < 8 && i0 + k < res; k++)
+}
+
+/* Traces texels i0 .. i0+15 of row j (those < res) as one packet of 16 (Embree's 16-wide
+ * traversal where the CPU has it), storing each distance times inv_scale as a half float; avx2:
+ * the rays 8 at a time (iir_smap_texel_rays_avx2). */
+static void trace_run(const iir_rt *rt, const iir_vpl *v, iir_vec3 org, int i0, int j, int res,
+                      float inv_scale, uint16_t *row, bool avx2, iir_raystats *st)
+{
+    iir_ray8 rays[2];
+    for (int h = 0; h < 2; h++) {
+#if defined(__x86_64__)
+        if (avx2) {
+            iir_smap_texel_rays_avx2(&v->frame, org, i0 + 8 * h, j, res, &rays[h]);
+            continue;
+        }
+#endif
+        texel_rays(v, org, i0 + 8 * h, j, res, &rays[h]);
+    }
+    iir_hit hits[16];
+    iir_rt_intersect16(rt, rays, hits, st, IIR_RAYS_SHADOWMAP);
+    for (int k = 0; k < 16 && i0 + k < res; k++)
         row[i0 + k] = iir_half_from_float(hits[k].t * inv_scale);
 }
 
@@ -59,10 +76,11 @@ bool iir_smap_render(iir_smap *m, const iir_rt *rt, const iir_vpl *v, int res, i
     }
     m->scale = iir_smap_scale(iir_rt_epsilon(rt));
     iir_vec3 org = iir_madd(v->position, v->frame.f, iir_rt_epsilon(rt));
+    bool avx2 = iir_isa_default() >= IIR_ISA_AVX2;
     for (int j = 0; j < res; j++)
-        for (int i0 = 0; i0 < res; i0 += 8)
+        for (int i0 = 0; i0 < res; i0 += 16)
             trace_run(rt, v, org, i0, j, res, 1.f / m->scale, m->depth + (size_t)j * (size_t)res,
-                      st);
+                      avx2, st);
     m->res = res;
     m->coarse = false;
     m->stamp = iir_smap_next_stamp();
