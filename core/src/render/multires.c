@@ -709,23 +709,26 @@ static void load_taps(const mr_level *v, int l, int i0, int j0, taps *t)
     }
 }
 
-/* Pixel (x, y)'s value from level l: bilinear over the unmarked of its four nearest texel centres,
- * weights renormalised (its own texel is unmarked and always among them with weight > 0). The taps
- * t are reused while consecutive pixels of a row share them (fy is then fixed as well). */
-static iir_vec3 upsample(const mr_level *v, int l, int x, int y, taps *t)
+/* Where pixel x of row y falls among level l's texel centres: u = (x + 1/2) / 2^l - 1/2 =
+ * (2x + 1 - 2^l) / 2^(l+1) = i0 + rem / d (d = 2^(l+1), 0 <= rem < d), floor and fraction exact;
+ * one pixel to the right adds 2 to rem. */
+typedef struct texel_pos {
+    int i0, j0, rem, remy, d;
+    float inv; /* 1 / d, exact */
+} texel_pos;
+
+static texel_pos texel_at(int l, int x, int y)
 {
-    /* u = (x + 1/2) / 2^l - 1/2 = (2x + 1 - 2^l) / 2^(l+1): floor and fraction exactly */
-    int s = 1 << l, d = 2 * s, nx = 2 * x + 1 - s, ny = 2 * y + 1 - s;
-    int i0 = ((nx + d) >> (l + 1)) - 1, j0 = ((ny + d) >> (l + 1)) - 1; /* floor: nx + d > 0 */
     static const float INV_D[IIR_MR_MAX_LEVEL + 1] = {0.5f,     0.25f,     0.125f,    0.0625f,
                                                       0.03125f, 0.015625f, 0.0078125f};
-    float inv = INV_D[l]; /* 1 / d, exact */
-    float fx = (float)(nx - i0 * d) * inv, fy = (float)(ny - j0 * d) * inv;
-    if (t->l != l || t->i0 != i0 || t->j0 != j0) {
-        load_taps(v, l, i0, j0, t);
-        t->A = iir_add(iir_scale(t->F[0], 1.f - fy), iir_scale(t->F[2], fy));
-        t->B = iir_sub(iir_add(iir_scale(t->F[1], 1.f - fy), iir_scale(t->F[3], fy)), t->A);
-    }
+    int s = 1 << l, d = 2 * s, nx = 2 * x + 1 - s, ny = 2 * y + 1 - s;
+    int i0 = ((nx + d) >> (l + 1)) - 1, j0 = ((ny + d) >> (l + 1)) - 1; /* floor: nx + d > 0 */
+    return (texel_pos){i0, j0, nx - i0 * d, ny - j0 * d, d, INV_D[l]};
+}
+
+/* The value at fraction fx between the taps t (loaded for fy). */
+static iir_vec3 bilinear(const taps *t, float fx, float fy)
+{
     if (t->all_open) return iir_madd(t->A, t->B, fx);
     float w[4] = {(1.f - fx) * (1.f - fy), fx * (1.f - fy), (1.f - fx) * fy, fx * fy};
     iir_vec3 sum = iir_v3s(0.f);
@@ -735,6 +738,32 @@ static iir_vec3 upsample(const mr_level *v, int l, int x, int y, taps *t)
         wsum += w[q] * t->open[q];
     }
     return iir_scale(sum, 1.f / wsum);
+}
+
+/* Level l's taps at texel (i0, j0) for fraction fy into t, unless it holds them. */
+static void taps_for(const mr_level *v, int l, int i0, int j0, float fy, taps *t)
+{
+    if (t->l == l && t->i0 == i0 && t->j0 == j0) return;
+    load_taps(v, l, i0, j0, t);
+    t->A = iir_add(iir_scale(t->F[0], 1.f - fy), iir_scale(t->F[2], fy));
+    t->B = iir_sub(iir_add(iir_scale(t->F[1], 1.f - fy), iir_scale(t->F[3], fy)), t->A);
+}
+
+/* Pixels x .. of row y at level l while they are (below x1) into out[x - x0]: bilinear over the
+ * unmarked of each one's four nearest texel centres, weights renormalised (its own texel is
+ * unmarked and always among them with weight > 0), the taps reused while consecutive pixels share
+ * them. Returns the first pixel past the run. */
+static int upsample_run(const mr_level *v, const uint8_t *level, int l, int x, int y, int x1,
+                        int x0, iir_vec3 *out, taps *t)
+{
+    texel_pos p = texel_at(l, x, y);
+    float fy = (float)p.remy * p.inv;
+    for (; x < x1 && level[x] == l; x++, p.rem += 2) {
+        if (p.rem >= p.d) p.rem -= p.d, p.i0++;
+        taps_for(v, l, p.i0, p.j0, fy, t);
+        out[x - x0] = bilinear(t, (float)p.rem * p.inv, fy);
+    }
+    return x;
 }
 
 /* Writes every coarse pixel's upsampled value. Called inside a parallel region. */
@@ -792,8 +821,8 @@ void iir_multires_upsample_span(const iir_multires *mr, int y, int x0, int x1, i
 {
     const uint8_t *level = mr->level + (size_t)y * (size_t)mr->width;
     taps t = {.l = -1};
-    for (int x = x0; x < x1; x++) {
+    for (int x = x0; x < x1;) {
         int l = level[x];
-        if (l > 0) out[x - x0] = upsample(&mr->lv[l], l, x, y, &t);
+        x = l > 0 ? upsample_run(&mr->lv[l], level, l, x, y, x1, x0, out, &t) : x + 1;
     }
 }
