@@ -53,6 +53,14 @@ static query_ctx plain_ctx(void)
     return c;
 }
 
+/* plain_ctx for a packet of coherent rays. */
+static query_ctx coherent_ctx(void)
+{
+    query_ctx c = plain_ctx();
+    c.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    return c;
+}
+
 /* Alpha cut-outs (iir_surface_covers): a candidate hit on a hole is rejected, for closest hits
  * and occlusion alike, single rays and packets; under a stochastic query a BLEND surface lets the
  * ray through with probability 1 - alpha, one coin per ray and triangle (iir_surface_alpha).
@@ -241,6 +249,13 @@ static void set_ray8(struct RTCRay8 *r, const iir_ray8 *p, int valid[8])
     SET_LANES(r, p, 0, valid);
 }
 
+/* Two packets of 8 as Embree's packet of 16 r (RTCRay16, or RTCRayHit16's ray). */
+static void set_ray16(struct RTCRay16 *r, const iir_ray8 halves[2], int valid[16])
+{
+    SET_LANES(r, &halves[0], 0, valid);
+    SET_LANES(r, &halves[1], 8, valid);
+}
+
 static uint64_t count_valid(const int valid[8])
 {
     uint64_t n = 0;
@@ -261,8 +276,7 @@ static uint64_t count_valid(const int valid[8])
 void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], iir_raystats *st,
                        iir_ray_kind kind)
 {
-    query_ctx ctx = plain_ctx(); /* the filter reads the whole of it */
-    ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    query_ctx ctx = coherent_ctx(); /* the filter reads the whole of it */
     struct RTCRayHit8 rh;
     _Alignas(32) int valid[8]; /* rtcIntersect8 wants its mask 32-byte aligned */
     set_ray8(&rh.ray, rays, valid);
@@ -275,12 +289,10 @@ void iir_rt_intersect8(const iir_rt *rt, const iir_ray8 *rays, iir_hit hits[8], 
 void iir_rt_intersect16(const iir_rt *rt, const iir_ray8 halves[2], iir_hit hits[16],
                         iir_raystats *st, iir_ray_kind kind)
 {
-    query_ctx ctx = plain_ctx();
-    ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    query_ctx ctx = coherent_ctx();
     struct RTCRayHit16 rh;
     _Alignas(64) int valid[16];
-    SET_LANES(&rh.ray, &halves[0], 0, valid);
-    SET_LANES(&rh.ray, &halves[1], 8, valid);
+    set_ray16(&rh.ray, halves, valid);
     for (int i = 0; i < 16; i++) rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect16(valid, rt->scene, &ctx.rtc, &rh);
     count(st, kind, count_valid(valid) + count_valid(valid + 8));
@@ -290,8 +302,7 @@ void iir_rt_intersect16(const iir_rt *rt, const iir_ray8 halves[2], iir_hit hits
 void iir_rt_occluded8(const iir_rt *rt, const iir_ray8 *rays, bool occluded[8], iir_raystats *st,
                       iir_ray_kind kind)
 {
-    query_ctx ctx = plain_ctx(); /* the filter reads the whole of it */
-    ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    query_ctx ctx = coherent_ctx(); /* the filter reads the whole of it */
     struct RTCRay8 r;
     _Alignas(32) int valid[8]; /* as rtcOccluded8 wants it */
     set_ray8(&r, rays, valid);
@@ -303,12 +314,10 @@ void iir_rt_occluded8(const iir_rt *rt, const iir_ray8 *rays, bool occluded[8], 
 void iir_rt_occluded16(const iir_rt *rt, const iir_ray8 halves[2], bool occluded[16],
                        iir_raystats *st, iir_ray_kind kind)
 {
-    query_ctx ctx = plain_ctx();
-    ctx.rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    query_ctx ctx = coherent_ctx();
     struct RTCRay16 r;
     _Alignas(64) int valid[16];
-    SET_LANES(&r, &halves[0], 0, valid);
-    SET_LANES(&r, &halves[1], 8, valid);
+    set_ray16(&r, halves, valid);
     rtcOccluded16(valid, rt->scene, &ctx.rtc, &r);
     count(st, kind, count_valid(valid) + count_valid(valid + 8));
     for (int i = 0; i < 16; i++) occluded[i] = valid[i] && r.tfar[i] < 0.f;
