@@ -242,20 +242,54 @@ static void compose_row(const filter_ctx *c, bool filter, int y, iir_image *out)
 }
 
 #if defined(__x86_64__)
-/* Composes row y with the column pass 8 pixels a step (full shading, AVX2). */
+/* Multires: E over [x0, x1) of row y, tile by tile -- in a tile near level-0 pixels, a group of 8
+ * holding one by the column pass, its coarse pixels then taking their upsampled value
+ * (upsample_tile wrote it in raw), the other groups that value alone; any other tile's pixels,
+ * all coarse, their upsampled value. */
+static void multires_span(const filter_ctx *c, const iir_filter_lanes *fl, int y, int x0, int x1,
+                          iir_vec3 *E)
+{
+    const iir_renderer *r = c->r;
+    int tiles_x = (fl->width + IIR_RENDER_TILE - 1) / IIR_RENDER_TILE;
+    for (int s0 = x0; s0 < x1; s0 += IIR_RENDER_TILE) {
+        int s1 = s0 + IIR_RENDER_TILE < x1 ? s0 + IIR_RENDER_TILE : x1;
+        if (!r->near_fine[(y / IIR_RENDER_TILE) * tiles_x + s0 / IIR_RENDER_TILE]) {
+            iir_multires_upsample_span(r->mr, y, s0, s1, E + (s0 - x0));
+            continue;
+        }
+        size_t row = (size_t)y * (size_t)fl->width;
+        for (int g = s0; g < s1; g += 8) { /* the column pass only for groups holding level 0 */
+            int g1 = g + 8 < s1 ? g + 8 : s1;
+            bool fine = iir_filter_any_fine(r->level + row + (size_t)g, g1 - g);
+            if (fine) iir_filter_columns_avx2(fl, y, g, g1, E + (g - x0));
+            for (int x = g; x < g1; x++)
+                if (!fine || r->level[row + (size_t)x] > 0) E[x - x0] = r->raw[row + (size_t)x];
+        }
+    }
+}
+
+/* Composes row y with the column pass 8 pixels a step (AVX2). */
 static void compose_row_lanes(const filter_ctx *c, const iir_filter_lanes *fl, int y,
                               iir_image *out)
 {
-    enum { SPAN = 256 };
+    enum { SPAN = 16 * IIR_RENDER_TILE };
     const iir_gbuffer *gb = &c->r->gb;
-    if (!gb->any_pbr && !gb->any_chain) {
+    bool plain = !gb->any_pbr && !gb->any_chain; /* albedo / pi alone */
+    if (plain && !c->r->level) {
         iir_filter_compose_avx2(fl, gb, y, out);
         return;
     }
     iir_vec3 E[SPAN];
     for (int x0 = 0; x0 < gb->width; x0 += SPAN) {
         int x1 = x0 + SPAN < gb->width ? x0 + SPAN : gb->width;
-        iir_filter_columns_avx2(fl, y, x0, x1, E);
+        if (c->r->level)
+            multires_span(c, fl, y, x0, x1, E);
+        else
+            iir_filter_columns_avx2(fl, y, x0, x1, E);
+        if (plain) {
+            iir_compose_span_avx2(gb, y, x0, x1, E, out);
+            continue;
+        }
         for (int x = x0; x < x1; x++) {
             size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
             if (gb->prim[i] == IIR_NO_HIT) continue;
@@ -267,36 +301,59 @@ static void compose_row_lanes(const filter_ctx *c, const iir_filter_lanes *fl, i
     }
 }
 
-/* Rows [y0, y1) of the full-shading filter: each row's row pass into the thread's ring (fl) as
- * soon as a column pass of the band needs it, then the band's rows composed in order -- the row
- * sums stay in the cache instead of going through memory between two passes over the image. */
+/* Whether a column pass reads row y's row pass: always with full shading; multires, when a tile
+ * within h rows of it lies near level-0 pixels (multires_span). */
+static bool row_read(const filter_ctx *c, int y)
+{
+    const iir_renderer *r = c->r;
+    if (!r->level) return true;
+    int tiles_x = (r->gb.width + IIR_RENDER_TILE - 1) / IIR_RENDER_TILE;
+    int t0 = (y - c->h > 0 ? y - c->h : 0) / IIR_RENDER_TILE;
+    int t1 = (y + c->h < r->gb.height ? y + c->h : r->gb.height - 1) / IIR_RENDER_TILE;
+    for (int t = t0 * tiles_x; t < (t1 + 1) * tiles_x; t++)
+        if (r->near_fine[t]) return true;
+    return false;
+}
+
+/* Rows [y0, y1) of the filter: each row's row pass into the thread's ring (fl) as soon as a
+ * column pass of the band needs it, then the band's rows composed in order -- the row sums stay
+ * in the cache instead of going through memory between two passes over the image. */
 static void filter_band(const filter_ctx *c, const iir_filter_lanes *fl, int y0, int y1,
                         iir_image *out)
 {
     int next = y0 - fl->h > 0 ? y0 - fl->h : 0; /* the next row to pass */
     for (int y = y0; y < y1; y++) {
         int last = y + fl->h < fl->height ? y + fl->h : fl->height - 1;
-        for (; next <= last; next++) iir_filter_rows_avx2(fl, next);
+        for (; next <= last; next++)
+            if (row_read(c, next)) iir_filter_rows_avx2(fl, next);
         compose_row_lanes(c, fl, y, out);
     }
 }
 
-/* The full-shading filter with the AVX2 passes (the scalar ones' image): OpenMP over bands of rows,
- * a thread's row sums in its own ring of 2 h + 1 rows of r->rows (the rows at a band's edges are
- * passed by both bands that read them); where the threads' rings do not fit in r->rows, one row
- * pass over the image and then one column pass. */
-static void filter_lanes(const filter_ctx *c, iir_image *out)
+/* The filter with the AVX2 passes (the scalar ones' image): OpenMP over bands of rows, a thread's
+ * row sums in its own ring of 2 h + 1 rows of r->rows (the rows at a band's edges are passed by
+ * both bands that read them); where the threads' rings do not fit in r->rows, one row pass over
+ * the image and then one column pass. Multires: the coarse values upsampled into raw first
+ * (upsample_tile), a coarse pixel a tap of every subset, and the passes only over the groups of 8
+ * pixels a level-0 pixel's column pass reads. */
+static void filter_lanes(const filter_ctx *c, bool known, iir_image *out)
 {
     enum { BAND = 32 };
     const iir_renderer *r = c->r;
     iir_filter_lanes fl = {r->gb.width,      r->gb.height, c->n,    c->h,
                            c->end_weight,    r->fmask,     c->live, r->raw,
-                           (float *)r->rows, r->gb.height};
+                           (float *)r->rows, r->gb.height, r->level};
     _Static_assert(sizeof(iir_filter_row) == 4 * sizeof(float), "rows hold the four planes");
     int ring = 2 * c->h + 1, bands = (fl.height + BAND - 1) / BAND;
-    if ((size_t)omp_get_max_threads() * (size_t)ring <= (size_t)fl.height) {
+    int tiles = iir_tile_count(fl.width, fl.height, IIR_RENDER_TILE);
+    bool fused = (size_t)omp_get_max_threads() * (size_t)ring <= (size_t)fl.height;
 #pragma omp parallel
-        {
+    {
+        if (r->level) {
+#pragma omp for schedule(dynamic, 1)
+            for (int t = 0; t < tiles; t++) upsample_tile(c, t, known);
+        }
+        if (fused) {
             iir_filter_lanes own = fl;
             own.ring = ring;
             own.planes += (size_t)omp_get_thread_num() * 4 * (size_t)ring * (size_t)fl.width;
@@ -304,15 +361,13 @@ static void filter_lanes(const filter_ctx *c, iir_image *out)
             for (int b = 0; b < bands; b++)
                 filter_band(c, &own, b * BAND,
                             b * BAND + BAND < fl.height ? b * BAND + BAND : fl.height, out);
+        } else {
+#pragma omp for schedule(dynamic, 8)
+            for (int y = 0; y < fl.height; y++)
+                if (row_read(c, y)) iir_filter_rows_avx2(&fl, y);
+#pragma omp for schedule(dynamic, 8)
+            for (int y = 0; y < fl.height; y++) compose_row_lanes(c, &fl, y, out);
         }
-        return;
-    }
-#pragma omp parallel
-    {
-#pragma omp for schedule(dynamic, 8)
-        for (int y = 0; y < fl.height; y++) iir_filter_rows_avx2(&fl, y);
-#pragma omp for schedule(dynamic, 8)
-        for (int y = 0; y < fl.height; y++) compose_row_lanes(c, &fl, y, out);
     }
 }
 #endif
@@ -329,12 +384,13 @@ void iir_render_filter(iir_renderer *r, const iir_indirect_params *p, iir_image 
     bool masked = r->fmask_serial == r->gb_serial && r->fmask_h == c.h;
     c.mask = r->fmask;
 #if defined(__x86_64__)
-    if (filter && !r->level && r->isa >= IIR_ISA_AVX2) {
+    if (filter && r->isa >= IIR_ISA_AVX2) {
         if (!masked) {
 #pragma omp parallel for schedule(dynamic, 1)
             for (int t = 0; t < tiles; t++) mask_tile(&c, t);
         }
-        filter_lanes(&c, out);
+        filter_lanes(&c, known, out);
+        if (r->level) r->near_fine_gen = gen, r->near_fine_h = c.h;
         r->fmask_serial = r->gb_serial, r->fmask_h = c.h;
         return;
     }

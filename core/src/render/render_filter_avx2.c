@@ -1,13 +1,15 @@
-/* render_filter_avx2.c -- the full-shading filter's row and column passes 8 pixels a step with AVX2
- * (render_internal.h: iir_filter_lanes): the scalar passes of render_filter.c with every tap's
- * product and sum in the same order and without FMA (this file is built with -mavx2 alone), so
- * the image is the same bit for bit. The row pass writes its sums and weights as four planes
- * (x, y, z, w) where the scalar one writes iir_filter_row structs. Called only where the CPU has
- * AVX2. */
+/* render_filter_avx2.c -- the filter's row and column passes and its compose 8 pixels a step with
+ * AVX2 (render_internal.h: iir_filter_lanes): the scalar passes of render_filter.c with every
+ * tap's product and sum in the same order and without FMA (this file is built with -mavx2 alone),
+ * so the image is the same bit for bit. The row pass writes its sums and weights as four planes
+ * (x, y, z, w) where the scalar one writes iir_filter_row structs; multires's passes run only over
+ * the groups of 8 pixels a level-0 pixel's column pass reads. Called only where the CPU has AVX2.
+ */
 #include "render_internal.h"
 
 #if defined(__x86_64__)
 #include <immintrin.h>
+#include <string.h>
 
 #include "render_lanes_avx2.h"
 
@@ -34,18 +36,21 @@ static inline float end_weight(const iir_filter_lanes *f, int d)
     return d == -f->h || d == f->h ? f->end_weight : 1.f;
 }
 
-/* Row y's raw light and subset flags over [x0 - h, x0 + CHUNK + h + 8), zero beyond the image. */
-static void chunk_planes(const iir_filter_lanes *f, int y, int x0, float *R, float *G, float *B,
-                         float *L)
+/* Row y's raw light and tap flags (its subset has VPLs, or multires: the pixel is coarse) over
+ * [x0 - h, x0 + len + h + 8), zero beyond the image: the taps of the groups of 8 centres from x0
+ * to below x0 + len. */
+static void chunk_planes(const iir_filter_lanes *f, int y, int x0, int len, float *R, float *G,
+                         float *B, float *L)
 {
     const iir_vec3 *raw = f->raw + (size_t)y * (size_t)f->width;
     const int *live = f->live + (y % f->n) * f->n;
-    int xx = x0 - f->h, end = CHUNK + 2 * IIR_FILTER_MAX_H + 8, k = 0;
+    int xx = x0 - f->h, end = len + 2 * f->h + 8, k = 0;
     for (; k < end && xx < 0; k++, xx++) R[k] = G[k] = B[k] = L[k] = 0.f;
+    const uint8_t *level = f->level ? f->level + (size_t)y * (size_t)f->width : NULL;
     for (int sx = xx % f->n; k < end && xx < f->width;
          k++, xx++, sx = sx + 1 == f->n ? 0 : sx + 1) {
         R[k] = raw[xx].x, G[k] = raw[xx].y, B[k] = raw[xx].z;
-        L[k] = live[sx] ? 1.f : 0.f;
+        L[k] = live[sx] || (level && level[xx] > 0) ? 1.f : 0.f;
     }
     for (; k < end; k++) R[k] = G[k] = B[k] = L[k] = 0.f;
 }
@@ -70,16 +75,47 @@ static inline __m256 load_lanes(const float *p, __m256i in, bool all)
     return all ? _mm256_loadu_ps(p) : _mm256_maskload_ps(p, in);
 }
 
+bool iir_filter_any_fine(const uint8_t *level, int n)
+{
+    if (n == 8) { /* a zero byte among 8 */
+        uint64_t v;
+        memcpy(&v, level, sizeof v);
+        return ((v - 0x0101010101010101ull) & ~v & 0x8080808080808080ull) != 0;
+    }
+    for (int k = 0; k < n; k++)
+        if (!level[k]) return true;
+    return false;
+}
+
+/* Multires: whether a column pass reads the row pass at pixels x .. x + 7 of row y (those below
+ * the width): a level-0 pixel among them within h rows. Always with full shading. */
+static bool group_read(const iir_filter_lanes *f, int y, int x)
+{
+    if (!f->level) return true;
+    int n = x + 8 <= f->width ? 8 : f->width - x;
+    int y0 = y - f->h > 0 ? y - f->h : 0, y1 = y + f->h < f->height ? y + f->h : f->height - 1;
+    for (int yy = y0; yy <= y1; yy++)
+        if (iir_filter_any_fine(f->level + (size_t)yy * (size_t)f->width + (size_t)x, n))
+            return true;
+    return false;
+}
+
 void iir_filter_rows_avx2(const iir_filter_lanes *f, int y)
 {
     _Alignas(32) float R[CHUNK + 2 * IIR_FILTER_MAX_H + 8], G[sizeof R / sizeof *R],
         B[sizeof R / sizeof *R], L[sizeof R / sizeof *R];
     size_t plane = (size_t)f->width * (size_t)f->ring, row = (size_t)y * (size_t)f->width;
     size_t slot = (size_t)(y % f->ring) * (size_t)f->width;
-    for (int x0 = 0; x0 < f->width; x0 += CHUNK) {
-        chunk_planes(f, y, x0, R, G, B, L);
-        int x1 = x0 + CHUNK < f->width ? x0 + CHUNK : f->width;
+    for (int c0 = 0; c0 < f->width; c0 += CHUNK) {
+        int c1 = c0 + CHUNK < f->width ? c0 + CHUNK : f->width;
+        uint32_t read = 0; /* the chunk's groups of 8 a column pass reads */
+        for (int x = c0; x < c1; x += 8) read |= (uint32_t)group_read(f, y, x) << ((x - c0) / 8);
+        if (!read) continue;
+        int x0 = c0 + 8 * __builtin_ctz(read), x1 = c0 + 8 * (32 - __builtin_clz(read));
+        x1 = x1 < c1 ? x1 : c1;
+        chunk_planes(f, y, x0, x1 - x0, R, G, B, L);
         for (int x = x0; x < x1; x += 8) {
+            if (!((read >> ((x - c0) / 8)) & 1)) continue;
             __m256i in = lanes_below(x, f->width);
             bool all = x + 8 <= f->width;
             __m256i masks = load_masks(f->mask + row + (size_t)x, in, all);
@@ -133,30 +169,50 @@ void iir_filter_columns_avx2(const iir_filter_lanes *f, int y, int x0, int x1, i
     }
 }
 
+/* out += albedo / pi * e at the 8 pixels from i on (row pointer L), those with geometry. */
+static inline void compose8(const iir_gbuffer *gb, size_t i, iir_vec3 *L, v3 e)
+{
+    __m256i none = _mm256_set1_epi32((int)IIR_NO_HIT);
+    __m256 hit = _mm256_castsi256_ps(_mm256_xor_si256(
+        _mm256_cmpeq_epi32(_mm256_loadu_si256((const __m256i *)(gb->prim + i)), none),
+        _mm256_set1_epi32(-1)));
+    v3 k = scale3(load_aos(gb->albedo + i, gb->albedo + i + 4), _mm256_set1_ps(IIR_INV_PI));
+    v3 l = load_aos(L, L + 4);
+    store_aos(blend3(l, add3(l, mul3(k, e)), hit), L, L + 4);
+}
+
+/* compose8's sum at pixel x of row y alone. */
+static inline void compose1(const iir_gbuffer *gb, int y, int x, iir_image *out, iir_vec3 E)
+{
+    size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
+    iir_vec3 *L = iir_image_at(out, x, y);
+    if (gb->prim[i] != IIR_NO_HIT)
+        *L = iir_add(*L, iir_mul(iir_scale(gb->albedo[i], IIR_INV_PI), E));
+}
+
 void iir_filter_compose_avx2(const iir_filter_lanes *f, const iir_gbuffer *gb, int y,
                              iir_image *out)
 {
     size_t row = (size_t)y * (size_t)f->width;
-    const iir_vec3 *albedo = gb->albedo + row;
-    iir_vec3 *L = iir_image_at(out, 0, y);
-    __m256 inv_pi = _mm256_set1_ps(IIR_INV_PI);
-    __m256i none = _mm256_set1_epi32((int)IIR_NO_HIT);
     int x = 0;
-    for (; x + 8 <= f->width; x += 8) {
-        v3 e = column8(f, y, x, _mm256_set1_epi32(-1), true);
-        __m256 hit = _mm256_castsi256_ps(_mm256_xor_si256(
-            _mm256_cmpeq_epi32(_mm256_loadu_si256((const __m256i *)(gb->prim + row + x)), none),
-            _mm256_set1_epi32(-1)));
-        v3 add = mul3(scale3(load_aos(albedo + x, albedo + x + 4), inv_pi), e);
-        v3 l = load_aos(L + x, L + x + 4);
-        store_aos(blend3(l, add3(l, add), hit), L + x, L + x + 4);
-    }
+    for (; x + 8 <= f->width; x += 8)
+        compose8(gb, row + (size_t)x, iir_image_at(out, x, y),
+                 column8(f, y, x, _mm256_set1_epi32(-1), true));
     if (x == f->width) return;
     iir_vec3 E[8];
     iir_filter_columns_avx2(f, y, x, f->width, E);
-    for (int x0 = x; x < f->width; x++)
-        if (gb->prim[row + (size_t)x] != IIR_NO_HIT)
-            L[x] = iir_add(L[x], iir_mul(iir_scale(albedo[x], IIR_INV_PI), E[x - x0]));
+    for (int x0 = x; x < f->width; x++) compose1(gb, y, x, out, E[x - x0]);
+}
+
+void iir_compose_span_avx2(const iir_gbuffer *gb, int y, int x0, int x1, const iir_vec3 *E,
+                           iir_image *out)
+{
+    size_t row = (size_t)y * (size_t)gb->width;
+    int x = x0;
+    for (; x + 8 <= x1; x += 8)
+        compose8(gb, row + (size_t)x, iir_image_at(out, x, y),
+                 load_aos(E + (x - x0), E + (x - x0) + 4));
+    for (; x < x1; x++) compose1(gb, y, x, out, E[x - x0]);
 }
 
 #endif

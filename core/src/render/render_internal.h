@@ -222,7 +222,7 @@ typedef struct iir_direct_lean {
 void iir_direct_lean_block_avx2(const iir_direct_lean *c, int x0, int y0, iir_image *out,
                                 iir_raystats *st);
 
-/* render_filter_avx2.c: the full-shading filter's passes 8 pixels a step, the same sums as the
+/* render_filter_avx2.c: the filter's passes 8 pixels a step, the same sums as the
  * scalar passes in the same order (the same image). The row pass of row y lives in slot y mod
  * ring of planes: ring = height keeps every row, ring >= 2 h + 1 only those a column pass reads. */
 typedef struct iir_filter_lanes {
@@ -233,8 +233,13 @@ typedef struct iir_filter_lanes {
     const iir_vec3 *raw;  /* the demodulated indirect light */
     float *planes;        /* 4 planes of width x ring: the row pass's sums (x, y, z) and weights */
     int ring;             /* rows a plane holds */
+    const uint8_t *level; /* multires's per pixel (NULL: full shading): a coarse pixel (level > 0)
+                             is a tap of every subset */
 } iir_filter_lanes;
-/* The row pass of row y into its slot of planes. */
+/* Whether one of n (<= 8) levels is 0: a level-0 pixel. */
+bool iir_filter_any_fine(const uint8_t *level, int n);
+/* The row pass of row y into its slot of planes (multires: only groups of 8 a column pass reads).
+ */
 void iir_filter_rows_avx2(const iir_filter_lanes *f, int y);
 /* The column pass of row y's pixels [x0, x1) (rows y - h .. y + h passed, in their slots): E[x -
  * x0], the filtered light (0 where no tap counted). */
@@ -244,6 +249,9 @@ void iir_filter_columns_avx2(const iir_filter_lanes *f, int y, int x0, int x1, i
  * sums). */
 void iir_filter_compose_avx2(const iir_filter_lanes *f, const iir_gbuffer *gb, int y,
                              iir_image *out);
+/* The same over pixels [x0, x1) of row y with their E given (E[x - x0]). */
+void iir_compose_span_avx2(const iir_gbuffer *gb, int y, int x0, int x1, const iir_vec3 *E,
+                           iir_image *out);
 
 /* render_filter.c: out += demod / pi * (filtered or raw) r->raw (iir_gb_demod: the glossy pixels',
  * which multires shades at full resolution); with r->level set only its level-0 pixels
