@@ -100,10 +100,19 @@ static void half_materials(lean_half *q, const iir_gbuffer *gb)
     if (gb->any_pbr) half_glossy(q, gb);
     v3 albedo = half_vec3(q, gb, gb->albedo);
     q->shaded = _mm256_and_ps(q->hit, _mm256_or_ps(q->glossy, not_black(albedo)));
-    __m256 inv_pi = _mm256_set1_ps(IIR_INV_PI);
-    v3 f = {_mm256_mul_ps(albedo.x, inv_pi), _mm256_mul_ps(albedo.y, inv_pi),
-            _mm256_mul_ps(albedo.z, inv_pi)};
-    q->f = and3(f, q->shaded);
+    q->f = and3(scale3(albedo, _mm256_set1_ps(IIR_INV_PI)), q->shaded);
+}
+
+/* The packet's lanes: o's shadow segments where traced. */
+static void set_rays(iir_ray8 *rays, const iir_light_delta_lanes *o, __m256 traced, __m256 tmax)
+{
+    __m256i one = _mm256_set1_epi32(1);
+    _mm256_storeu_si256((__m256i *)rays->valid, _mm256_and_si256(_mm256_castps_si256(traced), one));
+    const float *from[6] = {o->ox, o->oy, o->oz, o->dx, o->dy, o->dz};
+    float *to[6] = {rays->ox, rays->oy, rays->oz, rays->dx, rays->dy, rays->dz};
+    for (int k = 0; k < 6; k++) _mm256_storeu_ps(to[k], _mm256_loadu_ps(from[k]));
+    _mm256_storeu_ps(rays->tnear, zero());
+    _mm256_storeu_ps(rays->tfar, tmax);
 }
 
 /* Light e's 8 samples of half q into rays (lanes_into_rays's rule: a shaded lane that receives
@@ -136,16 +145,7 @@ static bool half_samples(const iir_direct_lean *c, const iir_light_eval *e, lean
     __m256 tmax = _mm256_loadu_ps(o.tmax);
     __m256 traced = _mm256_and_ps(lit, _mm256_cmp_ps(tmax, zero(), _CMP_GT_OQ));
     q->L = blend3(q->L, add3(q->L, q->pending), _mm256_andnot_ps(traced, lit));
-    _mm256_storeu_si256((__m256i *)rays->valid,
-                        _mm256_and_si256(_mm256_castps_si256(traced), _mm256_set1_epi32(1)));
-    _mm256_storeu_ps(rays->ox, _mm256_loadu_ps(o.ox)),
-        _mm256_storeu_ps(rays->oy, _mm256_loadu_ps(o.oy));
-    _mm256_storeu_ps(rays->oz, _mm256_loadu_ps(o.oz)),
-        _mm256_storeu_ps(rays->dx, _mm256_loadu_ps(o.dx));
-    _mm256_storeu_ps(rays->dy, _mm256_loadu_ps(o.dy)),
-        _mm256_storeu_ps(rays->dz, _mm256_loadu_ps(o.dz));
-    _mm256_storeu_ps(rays->tnear, zero());
-    _mm256_storeu_ps(rays->tfar, tmax);
+    set_rays(rays, &o, traced, tmax);
     return _mm256_movemask_ps(traced) != 0;
 }
 
