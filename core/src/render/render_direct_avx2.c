@@ -48,16 +48,13 @@ static v3 half_vec3(const lean_half *q, const iir_gbuffer *gb, const iir_vec3 *a
 /* Lanes whose pixel is geometry. */
 static __m256 half_hit(const lean_half *q, const iir_gbuffer *gb)
 {
-    _Alignas(32) int32_t prim[8];
+    uint32_t prim[8];
     for (int k = 0; k < 8; k++) {
         int px = q->x0 + k % HALF_W, py = q->y0 + k / HALF_W;
         bool in = px < gb->width && py < gb->height;
-        prim[k] = in ? (int32_t)gb->prim[(size_t)py * (size_t)gb->width + (size_t)px]
-                     : (int32_t)IIR_NO_HIT;
+        prim[k] = in ? gb->prim[(size_t)py * (size_t)gb->width + (size_t)px] : IIR_NO_HIT;
     }
-    __m256i none = _mm256_cmpeq_epi32(_mm256_load_si256((const __m256i *)prim),
-                                      _mm256_set1_epi32((int32_t)IIR_NO_HIT));
-    return _mm256_castsi256_ps(_mm256_xor_si256(none, _mm256_set1_epi32(-1)));
+    return hit_lanes(prim);
 }
 
 /* The half's surfaces: receivers, geometry, emission. */

@@ -224,7 +224,7 @@ static void compose_segment(const filter_ctx *c, bool filter, int t, int y, int 
         iir_vec3 *L = iir_image_at(out, x, y);
         iir_vec3 k = gb->any_pbr ? iir_gb_demod(gb, i, c->receivers) : gb->albedo[i];
         if (gb->any_chain) k = iir_mul(k, gb->through[i]);
-        *L = iir_add(*L, iir_mul(iir_scale(k, IIR_INV_PI), E));
+        iir_compose_add(L, k, E);
     }
 }
 
@@ -296,7 +296,7 @@ static void compose_row_lanes(const filter_ctx *c, const iir_filter_lanes *fl, i
             iir_vec3 *L = iir_image_at(out, x, y);
             iir_vec3 k = gb->any_pbr ? iir_gb_demod(gb, i, c->receivers) : gb->albedo[i];
             if (gb->any_chain) k = iir_mul(k, gb->through[i]);
-            *L = iir_add(*L, iir_mul(iir_scale(k, IIR_INV_PI), E[x - x0]));
+            iir_compose_add(L, k, E[x - x0]);
         }
     }
 }

@@ -75,18 +75,6 @@ static inline __m256 load_lanes(const float *p, __m256i in, bool all)
     return all ? _mm256_loadu_ps(p) : _mm256_maskload_ps(p, in);
 }
 
-bool iir_filter_any_fine(const uint8_t *level, int n)
-{
-    if (n == 8) { /* a zero byte among 8 */
-        uint64_t v;
-        memcpy(&v, level, sizeof v);
-        return ((v - 0x0101010101010101ull) & ~v & 0x8080808080808080ull) != 0;
-    }
-    for (int k = 0; k < n; k++)
-        if (!level[k]) return true;
-    return false;
-}
-
 /* Multires: whether a column pass reads the row pass at pixels x .. x + 7 of row y (those below
  * the width): a level-0 pixel among them within h rows. Always with full shading. */
 static bool group_read(const iir_filter_lanes *f, int y, int x)
@@ -172,10 +160,7 @@ void iir_filter_columns_avx2(const iir_filter_lanes *f, int y, int x0, int x1, i
 /* out += albedo / pi * e at the 8 pixels from i on (row pointer L), those with geometry. */
 static inline void compose8(const iir_gbuffer *gb, size_t i, iir_vec3 *L, v3 e)
 {
-    __m256i none = _mm256_set1_epi32((int)IIR_NO_HIT);
-    __m256 hit = _mm256_castsi256_ps(_mm256_xor_si256(
-        _mm256_cmpeq_epi32(_mm256_loadu_si256((const __m256i *)(gb->prim + i)), none),
-        _mm256_set1_epi32(-1)));
+    __m256 hit = hit_lanes(gb->prim + i);
     v3 k = scale3(load_aos(gb->albedo + i, gb->albedo + i + 4), _mm256_set1_ps(IIR_INV_PI));
     v3 l = load_aos(L, L + 4);
     store_aos(blend3(l, add3(l, mul3(k, e)), hit), L, L + 4);
@@ -186,8 +171,7 @@ static inline void compose1(const iir_gbuffer *gb, int y, int x, iir_image *out,
 {
     size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
     iir_vec3 *L = iir_image_at(out, x, y);
-    if (gb->prim[i] != IIR_NO_HIT)
-        *L = iir_add(*L, iir_mul(iir_scale(gb->albedo[i], IIR_INV_PI), E));
+    if (gb->prim[i] != IIR_NO_HIT) iir_compose_add(L, gb->albedo[i], E);
 }
 
 void iir_filter_compose_avx2(const iir_filter_lanes *f, const iir_gbuffer *gb, int y,

@@ -4,6 +4,8 @@
 #ifndef IIR_RENDER_INTERNAL_H
 #define IIR_RENDER_INTERNAL_H
 
+#include <string.h>
+
 #include "iir/bsdf.h"
 #include "iir/isa.h"
 #include "iir/multires.h"
@@ -237,7 +239,24 @@ typedef struct iir_filter_lanes {
                              is a tap of every subset */
 } iir_filter_lanes;
 /* Whether one of n (<= 8) levels is 0: a level-0 pixel. */
-bool iir_filter_any_fine(const uint8_t *level, int n);
+static inline bool iir_filter_any_fine(const uint8_t *level, int n)
+{
+    if (n == 8) { /* a zero byte among 8 */
+        uint64_t v;
+        memcpy(&v, level, sizeof v);
+        return ((v - 0x0101010101010101ull) & ~v & 0x8080808080808080ull) != 0;
+    }
+    for (int k = 0; k < n; k++)
+        if (!level[k]) return true;
+    return false;
+}
+
+/* The filter's compose at one pixel: L += k / pi * E (k: its demodulation, albedo for a
+ * Lambertian pixel). The AVX2 compose makes the same products in the same order. */
+static inline void iir_compose_add(iir_vec3 *L, iir_vec3 k, iir_vec3 E)
+{
+    *L = iir_add(*L, iir_mul(iir_scale(k, IIR_INV_PI), E));
+}
 /* The row pass of row y into its slot of planes (multires: only groups of 8 a column pass reads).
  */
 void iir_filter_rows_avx2(const iir_filter_lanes *f, int y);

@@ -7,6 +7,7 @@
 
 #include <immintrin.h>
 
+#include "iir/rt.h"
 #include "iir/vecmath.h"
 
 typedef struct v3 {
@@ -48,6 +49,14 @@ static inline __m256 not_black(v3 a)
     return _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(a.x, zero(), _CMP_NEQ_UQ),
                                      _mm256_cmp_ps(a.y, zero(), _CMP_NEQ_UQ)),
                         _mm256_cmp_ps(a.z, zero(), _CMP_NEQ_UQ));
+}
+
+/* Lanes whose G-buffer prim (8 from p) is geometry, not IIR_NO_HIT. */
+static inline __m256 hit_lanes(const uint32_t *p)
+{
+    __m256i none = _mm256_cmpeq_epi32(_mm256_loadu_si256((const __m256i *)p),
+                                      _mm256_set1_epi32((int)IIR_NO_HIT));
+    return _mm256_castsi256_ps(_mm256_xor_si256(none, _mm256_set1_epi32(-1)));
 }
 
 /* 4 iir_vec3 at each of a and b as lanes 0..3 (a) and 4..7 (b). */

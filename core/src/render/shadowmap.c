@@ -24,12 +24,13 @@ static iir_vec3 texel_dir(int i, int j, int res)
     return iir_paraboloid_dir(iir_v2(0.5f * (x + 1.f), 0.5f * (y + 1.f)));
 }
 
-/* Texels i0 .. i0+7 of row j (those < res) as packet rays. */
-static void texel_rays(const iir_vpl *v, iir_vec3 org, int i0, int j, int res, iir_ray8 *rays)
+/* Texels i0 .. i0+7 of row j (those < res) seen from org in frame fr as packet rays (the scalar
+ * iir_smap_texel_rays_avx2). */
+static void texel_rays(const iir_frame *fr, iir_vec3 org, int i0, int j, int res, iir_ray8 *rays)
 {
     for (int k = 0; k < 8; k++) {
         int i = i0 + k < res ? i0 + k : res - 1;
-        iir_vec3 d = iir_frame_to_world(&v->frame, texel_dir(i, j, res));
+        iir_vec3 d = iir_frame_to_world(fr, texel_dir(i, j, res));
         rays->ox[k] = org.x, rays->oy[k] = org.y, rays->oz[k] = org.z;
         rays->dx[k] = d.x, rays->dy[k] = d.y, rays->dz[k] = d.z;
         rays->tnear[k] = 0.f;
@@ -52,7 +53,7 @@ static void trace_run(const iir_rt *rt, const iir_vpl *v, iir_vec3 org, int i0, 
             continue;
         }
 #endif
-        texel_rays(v, org, i0 + 8 * h, j, res, &rays[h]);
+        texel_rays(&v->frame, org, i0 + 8 * h, j, res, &rays[h]);
     }
     iir_hit hits[16];
     iir_rt_intersect16(rt, rays, hits, st, IIR_RAYS_SHADOWMAP);
