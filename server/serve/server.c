@@ -315,6 +315,31 @@ static void on_closed(server *srv, conn *c)
     c->session = NULL;
 }
 
+#if defined(__SANITIZE_ADDRESS__)
+#define IIRD_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define IIRD_ASAN 1
+#endif
+#endif
+#ifdef IIRD_ASAN
+/* From <sanitizer/allocator_interface.h>, which GCC 12 does not ship. */
+void __sanitizer_purge_allocator(void);
+#endif
+
+/* The last session gone: give the allocator's free memory (a session's shadow maps were allocated
+ * on its worker) back to the system, so an idle daemon's RSS returns to its start. glibc keeps it
+ * in per-thread arenas until malloc_trim; ASan's allocator ignores malloc_trim and keeps freed
+ * blocks in its quarantine and size-class regions until its purge. */
+static void release_idle_memory(void)
+{
+#ifdef IIRD_ASAN
+    __sanitizer_purge_allocator();
+#else
+    malloc_trim(0);
+#endif
+}
+
 static void reap_closing(server *srv, bool wait)
 {
     bool freed = false;
@@ -329,9 +354,7 @@ static void reap_closing(server *srv, bool wait)
             p = &z->next;
         }
     }
-    /* The last session gone: give glibc's per-thread arenas (a session's shadow maps were
-       allocated on its worker) back to the system, so an idle daemon's RSS returns to its start. */
-    if (freed && !srv->closing && srv->active == 0) malloc_trim(0);
+    if (freed && !srv->closing && srv->active == 0) release_idle_memory();
 }
 
 /* No client message for --idle-timeout: an idle_timeout error, then close 4000. A client that
