@@ -85,6 +85,10 @@ iir_light_domain iir_domain_at_emitter(const iir_light_domain *d, iir_vec2 q);
  * CDF on a shape). Other maps: u - 1/2. */
 iir_vec2 iir_domain_emitter_stratum(const iir_light_domain *d, uint32_t i);
 
+/* The domain seen from emitter stratum i: iir_domain_at_emitter(d, iir_domain_emitter_stratum(d,
+ * i)), the stratum drawn only for an area light (every other map: *d itself). */
+iir_light_domain iir_domain_at_stratum(const iir_light_domain *d, uint32_t i);
+
 /* Short name: "disk", "cap disk" (glTF spot), "sphere", "sun disk", "area disk". */
 const char *iir_domain_map_name(iir_domain_map map);
 

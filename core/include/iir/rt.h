@@ -57,6 +57,16 @@ typedef struct iir_ray8 {
     int valid[8];
 } iir_ray8;
 
+/* Lane k of a packet set to the segment (tnear 0, tfar) along dir from org, valid. */
+static inline void iir_ray8_set(iir_ray8 *rays, int k, iir_vec3 org, iir_vec3 dir, float tfar)
+{
+    rays->ox[k] = org.x, rays->oy[k] = org.y, rays->oz[k] = org.z;
+    rays->dx[k] = dir.x, rays->dy[k] = dir.y, rays->dz[k] = dir.z;
+    rays->tnear[k] = 0.f;
+    rays->tfar[k] = tfar;
+    rays->valid[k] = 1;
+}
+
 typedef struct iir_rt iir_rt;
 
 /* Builds a high-quality BVH over the scene's triangles. The scene must outlive the rt.

@@ -223,3 +223,9 @@ iir_vec2 iir_domain_emitter_stratum(const iir_light_domain *d, uint32_t i)
     if (d->map != IIR_MAP_AREA_DISK) return iir_v2(u.x - 0.5f, u.y - 0.5f);
     return iir_area_light_sample_q(d->light, u);
 }
+
+iir_light_domain iir_domain_at_stratum(const iir_light_domain *d, uint32_t i)
+{
+    return d->map == IIR_MAP_AREA_DISK ? iir_domain_at_emitter(d, iir_domain_emitter_stratum(d, i))
+                                       : *d;
+}

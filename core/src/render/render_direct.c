@@ -133,15 +133,6 @@ static void clear_rays(block *b)
     for (int k = 0; k < 8; k++) b->rays.valid[k] = 0;
 }
 
-static void set_lane(iir_ray8 *rays, int k, iir_vec3 org, iir_vec3 dir, float tfar)
-{
-    rays->ox[k] = org.x, rays->oy[k] = org.y, rays->oz[k] = org.z;
-    rays->dx[k] = dir.x, rays->dy[k] = dir.y, rays->dz[k] = dir.z;
-    rays->tnear[k] = 0.f;
-    rays->tfar[k] = tfar;
-    rays->valid[k] = 1;
-}
-
 /* Traces the block's pending shadow rays and adds the contributions of the unoccluded ones. */
 static void resolve(const iir_renderer *r, block *b, iir_raystats *st)
 {
@@ -173,7 +164,7 @@ static void sample_lane(const iir_renderer *r, block *b, int k, const iir_light_
     b->pending[k] = iir_scale(iir_mul(iir_mul(f, b->through[k]), ls->Li), cos_theta * w / ls->pdf);
     const iir_light_segment *seg = &ls->shadow;
     if (seg->tmax > 0.f)
-        set_lane(&b->rays, k, seg->org, seg->dir, seg->tmax);
+        iir_ray8_set(&b->rays, k, seg->org, seg->dir, seg->tmax);
     else
         b->L[k] = iir_add(b->L[k], b->pending[k]);
 }
@@ -258,8 +249,8 @@ static bool lanes_into_rays(const iir_light_delta_lanes *o, const bool shaded[8]
             L[k] = iir_add(L[k], pending[k]);
             continue;
         }
-        set_lane(rays, k, iir_v3(o->ox[k], o->oy[k], o->oz[k]),
-                 iir_v3(o->dx[k], o->dy[k], o->dz[k]), o->tmax[k]);
+        iir_ray8_set(rays, k, iir_v3(o->ox[k], o->oy[k], o->oz[k]),
+                     iir_v3(o->dx[k], o->dy[k], o->dz[k]), o->tmax[k]);
         any = true;
     }
     return any;
@@ -396,7 +387,7 @@ static bool tree_samples(const direct_ctx *c, const iir_light_eval *e, const uin
         if (ls.pdf <= 0.f || iir_is_black(ls.Li) || cos_theta <= 0.f) continue;
         pending[k] = iir_scale(ls.Li, cos_theta / ls.pdf);
         if (ls.shadow.tmax > 0.f) {
-            set_lane(rays, k, ls.shadow.org, ls.shadow.dir, ls.shadow.tmax);
+            iir_ray8_set(rays, k, ls.shadow.org, ls.shadow.dir, ls.shadow.tmax);
             any = true;
         } else {
             E[k] = iir_add(E[k], pending[k]);

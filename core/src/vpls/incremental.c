@@ -233,14 +233,20 @@ static void set_disk(iir_vpl *v, const double s[3])
 
 /* One closest-hit ray from o along unit w: a VPL on a reflecting surface facing the light, or a
  * null sample (miss, emitter, grazing hit). */
+static bool hit_surface(const iir_incr *inc, const pose *ps, const iir_hit *hit, iir_vec3 w,
+                        iir_surface *sf)
+{
+    *sf = iir_surface_at(inc->scene, hit, iir_neg(w));
+    return iir_is_black(sf->Le) && iir_domain_faces(ps, sf->p, sf->ns);
+}
+
 static bool trace_surface(const iir_incr *inc, const pose *ps, iir_vec3 o, iir_vec3 w,
                           iir_raystats *rays, iir_surface *sf)
 {
     iir_ray ray = iir_make_ray(o, w, 0.f, INFINITY);
     iir_hit hit;
     if (!iir_rt_intersect(inc->rt, &ray, &hit, rays, IIR_RAYS_VPL)) return false;
-    *sf = iir_surface_at(inc->scene, &hit, iir_neg(w));
-    return iir_is_black(sf->Le) && iir_domain_faces(ps, sf->p, sf->ns);
+    return hit_surface(inc, ps, &hit, w, sf);
 }
 
 static sample trace_sample(const iir_incr *inc, const pose *ps, iir_vec3 o, iir_vec3 w,
@@ -570,17 +576,35 @@ typedef struct cell_ctx {
     const pose *ps;
 } cell_ctx;
 
-static iir_cell_hit cell_trace(void *ctx, const double s[3], uint32_t j, iir_raystats *rays)
+/* Pattern point j's emitter stratum: a hash of j, independent of the cells. */
+static pose cell_pose(const pose *ps, uint32_t j)
 {
+    return iir_domain_at_stratum(ps, (uint32_t)iir_mix64(0x5ce11ull << 32 | j));
+}
+
+static void cell_trace(void *ctx, const double (*s)[3], uint32_t j0, int m, iir_cell_hit *hits,
+                       iir_raystats *rays)
+{
+    _Static_assert(IIR_CELL_BATCH == 16, "one packet of 16");
     const cell_ctx *c = ctx;
-    iir_vec3 o, w;
-    uint32_t k = (uint32_t)iir_mix64(0x5ce11ull << 32 | j); /* independent of the cells */
-    pose at = iir_domain_at_emitter(c->ps, iir_domain_emitter_stratum(c->ps, k));
-    iir_domain_ray(&at, s, &o, &w);
-    iir_surface sf;
-    iir_cell_hit h = {.null_sample = true};
-    if (!trace_surface(c->inc, &at, o, w, rays, &sf)) return h;
-    return (iir_cell_hit){.x = sf.p, .n = sf.ns, .dist = iir_length(iir_sub(sf.p, o))};
+    iir_ray8 half[2];
+    iir_vec3 o[IIR_CELL_BATCH], w[IIR_CELL_BATCH];
+    memset(half, 0, sizeof half);
+    for (int q = 0; q < m; q++) {
+        pose at = cell_pose(c->ps, j0 + (uint32_t)q);
+        iir_domain_ray(&at, s[q], &o[q], &w[q]);
+        iir_ray8_set(&half[q / 8], q % 8, o[q], w[q], INFINITY);
+    }
+    iir_hit hit[IIR_CELL_BATCH];
+    iir_rt_intersect16(c->inc->rt, half, hit, rays, IIR_RAYS_VPL);
+    for (int q = 0; q < m; q++) {
+        pose at = cell_pose(c->ps, j0 + (uint32_t)q);
+        iir_surface sf;
+        hits[q] = (iir_cell_hit){.null_sample = true};
+        if (hit[q].prim != IIR_NO_HIT && hit_surface(c->inc, &at, &hit[q], w[q], &sf))
+            hits[q] =
+                (iir_cell_hit){.x = sf.p, .n = sf.ns, .dist = iir_length(iir_sub(sf.p, o[q]))};
+    }
 }
 
 /* WEIGH: Phi_i = I rho_i A_i profile(s_i); A_i the clipped Voronoi cell (surface: corrected where

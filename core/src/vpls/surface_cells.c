@@ -161,27 +161,33 @@ static void pattern_point(const iir_light_domain *d, uint32_t side, uint32_t y, 
     iir_domain_sample(d, iir_v2(fminf(ux, 0x1.fffffep-1f), fminf(uy, 0x1.fffffep-1f)), 0.0, s);
 }
 
-/* The rays of pattern rows [y0, y1): each one's cell owner by a walk from the last one's (from
- * site 0 for the first: the same whatever thread runs the rows), traced, and handed to the
- * neighbour whose surface it hit when it missed the owner's. */
+/* The rays of pattern rows [y0, y1), IIR_CELL_BATCH at a time: each one's cell owner by a walk
+ * from the last one's (from site 0 for the first: the same whatever thread runs the rows), traced,
+ * and handed to the neighbour whose surface it hit when it missed the owner's. */
 static void rows(iir_surface_cells *c, const iir_light_domain *d, const double *xyz,
                  const iir_site_graph *g, iir_cell_trace_fn trace, void *ctx, uint32_t side,
                  uint32_t y0, uint32_t y1, iir_raystats *rays)
 {
-    uint32_t owner = 0;
+    uint32_t owner = 0, owners[IIR_CELL_BATCH];
+    double s[IIR_CELL_BATCH][3];
+    iir_cell_hit hits[IIR_CELL_BATCH];
     for (uint32_t y = y0; y < y1; y++)
-        for (uint32_t k = 0; k < side; k++) {
-            double s[3];
-            pattern_point(d, side, y, k, s);
-            owner = iir_site_graph_nearest(g, xyz, owner, s);
-            iir_cell_hit h = trace(ctx, s, y * side + k, rays);
-            cell_plane v = plane_at(c, owner);
-            if (on_surface(&v, &h)) continue;
-            uint32_t to = best_fit(c, xyz, g, owner, &h, s);
+        for (uint32_t k0 = 0; k0 < side; k0 += IIR_CELL_BATCH) {
+            int m = side - k0 < IIR_CELL_BATCH ? (int)(side - k0) : IIR_CELL_BATCH;
+            for (int q = 0; q < m; q++) {
+                pattern_point(d, side, y, k0 + (uint32_t)q, s[q]);
+                owners[q] = owner = iir_site_graph_nearest(g, xyz, owner, s[q]);
+            }
+            trace(ctx, (const double(*)[3])s, y * side + k0, m, hits, rays);
+            for (int q = 0; q < m; q++) {
+                cell_plane v = plane_at(c, owners[q]);
+                if (on_surface(&v, &hits[q])) continue;
+                uint32_t to = best_fit(c, xyz, g, owners[q], &hits[q], s[q]);
 #pragma omp atomic
-            c->delta[owner]--;
+                c->delta[owners[q]]--;
 #pragma omp atomic
-            c->delta[to]++;
+                c->delta[to]++;
+            }
         }
 }
 

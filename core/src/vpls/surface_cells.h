@@ -28,12 +28,14 @@ typedef struct iir_cell_hit {
     bool null_sample;
 } iir_cell_hit;
 
-/* Traces the light's ray for point j of the pattern, at domain point s (an area light's from a
- * point of the emitter fixed for j, drawn independently of the cells: a cell's owner's own point
- * is not one -- owners are the VPLs that survived, and which of them survive depends on their
- * points); called from several threads at once. */
-typedef iir_cell_hit (*iir_cell_trace_fn)(void *ctx, const double s[3], uint32_t j,
-                                          iir_raystats *rays);
+/* Traces the light's rays for points j0 .. j0 + m - 1 of the pattern, at domain points s[0 .. m)
+ * (up to IIR_CELL_BATCH; neighbours in the domain, so the rays are coherent), into hits[0 .. m):
+ * an area light's from a point of the emitter fixed for j, drawn independently of the cells (a
+ * cell's owner's own point is not one -- owners are the VPLs that survived, and which of them
+ * survive depends on their points); called from several threads at once. */
+#define IIR_CELL_BATCH 16
+typedef void (*iir_cell_trace_fn)(void *ctx, const double (*s)[3], uint32_t j0, int m,
+                                  iir_cell_hit *hits, iir_raystats *rays);
 
 /* Buffers kept across frames. */
 typedef struct iir_surface_cells {
