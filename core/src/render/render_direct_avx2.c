@@ -51,9 +51,7 @@ static __m256 half_hit(const lean_half *q, const iir_gbuffer *gb)
     if (q->whole) { /* two rows of 4 as one vector (no store to forward from) */
         __m128i a = _mm_loadu_si128((const __m128i *)(gb->prim + q->row[0]));
         __m128i b = _mm_loadu_si128((const __m128i *)(gb->prim + q->row[1]));
-        __m256i none =
-            _mm256_cmpeq_epi32(_mm256_set_m128i(b, a), _mm256_set1_epi32((int)IIR_NO_HIT));
-        return _mm256_castsi256_ps(_mm256_xor_si256(none, _mm256_set1_epi32(-1)));
+        return hit_mask(_mm256_set_m128i(b, a));
     }
     uint32_t prim[8];
     for (int k = 0; k < 8; k++) {

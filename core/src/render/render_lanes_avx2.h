@@ -51,12 +51,15 @@ static inline __m256 not_black(v3 a)
                         _mm256_cmp_ps(a.z, zero(), _CMP_NEQ_UQ));
 }
 
-/* Lanes whose G-buffer prim (8 from p) is geometry, not IIR_NO_HIT. */
+/* Lanes whose G-buffer prim is geometry, not IIR_NO_HIT: of 8 prims as lanes, or 8 from p. */
+static inline __m256 hit_mask(__m256i prim)
+{
+    __m256i none = _mm256_cmpeq_epi32(prim, _mm256_set1_epi32((int)IIR_NO_HIT));
+    return _mm256_castsi256_ps(_mm256_xor_si256(none, _mm256_set1_epi32(-1)));
+}
 static inline __m256 hit_lanes(const uint32_t *p)
 {
-    __m256i none = _mm256_cmpeq_epi32(_mm256_loadu_si256((const __m256i *)p),
-                                      _mm256_set1_epi32((int)IIR_NO_HIT));
-    return _mm256_castsi256_ps(_mm256_xor_si256(none, _mm256_set1_epi32(-1)));
+    return hit_mask(_mm256_loadu_si256((const __m256i *)p));
 }
 
 /* 4 iir_vec3 at each of a and b as lanes 0..3 (a) and 4..7 (b). */

@@ -231,8 +231,8 @@ static void set_disk(iir_vpl *v, const double s[3])
 
 /* ==== rays =================================================================================== */
 
-/* One closest-hit ray from o along unit w: a VPL on a reflecting surface facing the light, or a
- * null sample (miss, emitter, grazing hit). */
+/* The surface a closest hit of a ray along unit w found: true when it can hold a VPL (it reflects
+ * and faces the light), false for an emitter or a grazing hit (a null sample). */
 static bool hit_surface(const iir_incr *inc, const pose *ps, const iir_hit *hit, iir_vec3 w,
                         iir_surface *sf)
 {
@@ -240,6 +240,8 @@ static bool hit_surface(const iir_incr *inc, const pose *ps, const iir_hit *hit,
     return iir_is_black(sf->Le) && iir_domain_faces(ps, sf->p, sf->ns);
 }
 
+/* One closest-hit ray from o along unit w: a VPL on a reflecting surface facing the light, or a
+ * null sample (miss, emitter, grazing hit). */
 static bool trace_surface(const iir_incr *inc, const pose *ps, iir_vec3 o, iir_vec3 w,
                           iir_raystats *rays, iir_surface *sf)
 {
@@ -588,20 +590,20 @@ static void cell_trace(void *ctx, const double (*s)[3], uint32_t j0, int m, iir_
     _Static_assert(IIR_CELL_BATCH == 16, "one packet of 16");
     const cell_ctx *c = ctx;
     iir_ray8 half[2];
+    pose at[IIR_CELL_BATCH];
     iir_vec3 o[IIR_CELL_BATCH], w[IIR_CELL_BATCH];
     memset(half, 0, sizeof half);
     for (int q = 0; q < m; q++) {
-        pose at = cell_pose(c->ps, j0 + (uint32_t)q);
-        iir_domain_ray(&at, s[q], &o[q], &w[q]);
+        at[q] = cell_pose(c->ps, j0 + (uint32_t)q);
+        iir_domain_ray(&at[q], s[q], &o[q], &w[q]);
         iir_ray8_set(&half[q / 8], q % 8, o[q], w[q], INFINITY);
     }
     iir_hit hit[IIR_CELL_BATCH];
     iir_rt_intersect16(c->inc->rt, half, hit, rays, IIR_RAYS_VPL);
     for (int q = 0; q < m; q++) {
-        pose at = cell_pose(c->ps, j0 + (uint32_t)q);
         iir_surface sf;
         hits[q] = (iir_cell_hit){.null_sample = true};
-        if (hit[q].prim != IIR_NO_HIT && hit_surface(c->inc, &at, &hit[q], w[q], &sf))
+        if (hit[q].prim != IIR_NO_HIT && hit_surface(c->inc, &at[q], &hit[q], w[q], &sf))
             hits[q] =
                 (iir_cell_hit){.x = sf.p, .n = sf.ns, .dist = iir_length(iir_sub(sf.p, o[q]))};
     }
