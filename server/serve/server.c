@@ -94,6 +94,7 @@ typedef struct server {
     int port;                     /* the listening port (cfg->port may be 0) */
     lws_sorted_usec_list_t tick;  /* bounds each lws_service wait during shutdown */
     lws_sorted_usec_list_t sweep; /* looks for connections lws is failing (sweep_cb) */
+    lws_sorted_usec_list_t idle;  /* hands free memory back once the last session is gone */
     bool sweeping;
     char web_dir[PATH_MAX];
 } server;
@@ -327,12 +328,23 @@ static void on_closed(server *srv, conn *c)
 void __sanitizer_purge_allocator(void);
 #endif
 
-/* The last session gone: give the allocator's free memory (a session's shadow maps were allocated
- * on its worker) back to the system, so an idle daemon's RSS returns to its start. glibc keeps it
- * in per-thread arenas until malloc_trim; ASan's allocator ignores malloc_trim and keeps freed
- * blocks in its quarantine and size-class regions until its purge. */
-static void release_idle_memory(void)
+static bool stopping(server *srv)
 {
+    return atomic_load(&srv->stop) || atomic_load(&srv->draining);
+}
+
+/* IDLE_RELEASE_MS after the last session went, if none came since: give the allocator's free
+ * memory (a session's shadow maps were allocated on its worker) back to the system, so an idle
+ * daemon's RSS returns to its start. glibc keeps it in per-thread arenas until malloc_trim; ASan's
+ * allocator ignores malloc_trim and keeps freed blocks in its quarantine and size-class regions
+ * until its purge (~50 ms of this thread after a radiosity session: hence on a timer, not in the
+ * closing's own callback, and never while the daemon stops). */
+enum { IDLE_RELEASE_MS = 100 };
+
+static void idle_cb(lws_sorted_usec_list_t *sul)
+{
+    server *srv = lws_container_of(sul, server, idle);
+    if (srv->active || srv->closing || stopping(srv)) return;
 #ifdef IIRD_ASAN
     __sanitizer_purge_allocator();
 #else
@@ -354,7 +366,10 @@ static void reap_closing(server *srv, bool wait)
             p = &z->next;
         }
     }
-    if (freed && !srv->closing && srv->active == 0) release_idle_memory();
+    if (freed && !srv->closing && srv->active == 0 && !stopping(srv)) {
+        lws_sul_cancel(&srv->idle);
+        lws_sul_schedule(srv->ctx, 0, &srv->idle, idle_cb, IDLE_RELEASE_MS * LWS_US_PER_MS);
+    }
 }
 
 /* No client message for --idle-timeout: an idle_timeout error, then close 4000. A client that
@@ -849,6 +864,7 @@ static int serve(server *srv)
         if (lws_service(srv->ctx, 0) < 0) break;
     shut_down(srv);
     lws_sul_cancel(&srv->sweep);
+    lws_sul_cancel(&srv->idle);
     pthread_mutex_lock(&srv->ctx_lock);
     srv->ctx = NULL;
     pthread_mutex_unlock(&srv->ctx_lock);

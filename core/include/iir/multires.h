@@ -62,16 +62,22 @@ typedef struct iir_mr_sample {
 } iir_mr_sample;
 #define IIR_MR_TEXEL UINT32_MAX
 
+/* A work item's samples, gathered from the hierarchy (or the G-buffer) only when the shading
+ * function reads them: a sum from cached columns (render_indirect.c) needs their count alone. */
+typedef struct iir_mr_samples iir_mr_samples;
+
+/* The item's samples, gathered on the first call. */
+const iir_mr_sample *iir_mr_samples_read(iir_mr_samples *src);
+
 /* Evaluates count (<= IIR_MR_BATCH) samples of class cls = cy m + cx of an m x m lattice (m
  * divides nothing in particular: the class unites the caller's n x n classes (kx, ky) with
  * kx mod m = cx and ky mod m = cy; m = 1: all of them) into E[0 .. count) and returns the
- * evaluations it made (the VPL sum: sample-VPL pairs). The samples are work item `item` of the
- * hierarchy (iir_multires_item): the same ones, in the same order, every frame of one generation.
- * Called from several threads at once with the same ctx (which it must only read) and the calling
- * thread's own ray counters st. */
-typedef uint64_t (*iir_mr_shade_fn)(void *ctx, int item, int m, uint32_t cls,
-                                    const iir_mr_sample *s, int count, iir_vec3 *E,
-                                    iir_raystats *st);
+ * evaluations it made (the VPL sum: sample-VPL pairs). The samples (iir_mr_samples_read(src)) are
+ * work item `item` of the hierarchy (iir_multires_item): the same ones, in the same order, every
+ * frame of one generation. Called from several threads at once with the same ctx (which it must
+ * only read) and the calling thread's own ray counters st. */
+typedef uint64_t (*iir_mr_shade_fn)(void *ctx, int item, int m, uint32_t cls, iir_mr_samples *src,
+                                    int count, iir_vec3 *E, iir_raystats *st);
 
 typedef struct iir_multires iir_multires;
 

@@ -99,11 +99,12 @@ static iir_vec3 bounce_point(const hier_state *s, const rsm_receiver *q, uint64_
 }
 
 /* multires.h's callback: every sample evaluates everything (no interleaving). */
-static uint64_t shade_samples(void *ctx, int item, int m, uint32_t cls, const iir_mr_sample *smp,
+static uint64_t shade_samples(void *ctx, int item, int m, uint32_t cls, iir_mr_samples *src,
                               int count, iir_vec3 *E, iir_raystats *st)
 {
     (void)item, (void)m, (void)cls, (void)st;
     const hier_state *s = ctx;
+    const iir_mr_sample *smp = iir_mr_samples_read(src);
     uint64_t evals = 0;
     for (int i = 0; i < count; i++) {
         rsm_receiver q = rsm_receiver_at(smp[i].position, smp[i].normal);

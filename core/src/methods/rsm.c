@@ -254,11 +254,12 @@ static iir_status shade_lowres(rsm_state *s, const iir_gbuffer *gb, iir_image *o
 /* ---- shading on the hierarchy (shading = multires) ---- */
 
 /* multires.h's callback: every sample gathers from every map (no interleaving). */
-static uint64_t gather_samples(void *ctx, int item, int m, uint32_t cls, const iir_mr_sample *smp,
+static uint64_t gather_samples(void *ctx, int item, int m, uint32_t cls, iir_mr_samples *src,
                                int count, iir_vec3 *E, iir_raystats *st)
 {
     (void)item, (void)m, (void)cls, (void)st;
     const rsm_state *s = ctx;
+    const iir_mr_sample *smp = iir_mr_samples_read(src);
     for (int i = 0; i < count; i++) {
         E[i] = iir_v3s(0.f);
         rsm_receiver q = rsm_receiver_at(smp[i].position, smp[i].normal);

@@ -581,17 +581,33 @@ static iir_mr_sample pixel_sample(const iir_gbuffer *gb, uint32_t i)
     return (iir_mr_sample){gb->position[i], gb->normal[i], gb->albedo[i], i};
 }
 
+struct iir_mr_samples {
+    const shade_ctx *c;
+    const mr_item *it;
+    iir_mr_sample *s; /* the thread's batch */
+    bool read;
+};
+
+const iir_mr_sample *iir_mr_samples_read(iir_mr_samples *src)
+{
+    const mr_item *it = src->it;
+    const mr_level *v = &src->c->mr->lv[it->l];
+    for (uint32_t q = it->begin; q < it->end && !src->read; q++)
+        src->s[q - it->begin] = it->l ? v->s[v->order[q]] : pixel_sample(src->c->gb, v->order[q]);
+    src->read = true;
+    return src->s;
+}
+
 /* Evaluates item u into its level's E (level 0: into out); returns the evaluations. */
 static uint64_t shade_item(const shade_ctx *c, int u, texel_batch *b, iir_raystats *st)
 {
     const mr_item *it = &c->mr->items[u];
     mr_level *v = &c->mr->lv[it->l];
-    int m = 0;
-    for (uint32_t q = it->begin; q < it->end; q++)
-        b->s[m++] = it->l ? v->s[v->order[q]] : pixel_sample(c->gb, v->order[q]);
+    int m = (int)(it->end - it->begin);
+    iir_mr_samples src = {c, it, b->s, false};
     uint64_t evals = 0;
     if ((c->live[it->l] >> it->cls) & 1)
-        evals = c->fn(c->ctx, u, v->n, it->cls, b->s, m, b->E, st);
+        evals = c->fn(c->ctx, u, v->n, it->cls, &src, m, b->E, st);
     else
         for (int q = 0; q < m; q++) b->E[q] = iir_v3s(0.f);
     iir_vec3 *E = it->l ? v->E : c->out;

@@ -683,7 +683,7 @@ static bool coarse_batch(const indirect_ctx *c, const iir_mr_sample *s, int coun
  * position is cls's mod m, subset k's estimate weighted |k| / |U| (so U's VPLs carry
  * Phi_i N / |U|: m = n is subset cls alone, m = 1 every VPL with its own flux). A union whose every
  * VPL is summed from its columns (no pixel of it can be glossy) skips the batch. */
-static uint64_t coarse_samples(void *ctx, int item, int m, uint32_t cls, const iir_mr_sample *s,
+static uint64_t coarse_samples(void *ctx, int item, int m, uint32_t cls, iir_mr_samples *src,
                                int count, iir_vec3 *E, iir_raystats *st)
 {
     const indirect_ctx *c = ctx;
@@ -698,7 +698,7 @@ static uint64_t coarse_samples(void *ctx, int item, int m, uint32_t cls, const i
     }
     pixel_batch b;
     bool plain = true;
-    if (!columns) plain = !coarse_batch(c, s, count, &b);
+    if (!columns) plain = !coarse_batch(c, iir_mr_samples_read(src), count, &b);
     b.m = count;
     for (int q = 0; q < count; q++) E[q] = iir_v3s(0.f);
     for (uint32_t k = 0; k < r->num_subsets && union_size; k++) {
