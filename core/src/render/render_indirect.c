@@ -484,6 +484,34 @@ static uint64_t shade_batch(const indirect_ctx *c, uint32_t k, uint32_t lead, pi
     return (uint64_t)m * count;
 }
 
+/* The background pixels of tile tl in r->raw: 0 (every other pixel is written). */
+static void zero_background(const iir_renderer *r, const iir_tile *tl)
+{
+    const iir_gbuffer *gb = &r->gb;
+    for (int y = tl->y0; y < tl->y1; y++)
+        for (int x = tl->x0; x < tl->x1; x++) {
+            size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
+            if (gb->prim[i] == IIR_NO_HIT) r->raw[i] = iir_v3s(0.f);
+        }
+}
+
+/* Which tiles hold background, once per G-buffer: a frame reads no tile's primitives just to find
+ * none (at 1024x768 the scan cost ~15% of the indirect phase, its lines missing the cache). */
+static void find_background(iir_renderer *r, int tiles)
+{
+    if (r->bg_serial == r->gb_serial) return;
+    const iir_gbuffer *gb = &r->gb;
+    for (int t = 0; t < tiles; t++) {
+        iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_INDIRECT_TILE, t);
+        bool bg = false;
+        for (int y = tl.y0; y < tl.y1 && !bg; y++)
+            for (int x = tl.x0; x < tl.x1; x++)
+                bg |= gb->prim[(size_t)y * (size_t)gb->width + (size_t)x] == IIR_NO_HIT;
+        r->bg_tile[t] = bg;
+    }
+    r->bg_serial = r->gb_serial;
+}
+
 /* Shades one tile; returns the pixel-VPL pairs shaded, and adds those read from columns to
  * *reused. */
 static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, int tiles, pixel_batch *b,
@@ -493,11 +521,7 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, int tiles, pi
     const iir_renderer *r = c->r;
     const iir_gbuffer *gb = &r->gb;
     iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_INDIRECT_TILE, t);
-    for (int y = tl.y0; y < tl.y1; y++) /* the background (every other pixel is written) */
-        for (int x = tl.x0; x < tl.x1; x++) {
-            size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
-            if (gb->prim[i] == IIR_NO_HIT) r->raw[i] = iir_v3s(0.f);
-        }
+    if (r->bg_tile[t]) zero_background(r, &tl);
     /* The lattice through (x0 + i, y0 + j) is one subset. */
     for (int j = 0; j < n && tl.y0 + j < tl.y1; j++)
         for (int i = 0; i < n && tl.x0 + i < tl.x1; i++) {
@@ -581,6 +605,7 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
         c.gv = iir_gv_begin(r, &r->gv, &c.args, n, shift, c.receivers, NULL);
     }
     count_readers(&c);
+    find_background(r, tiles);
     iir_raystats total = {0};
     int skipped = 0;
     uint64_t sum = 0, read = 0;

@@ -14,8 +14,15 @@
 #include "light_tree.h"
 
 /* Tiles of the G-buffer, direct and filter phases; the indirect phase uses larger ones so that a
- * subset has more pixels per tile to share each VPL's map texels. */
-enum { IIR_RENDER_TILE = 16, IIR_INDIRECT_TILE = 64, IIR_MAX_INTERLEAVE = 8, IIR_MAX_SUBSETS = 64 };
+ * subset has more pixels per tile to share each VPL's map texels, and its pieces of the VPLs'
+ * columns (gv_columns.h) are longer runs through memory (1 KB each with 128-pixel tiles and 4x4
+ * interleave: at 1024x768 the indirect phase took ~20% less time than with 64-pixel tiles). */
+enum {
+    IIR_RENDER_TILE = 16,
+    IIR_INDIRECT_TILE = 128,
+    IIR_MAX_INTERLEAVE = 8,
+    IIR_MAX_SUBSETS = 64
+};
 enum { IIR_MAX_AREA_SAMPLES = 4096 }; /* iir_indirect_params.area_samples */
 
 /* The filter's horizontal pass at one pixel: weighted sum of the accepted taps and their weight. */
@@ -66,6 +73,8 @@ struct iir_renderer {
                              within the filter's reach (render_filter.c) */
     uint64_t near_fine_gen; /* the multires generation near_fine was computed for; 0 = none */
     int near_fine_h;        /* and the filter's half-width */
+    uint8_t *bg_tile;       /* per indirect tile (IIR_INDIRECT_TILE): some pixel is background */
+    uint64_t bg_serial;     /* the G-buffer (gb_serial) bg_tile was computed for; 0 = none */
     uint32_t *fmask;       /* per pixel: which of the filter's taps are similar (render_filter.c) */
     uint64_t fmask_serial; /* the G-buffer (gb_serial) fmask was computed for; 0 = none */
     int fmask_h;           /* and the filter's half-width */
