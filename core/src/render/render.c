@@ -84,7 +84,6 @@ void iir_renderer_destroy(iir_renderer *r)
     free(r->raw);
     free(r->rows);
     free(r->near_fine);
-    free(r->bg_tile);
     free(r->fmask);
     free(r->vpl);
     iir_gv_free(r->gv);
@@ -133,8 +132,7 @@ uint64_t iir_renderer_memory(int width, int height)
         7 * sizeof *g->position + sizeof *g->mr + 2 * sizeof *g->depth + sizeof *g->prim;
     uint64_t scratch = sizeof(iir_vec3) + sizeof(iir_filter_row) + sizeof(uint32_t);
     uint64_t px = (uint64_t)width * (uint64_t)height;
-    return px * (gbuffer + scratch) + (uint64_t)iir_tile_count(width, height, IIR_RENDER_TILE) +
-           (uint64_t)iir_tile_count(width, height, IIR_INDIRECT_TILE);
+    return px * (gbuffer + scratch) + (uint64_t)iir_tile_count(width, height, IIR_RENDER_TILE);
 }
 
 /* Sizes the G-buffer and the per-pixel scratch for a w x h frame (only when the size changed). On
@@ -146,18 +144,16 @@ static iir_status resize(iir_renderer *r, int w, int h, iir_error *err)
     free(r->raw);
     free(r->rows);
     free(r->near_fine);
-    free(r->bg_tile);
     free(r->fmask);
     r->raw = malloc(sizeof(iir_vec3) * (size_t)w * (size_t)h);
     r->rows = malloc(sizeof(iir_filter_row) * (size_t)w * (size_t)h);
     r->near_fine = malloc((size_t)iir_tile_count(w, h, IIR_RENDER_TILE));
     r->near_fine_gen = 0;
-    r->bg_tile = malloc((size_t)iir_tile_count(w, h, IIR_INDIRECT_TILE));
     r->bg_serial = 0;
     r->fmask = malloc(sizeof(uint32_t) * (size_t)w * (size_t)h);
     r->fmask_serial = 0;
     iir_status s = iir_gbuffer_resize(&r->gb, w, h, err);
-    if (s == IIR_OK && (!r->raw || !r->rows || !r->near_fine || !r->bg_tile || !r->fmask)) {
+    if (s == IIR_OK && (!r->raw || !r->rows || !r->near_fine || !r->fmask)) {
         iir_gbuffer_free(&r->gb);
         s = iir_fail(err, IIR_ERR_NOMEM, "out of memory for a %dx%d frame", w, h);
     }

@@ -157,6 +157,7 @@ typedef struct indirect_ctx {
     uint32_t prefix[IIR_MAX_SUBSETS]; /* subset k's leading VPLs that read their columns and are
                                          not glossy (all of them: the columns alone shade it) */
     uint32_t reads[IIR_MAX_SUBSETS];  /* subset k's VPLs that read their columns */
+    bool fresh; /* the first frame on this G-buffer: its background pixels of r->raw are zeroed */
 } indirect_ctx;
 
 typedef iir_pixel_batch pixel_batch;
@@ -484,7 +485,10 @@ static uint64_t shade_batch(const indirect_ctx *c, uint32_t k, uint32_t lead, pi
     return (uint64_t)m * count;
 }
 
-/* The background pixels of tile tl in r->raw: 0 (every other pixel is written). */
+/* The background pixels of tile tl in r->raw: 0 (every other pixel is written each frame). Once
+ * per G-buffer: nothing writes them but with 0 (the empty lattices here, multires's fine pass),
+ * and a frame that read the G-buffer's primitives again just to find them spent ~15% of the
+ * indirect phase at 1024x768 waiting on those lines. */
 static void zero_background(const iir_renderer *r, const iir_tile *tl)
 {
     const iir_gbuffer *gb = &r->gb;
@@ -493,23 +497,6 @@ static void zero_background(const iir_renderer *r, const iir_tile *tl)
             size_t i = (size_t)y * (size_t)gb->width + (size_t)x;
             if (gb->prim[i] == IIR_NO_HIT) r->raw[i] = iir_v3s(0.f);
         }
-}
-
-/* Which tiles hold background, once per G-buffer: a frame reads no tile's primitives just to find
- * none (at 1024x768 the scan cost ~15% of the indirect phase, its lines missing the cache). */
-static void find_background(iir_renderer *r, int tiles)
-{
-    if (r->bg_serial == r->gb_serial) return;
-    const iir_gbuffer *gb = &r->gb;
-    for (int t = 0; t < tiles; t++) {
-        iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_INDIRECT_TILE, t);
-        bool bg = false;
-        for (int y = tl.y0; y < tl.y1 && !bg; y++)
-            for (int x = tl.x0; x < tl.x1; x++)
-                bg |= gb->prim[(size_t)y * (size_t)gb->width + (size_t)x] == IIR_NO_HIT;
-        r->bg_tile[t] = bg;
-    }
-    r->bg_serial = r->gb_serial;
 }
 
 /* Shades one tile; returns the pixel-VPL pairs shaded, and adds those read from columns to
@@ -521,7 +508,7 @@ static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, int tiles, pi
     const iir_renderer *r = c->r;
     const iir_gbuffer *gb = &r->gb;
     iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_INDIRECT_TILE, t);
-    if (r->bg_tile[t]) zero_background(r, &tl);
+    if (c->fresh) zero_background(r, &tl);
     /* The lattice through (x0 + i, y0 + j) is one subset. */
     for (int j = 0; j < n && tl.y0 + j < tl.y1; j++)
         for (int i = 0; i < n && tl.x0 + i < tl.x1; i++) {
@@ -605,7 +592,7 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
         c.gv = iir_gv_begin(r, &r->gv, &c.args, n, shift, c.receivers, NULL);
     }
     count_readers(&c);
-    find_background(r, tiles);
+    c.fresh = r->bg_serial != r->gb_serial;
     iir_raystats total = {0};
     int skipped = 0;
     uint64_t sum = 0, read = 0;
@@ -626,6 +613,7 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
     }
     iir_raystats_add(st, &total);
     if (columns) iir_gv_end(r->gv, !skipped);
+    if (!skipped) r->bg_serial = r->gb_serial;
     *evals += sum;
     *reused += read;
     return skipped > 0;

@@ -73,8 +73,7 @@ struct iir_renderer {
                              within the filter's reach (render_filter.c) */
     uint64_t near_fine_gen; /* the multires generation near_fine was computed for; 0 = none */
     int near_fine_h;        /* and the filter's half-width */
-    uint8_t *bg_tile;       /* per indirect tile (IIR_INDIRECT_TILE): some pixel is background */
-    uint64_t bg_serial;     /* the G-buffer (gb_serial) bg_tile was computed for; 0 = none */
+    uint64_t bg_serial;     /* the G-buffer whose background pixels in raw are 0; 0 = none */
     uint32_t *fmask;       /* per pixel: which of the filter's taps are similar (render_filter.c) */
     uint64_t fmask_serial; /* the G-buffer (gb_serial) fmask was computed for; 0 = none */
     int fmask_h;           /* and the filter's half-width */
