@@ -22,18 +22,52 @@ static inline __m256i lanes_below(int x, int end)
     return _mm256_cmpgt_epi32(_mm256_set1_epi32(end), idx);
 }
 
-/* The weight of tap d at 8 centres: tap_weight(d) where bit `bit` of their masks is set (and, in
- * the row pass, the tap's subset has VPLs: `live`), else 0. */
-static inline __m256 tap_weights(__m256i masks, int bit, float w)
-{
-    __m256i b = _mm256_set1_epi32((int)(1u << bit));
-    __m256 similar = _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(masks, b), b));
-    return _mm256_and_ps(similar, _mm256_set1_ps(w));
-}
-
 static inline float end_weight(const iir_filter_lanes *f, int d)
 {
     return d == -f->h || d == f->h ? f->end_weight : 1.f;
+}
+
+/* A pass's taps along one row or column, the same for each of its groups of 8 centres -- their
+ * similarity bits and weights (and the column pass's rows of planes) set once a row, not per tap
+ * of each group (the ring's row index was an integer division per tap). */
+typedef struct taps {
+    int count;
+    __m256i bit[2 * IIR_FILTER_MAX_H + 1];
+    __m256 w[2 * IIR_FILTER_MAX_H + 1];
+    const float *row[2 * IIR_FILTER_MAX_H + 1]; /* column pass: the planes' row of each tap */
+} taps;
+
+static void set_tap(taps *t, int bit, float w)
+{
+    t->bit[t->count] = _mm256_set1_epi32((int)(1u << bit));
+    t->w[t->count++] = _mm256_set1_ps(w);
+}
+
+/* The row pass's taps d = -h .. h. */
+static taps row_taps(const iir_filter_lanes *f)
+{
+    taps t = {0};
+    for (int d = -f->h; d <= f->h; d++) set_tap(&t, IIR_FILTER_MAX_H + d, end_weight(f, d));
+    return t;
+}
+
+/* The column pass's taps at row y: those of d = -h .. h inside the image. */
+static taps column_taps(const iir_filter_lanes *f, int y)
+{
+    taps t = {0};
+    for (int d = -f->h; d <= f->h; d++) {
+        if (y + d < 0 || y + d >= f->height) continue;
+        t.row[t.count] = f->planes + (size_t)((y + d) % f->ring) * (size_t)f->width;
+        set_tap(&t, IIR_FILTER_COLUMN + IIR_FILTER_MAX_H + d, end_weight(f, d));
+    }
+    return t;
+}
+
+/* Tap i's weight at 8 centres: its weight where its bit of their masks is set, else 0. */
+static inline __m256 tap_weights(const taps *t, int i, __m256i masks)
+{
+    __m256i similar = _mm256_cmpeq_epi32(_mm256_and_si256(masks, t->bit[i]), t->bit[i]);
+    return _mm256_and_ps(_mm256_castsi256_ps(similar), t->w[i]);
 }
 
 /* Row y's raw light and tap flags (its subset has VPLs, or multires: the pixel is coarse) over
@@ -94,6 +128,7 @@ void iir_filter_rows_avx2(const iir_filter_lanes *f, int y)
         B[sizeof R / sizeof *R], L[sizeof R / sizeof *R];
     size_t plane = (size_t)f->width * (size_t)f->ring, row = (size_t)y * (size_t)f->width;
     size_t slot = (size_t)(y % f->ring) * (size_t)f->width;
+    const taps t = row_taps(f);
     for (int c0 = 0; c0 < f->width; c0 += CHUNK) {
         int c1 = c0 + CHUNK < f->width ? c0 + CHUNK : f->width;
         uint32_t read = 0; /* the chunk's groups of 8 a column pass reads */
@@ -108,10 +143,10 @@ void iir_filter_rows_avx2(const iir_filter_lanes *f, int y)
             bool all = x + 8 <= f->width;
             __m256i masks = load_masks(f->mask + row + (size_t)x, in, all);
             __m256 r = zero(), g = zero(), b = zero(), w = zero();
-            for (int d = -f->h; d <= f->h; d++) {
-                int k = x - x0 + d + f->h; /* the taps' offset in the chunk's planes */
+            for (int i = 0; i < t.count; i++) {
+                int k = x - x0 + i; /* tap i's offset in the chunk's planes */
                 __m256 wt =
-                    _mm256_and_ps(tap_weights(masks, IIR_FILTER_MAX_H + d, end_weight(f, d)),
+                    _mm256_and_ps(tap_weights(&t, i, masks),
                                   _mm256_cmp_ps(_mm256_loadu_ps(L + k), zero(), _CMP_NEQ_OQ));
                 r = _mm256_add_ps(r, _mm256_mul_ps(_mm256_loadu_ps(R + k), wt));
                 g = _mm256_add_ps(g, _mm256_mul_ps(_mm256_loadu_ps(G + k), wt));
@@ -127,16 +162,16 @@ void iir_filter_rows_avx2(const iir_filter_lanes *f, int y)
     }
 }
 
-/* The column pass at pixels x .. x + 7 of row y (lanes `in`; `all`: the 8 of them): E. */
-static v3 column8(const iir_filter_lanes *f, int y, int x, __m256i in, bool all)
+/* The column pass at pixels x .. x + 7 of row y, its taps t (lanes `in`; `all`: the 8 of
+ * them): E. */
+static v3 column8(const iir_filter_lanes *f, const taps *t, int y, int x, __m256i in, bool all)
 {
     size_t plane = (size_t)f->width * (size_t)f->ring, row = (size_t)y * (size_t)f->width;
     __m256i masks = load_masks(f->mask + row + (size_t)x, in, all);
     __m256 r = zero(), g = zero(), b = zero(), w = zero();
-    for (int d = -f->h; d <= f->h; d++) {
-        if (y + d < 0 || y + d >= f->height) continue;
-        __m256 wt = tap_weights(masks, IIR_FILTER_COLUMN + IIR_FILTER_MAX_H + d, end_weight(f, d));
-        const float *p = f->planes + (size_t)((y + d) % f->ring) * (size_t)f->width + (size_t)x;
+    for (int i = 0; i < t->count; i++) {
+        __m256 wt = tap_weights(t, i, masks);
+        const float *p = t->row[i] + (size_t)x;
         r = _mm256_add_ps(r, _mm256_mul_ps(load_lanes(p, in, all), wt));
         g = _mm256_add_ps(g, _mm256_mul_ps(load_lanes(p + plane, in, all), wt));
         b = _mm256_add_ps(b, _mm256_mul_ps(load_lanes(p + 2 * plane, in, all), wt));
@@ -149,9 +184,10 @@ static v3 column8(const iir_filter_lanes *f, int y, int x, __m256i in, bool all)
 
 void iir_filter_columns_avx2(const iir_filter_lanes *f, int y, int x0, int x1, iir_vec3 *E)
 {
+    const taps t = column_taps(f, y);
     for (int x = x0; x < x1; x += 8) {
         _Alignas(32) float ex[8], ey[8], ez[8];
-        v3 e = column8(f, y, x, lanes_below(x, x1), x + 8 <= x1);
+        v3 e = column8(f, &t, y, x, lanes_below(x, x1), x + 8 <= x1);
         _mm256_store_ps(ex, e.x), _mm256_store_ps(ey, e.y), _mm256_store_ps(ez, e.z);
         for (int l = 0; l < 8 && x + l < x1; l++) E[x + l - x0] = iir_v3(ex[l], ey[l], ez[l]);
     }
@@ -178,10 +214,11 @@ void iir_filter_compose_avx2(const iir_filter_lanes *f, const iir_gbuffer *gb, i
                              iir_image *out)
 {
     size_t row = (size_t)y * (size_t)f->width;
+    const taps t = column_taps(f, y);
     int x = 0;
     for (; x + 8 <= f->width; x += 8)
         compose8(gb, row + (size_t)x, iir_image_at(out, x, y),
-                 column8(f, y, x, _mm256_set1_epi32(-1), true));
+                 column8(f, &t, y, x, _mm256_set1_epi32(-1), true));
     if (x == f->width) return;
     iir_vec3 E[8];
     iir_filter_columns_avx2(f, y, x, f->width, E);
