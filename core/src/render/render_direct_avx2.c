@@ -182,10 +182,8 @@ static void half_store(const lean_half *q, iir_image *out)
  * loads waited on memory: direct light ~15% faster with this). */
 enum { AHEAD = 32 };
 
-/* The lines the block AHEAD pixels to the right reads and writes, asked for now. Inlined always:
- * a function of prefetches alone counts as one without effects, and GCC drops the call. */
-static inline __attribute__((always_inline)) void prefetch_ahead(const iir_direct_lean *c, int x0,
-                                                                 int y0, iir_image *out)
+/* The lines the block AHEAD pixels to the right reads and writes, asked for now. */
+IIR_PREFETCH_FN prefetch_ahead(const iir_direct_lean *c, int x0, int y0, iir_image *out)
 {
     const iir_gbuffer *gb = c->gb;
     if (x0 + AHEAD >= gb->width || y0 + 2 * HALF_H > gb->height) return;

@@ -74,9 +74,8 @@ static inline __m256 tap_weights(const taps *t, int i, __m256i masks)
  * next): the loads of both were its top waits (at 1024x768 the pass ~10% faster with this). */
 enum { AHEAD = 128 };
 
-/* The lines of pixels i .. i + 15 of raw and of the masks, asked for now (always inlined: GCC
- * drops calls to a function of prefetches alone). */
-static inline __attribute__((always_inline)) void ask_ahead(const iir_filter_lanes *f, size_t i)
+/* The lines of pixels i .. i + 15 of raw and of the masks, asked for now. */
+IIR_PREFETCH_FN ask_ahead(const iir_filter_lanes *f, size_t i)
 {
     for (int b = 0; b < 3; b++) _mm_prefetch((const char *)(f->raw + i) + 64 * b, _MM_HINT_T0);
     _mm_prefetch((const char *)(f->mask + i), _MM_HINT_T0);

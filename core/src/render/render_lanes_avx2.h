@@ -14,6 +14,10 @@ typedef struct v3 {
     __m256 x, y, z;
 } v3;
 
+/* A helper whose body is prefetches alone: GCC counts such a function as one without effects and
+ * drops calls to it, so it must be inlined always. */
+#define IIR_PREFETCH_FN static inline __attribute__((always_inline)) void
+
 static inline __m256 zero(void)
 {
     return _mm256_setzero_ps();
