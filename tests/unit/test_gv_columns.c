@@ -29,7 +29,7 @@ static iir_render_timing frame_with(iir_renderer *r, const iir_view *v, const ii
 {
     iir_error err = {0};
     iir_render_timing t = {0};
-    iir_render_input in = {&v->camera, v->lights, v->num_lights, vpls, n, 1};
+    iir_render_input in = {&v->camera, v->lights, v->num_lights, vpls, n, 1, NULL};
     if (iir_renderer_frame(r, &in, p, out, &t, NULL, &err) != IIR_OK) fail_msg("%s", err.msg);
     return t;
 }
@@ -250,7 +250,7 @@ static void test_stopped_frame(void **state)
     iir_renderer_set_stop(w.kept, stop_after, &q);
     iir_image *img = iir_image_create(W, H);
     iir_error err = {0};
-    iir_render_input in = {&w.view.camera, w.view.lights, 1, w.vpls, w.n, 1};
+    iir_render_input in = {&w.view.camera, w.view.lights, 1, w.vpls, w.n, 1, NULL};
     assert_int_equal(iir_renderer_frame(w.kept, &in, &w.p, img, NULL, NULL, &err),
                      IIR_ERR_INTERRUPTED);
     iir_renderer_set_stop(w.kept, NULL, NULL);

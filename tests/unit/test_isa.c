@@ -50,7 +50,7 @@ static void render_with(iir_renderer *r, iir_isa isa, const iir_view *v, const i
     /* NaN everywhere first: a pixel the frame does not write fails the comparison */
     memset(out->pixels, 0xff, sizeof *out->pixels * (size_t)out->width * (size_t)out->height);
     iir_error err = {0};
-    iir_render_input in = {&v->camera, v->lights, v->num_lights, vpls, n, 1};
+    iir_render_input in = {&v->camera, v->lights, v->num_lights, vpls, n, 1, NULL};
     if (iir_renderer_frame(r, &in, p, out, NULL, NULL, &err) != IIR_OK) fail_msg("%s", err.msg);
 }
 

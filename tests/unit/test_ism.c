@@ -354,7 +354,8 @@ static void test_frames_against_pt(void **state)
     iir_render_timing t;
     iir_error err = {0};
     assert_int_equal(
-        iir_renderer_frame(r, &(iir_render_input){&v.camera, v.lights, v.num_lights, NULL, 0, 1},
+        iir_renderer_frame(r,
+                           &(iir_render_input){&v.camera, v.lights, v.num_lights, NULL, 0, 1, NULL},
                            &ind, direct, &t, NULL, &err),
         IIR_OK);
     const iir_gbuffer *gb = iir_renderer_gbuffer(r);

@@ -415,8 +415,8 @@ static void one_bounce(const fixture *f, enum kind k)
     iir_render_timing t;
     iir_error err = {0};
     iir_indirect_params ind = iir_indirect_params_default();
-    assert_int_equal(iir_renderer_frame(r, &(iir_render_input){&v.camera, &l, 1, NULL, 0, 1}, &ind,
-                                        img, &t, NULL, &err),
+    assert_int_equal(iir_renderer_frame(r, &(iir_render_input){&v.camera, &l, 1, NULL, 0, 1, NULL},
+                                        &ind, img, &t, NULL, &err),
                      IIR_OK);
     const char *methods[] = {"ir", "iir"};
     for (int i = 0; i < 2; i++) {

@@ -372,7 +372,7 @@ static void direct_frame(iir_renderer *r, const iir_camera *cam, const iir_light
 {
     iir_indirect_params ind = iir_indirect_params_default();
     iir_error err = {0};
-    iir_render_input in = {cam, light, 1, NULL, 0, 3};
+    iir_render_input in = {cam, light, 1, NULL, 0, 3, NULL};
     if (iir_renderer_frame(r, &in, &ind, out, t, NULL, &err) != IIR_OK) fail_msg("%s", err.msg);
 }
 
@@ -576,7 +576,7 @@ static void check_ir_matches_pt(const iir_test_cornell *f, const iir_light *ligh
     iir_render_timing t;
     iir_image *direct = iir_image_create(CW, CH);
     iir_error err = {0};
-    iir_render_input in = {&f->scene->camera, light, 1, NULL, 0, 1};
+    iir_render_input in = {&f->scene->camera, light, 1, NULL, 0, 1, NULL};
     assert_int_equal(iir_renderer_frame(r, &in, &ind, direct, &t, NULL, &err), IIR_OK);
     const iir_gbuffer *gb = iir_renderer_gbuffer(r);
     double rel = 0, rel_direct = 0, sum_img = 0, sum_ref = 0;

@@ -228,7 +228,7 @@ static void test_plane_matches_full(void **state)
     p.mr.mr_levels = L;
     iir_render_timing tf, tm;
     iir_error err = {0};
-    iir_render_input in = {&scene->camera, NULL, 0, vpls, N, 1};
+    iir_render_input in = {&scene->camera, NULL, 0, vpls, N, 1, NULL};
     assert_int_equal(iir_renderer_frame(r, &in, &p, full, &tf, NULL, &err), IIR_OK);
     p.shading = IIR_SHADING_MULTIRES;
     assert_int_equal(iir_renderer_frame(r, &in, &p, mr, &tm, NULL, &err), IIR_OK);
@@ -312,7 +312,7 @@ static void test_cornell_evaluations(void **state)
     iir_indirect_params ind = iir_indirect_params_default();
     iir_image *tmp = iir_image_create(CW, CH);
     iir_error err = {0};
-    iir_render_input in = {&f->scene->camera, NULL, 0, NULL, 0, 1};
+    iir_render_input in = {&f->scene->camera, NULL, 0, NULL, 0, 1, NULL};
     assert_int_equal(iir_renderer_frame(r, &in, &ind, tmp, NULL, NULL, &err), IIR_OK);
     double rel = relmse_smooth(iir_renderer_gbuffer(r), mr, full);
     double ratio = (double)a.vpl_evals / (double)b.vpl_evals;
@@ -359,7 +359,7 @@ static void test_cornell_against_pt(void **state)
     iir_indirect_params ind = iir_indirect_params_default();
     iir_image *tmp = iir_image_create(CW, CH);
     iir_error err = {0};
-    iir_render_input in = {&f->scene->camera, NULL, 0, NULL, 0, 1};
+    iir_render_input in = {&f->scene->camera, NULL, 0, NULL, 0, 1, NULL};
     assert_int_equal(iir_renderer_frame(r, &in, &ind, tmp, NULL, NULL, &err), IIR_OK);
     const iir_gbuffer *gb = iir_renderer_gbuffer(r);
     double e_full = relmse_smooth(gb, full, ref), e_mr = relmse_smooth(gb, mr, ref);
@@ -450,7 +450,8 @@ static void direct_frame(const iir_test_cornell *f, iir_renderer *r, bool tree, 
     p.shading = tree ? IIR_SHADING_MULTIRES : IIR_SHADING_FULL;
     p.mr.mr_direct = IIR_MR_DIRECT_TREE;
     p.mr.light_split = t;
-    iir_render_input in = {&f->scene->camera, f->scene->lights, f->scene->num_lights, NULL, 0, 1};
+    iir_render_input in = {
+        &f->scene->camera, f->scene->lights, f->scene->num_lights, NULL, 0, 1, NULL};
     iir_raystats st = {0};
     iir_error err = {0};
     assert_int_equal(iir_renderer_frame(r, &in, &p, img, NULL, &st, &err), IIR_OK);

@@ -69,7 +69,8 @@ static void full_sum_frame(const fixture *f, iir_method *m, const iir_params *p,
     ind.visibility = IIR_VIS_RAYS, ind.interleave = 1, ind.clamp = (float)iir_test_get(p, "clamp");
     iir_view v = still_view(f);
     iir_error err = {0};
-    if (iir_renderer_frame(r, &(iir_render_input){&v.camera, v.lights, v.num_lights, vpls, n, 0},
+    if (iir_renderer_frame(r,
+                           &(iir_render_input){&v.camera, v.lights, v.num_lights, vpls, n, 0, NULL},
                            &ind, out, NULL, NULL, &err) != IIR_OK)
         fail_msg("%s", err.msg);
     iir_renderer_destroy(r);

@@ -157,8 +157,8 @@ static iir_render_timing frame(const loaded *l, const iir_camera *cam, const iir
 {
     iir_render_timing t;
     iir_error err = {0};
-    if (iir_renderer_frame(l->r, &(iir_render_input){cam, lights, nl, vpls, nv, seed}, p, out, &t,
-                           st, &err) != IIR_OK)
+    if (iir_renderer_frame(l->r, &(iir_render_input){cam, lights, nl, vpls, nv, seed, NULL}, p, out,
+                           &t, st, &err) != IIR_OK)
         fail_msg("frame: %s", err.msg);
     return t;
 }
@@ -1090,6 +1090,74 @@ static void test_gbuffer_cache_and_determinism(void **state)
     unload_cornell(&l);
 }
 
+/* ---- a side beside the direct light ---- */
+
+/* A side's run: gives its VPLs or fails, counting its runs and the team its own loops get. */
+typedef struct side_ctx {
+    const iir_vpl *vpls;
+    uint32_t n;
+    iir_status fail;
+    int runs, team;
+} side_ctx;
+
+static iir_status side_run(void *ctx, const iir_vpl **vpls, uint32_t *n, iir_error *err)
+{
+    side_ctx *c = ctx;
+    c->runs++;
+    int team = 0;
+#pragma omp parallel
+    {
+#pragma omp atomic
+        team++;
+    }
+    c->team = team;
+    if (c->fail != IIR_OK) return iir_fail(err, c->fail, "the side gave up");
+    *vpls = c->vpls, *n = c->n;
+    return IIR_OK;
+}
+
+/* A frame whose VPLs come from a side equals the frame given them, on any number of threads (the
+ * side runs once, its loops on its one thread); a side's failure ends the frame with its error
+ * and leaves the renderer usable. */
+static void test_side(void **state)
+{
+    loaded l = load_cornell(state);
+    enum { W = 64, H = 48, N = 64 };
+    iir_vpl vpls[N];
+    light_vpls(&l, N, vpls);
+    iir_smaps_build(vpls, N, l.rt, 64, NULL);
+    iir_indirect_params p = iir_indirect_params_default();
+    iir_image *a = iir_image_create(W, H), *b = iir_image_create(W, H);
+    const iir_camera *cam = &l.scene->camera;
+    frame(&l, cam, l.scene->lights, 1, vpls, N, &p, 1, a, NULL);
+    int saved = omp_get_max_threads();
+    side_ctx c = {vpls, N, IIR_OK, 0, 0};
+    iir_render_side side = {side_run, &c};
+    iir_render_input in = {cam, l.scene->lights, 1, NULL, 0, 1, &side};
+    iir_error err = {0};
+    iir_render_timing t;
+    for (int threads = 1; threads <= 3; threads++) {
+        omp_set_num_threads(threads);
+        c.runs = 0;
+        memset(b->pixels, 0, sizeof(iir_vec3) * W * H);
+        assert_int_equal(iir_renderer_frame(l.r, &in, &p, b, &t, NULL, &err), IIR_OK);
+        assert_int_equal(c.runs, 1);
+        assert_int_equal(c.team, 1);
+        assert_true(t.side_ms >= 0.0 && t.direct_ms >= 0.0);
+        assert_memory_equal(a->pixels, b->pixels, sizeof(iir_vec3) * W * H);
+    }
+    omp_set_num_threads(saved);
+    c.fail = IIR_ERR_NOMEM;
+    assert_int_equal(iir_renderer_frame(l.r, &in, &p, b, &t, NULL, &err), IIR_ERR_NOMEM);
+    assert_string_equal(err.msg, "the side gave up");
+    frame(&l, cam, l.scene->lights, 1, vpls, N, &p, 1, b, NULL);
+    assert_memory_equal(a->pixels, b->pixels, sizeof(iir_vec3) * W * H);
+    iir_image_destroy(a);
+    iir_image_destroy(b);
+    release_vpls(vpls, N);
+    unload_cornell(&l);
+}
+
 /* ---- errors ---- */
 
 static void test_errors(void **state)
@@ -1105,24 +1173,24 @@ static void test_errors(void **state)
     iir_error err = {0};
     const iir_camera *cam = &l.scene->camera;
     assert_false(vpls[5].null_sample);
-    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
-                                        NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1, NULL},
+                                        &p, img, NULL, NULL, &err),
                      IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "shadow map"));
     /* Exact rays need no maps; a null sample needs none either. */
     p.visibility = IIR_VIS_RAYS;
-    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
-                                        NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1, NULL},
+                                        &p, img, NULL, NULL, &err),
                      IIR_OK);
     p.visibility = IIR_VIS_SHADOWMAP;
     vpls[5].null_sample = true;
-    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
-                                        NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1, NULL},
+                                        &p, img, NULL, NULL, &err),
                      IIR_OK);
     /* Bad parameters, VPLs, cameras, lights. */
     p.interleave = 9;
-    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
-                                        NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1, NULL},
+                                        &p, img, NULL, NULL, &err),
                      IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "interleave"));
     p = iir_indirect_params_default();
@@ -1130,31 +1198,31 @@ static void test_errors(void **state)
     assert_int_equal(iir_indirect_params_validate(&p, &err), IIR_ERR_INVALID);
     p = iir_indirect_params_default();
     vpls[2].flux.y = NAN;
-    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
-                                        NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1, NULL},
+                                        &p, img, NULL, NULL, &err),
                      IIR_ERR_INVALID);
     vpls[2].flux.y = 0.f;
     vpls[3].normal = iir_scale(vpls[3].normal, 2.f);
-    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1}, &p, img,
-                                        NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, NULL, 0, vpls, N, 1, NULL},
+                                        &p, img, NULL, NULL, &err),
                      IIR_ERR_INVALID);
     assert_non_null(strstr(err.msg, "iir_vpl_set_normal"));
     iir_vpl_set_normal(&vpls[3], iir_normalize(vpls[3].normal));
     iir_camera bad = *cam;
     bad.fov_y = 0.f;
-    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){&bad, NULL, 0, vpls, N, 1}, &p,
-                                        img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){&bad, NULL, 0, vpls, N, 1, NULL},
+                                        &p, img, NULL, NULL, &err),
                      IIR_ERR_INVALID);
     iir_light light = l.scene->lights[0];
     light.cone_angle = 2.f;
-    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, &light, 1, vpls, N, 1}, &p,
-                                        img, NULL, NULL, &err),
+    assert_int_equal(iir_renderer_frame(l.r, &(iir_render_input){cam, &light, 1, vpls, N, 1, NULL},
+                                        &p, img, NULL, NULL, &err),
                      IIR_ERR_INVALID);
     /* Still usable afterwards. */
-    assert_int_equal(iir_renderer_frame(l.r,
-                                        &(iir_render_input){cam, l.scene->lights, 1, vpls, N, 1},
-                                        &p, img, NULL, NULL, &err),
-                     IIR_OK);
+    assert_int_equal(
+        iir_renderer_frame(l.r, &(iir_render_input){cam, l.scene->lights, 1, vpls, N, 1, NULL}, &p,
+                           img, NULL, NULL, &err),
+        IIR_OK);
     iir_image_destroy(img);
     release_vpls(vpls, N);
     unload_cornell(&l);
@@ -1178,6 +1246,7 @@ int main(void)
         cmocka_unit_test(test_filter_respects_edges),
         cmocka_unit_test(test_clamp),
         cmocka_unit_test(test_gbuffer_cache_and_determinism),
+        cmocka_unit_test(test_side),
         cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests(tests, iir_test_cornell_setup, iir_test_cornell_teardown);

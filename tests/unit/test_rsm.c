@@ -59,7 +59,7 @@ static compared compare(const loaded *l, const iir_view *v, iir_image *a, iir_im
     iir_indirect_params ind = iir_indirect_params_default();
     iir_image *direct = iir_image_create(a->width, a->height);
     iir_error err = {0};
-    iir_render_input in = {&v->camera, v->lights, v->num_lights, NULL, 0, 1};
+    iir_render_input in = {&v->camera, v->lights, v->num_lights, NULL, 0, 1, NULL};
     assert_int_equal(iir_renderer_frame(r, &in, &ind, direct, NULL, NULL, &err), IIR_OK);
     const iir_gbuffer *gb = iir_renderer_gbuffer(r);
     compared c = {0};

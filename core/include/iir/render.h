@@ -234,8 +234,11 @@ static inline uint32_t iir_vpl_subset_of(const iir_vpl *v, uint32_t n2)
 /* IIR_ERR_INVALID naming the field and its range. */
 iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error *err);
 
+/* A frame's phases in milliseconds of wall time. With a side (iir_render_side) running beside the
+ * direct light, direct_ms is the time the direct phase took beyond the side's run (side_ms), so
+ * that the caller's own timing of the side plus these still add up to the frame. */
 typedef struct iir_render_timing {
-    double gbuffer_ms, direct_ms, indirect_ms, filter_ms;
+    double gbuffer_ms, direct_ms, indirect_ms, filter_ms, side_ms;
     bool gbuffer_cached; /* the G-buffer of the previous frame was reused */
     uint64_t vpl_evals;  /* pixel-VPL pairs shaded (multires: texel-VPL pairs and pixel-VPL
                             pairs of the full-resolution pixels) */
@@ -272,9 +275,21 @@ void iir_renderer_follow_specular(iir_renderer *r, int depth);
  * destroy; owned by the renderer. */
 const iir_gbuffer *iir_renderer_gbuffer(const iir_renderer *r);
 
+/* Work a frame's caller runs beside its direct light, where the VPLs come from: one thread runs
+ * run(ctx, ...) while the others shade the direct light, then joins them, so that its serial
+ * parts (a VPL step's triangulation) leave no core idle. It runs after the G-buffer, on the
+ * caller's objects alone (never the renderer's), and gives the VPLs the indirect light uses; its
+ * parallel loops run on its one thread. A status other than IIR_OK ends the frame with it (and
+ * err). */
+typedef struct iir_render_side {
+    iir_status (*run)(void *ctx, const iir_vpl **vpls, uint32_t *num_vpls, iir_error *err);
+    void *ctx;
+} iir_render_side;
+
 /* What a frame or a pass shades: the camera, the lights (delta and area lights; emissive triangles
  * come from the scene), the VPLs (NULL when num_vpls is 0) and the seed of the frame's random
- * numbers (the emissive-triangle samples of direct light). All read-only during the call. */
+ * numbers (the emissive-triangle samples of direct light). All read-only during the call. A frame
+ * with a side (may be NULL; passes have none) takes its VPLs from it instead of vpls/num_vpls. */
 typedef struct iir_render_input {
     const iir_camera *camera;
     const iir_light *lights;
@@ -282,6 +297,7 @@ typedef struct iir_render_input {
     const iir_vpl *vpls;
     uint32_t num_vpls;
     uint64_t seed;
+    const iir_render_side *side;
 } iir_render_input;
 
 /* The seed of a live frame's direct-light samples (emissive triangles, area lights): the same

@@ -410,6 +410,44 @@ static iir_status build_maps(iir_state *s, const iir_incr_stats *is, iir_raystat
     return st;
 }
 
+/* A frame's VPL step and maps, run beside its direct light (iir_render_side): what they did. */
+typedef struct frame_step {
+    iir_state *s;
+    const iir_view *view;
+    uint32_t nl;
+    bool updated, done; /* the step ran (the frame counts); and the maps too */
+    iir_incr_stats is;
+    uint32_t maps;
+    double step_ms, maps_ms;
+    iir_raystats rays;
+} frame_step;
+
+/* The side's run: the VPL sets follow the lights, the maps of new VPLs are built, and the VPLs
+ * gathered for the renderer. */
+static iir_status step_and_maps(void *ctx, const iir_vpl **vpls, uint32_t *n, iir_error *err)
+{
+    frame_step *f = ctx;
+    iir_state *s = f->s;
+    double t0 = iir_now_ms();
+    iir_status st = iir_vplsets_update(s->sets, f->view->lights, f->nl, &f->is, err);
+    if (st != IIR_OK) return st;
+    f->updated = true;
+    iir_raystats_add(&f->rays, &f->is.rays);
+    double t1 = iir_now_ms();
+    st = build_maps(s, &f->is, &f->rays, &f->maps, err);
+    if (st != IIR_OK) return st;
+    if (s->stop && s->stop(s->stop_ctx)) /* the maps not built are built by the next frame */
+        return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
+    double t2 = iir_now_ms();
+    f->step_ms = t1 - t0, f->maps_ms = t2 - t1;
+    measure_insert_cost(s, &f->is, f->maps, f->maps_ms);
+    *vpls = iir_vplsets_gather(s->sets, n);
+    f->done = true;
+    return IIR_OK;
+}
+
+/* The frame: the VPL step and its maps beside the direct light (step_and_maps), then the indirect
+ * light of the VPLs and the filter. */
 static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out,
                                iir_frame_stats *stats, iir_error *err)
 {
@@ -424,34 +462,24 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
             "iir needs a light (spot, point, sun or area light) to keep VPLs for; this view has "
             "none");
     double t0 = iir_now_ms();
-    iir_incr_stats is;
     uint32_t nl =
         view->num_lights < IIR_VPLSETS_MAX_LIGHTS ? view->num_lights : IIR_VPLSETS_MAX_LIGHTS;
     bool interactive = view_moved(s, view, nl);
     apply_insert_limit(s);
-    st = iir_vplsets_update(s->sets, view->lights, nl, &is, err);
-    if (st != IIR_OK) return st;
-    iir_raystats_add(&stats->rays, &is.rays);
-    double t1 = iir_now_ms();
-    uint32_t maps = 0;
-    st = build_maps(s, &is, &stats->rays, &maps, err);
-    if (st != IIR_OK) return s->frame++, st;
-    if (s->stop && s->stop(s->stop_ctx)) /* the maps not built are built by the next frame */
-        return s->frame++, iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
-    double t2 = iir_now_ms();
-    measure_insert_cost(s, &is, maps, t2 - t1);
-    uint32_t n = 0;
-    const iir_vpl *vpls = iir_vplsets_gather(s->sets, &n);
+    frame_step f = {.s = s, .view = view, .nl = nl};
+    iir_render_side side = {step_and_maps, &f};
     iir_indirect_params ind = s->params.vpl;
     ind.bounces = s->params.bounces;
     iir_render_timing rt;
     iir_render_input in = {.camera = &view->camera,
                            .lights = view->lights,
                            .num_lights = view->num_lights,
-                           .vpls = vpls,
-                           .num_vpls = n,
-                           .seed = iir_frame_direct_seed(s->params.common.seed)};
+                           .seed = iir_frame_direct_seed(s->params.common.seed),
+                           .side = &side};
     st = iir_renderer_frame(s->renderer, &in, &ind, out, &rt, &stats->rays, err);
+    iir_raystats_add(&stats->rays, &f.rays);
+    if (!f.updated) return st; /* the step did not run, or failed: the frame did not happen */
+    if (!f.done) return s->frame++, st; /* the maps not built are built by the next frame */
     iir_refine_params rp =
         iir_refine_params_of(&s->params.common, &s->params.vpl, s->params.bounces);
     if (st == IIR_OK)
@@ -463,11 +491,11 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     s->have_view = true;
     s->drawn = drawn_light(view->lights, nl);
     s->refine_frame = s->frame;
-    stats->phase_ms[IIR_PHASE_VPLS] = t1 - t0;
-    stats->phase_ms[IIR_PHASE_SHADOWMAPS] = t2 - t1;
+    stats->phase_ms[IIR_PHASE_VPLS] = f.step_ms;
+    stats->phase_ms[IIR_PHASE_SHADOWMAPS] = f.maps_ms;
     iir_render_timing_to_stats(&rt, stats);
     stats->total_ms = iir_now_ms() - t0;
-    fill_counts(&is, maps, &stats->vpl);
+    fill_counts(&f.is, f.maps, &stats->vpl);
     if (st == IIR_OK) control(s, interactive, stats);
     s->frame++;
     return st;

@@ -185,16 +185,49 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
     return IIR_OK;
 }
 
-/* The shading phases on the current G-buffer, timed into tm, rays added to rays: direct light,
- * indirect light from the VPL subsets and the clamp's compensation (timed as indirect), then the
- * filter into job->out. Returns true when a
- * phase stopped early at r->stop's request (out is then incomplete). */
-static bool shade(iir_renderer *r, const iir_shade_job *job, iir_render_timing *tm,
-                  iir_raystats *rays)
+void iir_side_go(iir_side_run *sr)
 {
     double t0 = iir_now_ms();
-    bool stopped = iir_render_direct(r, job, rays);
+    sr->status = sr->side->run(sr->side->ctx, &sr->vpls, &sr->num_vpls, &sr->err);
+    sr->ms = iir_now_ms() - t0;
+#pragma omp atomic write
+    sr->failed = sr->status != IIR_OK;
+}
+
+bool iir_side_failed(const iir_side_run *sr)
+{
+    bool failed;
+#pragma omp atomic read
+    failed = sr->failed;
+    return failed;
+}
+
+/* After the direct light: the side's status (its error into err), then the subsets of its VPLs. */
+static iir_status side_vpls(iir_renderer *r, const iir_side_run *sr, const iir_indirect_params *p,
+                            iir_error *err)
+{
+    if (sr->status != IIR_OK) {
+        if (err) *err = sr->err;
+        return sr->status;
+    }
+    return iir_render_subsets(r, sr->vpls, sr->num_vpls, p, false, err);
+}
+
+/* The shading phases on the current G-buffer, timed into tm, rays added to rays: direct light
+ * (with the side beside it, then its VPLs' subsets), indirect light from the VPL subsets and the
+ * clamp's compensation (timed as indirect), then the filter into job->out. Returns the side's
+ * error, or IIR_ERR_INTERRUPTED when a phase stopped early at r->stop's request (out is then
+ * incomplete). */
+static iir_status shade(iir_renderer *r, const iir_shade_job *job, iir_side_run *side,
+                        iir_render_timing *tm, iir_raystats *rays, iir_error *err)
+{
+    double t0 = iir_now_ms();
+    bool stopped = iir_render_direct(r, job, side->side ? side : NULL, rays);
     double t1 = iir_now_ms();
+    if (side->side) {
+        iir_status s = side_vpls(r, side, job->p, err);
+        if (s != IIR_OK) return s;
+    }
     if (!stopped && r->level)
         stopped =
             iir_render_indirect_coarse(r, job->p, true, rays, &tm->vpl_evals, &tm->vpl_reused);
@@ -204,10 +237,11 @@ static bool shade(iir_renderer *r, const iir_shade_job *job, iir_render_timing *
     if (!stopped && r->comp_lights) stopped = iir_render_compensate(r, job, rays);
     double t2 = iir_now_ms();
     if (!stopped) iir_render_filter(r, job->p, job->out);
-    tm->direct_ms = t1 - t0;
+    tm->side_ms = side->ms;
+    tm->direct_ms = t1 - t0 > side->ms ? t1 - t0 - side->ms : 0.0;
     tm->indirect_ms = t2 - t1;
     tm->filter_ms = iir_now_ms() - t2;
-    return stopped;
+    return stopped ? iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early") : IIR_OK;
 }
 
 /* Multires: builds (or keeps) the hierarchy of the current G-buffer and sets r->level; full
@@ -252,19 +286,20 @@ iir_status iir_renderer_frame(iir_renderer *r, const iir_render_input *in,
     iir_render_timing tm = {0};
     iir_raystats rays = {0};
     iir_status s = check_inputs(in->camera, in->lights, in->num_lights, p, out, err);
-    if (s == IIR_OK) s = iir_render_subsets(r, in->vpls, in->num_vpls, p, false, err);
+    iir_side_run side = {.side = in->side};
+    if (s == IIR_OK && !in->side) s = iir_render_subsets(r, in->vpls, in->num_vpls, p, false, err);
     if (s == IIR_OK) s = gbuffer_phase(r, in->camera, out->width, out->height, &tm, &rays, err);
     if (s == IIR_OK) s = multires_phase(r, p, &tm, err);
     if (s == IIR_OK) s = compensation_phase(r, in, p, err);
     iir_shade_job job = {
         .lights = in->lights, .num_lights = in->num_lights, .p = p, .seed = in->seed, .out = out};
-    bool stopped = s == IIR_OK && stop_requested(r);
+    if (s == IIR_OK && stop_requested(r))
+        s = iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     double mr_ms = tm.indirect_ms;
-    if (s == IIR_OK && !stopped) {
-        stopped = shade(r, &job, &tm, &rays);
+    if (s == IIR_OK) {
+        s = shade(r, &job, &side, &tm, &rays, err);
         tm.indirect_ms += mr_ms; /* the hierarchy's build (0 when kept) */
     }
-    if (stopped) s = iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);
     return s;
@@ -340,9 +375,12 @@ iir_status iir_renderer_pass(iir_renderer *r, const iir_render_input *in, const 
                          .shift = p->shift,
                          .seed = in->seed,
                          .out = out};
-    bool stopped = s == IIR_OK && stop_requested(r);
-    if (s == IIR_OK && !stopped) stopped = shade(r, &job, &tm, &rays);
-    if (stopped) s = iir_fail(err, IIR_ERR_INTERRUPTED, "refinement pass stopped early");
+    iir_side_run none = {0};
+    if (s == IIR_OK && !stop_requested(r))
+        s = shade(r, &job, &none, &tm, &rays, err);
+    else if (s == IIR_OK)
+        s = IIR_ERR_INTERRUPTED;
+    if (s == IIR_ERR_INTERRUPTED) s = iir_fail(err, s, "refinement pass stopped early");
     if (t) *t = tm;
     if (st) iir_raystats_add(st, &rays);
     return s;

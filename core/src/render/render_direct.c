@@ -447,7 +447,8 @@ static iir_status tree_direct(iir_renderer *r, direct_ctx *c, const iir_shade_jo
     return s;
 }
 
-bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_raystats *st)
+bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_side_run *side,
+                       iir_raystats *st)
 {
     bool stopped = false;
     int n = job->p->area_samples;
@@ -469,6 +470,8 @@ bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_raystats *
     c.lean = c.evals && r->isa >= IIR_ISA_AVX2 && !r->area_lights && !r->gb.any_chain;
     for (uint32_t l = 0; l < c.num_lights && c.lean; l++) c.lean = iir_light_is_delta(&c.lights[l]);
     if (tree_frame(&c)) {
+        if (side) iir_side_go(side); /* first: the tree's loops are OpenMP loops of their own */
+        side = NULL;
         iir_status s = tree_direct(r, &c, job, st);
         if (s != IIR_ERR_NOMEM) return s == IIR_ERR_INTERRUPTED;
     }
@@ -481,8 +484,13 @@ bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_raystats *
 #pragma omp parallel
     {
         iir_raystats local = {0};
+        if (side) {
+#pragma omp single nowait
+            iir_side_go(side); /* the other threads take the bands meanwhile */
+        }
 #pragma omp for schedule(dynamic, 1)
         for (int t = 0; t < bands; t++) {
+            if (side && iir_side_failed(side)) continue;
             if (r->stop && r->stop(r->stop_ctx)) {
 #pragma omp atomic write
                 stopped = true;

@@ -181,10 +181,27 @@ bool iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *r
                         const iir_camera_frame *cf, iir_vec2 jitter, int specular_depth,
                         const iir_stop *stop, iir_raystats *st);
 
+/* A frame's side job (iir_render_side) and what it gave: run once by iir_side_go. `failed` is
+ * written atomically (the direct light's threads poll it to give up their bands). */
+typedef struct iir_side_run {
+    const iir_render_side *side;
+    iir_status status;
+    bool failed;
+    const iir_vpl *vpls;
+    uint32_t num_vpls;
+    double ms; /* its run's wall time */
+    iir_error err;
+} iir_side_run;
+void iir_side_go(iir_side_run *sr);
+bool iir_side_failed(const iir_side_run *sr);
+
 /* render_direct.c: out = emission + direct light (every pixel written). Each tile first polls
  * r->stop (when set) and is skipped once it said stop; returns true when that happened (out is then
- * incomplete). */
-bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_raystats *st);
+ * incomplete). With a side (may be NULL), one thread runs it first while the others shade, and the
+ * bands left once it failed are skipped (out is then incomplete; not counted as stopped); it runs
+ * whatever happens. */
+bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_side_run *side,
+                       iir_raystats *st);
 
 /* render_indirect.c: builds the per-subset VPL lists (checking the VPLs), a subset's flux scaled
  * by N / |subset| (frames) or by n^2 (refinement passes: exact_mean), then fills r->raw, pixel
