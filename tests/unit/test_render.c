@@ -1092,15 +1092,16 @@ static void test_gbuffer_cache_and_determinism(void **state)
 
 /* ---- a side beside the direct light ---- */
 
-/* A side's run: gives its VPLs or fails, counting its runs and the team its own loops get. */
+/* A side: fails in its run or in its vpls, or gives its VPLs; counts its calls and the team its
+ * run's own loops get. */
 typedef struct side_ctx {
     const iir_vpl *vpls;
     uint32_t n;
-    iir_status fail;
-    int runs, team;
+    iir_status fail_run, fail_vpls;
+    int runs, gave, team;
 } side_ctx;
 
-static iir_status side_run(void *ctx, const iir_vpl **vpls, uint32_t *n, iir_error *err)
+static iir_status side_run(void *ctx, iir_error *err)
 {
     side_ctx *c = ctx;
     c->runs++;
@@ -1111,14 +1112,21 @@ static iir_status side_run(void *ctx, const iir_vpl **vpls, uint32_t *n, iir_err
         team++;
     }
     c->team = team;
-    if (c->fail != IIR_OK) return iir_fail(err, c->fail, "the side gave up");
+    return c->fail_run != IIR_OK ? iir_fail(err, c->fail_run, "the side gave up") : IIR_OK;
+}
+
+static iir_status side_vpls(void *ctx, const iir_vpl **vpls, uint32_t *n, iir_error *err)
+{
+    side_ctx *c = ctx;
+    c->gave++;
+    if (c->fail_vpls != IIR_OK) return iir_fail(err, c->fail_vpls, "no VPLs today");
     *vpls = c->vpls, *n = c->n;
     return IIR_OK;
 }
 
 /* A frame whose VPLs come from a side equals the frame given them, on any number of threads (the
- * side runs once, its loops on its one thread); a side's failure ends the frame with its error
- * and leaves the renderer usable. */
+ * side's run and vpls are called once each, the run's loops on its one thread); a side's failure
+ * ends the frame with its error and leaves the renderer usable. */
 static void test_side(void **state)
 {
     loaded l = load_cornell(state);
@@ -1131,25 +1139,30 @@ static void test_side(void **state)
     const iir_camera *cam = &l.scene->camera;
     frame(&l, cam, l.scene->lights, 1, vpls, N, &p, 1, a, NULL);
     int saved = omp_get_max_threads();
-    side_ctx c = {vpls, N, IIR_OK, 0, 0};
-    iir_render_side side = {side_run, &c};
+    side_ctx c = {vpls, N, IIR_OK, IIR_OK, 0, 0, 0};
+    iir_render_side side = {side_run, side_vpls, &c};
     iir_render_input in = {cam, l.scene->lights, 1, NULL, 0, 1, &side};
     iir_error err = {0};
     iir_render_timing t;
     for (int threads = 1; threads <= 3; threads++) {
         omp_set_num_threads(threads);
-        c.runs = 0;
+        c.runs = c.gave = 0;
         memset(b->pixels, 0, sizeof(iir_vec3) * W * H);
         assert_int_equal(iir_renderer_frame(l.r, &in, &p, b, &t, NULL, &err), IIR_OK);
         assert_int_equal(c.runs, 1);
+        assert_int_equal(c.gave, 1);
         assert_int_equal(c.team, 1);
         assert_true(t.side_ms >= 0.0 && t.direct_ms >= 0.0);
         assert_memory_equal(a->pixels, b->pixels, sizeof(iir_vec3) * W * H);
     }
     omp_set_num_threads(saved);
-    c.fail = IIR_ERR_NOMEM;
+    c.fail_run = IIR_ERR_NOMEM, c.gave = 0;
     assert_int_equal(iir_renderer_frame(l.r, &in, &p, b, &t, NULL, &err), IIR_ERR_NOMEM);
     assert_string_equal(err.msg, "the side gave up");
+    assert_int_equal(c.gave, 0); /* no VPLs asked of a side whose run failed */
+    c.fail_run = IIR_OK, c.fail_vpls = IIR_ERR_INTERRUPTED;
+    assert_int_equal(iir_renderer_frame(l.r, &in, &p, b, &t, NULL, &err), IIR_ERR_INTERRUPTED);
+    assert_string_equal(err.msg, "no VPLs today");
     frame(&l, cam, l.scene->lights, 1, vpls, N, &p, 1, b, NULL);
     assert_memory_equal(a->pixels, b->pixels, sizeof(iir_vec3) * W * H);
     iir_image_destroy(a);

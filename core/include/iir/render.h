@@ -234,9 +234,9 @@ static inline uint32_t iir_vpl_subset_of(const iir_vpl *v, uint32_t n2)
 /* IIR_ERR_INVALID naming the field and its range. */
 iir_status iir_indirect_params_validate(const iir_indirect_params *p, iir_error *err);
 
-/* A frame's phases in milliseconds of wall time. With a side (iir_render_side) running beside the
- * direct light, direct_ms is the time the direct phase took beyond the side's run (side_ms), so
- * that the caller's own timing of the side plus these still add up to the frame. */
+/* A frame's phases in milliseconds of wall time. With a side (iir_render_side), direct_ms is the
+ * time the direct phase took beyond the side's run (side_ms), and no phase holds the side's vpls,
+ * so that the caller's own timing of the side plus these still add up to the frame. */
 typedef struct iir_render_timing {
     double gbuffer_ms, direct_ms, indirect_ms, filter_ms, side_ms;
     bool gbuffer_cached; /* the G-buffer of the previous frame was reused */
@@ -275,14 +275,17 @@ void iir_renderer_follow_specular(iir_renderer *r, int depth);
  * destroy; owned by the renderer. */
 const iir_gbuffer *iir_renderer_gbuffer(const iir_renderer *r);
 
-/* Work a frame's caller runs beside its direct light, where the VPLs come from: one thread runs
- * run(ctx, ...) while the others shade the direct light, then joins them, so that its serial
- * parts (a VPL step's triangulation) leave no core idle. It runs after the G-buffer, on the
- * caller's objects alone (never the renderer's), and gives the VPLs the indirect light uses; its
- * parallel loops run on its one thread. A status other than IIR_OK ends the frame with it (and
- * err). */
+/* Work a frame's caller does beside its direct light, where the VPLs come from. One thread runs
+ * run(ctx) while the others shade the direct light, then joins them, so that its serial parts (a
+ * VPL step's triangulation) leave no core idle; its own parallel loops run on its one thread, so
+ * it should be the serial kind of work. After the direct light, vpls(ctx, ...) runs on the
+ * calling thread (its loops on every thread: a VPL step's shadow maps) and gives the VPLs the
+ * indirect light uses. Both run after the G-buffer, on the caller's objects alone (never the
+ * renderer's), once each (vpls only when run succeeded); a status other than IIR_OK ends the frame
+ * with it (and err). */
 typedef struct iir_render_side {
-    iir_status (*run)(void *ctx, const iir_vpl **vpls, uint32_t *num_vpls, iir_error *err);
+    iir_status (*run)(void *ctx, iir_error *err);
+    iir_status (*vpls)(void *ctx, const iir_vpl **vpls, uint32_t *num_vpls, iir_error *err);
     void *ctx;
 } iir_render_side;
 

@@ -410,7 +410,7 @@ static iir_status build_maps(iir_state *s, const iir_incr_stats *is, iir_raystat
     return st;
 }
 
-/* A frame's VPL step and maps, run beside its direct light (iir_render_side): what they did. */
+/* A frame's VPL step (run beside its direct light: iir_render_side) and maps: what they did. */
 typedef struct frame_step {
     iir_state *s;
     const iir_view *view;
@@ -422,32 +422,39 @@ typedef struct frame_step {
     iir_raystats rays;
 } frame_step;
 
-/* The side's run: the VPL sets follow the lights, the maps of new VPLs are built, and the VPLs
- * gathered for the renderer. */
-static iir_status step_and_maps(void *ctx, const iir_vpl **vpls, uint32_t *n, iir_error *err)
+/* The side's run, beside the direct light: the VPL sets follow the lights. */
+static iir_status step(void *ctx, iir_error *err)
+{
+    frame_step *f = ctx;
+    double t0 = iir_now_ms();
+    iir_status st = iir_vplsets_update(f->s->sets, f->view->lights, f->nl, &f->is, err);
+    if (st != IIR_OK) return st;
+    f->updated = true;
+    iir_raystats_add(&f->rays, &f->is.rays);
+    f->step_ms = iir_now_ms() - t0;
+    return IIR_OK;
+}
+
+/* The side's VPLs, after the direct light: the maps of new VPLs built (on every thread), and the
+ * VPLs gathered for the renderer. */
+static iir_status maps(void *ctx, const iir_vpl **vpls, uint32_t *n, iir_error *err)
 {
     frame_step *f = ctx;
     iir_state *s = f->s;
     double t0 = iir_now_ms();
-    iir_status st = iir_vplsets_update(s->sets, f->view->lights, f->nl, &f->is, err);
-    if (st != IIR_OK) return st;
-    f->updated = true;
-    iir_raystats_add(&f->rays, &f->is.rays);
-    double t1 = iir_now_ms();
-    st = build_maps(s, &f->is, &f->rays, &f->maps, err);
+    iir_status st = build_maps(s, &f->is, &f->rays, &f->maps, err);
     if (st != IIR_OK) return st;
     if (s->stop && s->stop(s->stop_ctx)) /* the maps not built are built by the next frame */
         return iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early");
-    double t2 = iir_now_ms();
-    f->step_ms = t1 - t0, f->maps_ms = t2 - t1;
+    f->maps_ms = iir_now_ms() - t0;
     measure_insert_cost(s, &f->is, f->maps, f->maps_ms);
     *vpls = iir_vplsets_gather(s->sets, n);
     f->done = true;
     return IIR_OK;
 }
 
-/* The frame: the VPL step and its maps beside the direct light (step_and_maps), then the indirect
- * light of the VPLs and the filter. */
+/* The frame: the VPL step beside the direct light (step), then the new VPLs' maps (maps), the
+ * indirect light of the VPLs and the filter. */
 static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out,
                                iir_frame_stats *stats, iir_error *err)
 {
@@ -467,7 +474,7 @@ static iir_status iir_m_render(void *state, const iir_view *view, iir_image *out
     bool interactive = view_moved(s, view, nl);
     apply_insert_limit(s);
     frame_step f = {.s = s, .view = view, .nl = nl};
-    iir_render_side side = {step_and_maps, &f};
+    iir_render_side side = {step, maps, &f};
     iir_indirect_params ind = s->params.vpl;
     ind.bounces = s->params.bounces;
     iir_render_timing rt;

@@ -188,7 +188,7 @@ static iir_status gbuffer_phase(iir_renderer *r, const iir_camera *cam, int w, i
 void iir_side_go(iir_side_run *sr)
 {
     double t0 = iir_now_ms();
-    sr->status = sr->side->run(sr->side->ctx, &sr->vpls, &sr->num_vpls, &sr->err);
+    sr->status = sr->side->run(sr->side->ctx, &sr->err);
     sr->ms = iir_now_ms() - t0;
 #pragma omp atomic write
     sr->failed = sr->status != IIR_OK;
@@ -202,15 +202,17 @@ bool iir_side_failed(const iir_side_run *sr)
     return failed;
 }
 
-/* After the direct light: the side's status (its error into err), then the subsets of its VPLs. */
-static iir_status side_vpls(iir_renderer *r, const iir_side_run *sr, const iir_indirect_params *p,
+/* After the direct light: the side's status (its error into err), then its VPLs and their
+ * subsets. */
+static iir_status side_vpls(iir_renderer *r, iir_side_run *sr, const iir_indirect_params *p,
                             iir_error *err)
 {
     if (sr->status != IIR_OK) {
         if (err) *err = sr->err;
         return sr->status;
     }
-    return iir_render_subsets(r, sr->vpls, sr->num_vpls, p, false, err);
+    iir_status s = sr->side->vpls(sr->side->ctx, &sr->vpls, &sr->num_vpls, err);
+    return s == IIR_OK ? iir_render_subsets(r, sr->vpls, sr->num_vpls, p, false, err) : s;
 }
 
 /* The shading phases on the current G-buffer, timed into tm, rays added to rays: direct light
@@ -223,11 +225,12 @@ static iir_status shade(iir_renderer *r, const iir_shade_job *job, iir_side_run 
 {
     double t0 = iir_now_ms();
     bool stopped = iir_render_direct(r, job, side->side ? side : NULL, rays);
-    double t1 = iir_now_ms();
+    double direct_ms = iir_now_ms() - t0;
     if (side->side) {
         iir_status s = side_vpls(r, side, job->p, err);
         if (s != IIR_OK) return s;
     }
+    double t1 = iir_now_ms();
     if (!stopped && r->level)
         stopped =
             iir_render_indirect_coarse(r, job->p, true, rays, &tm->vpl_evals, &tm->vpl_reused);
@@ -238,7 +241,7 @@ static iir_status shade(iir_renderer *r, const iir_shade_job *job, iir_side_run 
     double t2 = iir_now_ms();
     if (!stopped) iir_render_filter(r, job->p, job->out);
     tm->side_ms = side->ms;
-    tm->direct_ms = t1 - t0 > side->ms ? t1 - t0 - side->ms : 0.0;
+    tm->direct_ms = direct_ms > side->ms ? direct_ms - side->ms : 0.0;
     tm->indirect_ms = t2 - t1;
     tm->filter_ms = iir_now_ms() - t2;
     return stopped ? iir_fail(err, IIR_ERR_INTERRUPTED, "frame stopped early") : IIR_OK;
