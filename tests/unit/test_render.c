@@ -1023,13 +1023,20 @@ static void test_clamp(void **state)
 
 /* ---- G-buffer reuse and determinism ---- */
 
-static void test_gbuffer_cache_and_determinism(void **state)
+/* The Cornell box and n of its light's VPLs with 64^2 shadow maps. */
+static loaded cornell_with_vpls(void **state, uint32_t n, iir_vpl *vpls)
 {
     loaded l = load_cornell(state);
+    light_vpls(&l, n, vpls);
+    iir_smaps_build(vpls, n, l.rt, 64, NULL);
+    return l;
+}
+
+static void test_gbuffer_cache_and_determinism(void **state)
+{
     enum { W = 64, H = 48, N = 64 };
     iir_vpl vpls[N];
-    light_vpls(&l, N, vpls);
-    iir_smaps_build(vpls, N, l.rt, 64, NULL);
+    loaded l = cornell_with_vpls(state, N, vpls);
     iir_indirect_params p = iir_indirect_params_default();
     iir_image *a = iir_image_create(W, H), *b = iir_image_create(W, H);
     iir_camera cam = l.scene->camera, moved = cam;
@@ -1129,14 +1136,12 @@ static iir_status side_vpls(void *ctx, const iir_vpl **vpls, uint32_t *n, iir_er
  * ends the frame with its error and leaves the renderer usable. */
 static void test_side(void **state)
 {
-    loaded l = load_cornell(state);
     enum { W = 64, H = 48, N = 64 };
     iir_vpl vpls[N];
-    light_vpls(&l, N, vpls);
-    iir_smaps_build(vpls, N, l.rt, 64, NULL);
-    iir_indirect_params p = iir_indirect_params_default();
-    iir_image *a = iir_image_create(W, H), *b = iir_image_create(W, H);
+    loaded l = cornell_with_vpls(state, N, vpls);
     const iir_camera *cam = &l.scene->camera;
+    iir_image *a = iir_image_create(W, H), *b = iir_image_create(W, H);
+    iir_indirect_params p = iir_indirect_params_default();
     frame(&l, cam, l.scene->lights, 1, vpls, N, &p, 1, a, NULL);
     int saved = omp_get_max_threads();
     side_ctx c = {vpls, N, IIR_OK, IIR_OK, 0, 0, 0};

@@ -31,10 +31,10 @@ typedef struct lean_half {
     v3 pending;          /* a light's contribution, kept where its ray is unoccluded */
 } lean_half;
 
-/* Array a's values at the half's pixels (0 outside the image). */
-static v3 half_vec3(const lean_half *q, const iir_gbuffer *gb, const iir_vec3 *a)
+/* half_vec3 at a half reaching past the image's edge. */
+static __attribute__((noinline)) v3 edge_vec3(const lean_half *q, const iir_gbuffer *gb,
+                                              const iir_vec3 *a)
 {
-    if (q->whole) return load_aos(a + q->row[0], a + q->row[1]);
     _Alignas(32) float x[8], y[8], z[8];
     for (int k = 0; k < 8; k++) {
         int px = q->x0 + k % HALF_W, py = q->y0 + k / HALF_W;
@@ -43,6 +43,12 @@ static v3 half_vec3(const lean_half *q, const iir_gbuffer *gb, const iir_vec3 *a
         x[k] = v.x, y[k] = v.y, z[k] = v.z;
     }
     return load_planes(x, y, z);
+}
+
+/* Array a's values at the half's pixels (0 outside the image). */
+static inline v3 half_vec3(const lean_half *q, const iir_gbuffer *gb, const iir_vec3 *a)
+{
+    return q->whole ? load_aos(a + q->row[0], a + q->row[1]) : edge_vec3(q, gb, a);
 }
 
 /* Lanes whose pixel is geometry. */
