@@ -204,15 +204,17 @@ bool iir_side_failed(const iir_side_run *sr)
 
 /* After the direct light: the side's status (its error into err), then its VPLs and their
  * subsets. */
-static iir_status side_vpls(iir_renderer *r, iir_side_run *sr, const iir_indirect_params *p,
+static iir_status side_vpls(iir_renderer *r, const iir_side_run *sr, const iir_indirect_params *p,
                             iir_error *err)
 {
     if (sr->status != IIR_OK) {
         if (err) *err = sr->err;
         return sr->status;
     }
-    iir_status s = sr->side->vpls(sr->side->ctx, &sr->vpls, &sr->num_vpls, err);
-    return s == IIR_OK ? iir_render_subsets(r, sr->vpls, sr->num_vpls, p, false, err) : s;
+    const iir_vpl *vpls = NULL;
+    uint32_t n = 0;
+    iir_status s = sr->side->vpls(sr->side->ctx, &vpls, &n, err);
+    return s == IIR_OK ? iir_render_subsets(r, vpls, n, p, false, err) : s;
 }
 
 /* The shading phases on the current G-buffer, timed into tm, rays added to rays: direct light

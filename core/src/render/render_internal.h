@@ -181,15 +181,13 @@ bool iir_gbuffer_render(iir_gbuffer *gb, const iir_scene *scene, const iir_rt *r
                         const iir_camera_frame *cf, iir_vec2 jitter, int specular_depth,
                         const iir_stop *stop, iir_raystats *st);
 
-/* A frame's side (iir_render_side) and what it gave: run once by iir_side_go, its vpls after the
- * direct light. `failed` is written atomically (the direct light's threads poll it to give up
+/* A frame's side (iir_render_side) and how its run went: run once by iir_side_go, its vpls after
+ * the direct light. `failed` is written atomically (the direct light's threads poll it to give up
  * their bands). */
 typedef struct iir_side_run {
     const iir_render_side *side;
     iir_status status;
     bool failed;
-    const iir_vpl *vpls;
-    uint32_t num_vpls;
     double ms; /* its run's wall time */
     iir_error err;
 } iir_side_run;
