@@ -969,10 +969,11 @@ static void check_pdf_integrates_to_one(const iir_scene *scp, const iir_light *l
 }
 
 /* The 8-lane delta-light sampler (the direct-light kernel) against iir_light_sample_li lane by
- * lane, for every delta kind (a spot with and without a smooth edge, a glTF spot, a point, a sun),
- * at receivers around and behind each light: the same light and the same shadow segment up to
- * float rounding (FMA, vector square roots: 1e-5 relative, the light's to its intensity over
- * d^2), nothing where the scalar path gives nothing. */
+ * lane (and the 16-lane one against two 8-lane calls, bit for bit), for every delta kind (a spot
+ * with and without a smooth edge, a glTF spot, a point, a sun), at receivers around and behind each
+ * light: the same light and the same shadow segment up to float rounding (FMA, vector reciprocal
+ * square roots with a Newton step: 1e-5 relative, the light's to its intensity over d^2), nothing
+ * where the scalar path gives nothing. */
 static void test_delta_lanes_match_scalar(void **state)
 {
     (void)state;
@@ -1007,6 +1008,18 @@ static void test_delta_lanes_match_scalar(void **state)
             }
             iir_light_delta_lanes out;
             iir_light_sample_delta8_avx2(&e, eps, &in, &out);
+            /* 16 lanes: the same bits as 8 and 8 (the second set: the lanes reversed) */
+            iir_light_lanes both[2] = {in, in};
+            float *planes[6] = {both[1].px, both[1].py, both[1].pz,
+                                both[1].nx, both[1].ny, both[1].nz};
+            const float *from[6] = {in.px, in.py, in.pz, in.nx, in.ny, in.nz};
+            for (int q = 0; q < 6; q++)
+                for (int k = 0; k < 8; k++) planes[q][k] = from[q][7 - k];
+            iir_light_delta_lanes wide[2], second;
+            iir_light_sample_delta16_avx2(&e, eps, both, wide);
+            iir_light_sample_delta8_avx2(&e, eps, &both[1], &second);
+            assert_memory_equal(&wide[0], &out, sizeof out);
+            assert_memory_equal(&wide[1], &second, sizeof second);
             for (int k = 0; k < 8; k++, tested++) {
                 iir_light_sample ls = iir_light_sample_li(&e, &ctx[k], iir_v2(0.f, 0.f));
                 float cos_x = iir_dot(ctx[k].n, ls.wi);

@@ -1,7 +1,8 @@
 /* render_direct_avx2.c -- direct light's lean block with AVX2 (render_internal.h:
  * iir_direct_lean_block_avx2): the common frame's 4x4 pixels -- points, spots and suns alone, no
  * specular chain -- as two halves of 8 lanes held in registers from the G-buffer's rows to the
- * frame's, each light's 16 shadow rays in one packet. Its sums are render_direct.c's shade_block's,
+ * frame's, each light's 16 samples in one call (iir_light_sample_delta16_avx2) and its 16 shadow
+ * rays in one packet. Its sums are render_direct.c's shade_block's,
  * product for product and in the same order (this file is built with -mavx2 alone: no FMA), so the
  * frame is the same bit for bit. Called only where the CPU has AVX2. */
 #include "render_internal.h"
@@ -123,19 +124,13 @@ static void set_rays(iir_ray8 *rays, const iir_light_delta_lanes *o, __m256 trac
     _mm256_storeu_ps(rays->tfar, tmax);
 }
 
-/* Light e's 8 samples of half q into rays (lanes_into_rays's rule: a shaded lane that receives
- * light gets its pending f E, added at once when its segment is too short to test). True when a
- * lane has a ray. A half the light does not reach reads no material. */
-static bool half_samples(const iir_direct_lean *c, const iir_light_eval *e, lean_half *q,
-                         iir_ray8 *rays)
+/* Light sample o at half q into rays (lanes_into_rays's rule: a shaded lane that receives light
+ * gets its pending f E, added at once when its segment is too short to test). True when a lane
+ * has a ray. A half the light does not reach reads no material. */
+static bool half_rays(const iir_direct_lean *c, const iir_light_delta_lanes *o, lean_half *q,
+                      iir_ray8 *rays)
 {
-    iir_light_lanes in;
-    _mm256_store_ps(in.px, q->p.x), _mm256_store_ps(in.py, q->p.y);
-    _mm256_store_ps(in.pz, q->p.z), _mm256_store_ps(in.nx, q->n.x);
-    _mm256_store_ps(in.ny, q->n.y), _mm256_store_ps(in.nz, q->n.z);
-    iir_light_delta_lanes o;
-    iir_light_sample_delta8_avx2(e, c->eps, &in, &o);
-    v3 E = load_planes(o.Ex, o.Ey, o.Ez);
+    v3 E = load_planes(o->Ex, o->Ey, o->Ez);
     __m256 lit = not_black(E);
     if (!_mm256_movemask_ps(lit)) {
         memset(rays->valid, 0, sizeof rays->valid);
@@ -145,16 +140,33 @@ static bool half_samples(const iir_direct_lean *c, const iir_light_eval *e, lean
     v3 f = q->f;
     if (q->any_glossy) {
         _Alignas(32) float fx[8], fy[8], fz[8];
-        iir_bsdf_f8_avx2(&q->bsdf, o.wx, o.wy, o.wz, fx, fy, fz);
+        iir_bsdf_f8_avx2(&q->bsdf, o->wx, o->wy, o->wz, fx, fy, fz);
         f = blend3(f, load_planes(fx, fy, fz), q->glossy);
     }
     lit = _mm256_and_ps(lit, q->shaded);
     q->pending = mul3(f, E);
-    __m256 tmax = _mm256_loadu_ps(o.tmax);
+    __m256 tmax = _mm256_loadu_ps(o->tmax);
     __m256 traced = _mm256_and_ps(lit, _mm256_cmp_ps(tmax, zero(), _CMP_GT_OQ));
     q->L = blend3(q->L, add3(q->L, q->pending), _mm256_andnot_ps(traced, lit));
-    set_rays(rays, &o, traced, tmax);
+    set_rays(rays, o, traced, tmax);
     return _mm256_movemask_ps(traced) != 0;
+}
+
+/* Light e's 16 samples, both halves in one call (their latencies overlap), into the halves'
+ * rays. True when a lane has a ray. */
+static bool block_samples(const iir_direct_lean *c, const iir_light_eval *e, lean_half q[2],
+                          iir_ray8 rays[2])
+{
+    iir_light_lanes in[2];
+    for (int h = 0; h < 2; h++) {
+        _mm256_store_ps(in[h].px, q[h].p.x), _mm256_store_ps(in[h].py, q[h].p.y);
+        _mm256_store_ps(in[h].pz, q[h].p.z), _mm256_store_ps(in[h].nx, q[h].n.x);
+        _mm256_store_ps(in[h].ny, q[h].n.y), _mm256_store_ps(in[h].nz, q[h].n.z);
+    }
+    iir_light_delta_lanes o[2];
+    iir_light_sample_delta16_avx2(e, c->eps, in, o);
+    bool any = half_rays(c, &o[0], &q[0], &rays[0]);
+    return half_rays(c, &o[1], &q[1], &rays[1]) | any;
 }
 
 /* Lanes of 8 bools. */
@@ -212,9 +224,7 @@ void iir_direct_lean_block_avx2(const iir_direct_lean *c, int x0, int y0, iir_im
     for (int h = 0; h < 2; h++) half_surface(&q[h], c->gb, x0, y0 + HALF_H * h);
     for (uint32_t l = 0; l < c->num_lights; l++) {
         iir_ray8 rays[2];
-        bool any = half_samples(c, &c->evals[l], &q[0], &rays[0]);
-        any |= half_samples(c, &c->evals[l], &q[1], &rays[1]);
-        if (!any) continue;
+        if (!block_samples(c, &c->evals[l], q, rays)) continue;
         bool occluded[16];
         iir_rt_occluded16(c->rt, rays, occluded, st, IIR_RAYS_SHADOW);
         for (int h = 0; h < 2; h++) {

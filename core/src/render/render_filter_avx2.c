@@ -81,21 +81,41 @@ IIR_PREFETCH_FN ask_ahead(const iir_filter_lanes *f, size_t i)
     _mm_prefetch((const char *)(f->mask + i), _MM_HINT_T0);
 }
 
+/* Tap flags of 8 pixels from xx (subset sx = xx mod n): pattern[sx + j] is live[(sx + j) % n],
+ * or multires's level > 0 among them. */
+static inline __m256 flags8(const float *pattern, int sx, const uint8_t *level, int xx)
+{
+    __m256 live = _mm256_loadu_ps(pattern + sx);
+    if (!level) return live;
+    uint64_t bytes;
+    memcpy(&bytes, level + xx, sizeof bytes);
+    __m256i lv = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)bytes));
+    __m256 coarse = _mm256_castsi256_ps(_mm256_cmpgt_epi32(lv, _mm256_setzero_si256()));
+    return _mm256_or_ps(live, _mm256_and_ps(coarse, _mm256_set1_ps(1.f)));
+}
+
 /* Row y's raw light and tap flags (its subset has VPLs, or multires: the pixel is coarse) over
  * [x0 - h, x0 + len + h + 8), zero beyond the image: the taps of the groups of 8 centres from x0
- * to below x0 + len. */
+ * to below x0 + len. Inside the image 8 pixels a step (their xyz split into planes). */
 static void chunk_planes(const iir_filter_lanes *f, int y, int x0, int len, float *R, float *G,
                          float *B, float *L)
 {
     const iir_vec3 *raw = f->raw + (size_t)y * (size_t)f->width;
     const int *live = f->live + (y % f->n) * f->n;
+    float pattern[IIR_MAX_INTERLEAVE + 8];
+    for (int j = 0; j < f->n + 8; j++) pattern[j] = live[j % f->n] ? 1.f : 0.f;
     int xx = x0 - f->h, end = len + 2 * f->h + 8, k = 0;
     for (; k < end && xx < 0; k++, xx++) R[k] = G[k] = B[k] = L[k] = 0.f;
     const uint8_t *level = f->level ? f->level + (size_t)y * (size_t)f->width : NULL;
     size_t at = (size_t)y * (size_t)f->width, last = (size_t)f->width * (size_t)f->height;
-    for (int sx = xx % f->n; k < end && xx < f->width;
-         k++, xx++, sx = sx + 1 == f->n ? 0 : sx + 1) {
-        if (!(xx & 15) && at + (size_t)(xx + AHEAD) < last) ask_ahead(f, at + (size_t)(xx + AHEAD));
+    int sx = xx % f->n;
+    for (; k + 8 <= end && xx + 8 <= f->width; k += 8, xx += 8, sx = (sx + 8) % f->n) {
+        if (!(xx & 8) && at + (size_t)(xx + AHEAD) < last) ask_ahead(f, at + (size_t)(xx + AHEAD));
+        v3 v = load_aos(raw + xx, raw + xx + 4);
+        _mm256_storeu_ps(R + k, v.x), _mm256_storeu_ps(G + k, v.y), _mm256_storeu_ps(B + k, v.z);
+        _mm256_storeu_ps(L + k, flags8(pattern, sx, level, xx));
+    }
+    for (; k < end && xx < f->width; k++, xx++, sx = sx + 1 == f->n ? 0 : sx + 1) {
         R[k] = raw[xx].x, G[k] = raw[xx].y, B[k] = raw[xx].z;
         L[k] = live[sx] || (level && level[xx] > 0) ? 1.f : 0.f;
     }
