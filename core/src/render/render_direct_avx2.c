@@ -69,16 +69,21 @@ static __m256 half_hit(const lean_half *q, const iir_gbuffer *gb)
     return hit_lanes(prim);
 }
 
-/* The half's surfaces: receivers, geometry, emission. */
-static void half_surface(lean_half *q, const iir_gbuffer *gb, int x0, int y0)
+/* The half's place and which of its pixels are geometry. */
+static void half_at(lean_half *q, const iir_gbuffer *gb, int x0, int y0)
 {
     q->x0 = x0, q->y0 = y0, q->loaded = false;
     q->whole = x0 + HALF_W <= gb->width && y0 + HALF_H <= gb->height;
     for (int r = 0; r < HALF_H; r++) q->row[r] = (size_t)(y0 + r) * (size_t)gb->width + (size_t)x0;
+    q->hit = half_hit(q, gb);
+}
+
+/* The half's surfaces: receivers, emission. */
+static void half_surface(lean_half *q, const iir_gbuffer *gb)
+{
     q->p = half_vec3(q, gb, gb->position);
     q->n = half_vec3(q, gb, gb->normal);
     q->L = gb->any_emission ? half_vec3(q, gb, gb->emission) : (v3){zero(), zero(), zero()};
-    q->hit = half_hit(q, gb);
 }
 
 /* The glossy lanes' BSDFs (metallic-roughness pixels), lane by lane. */
@@ -221,7 +226,12 @@ void iir_direct_lean_block_avx2(const iir_direct_lean *c, int x0, int y0, iir_im
 {
     lean_half q[2];
     prefetch_ahead(c, x0, y0, out);
-    for (int h = 0; h < 2; h++) half_surface(&q[h], c->gb, x0, y0 + HALF_H * h);
+    for (int h = 0; h < 2; h++) half_at(&q[h], c->gb, x0, y0 + HALF_H * h);
+    if (!_mm256_movemask_ps(_mm256_or_ps(q[0].hit, q[1].hit))) { /* background: black */
+        for (int h = 0; h < 2; h++) q[h].L = (v3){zero(), zero(), zero()}, half_store(&q[h], out);
+        return;
+    }
+    for (int h = 0; h < 2; h++) half_surface(&q[h], c->gb);
     for (uint32_t l = 0; l < c->num_lights; l++) {
         iir_ray8 rays[2];
         if (!block_samples(c, &c->evals[l], q, rays)) continue;

@@ -176,7 +176,8 @@ void iir_filter_rows_avx2(const iir_filter_lanes *f, int y)
             bool all = x + 8 <= f->width;
             __m256i masks = load_masks(f->mask + row + (size_t)x, in, all);
             __m256 r = zero(), g = zero(), b = zero(), w = zero();
-            for (int i = 0; i < t.count; i++) {
+            bool background = _mm256_testz_si256(masks, masks); /* no tap: zeros */
+            for (int i = 0; i < t.count && !background; i++) {
                 int k = x - x0 + i; /* tap i's offset in the chunk's planes */
                 __m256 wt =
                     _mm256_and_ps(tap_weights(&t, i, masks),
@@ -249,9 +250,12 @@ void iir_filter_compose_avx2(const iir_filter_lanes *f, const iir_gbuffer *gb, i
     size_t row = (size_t)y * (size_t)f->width;
     const taps t = column_taps(f, y);
     int x = 0;
-    for (; x + 8 <= f->width; x += 8)
+    for (; x + 8 <= f->width; x += 8) {
+        __m256i masks = _mm256_loadu_si256((const __m256i *)(f->mask + row + (size_t)x));
+        if (_mm256_testz_si256(masks, masks)) continue; /* background: nothing to add */
         compose8(gb, row + (size_t)x, iir_image_at(out, x, y),
                  column8(f, &t, y, x, _mm256_set1_epi32(-1), true));
+    }
     if (x == f->width) return;
     iir_vec3 E[8];
     iir_filter_columns_avx2(f, y, x, f->width, E);
