@@ -81,8 +81,14 @@ IIR_PREFETCH_FN ask_ahead(const iir_filter_lanes *f, size_t i)
     _mm_prefetch((const char *)(f->mask + i), _MM_HINT_T0);
 }
 
-/* Tap flags of 8 pixels from xx (subset sx = xx mod n): pattern[sx + j] is live[(sx + j) % n],
- * or multires's level > 0 among them. */
+/* The tap flag of pixel xx of a row (subset sx = xx mod n): its subset has VPLs (pattern[sx],
+ * pattern[j] = live[j % n]), or multires: the pixel is coarse (level[xx] > 0). */
+static inline float flag1(const float *pattern, int sx, const uint8_t *level, int xx)
+{
+    return pattern[sx] != 0.f || (level && level[xx] > 0) ? 1.f : 0.f;
+}
+
+/* flag1 at 8 pixels from xx. */
 static inline __m256 flags8(const float *pattern, int sx, const uint8_t *level, int xx)
 {
     __m256 live = _mm256_loadu_ps(pattern + sx);
@@ -110,14 +116,15 @@ static void chunk_planes(const iir_filter_lanes *f, int y, int x0, int len, floa
     size_t at = (size_t)y * (size_t)f->width, last = (size_t)f->width * (size_t)f->height;
     int sx = xx % f->n;
     for (; k + 8 <= end && xx + 8 <= f->width; k += 8, xx += 8, sx = (sx + 8) % f->n) {
-        if (!(xx & 8) && at + (size_t)(xx + AHEAD) < last) ask_ahead(f, at + (size_t)(xx + AHEAD));
+        bool ask = !(xx & 8) && at + (size_t)(xx + AHEAD) < last; /* every 16 pixels */
+        if (ask) ask_ahead(f, at + (size_t)(xx + AHEAD));
         v3 v = load_aos(raw + xx, raw + xx + 4);
         _mm256_storeu_ps(R + k, v.x), _mm256_storeu_ps(G + k, v.y), _mm256_storeu_ps(B + k, v.z);
         _mm256_storeu_ps(L + k, flags8(pattern, sx, level, xx));
     }
     for (; k < end && xx < f->width; k++, xx++, sx = sx + 1 == f->n ? 0 : sx + 1) {
         R[k] = raw[xx].x, G[k] = raw[xx].y, B[k] = raw[xx].z;
-        L[k] = live[sx] || (level && level[xx] > 0) ? 1.f : 0.f;
+        L[k] = flag1(pattern, sx, level, xx);
     }
     for (; k < end; k++) R[k] = G[k] = B[k] = L[k] = 0.f;
 }
@@ -196,12 +203,12 @@ void iir_filter_rows_avx2(const iir_filter_lanes *f, int y)
     }
 }
 
-/* The column pass at pixels x .. x + 7 of row y, its taps t (lanes `in`; `all`: the 8 of
- * them): E. */
-static v3 column8(const iir_filter_lanes *f, const taps *t, int y, int x, __m256i in, bool all)
+/* The column pass at pixels x .. x + 7, their similarity masks and taps t (lanes `in`; `all`: the
+ * 8 of them): E. */
+static v3 column8(const iir_filter_lanes *f, const taps *t, int x, __m256i masks, __m256i in,
+                  bool all)
 {
-    size_t plane = (size_t)f->width * (size_t)f->ring, row = (size_t)y * (size_t)f->width;
-    __m256i masks = load_masks(f->mask + row + (size_t)x, in, all);
+    size_t plane = (size_t)f->width * (size_t)f->ring;
     __m256 r = zero(), g = zero(), b = zero(), w = zero();
     for (int i = 0; i < t->count; i++) {
         __m256 wt = tap_weights(t, i, masks);
@@ -221,7 +228,10 @@ void iir_filter_columns_avx2(const iir_filter_lanes *f, int y, int x0, int x1, i
     const taps t = column_taps(f, y);
     for (int x = x0; x < x1; x += 8) {
         _Alignas(32) float ex[8], ey[8], ez[8];
-        v3 e = column8(f, &t, y, x, lanes_below(x, x1), x + 8 <= x1);
+        __m256i in = lanes_below(x, x1);
+        bool all = x + 8 <= x1;
+        __m256i masks = load_masks(f->mask + (size_t)y * (size_t)f->width + (size_t)x, in, all);
+        v3 e = column8(f, &t, x, masks, in, all);
         _mm256_store_ps(ex, e.x), _mm256_store_ps(ey, e.y), _mm256_store_ps(ez, e.z);
         for (int l = 0; l < 8 && x + l < x1; l++) E[x + l - x0] = iir_v3(ex[l], ey[l], ez[l]);
     }
@@ -254,7 +264,7 @@ void iir_filter_compose_avx2(const iir_filter_lanes *f, const iir_gbuffer *gb, i
         __m256i masks = _mm256_loadu_si256((const __m256i *)(f->mask + row + (size_t)x));
         if (_mm256_testz_si256(masks, masks)) continue; /* background: nothing to add */
         compose8(gb, row + (size_t)x, iir_image_at(out, x, y),
-                 column8(f, &t, y, x, _mm256_set1_epi32(-1), true));
+                 column8(f, &t, x, masks, _mm256_set1_epi32(-1), true));
     }
     if (x == f->width) return;
     iir_vec3 E[8];
