@@ -80,7 +80,7 @@ static void put_pixel(iir_gv_columns *c, const iir_gbuffer *gb, uint32_t o, size
 static void tile_pixels(iir_gv_columns *c, const iir_gbuffer *gb, int n, int t, uint32_t *next)
 {
     uint32_t n2 = (uint32_t)(n * n);
-    iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_INDIRECT_TILE, t);
+    iir_tile tl = iir_indirect_tile_at(gb->width, gb->height, t);
     for (int j = 0; j < n && tl.y0 + j < tl.y1; j++)
         for (int i = 0; i < n && tl.x0 + i < tl.x1; i++) {
             uint32_t k = (uint32_t)(((tl.y0 + j) % n) * n + (tl.x0 + i) % n);
@@ -101,7 +101,7 @@ static void tile_pixels(iir_gv_columns *c, const iir_gbuffer *gb, int n, int t, 
 static bool count_pixels(iir_gv_columns *c, const iir_gbuffer *gb, int n)
 {
     uint32_t n2 = (uint32_t)(n * n), next[IIR_MAX_SUBSETS] = {0};
-    int tiles = iir_tile_count(gb->width, gb->height, IIR_INDIRECT_TILE);
+    int tiles = iir_indirect_tile_count(gb->width, gb->height);
     free(c->ord), free(c->pixel), free(c->glossy), free(c->soa);
     c->pixel = NULL, c->soa = NULL;
     c->ord = malloc(sizeof *c->ord * (size_t)tiles * n2);

@@ -499,19 +499,30 @@ static void zero_background(const iir_renderer *r, const iir_tile *tl)
         }
 }
 
-/* Shades one tile; returns the pixel-VPL pairs shaded, and adds those read from columns to
- * *reused. */
+/* Whether the frame's stop hook asks to stop (never when not stoppable). */
+static bool stop_asked(const indirect_ctx *c)
+{
+    return c->stop && c->stop(c->r->stop_ctx);
+}
+
+/* Shades one tile (a band: its subsets one by one, asking the stop hook before each and leaving
+ * the rest when it says stop, *stopped then set); returns the pixel-VPL pairs shaded, and adds
+ * those read from columns to *reused. */
 static uint64_t indirect_tile(const indirect_ctx *c, int n, int t, int tiles, pixel_batch *b,
-                              iir_raystats *st, uint64_t *reused)
+                              iir_raystats *st, uint64_t *reused, int *stopped)
 {
     uint64_t evals = 0;
     const iir_renderer *r = c->r;
     const iir_gbuffer *gb = &r->gb;
-    iir_tile tl = iir_tile_at(gb->width, gb->height, IIR_INDIRECT_TILE, t);
+    iir_tile tl = iir_indirect_tile_at(gb->width, gb->height, t);
     if (c->fresh) zero_background(r, &tl);
     /* The lattice through (x0 + i, y0 + j) is one subset. */
     for (int j = 0; j < n && tl.y0 + j < tl.y1; j++)
         for (int i = 0; i < n && tl.x0 + i < tl.x1; i++) {
+            if (stop_asked(c)) {
+                *stopped = 1;
+                return evals;
+            }
             uint32_t k = ((uint32_t)(((tl.y0 + j) % n) * n + (tl.x0 + i) % n) + c->shift) %
                          (uint32_t)(n * n);
             int x = tl.x0 + i, y = tl.y0 + j;
@@ -585,7 +596,7 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
                          bool stoppable, iir_raystats *st, uint64_t *evals, uint64_t *reused)
 {
     indirect_ctx c = make_ctx(r, p, shift, stoppable);
-    int tiles = iir_tile_count(r->gb.width, r->gb.height, IIR_INDIRECT_TILE), n = p->interleave;
+    int tiles = iir_indirect_tile_count(r->gb.width, r->gb.height), n = p->interleave;
     bool columns = c.use_smap && r->isa >= IIR_ISA_AVX2; /* the AVX2 kernel's (render_batch.h) */
     if (columns) {
         iir_gv_free(r->gv_mr), r->gv_mr = NULL; /* one set of columns at a time */
@@ -602,11 +613,8 @@ bool iir_render_indirect(iir_renderer *r, const iir_indirect_params *p, uint32_t
         pixel_batch b; /* on the stack: no allocation */
 #pragma omp for schedule(dynamic, 1)
         for (int t = 0; t < tiles; t++) {
-            if (c.stop && (skipped || c.stop(r->stop_ctx))) {
-                skipped = 1; /* this thread's remaining tiles are skipped without asking again */
-                continue;
-            }
-            sum += indirect_tile(&c, n, t, tiles, &b, &local, &read);
+            if (skipped) continue; /* this thread's remaining tiles, without asking again */
+            sum += indirect_tile(&c, n, t, tiles, &b, &local, &read, &skipped);
         }
 #pragma omp critical(iir_indirect_rays)
         iir_raystats_add(&total, &local);

@@ -13,16 +13,12 @@
 #include "iir/scene.h"
 #include "light_tree.h"
 
-/* Tiles of the G-buffer, direct and filter phases; the indirect phase uses larger ones so that a
- * subset has more pixels per tile to share each VPL's map texels, and its pieces of the VPLs'
- * columns (gv_columns.h) are longer runs through memory (1 KB each with 128-pixel tiles and 4x4
- * interleave: at 1024x768 the indirect phase took ~20% less time than with 64-pixel tiles). */
-enum {
-    IIR_RENDER_TILE = 16,
-    IIR_INDIRECT_TILE = 128,
-    IIR_MAX_INTERLEAVE = 8,
-    IIR_MAX_SUBSETS = 64
-};
+/* Tiles of the G-buffer, direct and filter phases. The indirect phase works in bands across the
+ * frame instead, so that a subset has more pixels per band to share each VPL's map texels, and its
+ * pieces of the VPLs' columns (gv_columns.h), read 16 side by side, are runs through memory long
+ * enough for the prefetchers: 16 KB each at 1024x768 with 4x4 interleave, against 4 KB with the
+ * 128-pixel square tiles before (the phase ~13% faster; 64-pixel tiles were ~20% slower again). */
+enum { IIR_RENDER_TILE = 16, IIR_INDIRECT_BAND = 64, IIR_MAX_INTERLEAVE = 8, IIR_MAX_SUBSETS = 64 };
 enum { IIR_MAX_AREA_SAMPLES = 4096 }; /* iir_indirect_params.area_samples */
 
 /* The filter's horizontal pass at one pixel: weighted sum of the accepted taps and their weight. */
@@ -111,6 +107,19 @@ static inline iir_tile iir_tile_at(int width, int height, int size, int t)
     tl.y0 = (t / tiles_x) * size;
     tl.x1 = tl.x0 + size < width ? tl.x0 + size : width;
     tl.y1 = tl.y0 + size < height ? tl.y0 + size : height;
+    return tl;
+}
+
+/* The indirect phase's tiles: bands of IIR_INDIRECT_BAND rows across the frame, top to bottom. */
+static inline int iir_indirect_tile_count(int width, int height)
+{
+    return width > 0 ? (height + IIR_INDIRECT_BAND - 1) / IIR_INDIRECT_BAND : 0;
+}
+
+static inline iir_tile iir_indirect_tile_at(int width, int height, int t)
+{
+    iir_tile tl = {0, t * IIR_INDIRECT_BAND, width, (t + 1) * IIR_INDIRECT_BAND};
+    tl.y1 = tl.y1 < height ? tl.y1 : height;
     return tl;
 }
 
