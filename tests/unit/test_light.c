@@ -1008,18 +1008,19 @@ static void test_delta_lanes_match_scalar(void **state)
             }
             iir_light_delta_lanes out;
             iir_light_sample_delta8_avx2(&e, eps, &in, &out);
-            /* 16 lanes: the same bits as 8 and 8 (the second set: the lanes reversed) */
-            iir_light_lanes both[2] = {in, in};
-            float *planes[6] = {both[1].px, both[1].py, both[1].pz,
-                                both[1].nx, both[1].ny, both[1].nz};
+            /* 32 lanes: the same bits as four times 8 (the odd sets: the lanes reversed) */
+            iir_light_lanes sets[4] = {in, in, in, in};
+            float *planes[6] = {sets[1].px, sets[1].py, sets[1].pz,
+                                sets[1].nx, sets[1].ny, sets[1].nz};
             const float *from[6] = {in.px, in.py, in.pz, in.nx, in.ny, in.nz};
             for (int q = 0; q < 6; q++)
                 for (int k = 0; k < 8; k++) planes[q][k] = from[q][7 - k];
-            iir_light_delta_lanes wide[2], second;
-            iir_light_sample_delta16_avx2(&e, eps, both, wide);
-            iir_light_sample_delta8_avx2(&e, eps, &both[1], &second);
-            assert_memory_equal(&wide[0], &out, sizeof out);
-            assert_memory_equal(&wide[1], &second, sizeof second);
+            sets[3] = sets[1];
+            iir_light_delta_lanes wide[4], second;
+            iir_light_sample_delta32_avx2(&e, eps, sets, wide);
+            iir_light_sample_delta8_avx2(&e, eps, &sets[1], &second);
+            for (int h = 0; h < 4; h++)
+                assert_memory_equal(&wide[h], h % 2 ? &second : &out, sizeof out);
             for (int k = 0; k < 8; k++, tested++) {
                 iir_light_sample ls = iir_light_sample_li(&e, &ctx[k], iir_v2(0.f, 0.f));
                 float cos_x = iir_dot(ctx[k].n, ls.wi);

@@ -340,7 +340,7 @@ typedef struct iir_light_sample {
  * light's plane. Whether ctx's surface faces wi is the caller's to test. */
 iir_light_sample iir_light_sample_li(const iir_light_eval *e, const iir_light_ctx *ctx, iir_vec2 u);
 
-/* ---- a delta light at 8 or 16 receivers at once (light_lanes_avx2.c): the direct-light kernel */
+/* ---- a delta light at 8 or 32 receivers at once (light_lanes_avx2.c): the direct-light kernel */
 
 /* 8 receiving points, structure of arrays: the points on their surfaces and their unit normals. */
 typedef struct iir_light_lanes {
@@ -362,10 +362,10 @@ typedef struct iir_light_delta_lanes {
 void iir_light_sample_delta8_avx2(const iir_light_eval *e, float eps, const iir_light_lanes *in,
                                   iir_light_delta_lanes *out);
 
-/* iir_light_sample_delta8_avx2 at two sets of 8 lanes, the same bit for bit as two calls and
- * nearly as fast as one (their chains of square roots and divisions overlap). */
-void iir_light_sample_delta16_avx2(const iir_light_eval *e, float eps, const iir_light_lanes in[2],
-                                   iir_light_delta_lanes out[2]);
+/* iir_light_sample_delta8_avx2 at four sets of 8 lanes, the same bit for bit as four calls and
+ * not much slower than one (their chains of square roots and divisions overlap). */
+void iir_light_sample_delta32_avx2(const iir_light_eval *e, float eps, const iir_light_lanes in[4],
+                                   iir_light_delta_lanes out[4]);
 
 /* The solid-angle pdf iir_light_sample_li gives area light l's point at distance dist along unit
  * wi from the receiving point (0 when wi meets it from behind), the pick probability not included.

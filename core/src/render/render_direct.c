@@ -12,8 +12,8 @@
  * light sample alone (weight 1), which is unbiased by itself. Shadow rays go out as 8-wide packets
  * over 4x2 pixel blocks (neighbouring pixels, one light: coherent rays); with AVX2 a point, spot
  * or sun is evaluated at the block's 8 pixels at once (iir_light_sample_delta8_avx2), and a frame
- * of such lights alone (lean) goes in 4x4 blocks held in registers, one 16-wide packet each, a
- * metallic-roughness pixel's BSDF evaluated 8 lanes at once (iir_bsdf_f8_avx2;
+ * of such lights alone (lean) goes in pairs of 4x4 blocks held in registers, one 16-wide packet a
+ * block, a metallic-roughness pixel's BSDF evaluated 8 lanes at once (iir_bsdf_f8_avx2;
  * render_direct_avx2.c), emission read only when some pixel has it.
  * Threads: OpenMP over bands of two (lean: four) whole rows, each writing only its own pixels of
  * the frame; ray counters per thread, summed once.
@@ -479,7 +479,7 @@ bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_side_run *
     /* bands of whole rows, a block high: each per-pixel array streams through memory in long runs
        (16-pixel tile rows are a few cache lines each, too short for the prefetchers) */
     int w = out->width, h = out->height, band_h = c.lean ? 2 * BLOCK_H : BLOCK_H;
-    int bands = (h + band_h - 1) / band_h; /* lean blocks are 4x4 */
+    int bands = (h + band_h - 1) / band_h; /* lean blocks are 4x4, two a call */
     iir_raystats total = {0};
 #pragma omp parallel
     {
@@ -496,7 +496,8 @@ bool iir_render_direct(iir_renderer *r, const iir_shade_job *job, iir_side_run *
                 stopped = true;
                 continue;
             }
-            for (int x = 0; x < w; x += BLOCK_W) shade_block(&c, x, t * band_h, out, &local);
+            for (int x = 0; x < w; x += c.lean ? 2 * BLOCK_W : BLOCK_W)
+                shade_block(&c, x, t * band_h, out, &local);
         }
 #pragma omp critical(iir_direct_rays)
         iir_raystats_add(&total, &local);

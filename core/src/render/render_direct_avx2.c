@@ -1,8 +1,8 @@
 /* render_direct_avx2.c -- direct light's lean block with AVX2 (render_internal.h:
- * iir_direct_lean_block_avx2): the common frame's 4x4 pixels -- points, spots and suns alone, no
- * specular chain -- as two halves of 8 lanes held in registers from the G-buffer's rows to the
- * frame's, each light's 16 samples in one call (iir_light_sample_delta16_avx2) and its 16 shadow
- * rays in one packet. Its sums are render_direct.c's shade_block's,
+ * iir_direct_lean_block_avx2): the common frame's two 4x4 blocks side by side -- points, spots and
+ * suns alone, no specular chain -- as four halves of 8 lanes held in registers from the G-buffer's
+ * rows to the frame's, each light's 32 samples in one call (iir_light_sample_delta32_avx2) and
+ * each block's 16 shadow rays in one packet. Its sums are render_direct.c's shade_block's,
  * product for product and in the same order (this file is built with -mavx2 alone: no FMA), so the
  * frame is the same bit for bit. Called only where the CPU has AVX2. */
 #include "render_internal.h"
@@ -15,6 +15,7 @@
 #include "render_lanes_avx2.h"
 
 enum { HALF_W = 4, HALF_H = 2 }; /* a half's pixels: lane r * HALF_W + j is (x0 + j, y0 + r) */
+enum { NH = 4 };                 /* halves a call shades: two 4x4 blocks side by side */
 
 /* The 8 lanes of a half of a lean block. */
 typedef struct lean_half {
@@ -157,21 +158,23 @@ static bool half_rays(const iir_direct_lean *c, const iir_light_delta_lanes *o, 
     return _mm256_movemask_ps(traced) != 0;
 }
 
-/* Light e's 16 samples, both halves in one call (their latencies overlap), into the halves'
- * rays. True when a lane has a ray. */
-static bool block_samples(const iir_direct_lean *c, const iir_light_eval *e, lean_half q[2],
-                          iir_ray8 rays[2])
+/* Light e's samples at the NH halves in one call (their latencies overlap), into the halves'
+ * rays. rays_any[b]: block b (halves 2b, 2b + 1) has a lane with a ray. */
+static void block_samples(const iir_direct_lean *c, const iir_light_eval *e, lean_half *q,
+                          iir_ray8 *rays, bool *rays_any)
 {
-    iir_light_lanes in[2];
-    for (int h = 0; h < 2; h++) {
+    iir_light_lanes in[NH];
+    for (int h = 0; h < NH; h++) {
         _mm256_store_ps(in[h].px, q[h].p.x), _mm256_store_ps(in[h].py, q[h].p.y);
         _mm256_store_ps(in[h].pz, q[h].p.z), _mm256_store_ps(in[h].nx, q[h].n.x);
         _mm256_store_ps(in[h].ny, q[h].n.y), _mm256_store_ps(in[h].nz, q[h].n.z);
     }
-    iir_light_delta_lanes o[2];
-    iir_light_sample_delta16_avx2(e, c->eps, in, o);
-    bool any = half_rays(c, &o[0], &q[0], &rays[0]);
-    return half_rays(c, &o[1], &q[1], &rays[1]) | any;
+    iir_light_delta_lanes o[NH];
+    iir_light_sample_delta32_avx2(e, c->eps, in, o);
+    for (int b = 0; b < NH / 2; b++) {
+        bool any = half_rays(c, &o[2 * b], &q[2 * b], &rays[2 * b]);
+        rays_any[b] = half_rays(c, &o[2 * b + 1], &q[2 * b + 1], &rays[2 * b + 1]) | any;
+    }
 }
 
 /* Lanes of 8 bools. */
@@ -182,6 +185,21 @@ static inline __m256 bool_lanes(const bool *b)
     __m256i v = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128((long long)bytes));
     return _mm256_castsi256_ps(
         _mm256_xor_si256(_mm256_cmpeq_epi32(v, _mm256_setzero_si256()), _mm256_set1_epi32(-1)));
+}
+
+/* A block's 16 shadow rays as one packet: each half's pending light kept where its ray is
+ * unoccluded. */
+static void block_rays(const iir_direct_lean *c, const iir_ray8 rays[2], lean_half q[2],
+                       iir_raystats *st)
+{
+    bool occluded[16];
+    iir_rt_occluded16(c->rt, rays, occluded, st, IIR_RAYS_SHADOW);
+    for (int h = 0; h < 2; h++) {
+        __m256 valid = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+            _mm256_loadu_si256((const __m256i *)rays[h].valid), _mm256_setzero_si256()));
+        __m256 keep = _mm256_andnot_ps(bool_lanes(occluded + 8 * h), valid);
+        q[h].L = blend3(q[h].L, add3(q[h].L, q[h].pending), keep);
+    }
 }
 
 /* The half's radiance into the frame (its pixels inside it). */
@@ -224,27 +242,27 @@ IIR_PREFETCH_FN prefetch_ahead(const iir_direct_lean *c, int x0, int y0, iir_ima
 void iir_direct_lean_block_avx2(const iir_direct_lean *c, int x0, int y0, iir_image *out,
                                 iir_raystats *st)
 {
-    lean_half q[2];
+    lean_half q[NH];
     prefetch_ahead(c, x0, y0, out);
-    for (int h = 0; h < 2; h++) half_at(&q[h], c->gb, x0, y0 + HALF_H * h);
-    if (!_mm256_movemask_ps(_mm256_or_ps(q[0].hit, q[1].hit))) { /* background: black */
-        for (int h = 0; h < 2; h++) q[h].L = (v3){zero(), zero(), zero()}, half_store(&q[h], out);
+    prefetch_ahead(c, x0 + HALF_W, y0, out);
+    __m256 hit = zero();
+    for (int h = 0; h < NH; h++) {
+        half_at(&q[h], c->gb, x0 + HALF_W * (h / 2), y0 + HALF_H * (h % 2));
+        hit = _mm256_or_ps(hit, q[h].hit);
+    }
+    if (!_mm256_movemask_ps(hit)) { /* background: black */
+        for (int h = 0; h < NH; h++) q[h].L = (v3){zero(), zero(), zero()}, half_store(&q[h], out);
         return;
     }
-    for (int h = 0; h < 2; h++) half_surface(&q[h], c->gb);
+    for (int h = 0; h < NH; h++) half_surface(&q[h], c->gb);
     for (uint32_t l = 0; l < c->num_lights; l++) {
-        iir_ray8 rays[2];
-        if (!block_samples(c, &c->evals[l], q, rays)) continue;
-        bool occluded[16];
-        iir_rt_occluded16(c->rt, rays, occluded, st, IIR_RAYS_SHADOW);
-        for (int h = 0; h < 2; h++) {
-            __m256 valid = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
-                _mm256_loadu_si256((const __m256i *)rays[h].valid), _mm256_setzero_si256()));
-            __m256 keep = _mm256_andnot_ps(bool_lanes(occluded + 8 * h), valid);
-            q[h].L = blend3(q[h].L, add3(q[h].L, q[h].pending), keep);
-        }
+        iir_ray8 rays[NH];
+        bool any[NH / 2];
+        block_samples(c, &c->evals[l], q, rays, any);
+        for (int b = 0; b < NH / 2; b++)
+            if (any[b]) block_rays(c, &rays[2 * b], &q[2 * b], st);
     }
-    for (int h = 0; h < 2; h++) half_store(&q[h], out);
+    for (int h = 0; h < NH; h++) half_store(&q[h], out);
 }
 
 #endif

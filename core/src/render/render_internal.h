@@ -244,7 +244,7 @@ bool iir_render_compensate(iir_renderer *r, const iir_shade_job *job, iir_raysta
  * + d the tap d pixels along its column. */
 enum { IIR_FILTER_MAX_H = IIR_MAX_INTERLEAVE / 2, IIR_FILTER_COLUMN = 16 };
 
-/* render_direct_avx2.c: direct light's lean 4x4 block at (x0, y0) -- a frame of points, spots and
+/* render_direct_avx2.c: direct light's lean 8x4 pixels at (x0, y0) -- a frame of points, spots and
  * suns alone (evals, prepared) without specular chains -- into out, the same sums as
  * render_direct.c's general block (the same image). */
 typedef struct iir_direct_lean {
