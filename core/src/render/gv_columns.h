@@ -7,9 +7,10 @@
  * the columns. Not the kernels (render_batch.h) and not the choice of VPL subsets
  * (render_indirect.c). Internal to libiircore.
  *
- * Full shading's columns run over the pixels of the VPL's subset, tile by tile, and keep a copy of
- * those pixels' positions and normals in that order (so that a batch holding a VPL without a
- * column is copied, not gathered from the G-buffer: 24 bytes a pixel); multires's over
+ * Full shading's columns run over the pixels of the VPL's subset, tile by tile (the indirect
+ * phase's tiles: bands of rows, iir_indirect_tile_at), and keep a copy of those pixels' positions
+ * and normals in that order (so that a batch holding a VPL without a column is copied, not
+ * gathered from the G-buffer: 24 bytes a pixel); multires's over
  * the samples of the hierarchy's work items whose class unites the subset (its coarse texels and
  * the pixels it shades at full resolution). A renderer keeps one of the two at a time.
  *
