@@ -87,14 +87,15 @@ uint32_t iir_site_graph_nearest(const iir_site_graph *g, const double *xyz, uint
 {
     uint32_t at = start;
     double best = dist2(&xyz[3 * at], s);
-    for (bool moved = true; moved;) {
-        moved = false;
-        for (uint32_t k = g->off[at]; k < g->off[at + 1]; k++) {
+    for (;;) { /* to the nearest of at's neighbours while it is nearer than at */
+        uint32_t next = at;
+        for (uint32_t k = g->off[at], end = g->off[at + 1]; k < end; k++) {
             double d = dist2(&xyz[3 * g->adj[k]], s);
-            if (d < best) best = d, at = g->adj[k], moved = true;
+            if (d < best) best = d, next = g->adj[k];
         }
+        if (next == at) return at;
+        at = next;
     }
-    return at;
 }
 
 /* ---- interleave keys ---- */
