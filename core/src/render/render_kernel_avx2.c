@@ -219,45 +219,39 @@ static void column_pass(const iir_kernel_args *a, const iir_shade_vpl *v, iir_pi
  * otherwise waiting on memory (at 1024x768 the columns, 48 MB, are beyond the caches). */
 enum { COLUMN_AHEAD = 64 };
 
-/* Pixels j .. j + 15 of the columns' sum, both groups of 8 at once: the powers' broadcasts
- * shared, six chains of fused products in flight instead of three. */
-static inline void columns_sum16(const iir_shade_vpl *v, const iir_gv_ref *gv, uint32_t count,
-                                 uint32_t ord, int j, float *Ex, float *Ey, float *Ez)
+/* Pixels j .. j + 8 G - 1 of the columns' sum (G = 2: whole groups; G = 1: the last group, its
+ * lanes from m on 0), the G groups at once: each VPL's broadcasts shared, 3 G chains of fused
+ * products in flight. */
+static inline __attribute__((always_inline)) void
+columns_sum_groups(const iir_shade_vpl *v, const iir_gv_ref *gv, uint32_t count, uint32_t ord,
+                   int j, int m, float *E[3], int G)
 {
-    __m256 x0 = _mm256_setzero_ps(), y0 = x0, z0 = x0, x1 = x0, y1 = x0, z1 = x0;
+    __m256i in =
+        _mm256_cmpgt_epi32(_mm256_set1_epi32(m - j), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    __m256 s[2][3];
+    for (int g = 0; g < G; g++) s[g][0] = s[g][1] = s[g][2] = _mm256_setzero_ps();
     for (uint32_t i = 0; i < count; i++) {
         const float *col = gv[i].col + ord + j;
-        _mm_prefetch((const char *)(col + COLUMN_AHEAD), _MM_HINT_T0);
-        __m256 a = _mm256_loadu_ps(col), b = _mm256_loadu_ps(col + 8);
-        __m256 px = _mm256_set1_ps(v[i].power.x), py = _mm256_set1_ps(v[i].power.y),
-               pz = _mm256_set1_ps(v[i].power.z);
-        x0 = _mm256_fmadd_ps(px, a, x0), x1 = _mm256_fmadd_ps(px, b, x1);
-        y0 = _mm256_fmadd_ps(py, a, y0), y1 = _mm256_fmadd_ps(py, b, y1);
-        z0 = _mm256_fmadd_ps(pz, a, z0), z1 = _mm256_fmadd_ps(pz, b, z1);
+        if (G == 2) _mm_prefetch((const char *)(col + COLUMN_AHEAD), _MM_HINT_T0);
+        __m256 p[3] = {_mm256_set1_ps(v[i].power.x), _mm256_set1_ps(v[i].power.y),
+                       _mm256_set1_ps(v[i].power.z)};
+        for (int g = 0; g < G; g++) {
+            __m256 GV =
+                G == 2 || j + 8 <= m ? _mm256_loadu_ps(col + 8 * g) : _mm256_maskload_ps(col, in);
+            for (int q = 0; q < 3; q++) s[g][q] = _mm256_fmadd_ps(p[q], GV, s[g][q]);
+        }
     }
-    _mm256_storeu_ps(Ex + j, x0), _mm256_storeu_ps(Ey + j, y0), _mm256_storeu_ps(Ez + j, z0);
-    _mm256_storeu_ps(Ex + j + 8, x1), _mm256_storeu_ps(Ey + j + 8, y1);
-    _mm256_storeu_ps(Ez + j + 8, z1);
+    for (int g = 0; g < G; g++)
+        for (int q = 0; q < 3; q++) _mm256_storeu_ps(E[q] + j + 8 * g, s[g][q]);
 }
 
 void iir_columns_sum_avx2(const iir_shade_vpl *v, const iir_gv_ref *gv, uint32_t count,
                           uint32_t ord, int m, float *Ex, float *Ey, float *Ez)
 {
+    float *E[3] = {Ex, Ey, Ez};
     int j = 0;
-    for (; j + 16 <= m; j += 16) columns_sum16(v, gv, count, ord, j, Ex, Ey, Ez);
-    for (; j < m; j += 8) {
-        __m256i in =
-            _mm256_cmpgt_epi32(_mm256_set1_epi32(m - j), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-        __m256 x = _mm256_setzero_ps(), y = x, z = x;
-        for (uint32_t i = 0; i < count; i++) {
-            const float *col = gv[i].col + ord + j;
-            __m256 GV = j + 8 <= m ? _mm256_loadu_ps(col) : _mm256_maskload_ps(col, in);
-            x = _mm256_fmadd_ps(_mm256_set1_ps(v[i].power.x), GV, x);
-            y = _mm256_fmadd_ps(_mm256_set1_ps(v[i].power.y), GV, y);
-            z = _mm256_fmadd_ps(_mm256_set1_ps(v[i].power.z), GV, z);
-        }
-        _mm256_storeu_ps(Ex + j, x), _mm256_storeu_ps(Ey + j, y), _mm256_storeu_ps(Ez + j, z);
-    }
+    for (; j + 16 <= m; j += 16) columns_sum_groups(v, gv, count, ord, j, m, E, 2);
+    for (; j < m; j += 8) columns_sum_groups(v, gv, count, ord, j, m, E, 1);
 }
 
 /* Software-pipelined over the VPLs: VPL i's geometry pass (asking for its texels) runs before VPL
