@@ -141,7 +141,7 @@ async function restores(page) {
 }
 
 async function main() {
-    const { daemon, page } = await H.openSmallSession(IIRD, SRC);
+    const { daemon, page } = await H.openSmallSession(IIRD, SRC, { refinePasses: 16 }); // its refined frame: pass 8
     check((await ctlText(page)) === 'off', `the controller shows off without a target: ${await ctlText(page)}`);
     await refinementOnly(page);
     await climbs(page);
