@@ -262,17 +262,17 @@ export async function open(page, url) {
     await page.waitForFunction(() => window.iir && window.iir.framesDrawn > 0, null, { timeout: WAIT_MS });
 }
 
-// The daemon flags of a test that does not study refinement: a still of 8 passes. The product's 64
-// are, under ASan, most of such a test's CPU (the session refines after every input while the test
-// goes on: test_arrow_tilt's daemon 45 CPU seconds with 64, 12 with 8).
-export const FEW_PASSES = ['--refine-passes', '8'];
+// The daemon flag for a still of `passes` refinement passes; a test that does not study refinement
+// takes 8. The product's 64 are, under ASan, most of such a test's CPU (the session refines after
+// every input while the test goes on: test_arrow_tilt's daemon 45 CPU seconds with 64, 12 with 8).
+export const refineArgs = (passes = 8) => ['--refine-passes', String(passes)];
 
 // A daemon on the built-in Cornell box with small frames (256x192, 64^2 shadow maps) and a page on
 // it, settled: where a test that drives one session through the page starts. A still has
-// `refinePasses` passes (FEW_PASSES unless the test needs more).
-export async function openSmallSession(IIRD, SRC, { refinePasses = Number(FEW_PASSES[1]) } = {}) {
+// `refinePasses` passes (refineArgs' default unless the test needs more).
+export async function openSmallSession(IIRD, SRC, { refinePasses } = {}) {
     const chromium = await prerequisites(IIRD, SRC);
-    const { daemon, url } = await startDaemon(IIRD, ['--size', '256x192', '--sm-res', '64', '--refine-passes', String(refinePasses),
+    const { daemon, url } = await startDaemon(IIRD, ['--size', '256x192', '--sm-res', '64', ...refineArgs(refinePasses),
         ...webArgs(IIRD, path.join(SRC, 'web'))]);
     log(`daemon at ${url} (${daemon.cmd})`);
     const browser = await launch(chromium);

@@ -80,7 +80,7 @@ async function bannerInSight(page, label) {
 async function main() {
     const chromium = await H.prerequisites(IIRD, SRC);
     const scenes = H.makeScenes(SRC, { conference: true });
-    const { daemon, url } = await H.startDaemon(IIRD, [...H.FEW_PASSES, '--scenes', scenes, '--size', '256x192', '--sm-res', '64', ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
+    const { daemon, url } = await H.startDaemon(IIRD, [...H.refineArgs(), '--scenes', scenes, '--size', '256x192', '--sm-res', '64', ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
     log(`daemon at ${url} (${daemon.cmd})`);
     const browser = await H.launch(chromium);
     const page = await H.newPage(browser, { expected: /\[unsupported\]|200000 patches/ });

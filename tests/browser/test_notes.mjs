@@ -129,7 +129,7 @@ async function main() {
     const chromium = await H.prerequisites(IIRD, SRC);
     const scenes = H.makeScenes(SRC);
     fs.cpSync(path.join(SRC, 'scenes', 'cornell_spheres'), path.join(scenes, 'cornell_spheres'), { recursive: true });
-    const { daemon, url } = await H.startDaemon(IIRD, [...H.FEW_PASSES, '--scenes', scenes, ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
+    const { daemon, url } = await H.startDaemon(IIRD, [...H.refineArgs(), '--scenes', scenes, ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
     log(`daemon at ${url} (${daemon.cmd})`);
     const browser = await H.launch(chromium);
     const page = await H.newPage(browser);

@@ -74,7 +74,7 @@ function chartProblems(rows) {
 
 async function main() {
     const chromium = await H.prerequisites(IIRD, SRC);
-    const { daemon, url } = await H.startDaemon(IIRD, [...H.FEW_PASSES, '--scenes', path.join(SRC, 'scenes'), ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
+    const { daemon, url } = await H.startDaemon(IIRD, [...H.refineArgs(), '--scenes', path.join(SRC, 'scenes'), ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
     log(`daemon at ${url} (${daemon.cmd})`);
     const browser = await H.launch(chromium);
     const page = await H.newPage(browser);

@@ -24,7 +24,7 @@ async function inColour(page, label, shot) {
 async function main() {
     const chromium = await H.prerequisites(IIRD, SRC);
     // No --max-sessions-per-address: the product's default, max(1, 4 / 4) = 1.
-    const { daemon, url } = await H.startDaemon(IIRD, [...H.FEW_PASSES, '--size', '256x192', '--sm-res', '64', '--max-sessions', String(TABS),
+    const { daemon, url } = await H.startDaemon(IIRD, [...H.refineArgs(), '--size', '256x192', '--sm-res', '64', '--max-sessions', String(TABS),
         ...H.webArgs(IIRD, path.join(SRC, 'web'))]);
     log(`daemon at ${url} (${daemon.cmd})`);
     const browser = await H.launch(chromium);
